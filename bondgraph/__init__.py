@@ -1,0 +1,21 @@
+"""bondgraph: bond graph models, causality, sympy equations and simulation.
+
+>>> from bondgraph import BondGraph, simulate
+>>> from bondgraph.library import dc_motor
+>>> dc_motor().assign_causality("integral").storage
+{'L_a': 'integral', 'J': 'integral'}
+"""
+
+from .causality import Causality, CausalIssue, assign_causality
+from .control import PIController
+from .equations import StateEquations, causal_equations, model_equations, state_equations
+from .errors import CausalityError, EquationError, LawError, ModelError, SimulationError
+from .model import BondGraph, Bond, Element, signal_function
+from .simulation import SimulationResult, simulate
+
+__all__ = [
+    "BondGraph", "Bond", "Element", "Causality", "CausalIssue", "PIController", "StateEquations",
+    "SimulationResult", "assign_causality", "causal_equations", "model_equations", "state_equations",
+    "simulate", "signal_function", "ModelError", "LawError", "CausalityError", "EquationError",
+    "SimulationError",
+]

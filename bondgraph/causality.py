@@ -1,0 +1,339 @@
+"""Sequential causality assignment procedure (SCAP).
+
+Causality decides, for each bond, which end imposes the effort (the other end
+imposes the flow; the causal stroke sits at the end that *receives* effort).
+
+Procedure (Karnopp, Margolis and Rosenberg; Samantaray and Ould Bouamama for
+the dualized detectors used in diagnosis):
+
+1. sources (Se, Sf, MSe, MSf), and detectors dualized to signal sources
+   (De -> SSe, Df -> SSf) when requested, each followed by propagation;
+2. storage elements (C, I) in the preferred causality, integral or derivative,
+   each followed by propagation; an element already fixed by propagation
+   the other way is *dependent storage*;
+3. R elements still free, then any bond still free: every such choice is
+   arbitrary and signals an algebraic loop (zero-order causal path).
+
+Propagation enforces the junction rules (a 0-junction receives its effort on
+exactly one bond, a 1-junction its flow on exactly one bond), the TF rule
+(effort passes through) and the GY rule (effort in on both ports or out on
+both).  Conflicts are reported, never raised: the assignment is inspectable
+even for an invalid model.
+
+Example
+-------
+>>> from bondgraph.library import rlc_circuit
+>>> causality = rlc_circuit().assign_causality("integral")
+>>> causality.storage
+{'L': 'integral', 'C': 'integral'}
+>>> causality.is_valid
+True
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from collections.abc import Hashable
+from dataclasses import dataclass, field
+
+from . import elements as el
+from .laws import solve_for
+from .errors import LawError
+from .model import PORT_SYMBOLS, Bond, BondGraph
+
+INTEGRAL, DERIVATIVE = "integral", "derivative"
+
+
+@dataclass(frozen=True)
+class CausalIssue:
+    """Something the assignment found: ``kind`` is ``"conflict"``,
+    ``"dependent storage"`` or ``"algebraic loop"``."""
+
+    kind: str
+    elements: tuple
+    bonds: tuple
+    message: str
+
+    def __str__(self) -> str:
+        return f"{self.kind}: {self.message}"
+
+
+@dataclass
+class Causality:
+    """The result of SCAP.
+
+    Attributes
+    ----------
+    preferred : str
+        ``"integral"`` or ``"derivative"``.
+    effort_from : dict
+        Bond key ``(tail, head)`` -> the node that imposes effort on that bond.
+        Dualized detector bonds are included.  A bond missing here could not
+        be assigned (see ``issues``).
+    storage : dict
+        Storage element -> ``"integral"`` or ``"derivative"``.
+    dualized : dict
+        Detector -> ``"SSe"`` or ``"SSf"`` when detectors were dualized.
+    issues : list of CausalIssue
+    """
+
+    preferred: str
+    effort_from: dict = field(default_factory=dict)
+    storage: dict = field(default_factory=dict)
+    dualized: dict = field(default_factory=dict)
+    issues: list = field(default_factory=list)
+    bonds: list = field(default_factory=list, repr=False)
+
+    def stroke(self, bond: tuple) -> Hashable:
+        """The end of ``bond`` that receives effort (where the causal stroke is drawn)."""
+        tail, head = bond
+        return head if self.effort_from[bond] == tail else tail
+
+    def _of(self, kind: str) -> list[CausalIssue]:
+        return [issue for issue in self.issues if issue.kind == kind]
+
+    @property
+    def conflicts(self) -> list[CausalIssue]:
+        return self._of("conflict")
+
+    @property
+    def dependent_storage(self) -> list[Hashable]:
+        return [issue.elements[0] for issue in self._of("dependent storage")]
+
+    @property
+    def algebraic_loops(self) -> list[CausalIssue]:
+        return self._of("algebraic loop")
+
+    @property
+    def is_valid(self) -> bool:
+        """No conflicts and every bond assigned."""
+        return not self.conflicts and all(b.key in self.effort_from for b in self.bonds)
+
+    def summary(self) -> str:
+        """A short text report."""
+        lines = [f"causality ({self.preferred} preferred): "
+                 f"{sum(v == INTEGRAL for v in self.storage.values())} integral, "
+                 f"{sum(v == DERIVATIVE for v in self.storage.values())} derivative storage"]
+        lines += [f"  {issue}" for issue in self.issues]
+        return "\n".join(lines)
+
+
+class _Conflict(Exception):
+    def __init__(self, node: Hashable, message: str):
+        super().__init__(message)
+        self.node = node
+
+
+def assign_causality(bg: BondGraph, preferred: str = INTEGRAL, *, dualize_detectors: bool | None = None) -> Causality:
+    """Assign causality to every bond of ``bg`` by SCAP.
+
+    Parameters
+    ----------
+    bg : BondGraph
+    preferred : {"integral", "derivative"}
+        Preferred storage causality: integral for simulation, derivative for
+        diagnosis (no unknown initial conditions).
+    dualize_detectors : bool, optional
+        Turn De into SSe and Df into SSf (they impose their measured effort or
+        flow on their junction).  Default: True for derivative preference.
+
+    Returns
+    -------
+    Causality
+    """
+    if preferred not in (INTEGRAL, DERIVATIVE):
+        raise ValueError(f"preferred causality must be 'integral' or 'derivative', got {preferred!r}")
+    if dualize_detectors is None:
+        dualize_detectors = preferred == DERIVATIVE
+    return _Scap(bg, preferred, dualize_detectors).run()
+
+
+class _Scap:
+    def __init__(self, bg: BondGraph, preferred: str, dualize: bool):
+        self.elements = bg.elements
+        self.all_bonds = bg.bonds
+        self.bonds = [b for b in self.all_bonds if not b.is_signal or dualize]
+        self.at: dict[Hashable, list[Bond]] = {n: [] for n in self.elements}
+        for bond in self.bonds:
+            self.at[bond.tail].append(bond)
+            self.at[bond.head].append(bond)
+        self.result = Causality(preferred, bonds=self.bonds)
+        self.effort_from = self.result.effort_from
+        self.origin: dict[tuple, Hashable] = {}  # which element's choice fixed a bond
+        self.dualize = dualize
+
+    # -- driver -----------------------------------------------------------
+    def run(self) -> Causality:
+        kinds = {name: e.kind for name, e in self.elements.items()}
+        for name, kind in kinds.items():
+            if kind in el.SOURCES:
+                self._fix_source(name, self._effort_from_source(name, kind))
+        if self.dualize:
+            for name, kind in kinds.items():
+                if kind in el.DETECTORS:
+                    self.result.dualized[name] = "SSe" if kind == "De" else "SSf"
+                    self._fix_source(name, self._effort_from_source(name, kind))
+        for name, kind in kinds.items():
+            if kind in el.STORAGE:
+                self._fix_storage(name)
+        for name, kind in kinds.items():
+            if kind == "R" and self.at[name][0].key not in self.effort_from:
+                self._fix_free(self.at[name][0], self._preferred_r(name), name)
+        for bond in self.bonds:
+            if bond.key not in self.effort_from:
+                self._fix_free(bond, bond.tail, None)
+        return self.result
+
+    def _effort_from_source(self, name: Hashable, kind: str) -> Hashable:
+        bond = self.at[name][0]
+        imposes_effort = kind in el.EFFORT_SOURCES or kind == "De"
+        return name if imposes_effort else bond.other(name)
+
+    def _fix_source(self, name: Hashable, effort_from: Hashable) -> None:
+        bond = self.at[name][0]
+        role = "SSe" if self.elements[name].kind == "De" else "SSf" if self.elements[name].kind == "Df" else None
+        label = f"{role} {name!r} (dualized {self.elements[name].kind})" if role else str(self.elements[name])
+        current = self.effort_from.get(bond.key)
+        if current is not None:
+            if current != effort_from:
+                self._issue("conflict", (name, self.origin[bond.key]), (bond.key,),
+                            f"{label} cannot impose its {'effort' if effort_from == name else 'flow'} on {bond}: "
+                            f"already imposed through propagation from {self.elements[self.origin[bond.key]]}")
+            return
+        try:
+            self._propagate(bond, effort_from, name)
+        except _Conflict as conflict:
+            self._issue("conflict", (name, conflict.node), (bond.key,), f"{label}: {conflict}")
+
+    def _fix_storage(self, name: Hashable) -> None:
+        bond = self.at[name][0]
+        kind = self.elements[name].kind
+        preferred = self.result.preferred
+        # integral C imposes effort (e = q/C); integral I receives effort (f = p/I)
+        integral_from = name if kind == "C" else bond.other(name)
+        current = self.effort_from.get(bond.key)
+        if current is None:
+            wanted = integral_from if preferred == INTEGRAL else _opposite(bond, integral_from)
+            try:
+                self._propagate(bond, wanted, name)
+                current = wanted
+            except _Conflict:
+                try:
+                    self._propagate(bond, _opposite(bond, wanted), name)
+                    current = _opposite(bond, wanted)
+                except _Conflict as conflict:
+                    self._issue("conflict", (name, conflict.node), (bond.key,),
+                                f"{self.elements[name]}: no causality is consistent: {conflict}")
+                    return
+        state = INTEGRAL if current == integral_from else DERIVATIVE
+        self.result.storage[name] = state
+        if state != preferred:
+            origin = self.origin.get(bond.key, name)
+            self._issue("dependent storage", (name,), (bond.key,),
+                        f"{self.elements[name]} is in {state} causality, forced by "
+                        f"{self.elements[origin] if origin != name else 'a causal loop'}")
+
+    def _preferred_r(self, name: Hashable) -> Hashable:
+        """Resistance causality (R imposes effort) unless only the conductance form is explicit."""
+        element, bond = self.elements[name], self.at[name][0]
+        if element.law is not None:
+            try:
+                solve_for(element.law, PORT_SYMBOLS["e"], where=str(element))
+            except LawError:
+                return bond.other(name)
+        return name
+
+    def _fix_free(self, bond: Bond, effort_from: Hashable, element: Hashable | None) -> None:
+        for choice in (effort_from, _opposite(bond, effort_from)):
+            try:
+                self._propagate(bond, choice, element if element is not None else choice)
+                break
+            except _Conflict:
+                continue
+        else:
+            self._issue("conflict", (bond.tail, bond.head), (bond.key,), f"{bond}: no causality is consistent")
+            return
+        what = f"{self.elements[element]}" if element is not None else f"{bond}"
+        self._issue("algebraic loop", (element,) if element is not None else (bond.tail, bond.head), (bond.key,),
+                    f"arbitrary causality chosen at {what}: an algebraic loop (zero-order causal path) through it")
+
+    def _issue(self, kind, elements, bonds, message) -> None:
+        self.result.issues.append(CausalIssue(kind, tuple(elements), tuple(bonds), message))
+
+    # -- propagation --------------------------------------------------------
+    def _propagate(self, bond: Bond, effort_from: Hashable, origin: Hashable) -> None:
+        """Assign one bond and everything it implies; undo all of it on conflict."""
+        trail: list[tuple] = []
+        queue = deque([(bond, effort_from)])
+        try:
+            while queue:
+                current, source = queue.popleft()
+                assigned = self.effort_from.get(current.key)
+                if assigned is not None:
+                    if assigned != source:
+                        raise _Conflict(current.tail, f"{current} would need effort from both ends")
+                    continue
+                self.effort_from[current.key] = source
+                self.origin[current.key] = origin
+                trail.append(current.key)
+                for node in (current.tail, current.head):
+                    queue.extend(self._implied(node))
+        except _Conflict:
+            for key in trail:
+                del self.effort_from[key]
+                del self.origin[key]
+            raise
+
+    def _implied(self, node: Hashable) -> list[tuple[Bond, Hashable]]:
+        kind = self.elements[node].kind
+        bonds = self.at[node]
+        if kind in el.JUNCTIONS:
+            return self._junction_rule(node, kind, bonds)
+        if kind in el.TWO_PORTS:
+            return self._two_port_rule(node, kind, bonds)
+        return []
+
+    def _junction_rule(self, node, kind, bonds):
+        # 0-junction: exactly one bond brings effort in (effort_from != node).
+        # 1-junction: exactly one bond brings flow in, i.e. the junction imposes effort on it.
+        def is_strong(bond):
+            return (self.effort_from[bond.key] != node) if kind == "0" else (self.effort_from[bond.key] == node)
+
+        assigned = [b for b in bonds if b.key in self.effort_from]
+        free = [b for b in bonds if b.key not in self.effort_from]
+        strong = [b for b in assigned if is_strong(b)]
+        if len(strong) > 1:
+            names = ", ".join(str(b) for b in strong)
+            what = "effort" if kind == "0" else "flow"
+            raise _Conflict(node, f"{self.elements[node]} receives its {what} from more than one bond ({names})")
+        if strong:  # every other bond is weak
+            return [(b, node if kind == "0" else b.other(node)) for b in free]
+        if len(free) == 1:  # the last free bond must be the strong one
+            b = free[0]
+            return [(b, b.other(node) if kind == "0" else node)]
+        if not free:
+            what = "effort" if kind == "0" else "flow"
+            raise _Conflict(node, f"no bond sets the {what} of {self.elements[node]}")
+        return []
+
+    def _two_port_rule(self, node, kind, bonds):
+        first, second = bonds
+        assigned = [b for b in bonds if b.key in self.effort_from]
+        if len(assigned) != 1:
+            if len(assigned) == 2:
+                out = [self.effort_from[b.key] == node for b in bonds]
+                ok = out[0] != out[1] if kind in el.TRANSFORMERS else out[0] == out[1]
+                if not ok:
+                    rule = "passes effort through" if kind in el.TRANSFORMERS else "takes effort on both ports or neither"
+                    raise _Conflict(node, f"{self.elements[node]} {rule}")
+            return []
+        known = assigned[0]
+        other = second if known is first else first
+        imposes = self.effort_from[known.key] == node
+        # TF: effort in on one port, out on the other; GY: same role on both ports
+        out_on_other = (not imposes) if kind in el.TRANSFORMERS else imposes
+        return [(other, node if out_on_other else other.other(node))]
+
+
+def _opposite(bond: Bond, end: Hashable) -> Hashable:
+    return bond.other(end)

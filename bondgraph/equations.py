@@ -1,0 +1,475 @@
+"""Bond graph equations with sympy: constitutive and junction equations, causal
+solution, and state equations.
+
+Variables
+---------
+Each power bond with label ``k`` carries an effort ``e_k`` and a flow ``f_k``
+(sympy Symbols).  Energy variables of storage elements are functions of time,
+``q_<C>(t)`` and ``p_<I>(t)``; signals are ``name(t)`` (DESIGN.md, ARR
+contract); parameters are Symbols named after ``param``.
+
+Sign conventions: power flows along the bond direction.  A one-port's own flow
+is the flow *into* it, ``s * f_k`` with ``s = +1`` if the bond points at the
+element and ``-1`` otherwise.  A 0-junction balances ``sum(s_k f_k) = 0`` and a
+1-junction ``sum(s_k e_k) = 0``, with ``s_k = +1`` for bonds into the junction.
+
+Causal solution
+---------------
+Causality turns every element equation into an assignment of the variable it
+outputs.  The assignments form a dependency graph; its strongly connected
+components are algebraic loops, solved jointly with sympy where possible; the
+rest is substituted in topological order.  Work grows with the number of
+bonds, not with its cube.  Storage in derivative causality outputs ``d/dt`` of
+an expression; the state equations are then linear in the state derivatives
+and are solved for them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Hashable
+from dataclasses import dataclass, field
+
+import networkx as nx
+import sympy as sp
+
+from . import elements as el
+from .causality import DERIVATIVE, INTEGRAL, Causality, assign_causality
+from .errors import CausalityError, EquationError, LawError
+from .laws import solve_for
+from .model import PORT_SYMBOLS, T, BondGraph, Element, signal_function
+
+E_, F_, Q_, P_ = (PORT_SYMBOLS[n] for n in "efqp")
+
+
+class ddt(sp.Function):
+    """Marker for a time derivative to be taken once its argument is known."""
+
+
+def effort(label: Hashable) -> sp.Symbol:
+    """The effort symbol of bond ``label``: ``e_<label>``."""
+    return sp.Symbol(f"e_{label}")
+
+
+def flow(label: Hashable) -> sp.Symbol:
+    """The flow symbol of bond ``label``: ``f_<label>``."""
+    return sp.Symbol(f"f_{label}")
+
+
+def energy_variable(element: Element) -> sp.Expr:
+    """``q_<name>(t)`` for a C element, ``p_<name>(t)`` for an I element."""
+    return sp.Function(f"{'q' if element.kind == 'C' else 'p'}_{element.name}")(T)
+
+
+def constitutive_law(element: Element) -> sp.Expr:
+    """The element's law as an expression equal to zero; linear by default.
+
+    C: ``e - q/C``;  I: ``f - p/I``;  R: ``e - R*f``.
+    """
+    if element.law is not None:
+        return element.law
+    theta = sp.Symbol(element.param)
+    return {"C": E_ - Q_ / theta, "I": F_ - P_ / theta, "R": E_ - theta * F_}[element.kind]
+
+
+# ---------------------------------------------------------------------------
+# acausal equations
+
+
+def model_equations(bg: BondGraph) -> list[sp.Eq]:
+    """Every constitutive and junction equation of ``bg``, without causality.
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit
+    >>> model_equations(rlc_circuit())[0]
+    Eq(e_1, V(t))
+    """
+    elements, bonds = bg.elements, bg.bonds
+    at: dict[Hashable, list] = {n: [] for n in elements}
+    for bond in bonds:
+        at[bond.tail].append(bond)
+        at[bond.head].append(bond)
+    equations: list[sp.Eq] = []
+    for name, element in elements.items():
+        power = [b for b in at[name] if not b.is_signal]
+        kind = element.kind
+        if kind in el.ONE_PORTS:
+            b = power[0]
+            s = b.sign_into(name)
+            e, f = effort(b.label), s * flow(b.label)
+            if kind in el.EFFORT_SOURCES:
+                equations.append(sp.Eq(e, signal_function(element.signal)))
+            elif kind in el.FLOW_SOURCES:
+                equations.append(sp.Eq(-f, signal_function(element.signal)))
+            else:
+                x = energy_variable(element) if kind in el.STORAGE else None
+                law = constitutive_law(element).xreplace({E_: e, F_: f, Q_: x, P_: x})
+                equations.append(sp.Eq(law, 0))
+                if kind == "C":
+                    equations.append(sp.Eq(sp.Derivative(x, T), f))
+                elif kind == "I":
+                    equations.append(sp.Eq(sp.Derivative(x, T), e))
+        elif kind in el.TWO_PORTS:
+            one, two = sorted(power, key=lambda b: b.head != name)  # entering bond first
+            m = element.modulus
+            e1, f1, e2, f2 = effort(one.label), flow(one.label), effort(two.label), flow(two.label)
+            if kind in el.TRANSFORMERS:
+                equations += [sp.Eq(e1, m * e2), sp.Eq(f2, m * f1)]
+            else:
+                equations += [sp.Eq(e1, m * f2), sp.Eq(e2, m * f1)]
+        elif kind in el.JUNCTIONS:
+            common, summed = (effort, flow) if kind == "0" else (flow, effort)
+            first = common(power[0].label)
+            equations += [sp.Eq(common(b.label), first) for b in power[1:]]
+            equations.append(sp.Eq(sp.Add(*(b.sign_into(name) * summed(b.label) for b in power)), 0))
+            for b in at[name]:
+                if b.is_signal:
+                    equations.append(sp.Eq(signal_function(elements[b.head].signal), first))
+    return equations
+
+
+# ---------------------------------------------------------------------------
+# causal equations
+
+
+@dataclass
+class CausalEquations:
+    """Element equations oriented by a causal assignment.
+
+    Attributes
+    ----------
+    assignments : dict
+        Bond variable -> expression (in bond variables, energy variables,
+        signals, parameters, and ``ddt(...)`` for derivative causality).
+    states : dict
+        Storage element in integral causality -> its energy variable ``q(t)``/``p(t)``.
+    derivatives : dict
+        Storage element in integral causality -> d(state)/dt in bond variables.
+    outputs : dict
+        Measured signal (detector not dualized) -> expression in bond variables.
+    balances : dict
+        Junction carrying a dualized detector -> its power balance (effort or
+        flow sum), in bond variables: the candidate ARR of that junction.
+    """
+
+    causality: Causality
+    assignments: dict = field(default_factory=dict)
+    states: dict = field(default_factory=dict)
+    derivatives: dict = field(default_factory=dict)
+    outputs: dict = field(default_factory=dict)
+    balances: dict = field(default_factory=dict)
+    loops: list = field(default_factory=list)
+    _resolved: dict | None = field(default=None, repr=False)
+
+    @property
+    def resolved(self) -> dict:
+        """Bond variable -> expression in known quantities only (cached)."""
+        if self._resolved is None:
+            self._resolved, self.loops = resolve(self.assignments)
+        return self._resolved
+
+    def express(self, expression: sp.Expr) -> sp.Expr:
+        """Rewrite ``expression`` (in bond variables) in known quantities."""
+        return substitute(expression, self.resolved)
+
+
+def causal_equations(bg: BondGraph, causality: Causality) -> CausalEquations:
+    """Orient every element equation of ``bg`` according to ``causality``.
+
+    Raises
+    ------
+    CausalityError
+        if the assignment has conflicts or unassigned bonds.
+    """
+    if causality.conflicts or not causality.is_valid:
+        problems = "; ".join(str(i) for i in causality.conflicts) or "some bonds have no causality"
+        raise CausalityError(f"cannot orient the equations: {problems}")
+    result = CausalEquations(causality)
+    elements = bg.elements
+    at: dict[Hashable, list] = {n: [] for n in elements}
+    for bond in bg.bonds:
+        at[bond.tail].append(bond)
+        at[bond.head].append(bond)
+    for name, element in elements.items():
+        _orient(result, name, element, at[name], elements, causality)
+    return result
+
+
+def _orient(result: CausalEquations, name, element: Element, bonds, elements, causality: Causality) -> None:
+    assign = result.assignments
+    kind = element.kind
+    ef = causality.effort_from
+    power = [b for b in bonds if not b.is_signal]
+    if kind in el.ONE_PORTS:
+        b = power[0]
+        s = b.sign_into(name)
+        e, f = effort(b.label), flow(b.label)
+        if kind in el.EFFORT_SOURCES:
+            assign[e] = signal_function(element.signal)
+        elif kind in el.FLOW_SOURCES:
+            assign[f] = -s * signal_function(element.signal)
+        elif kind == "R":
+            law = constitutive_law(element)
+            if ef[b.key] == name:  # resistance causality: e = phi(f)
+                assign[e] = _solve(law, E_, element).xreplace({F_: s * f})
+            else:  # conductance causality: f = phi^-1(e)
+                assign[f] = s * _solve(law, F_, element).xreplace({E_: e})
+        else:
+            _orient_storage(result, name, element, b, s, causality.storage[name])
+    elif kind in el.TWO_PORTS:
+        one, two = sorted(power, key=lambda b: b.head != name)
+        m = element.modulus
+        e1, f1, e2, f2 = effort(one.label), flow(one.label), effort(two.label), flow(two.label)
+        if kind in el.TRANSFORMERS:
+            if ef[one.key] != name:  # effort enters at port 1: e2 = e1/m, f1 = f2/m
+                assign[e2], assign[f1] = e1 / m, f2 / m
+            else:
+                assign[e1], assign[f2] = m * e2, m * f1
+        else:
+            if ef[one.key] == name:  # GY imposes both efforts
+                assign[e1], assign[e2] = m * f2, m * f1
+            else:
+                assign[f2], assign[f1] = e1 / m, e2 / m
+    elif kind in el.JUNCTIONS:
+        _orient_junction(result, name, kind, bonds, elements, causality)
+
+
+def _orient_storage(result, name, element, bond, s, state):
+    e, f = effort(bond.label), flow(bond.label)
+    law = constitutive_law(element)
+    x = energy_variable(element)
+    if element.kind == "C":
+        if state == INTEGRAL:  # e = phi(q), dq/dt = flow in
+            result.assignments[e] = _solve(law, E_, element).xreplace({Q_: x})
+            result.states[name], result.derivatives[name] = x, s * f
+        else:  # f = d/dt phi^-1(e)
+            result.assignments[f] = s * ddt(_solve(law, Q_, element).xreplace({E_: e}))
+    else:
+        if state == INTEGRAL:  # f = phi(p), dp/dt = e
+            result.assignments[f] = s * _solve(law, F_, element).xreplace({P_: x})
+            result.states[name], result.derivatives[name] = x, e
+        else:  # e = d/dt phi^-1(f)
+            result.assignments[e] = ddt(_solve(law, P_, element).xreplace({F_: s * f}))
+
+
+def _orient_junction(result, name, kind, bonds, elements, causality):
+    ef = causality.effort_from
+    common, summed = (effort, flow) if kind == "0" else (flow, effort)
+
+    def is_strong(b):
+        return (ef[b.key] != name) if kind == "0" else (ef[b.key] == name)
+
+    strong = next(b for b in bonds if is_strong(b))
+    power = [b for b in bonds if not b.is_signal]
+    if strong.is_signal:  # a dualized detector imposes the common variable
+        value = signal_function(elements[strong.head].signal)
+        for b in power:
+            result.assignments[common(b.label)] = value
+        result.balances[name] = sp.Add(*(b.sign_into(name) * summed(b.label) for b in power))
+    else:
+        value = common(strong.label)
+        for b in power:
+            if b is not strong:
+                result.assignments[common(b.label)] = value
+        others = sp.Add(*(b.sign_into(name) * summed(b.label) for b in power if b is not strong))
+        result.assignments[summed(strong.label)] = -strong.sign_into(name) * others
+    for b in bonds:
+        if b.is_signal and b is not strong:
+            result.outputs[elements[b.head].signal] = value
+
+
+def _solve(law: sp.Expr, variable: sp.Symbol, element: Element) -> sp.Expr:
+    try:
+        return solve_for(law, variable, where=str(element))
+    except LawError as exc:
+        raise EquationError(f"{exc} (the causality puts {element} in a form that needs {variable})") from None
+
+
+# ---------------------------------------------------------------------------
+# resolution
+
+
+def substitute(expression: sp.Expr, resolved: dict) -> sp.Expr:
+    """Replace resolved bond variables and carry out pending ``ddt`` derivatives."""
+    mapping = {s: resolved[s] for s in expression.free_symbols if s in resolved}
+    if mapping:
+        expression = expression.xreplace(mapping)
+    if expression.has(ddt):
+        expression = expression.replace(ddt, lambda inner: sp.diff(inner, T))
+    return expression
+
+
+def resolve(assignments: dict) -> tuple[dict, list]:
+    """Express every assigned variable in known quantities.
+
+    Returns the resolved mapping and the list of algebraic loops solved, each
+    a tuple of the variables involved.
+
+    Raises
+    ------
+    EquationError
+        for an algebraic loop sympy cannot solve, naming its variables.
+    """
+    unknowns = set(assignments)
+    graph = nx.DiGraph()
+    graph.add_nodes_from(assignments)
+    for var, expression in assignments.items():
+        graph.add_edges_from((dep, var) for dep in expression.free_symbols & unknowns)
+    condensed = nx.condensation(graph)
+    resolved: dict = {}
+    loops: list = []
+    for component in nx.topological_sort(condensed):
+        members = sorted(condensed.nodes[component]["members"], key=sp.default_sort_key)
+        if len(members) == 1 and not graph.has_edge(members[0], members[0]):
+            resolved[members[0]] = substitute(assignments[members[0]], resolved)
+            continue
+        equations = [var - substitute(assignments[var], resolved) for var in members]
+        try:
+            solutions = sp.solve(equations, members, dict=True)
+        except NotImplementedError:
+            solutions = []
+        if len(solutions) != 1 or set(solutions[0]) != set(members):
+            names = ", ".join(map(str, members))
+            raise EquationError(
+                f"algebraic loop in {names}: sympy found {len(solutions)} explicit solution(s); "
+                "equations: " + "; ".join(f"{eq} = 0" for eq in equations)
+            )
+        resolved.update({var: sp.simplify(value) for var, value in solutions[0].items()})
+        loops.append(tuple(members))
+    return resolved, loops
+
+
+# ---------------------------------------------------------------------------
+# state equations
+
+
+@dataclass
+class StateEquations:
+    """Explicit state equations ``dx/dt = rhs(x, u, theta)`` and outputs.
+
+    Attributes
+    ----------
+    states : list of sympy.Symbol
+        Energy variables ``q_<C>``, ``p_<I>`` of storage in integral causality.
+    elements : list
+        The storage element of each state.
+    rhs : list of sympy.Expr
+        Time derivative of each state, in states, input signals ``u(t)`` and
+        parameter symbols.
+    inputs : list of str
+        Input signal names.
+    outputs : dict
+        Measured signal -> expression.
+    efforts, flows : dict
+        Bond label -> expression of its effort and flow.
+    parameters : dict
+        Parameter name -> nominal value.
+    causality : Causality
+    algebraic_loops : list
+        Tuples of bond variables of the algebraic loops solved symbolically.
+    """
+
+    states: list
+    elements: list
+    rhs: list
+    inputs: list
+    outputs: dict
+    efforts: dict
+    flows: dict
+    parameters: dict
+    causality: Causality
+    algebraic_loops: list
+
+    @property
+    def dependent_storage(self) -> list:
+        return self.causality.dependent_storage
+
+    def __str__(self) -> str:
+        lines = [f"d{x}/dt = {rhs}" for x, rhs in zip(self.states, self.rhs)]
+        lines += [f"{name} = {expr}" for name, expr in self.outputs.items()]
+        return "\n".join(lines)
+
+
+def state_equations(bg: BondGraph, causality: Causality | None = None) -> StateEquations:
+    """Derive the state equations of ``bg`` in (preferred) integral causality.
+
+    Storage forced into derivative causality (dependent storage) is handled by
+    solving the equations, which are then linear in the state derivatives.
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit
+    >>> eqs = rlc_circuit().state_equations()
+    >>> eqs.states, eqs.rhs[0]
+    ([p_L, q_C], -R*p_L/L + V(t) - q_C/C)
+    """
+    if causality is None:
+        causality = assign_causality(bg, INTEGRAL, dualize_detectors=False)
+    if causality.dualized:
+        raise CausalityError("state equations need detectors as measurements, not dualized sources")
+    oriented = causal_equations(bg, causality)
+    resolved = oriented.resolved
+    names = list(oriented.states)
+    functions = [oriented.states[n] for n in names]
+    symbols = [sp.Symbol(str(x.func)) for x in functions]
+    to_symbol = dict(zip(functions, symbols))
+    rhs = [substitute(oriented.derivatives[n], resolved) for n in names]
+    rhs = _solve_for_derivatives(rhs, functions, [bg.elements[n] for n in names])
+
+    def finish(expression):
+        return expression.xreplace(to_symbol)
+
+    labels = [b.label for b in bg.bonds if not b.is_signal]
+    efforts = {k: finish(resolved.get(effort(k), effort(k))) for k in labels}
+    flows = {k: finish(resolved.get(flow(k), flow(k))) for k in labels}
+    outputs = {s: finish(oriented.express(expr)) for s, expr in oriented.outputs.items()}
+    for table in (efforts, flows, outputs):
+        for key, expression in table.items():
+            if expression.has(sp.Derivative):
+                expression = expression.xreplace(
+                    {sp.Derivative(x, T): r for x, r in zip(symbols, [finish(r) for r in rhs])}
+                )
+                table[key] = expression
+    return StateEquations(
+        states=symbols,
+        elements=names,
+        rhs=[finish(r) for r in rhs],
+        inputs=bg.inputs,
+        outputs=outputs,
+        efforts=efforts,
+        flows=flows,
+        parameters=bg.parameters,
+        causality=causality,
+        algebraic_loops=oriented.loops,
+    )
+
+
+def _solve_for_derivatives(rhs: list, states: list, elements: list) -> list:
+    """Eliminate ``d x_j/dt`` terms (from dependent storage) from the right-hand sides."""
+    pending = [i for i, r in enumerate(rhs) if r.has(sp.Derivative)]
+    if not pending:
+        return rhs
+    derivatives = {sp.Derivative(x, T): sp.Symbol(f"_d_{x.func}") for x in states}
+    unknown_derivatives = set()
+    for i in pending:
+        unknown_derivatives |= rhs[i].atoms(sp.Derivative)
+    stray = unknown_derivatives - set(derivatives)
+    if stray:
+        raise EquationError(
+            f"state equations need time derivatives of {sorted(map(str, stray))}: "
+            "a storage element in derivative causality is driven by an input"
+        )
+    involved = {derivatives[d] for d in unknown_derivatives}
+    rows = sorted(set(pending) | {i for i, x in enumerate(states) if derivatives[sp.Derivative(x, T)] in involved})
+    unknowns = [derivatives[sp.Derivative(states[i], T)] for i in rows]
+    equations = [unknowns[k] - rhs[i].xreplace(derivatives) for k, i in enumerate(rows)]
+    solution = sp.solve(equations, unknowns, dict=True)
+    if len(solution) != 1:
+        raise EquationError(
+            "dependent storage: cannot solve for the derivatives of "
+            + ", ".join(str(elements[i]) for i in rows)
+        )
+    rhs = list(rhs)
+    for k, i in enumerate(rows):
+        rhs[i] = sp.simplify(solution[0][unknowns[k]])
+    return rhs

@@ -1,0 +1,395 @@
+"""The bond graph model: a networkx.DiGraph wrapped with a small DSL and validation.
+
+A bond graph is a ``networkx.DiGraph`` (model contract in DESIGN.md): node
+attribute ``kind``; ``param``, ``value``, ``uncertainty``, ``law`` on
+parametric elements; ``signal`` on sources and detectors; an edge ``u -> v`` is
+a bond whose direction is the power half-arrow, and edges into De/Df are signal
+bonds.  Extensions kept by this toolkit (other attributes are kept and ignored):
+
+``modulus``
+    TF/GY/MTF/MGY: the modulus as an expression in parameters (and, for MTF/MGY,
+    the modulating signal), e.g. ``"1/k_belt"``.  Default: the parameter itself
+    (TF, GY) or the modulating signal (MTF, MGY).
+``params``
+    A dict of auxiliary constants a law uses besides the element's own
+    parameter, e.g. ``{"S_n": 5e-5, "g": 9.81}`` for a valve.
+
+Examples
+--------
+>>> bg = BondGraph()
+>>> bg.add("V", "Se", signal="u")
+'V'
+>>> bg.add("J1", "1")
+'J1'
+>>> bg.add("R1", "R", value=2.0, uncertainty=(-0.1, 0.1))
+'R1'
+>>> bg.add("L1", "I", value=0.5)
+'L1'
+>>> for tail, head in [("V", "J1"), ("J1", "R1"), ("J1", "L1")]:
+...     _ = bg.bond(tail, head)
+>>> bg.parameters
+{'R1': 2.0, 'L1': 0.5}
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Hashable, Mapping
+from dataclasses import dataclass, field
+
+import networkx as nx
+import sympy as sp
+from sympy.core.function import AppliedUndef
+
+from . import elements as el
+from .errors import LawError, ModelError
+from .laws import parse_expression
+
+T = sp.Symbol("t")
+PORT_SYMBOLS = {name: sp.Symbol(name) for name in ("e", "f", "q", "p")}
+RESERVED_NAMES = frozenset(PORT_SYMBOLS) | {"t"}
+
+
+def signal_function(name: str) -> sp.Expr:
+    """The contract's form of a measured or input signal: ``name(t)``.
+
+    >>> signal_function("omega_m")
+    omega_m(t)
+    """
+    return sp.Function(name)(T)
+
+
+@dataclass(frozen=True)
+class Element:
+    """A validated node of the bond graph.
+
+    ``law`` is in the port symbols ``e, f, q, p`` and parameter symbols;
+    ``modulus`` (two-ports) is in parameter symbols and signal functions.
+    """
+
+    name: Hashable
+    kind: str
+    param: str | None = None
+    value: float | None = None
+    uncertainty: tuple[float, float] | None = None
+    law: sp.Expr | None = None
+    modulus: sp.Expr | None = None
+    signal: str | None = None
+    constants: Mapping[str, float] = field(default_factory=dict)
+
+    def __str__(self) -> str:
+        return f"{self.kind} {self.name!r}"
+
+
+@dataclass(frozen=True)
+class Bond:
+    """A bond ``tail -> head`` (power direction); signal bonds end at a detector."""
+
+    tail: Hashable
+    head: Hashable
+    label: Hashable | None
+    is_signal: bool = False
+
+    @property
+    def key(self) -> tuple[Hashable, Hashable]:
+        return (self.tail, self.head)
+
+    def other(self, node: Hashable) -> Hashable:
+        return self.head if node == self.tail else self.tail
+
+    def sign_into(self, node: Hashable) -> int:
+        """+1 if power flows into ``node`` along this bond, -1 if out of it."""
+        return 1 if node == self.head else -1
+
+    def __str__(self) -> str:
+        name = f"bond {self.label} " if self.label is not None else "signal bond "
+        return f"{name}({self.tail!r} -> {self.head!r})"
+
+
+class BondGraph:
+    """A bond graph model following the DESIGN.md contract.
+
+    Parameters
+    ----------
+    graph : networkx.DiGraph, optional
+        A graph built with networkx directly.  It is validated at once and kept
+        as given (``bg.graph is graph``).  Without it, build with :meth:`add`
+        and :meth:`bond`.
+    name : str, optional
+        A name for reports.
+    """
+
+    def __init__(self, graph: nx.DiGraph | None = None, *, name: str | None = None):
+        if graph is None:
+            graph = nx.DiGraph()
+        if not isinstance(graph, nx.DiGraph) or graph.is_multigraph():
+            raise ModelError(f"a bond graph is a networkx.DiGraph, got {type(graph).__name__}")
+        self._graph = graph
+        self.name = name or graph.graph.get("name", "bond graph")
+        if graph.number_of_nodes():
+            self.validate()
+
+    # -- building (DSL) -------------------------------------------------
+    @property
+    def graph(self) -> nx.DiGraph:
+        """The underlying networkx graph (the same object, not a copy)."""
+        return self._graph
+
+    def add(self, name: Hashable, kind: str | int, **attributes) -> Hashable:
+        """Add an element; node-local attributes are checked at once.
+
+        ``bg.add("R1", "R", value=10.0, uncertainty=(-0.05, 0.05))``
+        """
+        if name in self._graph:
+            raise ModelError(f"node {name!r} already exists ({self._graph.nodes[name].get('kind')})")
+        data = {"kind": kind, **attributes}
+        _read_element(name, data)  # raises with the node's name on bad input
+        self._graph.add_node(name, **data)
+        return name
+
+    def bond(self, tail: Hashable, head: Hashable, *, label: Hashable | None = None, **attributes) -> tuple:
+        """Add a bond with power flowing from ``tail`` to ``head``.
+
+        A bond into a De/Df node is a signal bond (a sensor on a junction).
+        """
+        for node in (tail, head):
+            if node not in self._graph:
+                raise ModelError(f"bond ({tail!r} -> {head!r}): node {node!r} does not exist; add it first")
+        if self._graph.has_edge(tail, head):
+            raise ModelError(f"bond ({tail!r} -> {head!r}) already exists")
+        if label is not None:
+            attributes["label"] = label
+        self._graph.add_edge(tail, head, **attributes)
+        return (tail, head)
+
+    # -- views ------------------------------------------------------------
+    def validate(self) -> None:
+        """Check the whole model; raise :class:`ModelError` naming the node or bond at fault."""
+        self._structure()
+
+    @property
+    def elements(self) -> dict[Hashable, Element]:
+        """Validated elements by node name, in insertion order."""
+        return dict(self._structure()[0])
+
+    @property
+    def bonds(self) -> list[Bond]:
+        """Power bonds (with labels) followed by signal bonds, in edge order."""
+        return list(self._structure()[1])
+
+    @property
+    def parameters(self) -> dict[str, float]:
+        """Nominal value of every parameter (element parameters, then law constants)."""
+        return dict(self._structure()[2])
+
+    @property
+    def uncertainties(self) -> dict[str, tuple[float, float]]:
+        """Multiplicative interval ``(delta_lo, delta_hi)`` of each uncertain parameter."""
+        return {e.param: e.uncertainty for e in self.elements.values() if e.uncertainty is not None}
+
+    @property
+    def inputs(self) -> list[str]:
+        """Input signal names: sources and modulating signals of MTF/MGY."""
+        names = [e.signal for e in self.elements.values() if e.kind in el.SOURCES | el.MODULATED_TWO_PORTS]
+        return list(dict.fromkeys(names))
+
+    @property
+    def outputs(self) -> list[str]:
+        """Measured signal names (detectors)."""
+        return [e.signal for e in self.elements.values() if e.kind in el.DETECTORS]
+
+    def symbol(self, parameter: str) -> sp.Symbol:
+        """The sympy symbol of a parameter."""
+        if parameter not in self.parameters:
+            raise KeyError(f"unknown parameter {parameter!r}; the model has {sorted(self.parameters)}")
+        return sp.Symbol(parameter)
+
+    # -- analysis -----------------------------------------------------------
+    def assign_causality(self, preferred: str = "integral", *, dualize_detectors: bool | None = None):
+        """Sequential causality assignment; see :func:`bondgraph.causality.assign_causality`."""
+        from .causality import assign_causality
+
+        return assign_causality(self, preferred=preferred, dualize_detectors=dualize_detectors)
+
+    def equations(self) -> list[sp.Eq]:
+        """Acausal constitutive and junction equations; see :func:`bondgraph.equations.model_equations`."""
+        from .equations import model_equations
+
+        return model_equations(self)
+
+    def state_equations(self, causality=None):
+        """State equations in integral causality; see :func:`bondgraph.equations.state_equations`."""
+        from .equations import state_equations
+
+        return state_equations(self, causality)
+
+    def __repr__(self) -> str:
+        kinds: dict[str, int] = {}
+        for _, data in self._graph.nodes(data=True):
+            kind = str(data.get("kind"))
+            kinds[kind] = kinds.get(kind, 0) + 1
+        summary = ", ".join(f"{n} {k}" for k, n in sorted(kinds.items()))
+        return f"<BondGraph {self.name!r}: {self._graph.number_of_edges()} bonds; {summary}>"
+
+    # -- validation ---------------------------------------------------------
+    def _structure(self):
+        elements = {name: _read_element(name, data) for name, data in self._graph.nodes(data=True)}
+        bonds = _read_bonds(self._graph, elements)
+        from .validation import check_model
+
+        parameters = check_model(elements, bonds)
+        return elements, bonds, parameters
+
+
+def _read_element(name: Hashable, data: Mapping) -> Element:
+    """Validate one node's attributes and return its :class:`Element`."""
+    kind = el.normalize_kind(data.get("kind"))
+    if kind is None:
+        raise ModelError(
+            f"node {name!r}: unknown kind {data.get('kind')!r} (expected one of {', '.join(sorted(el.KINDS))})"
+        )
+    where = f"{kind} {name!r}"
+    param = value = uncertainty = law = modulus = signal = None
+    constants = _read_constants(where, data.get("params"))
+
+    if kind in el.PARAMETRIC:
+        param = str(data.get("param", name))
+        if param in RESERVED_NAMES:
+            raise ModelError(f"{where}: parameter name {param!r} is reserved (e, f, q, p, t)")
+        value = _read_value(where, data.get("value"))
+    elif "uncertainty" in data and data["uncertainty"] is not None:
+        raise ModelError(f"{where}: has an uncertainty but no parameter (only C, I, R, TF, GY, MTF, MGY do)")
+    if kind in el.PARAMETRIC and data.get("uncertainty") is not None:
+        uncertainty = _read_uncertainty(where, data["uncertainty"])
+    if kind in el.SOURCES | el.DETECTORS | el.MODULATED_TWO_PORTS:
+        signal = str(data.get("signal", name))
+        if signal in RESERVED_NAMES:
+            raise ModelError(f"{where}: signal name {signal!r} is reserved (e, f, q, p, t)")
+    if kind in el.SOURCES and data.get("value") is not None:
+        value = _read_value(where, data["value"])  # optional constant input
+
+    names = {**{c: sp.Symbol(c) for c in constants}, **({param: sp.Symbol(param)} if param else {})}
+    if data.get("law") is not None:
+        if kind not in el.LAW_VARIABLES:
+            raise ModelError(f"{where}: a law is only for C, I and R elements (use 'modulus' on a two-port)")
+        law = _read_law(where, kind, data["law"], names, param)
+    if kind in el.TWO_PORTS:
+        modulus = _read_modulus(where, kind, data.get("modulus"), names, param, signal)
+    if kind in el.PARAMETRIC and value is None:
+        uses_param = sp.Symbol(param) in (law if law is not None else modulus if modulus is not None else sp.Symbol(param)).free_symbols
+        if uses_param:
+            raise ModelError(f"{where}: missing nominal 'value' for parameter {param!r}")
+    return Element(name, kind, param, value, uncertainty, law, modulus, signal, constants)
+
+
+def _read_value(where: str, value) -> float | None:
+    if value is None:
+        return None
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        raise ModelError(f"{where}: nominal value {value!r} is not a number") from None
+    if not math.isfinite(number):
+        raise ModelError(f"{where}: nominal value {value!r} is not finite")
+    return number
+
+
+def _read_uncertainty(where: str, interval) -> tuple[float, float]:
+    try:
+        lo, hi = (float(x) for x in interval)
+    except (TypeError, ValueError):
+        raise ModelError(f"{where}: uncertainty {interval!r} is not a pair (delta_lo, delta_hi)") from None
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ModelError(f"{where}: uncertainty {interval!r} is not finite")
+    if lo > hi:
+        raise ModelError(f"{where}: uncertainty {interval!r} has lo > hi")
+    if not lo <= 0.0 <= hi:
+        raise ModelError(
+            f"{where}: multiplicative uncertainty {interval!r} must contain 0 "
+            "(true value = value * (1 + delta), delta in [lo, hi])"
+        )
+    if lo <= -1.0:
+        raise ModelError(f"{where}: uncertainty {interval!r} lets the parameter reach zero or change sign (need lo > -1)")
+    return (lo, hi)
+
+
+def _read_constants(where: str, params) -> dict[str, float]:
+    if params is None:
+        return {}
+    if not isinstance(params, Mapping):
+        raise ModelError(f"{where}: 'params' must be a mapping of constant names to values, got {params!r}")
+    constants = {}
+    for key, value in params.items():
+        if str(key) in RESERVED_NAMES:
+            raise ModelError(f"{where}: constant name {key!r} is reserved (e, f, q, p, t)")
+        constants[str(key)] = _read_value(f"{where} constant {key!r}", value)
+        if constants[str(key)] is None:
+            raise ModelError(f"{where}: constant {key!r} has no value")
+    return constants
+
+
+def _read_law(where: str, kind: str, law, names: dict, param: str) -> sp.Expr:
+    ports = el.LAW_VARIABLES[kind]
+    allowed = {**names, **{v: PORT_SYMBOLS[v] for v in ports}}
+    if isinstance(law, str):
+        expression = parse_expression(law, allowed, where=f"{where} law")
+    elif isinstance(law, sp.Basic):
+        expression = law
+        if isinstance(law, sp.Equality):
+            expression = law.lhs - law.rhs
+        unknown = {s.name for s in expression.free_symbols} - set(allowed)
+        if unknown:
+            raise LawError(f"{where} law: unknown symbol(s) {sorted(unknown)} (allowed: {sorted(allowed)})")
+        if expression.atoms(AppliedUndef):
+            raise LawError(f"{where} law: undefined function(s) {sorted(map(str, expression.atoms(AppliedUndef)))}")
+    else:
+        raise LawError(f"{where} law: expected a sympy expression or a string, got {type(law).__name__}")
+    symbols = {s.name for s in expression.free_symbols}
+    missing = [v for v in ports if v not in symbols]
+    if missing:
+        raise LawError(
+            f"{where} law {expression} = 0 does not mention the port variable(s) {missing} "
+            f"(a {kind} law relates {' and '.join(ports)})"
+        )
+    return expression
+
+
+def _read_modulus(where, kind, modulus, names, param, signal) -> sp.Expr:
+    if kind in el.MODULATED_TWO_PORTS:
+        names = {**names, signal: signal_function(signal)}
+    if modulus is None:
+        return signal_function(signal) if kind in el.MODULATED_TWO_PORTS else sp.Symbol(param)
+    if isinstance(modulus, (int, float)) and not isinstance(modulus, bool):
+        raise ModelError(f"{where}: give a numeric modulus as 'value', not 'modulus'")
+    if isinstance(modulus, str):  # a modulating signal is written by name; it stands for name(t)
+        return parse_expression(modulus, names, where=f"{where} modulus")
+    if isinstance(modulus, sp.Basic):
+        allowed = {str(v) for v in names.values()}
+        unknown = {str(s) for s in modulus.free_symbols | modulus.atoms(AppliedUndef)} - allowed - {"t"}
+        if unknown:
+            raise LawError(f"{where} modulus: unknown symbol(s) {sorted(unknown)}")
+        return modulus
+    raise LawError(f"{where} modulus: expected a sympy expression or a string, got {type(modulus).__name__}")
+
+
+def _read_bonds(graph: nx.DiGraph, elements: Mapping[Hashable, Element]) -> list[Bond]:
+    power, signal, used = [], [], set()
+    for tail, head, data in graph.edges(data=True):
+        is_signal = elements[head].kind in el.DETECTORS or elements[tail].kind in el.DETECTORS
+        label = data.get("label")
+        if is_signal:
+            signal.append(Bond(tail, head, label, True))
+            continue
+        if label is not None:
+            if str(label) in used:  # labels name the symbols e_<label>, f_<label>
+                raise ModelError(f"bond ({tail!r} -> {head!r}): label {label!r} is used by another bond")
+            used.add(str(label))
+        power.append([tail, head, label])
+    number = 1
+    for entry in power:  # number unlabeled bonds, skipping labels the user chose
+        if entry[2] is None:
+            while str(number) in used:
+                number += 1
+            entry[2] = number
+            used.add(str(number))
+    return [Bond(t, h, label) for t, h, label in power] + signal

@@ -1,0 +1,265 @@
+"""Simulation of bond graph state equations with ``scipy.integrate.solve_ivp``.
+
+Inputs are given per signal name as
+
+* a number (constant input),
+* a callable ``u(t)``,
+* a callable ``u(t, y)`` of time and the measured signals ``y`` (a dict), so a
+  feedback law can close around the model, or
+* a controller object with states (see :mod:`bondgraph.control`).
+
+Parameters may be overridden by numbers or by callables of time (a degrading
+parameter, say).  The result holds every effort, flow, state and signal.
+"""
+
+from __future__ import annotations
+
+import inspect
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+import sympy as sp
+from scipy.integrate import solve_ivp
+
+from .equations import StateEquations
+from .errors import SimulationError
+from .model import T, BondGraph, signal_function
+
+
+@dataclass
+class SimulationResult:
+    """Trajectories of a simulation.
+
+    Attributes
+    ----------
+    t : ndarray, shape (n,)
+    states : dict
+        State name (``q_C``, ``p_L``) -> trajectory.
+    efforts, flows : dict
+        Bond label -> trajectory.
+    signals : dict
+        Input and measured signal name -> trajectory.
+    controller_states : dict
+        Input name -> array (n, n_states) of controller states.
+    solver : object
+        The ``solve_ivp`` result (``nfev``, ``message``...).
+    """
+
+    t: np.ndarray
+    states: dict
+    efforts: dict
+    flows: dict
+    signals: dict
+    controller_states: dict = field(default_factory=dict)
+    solver: object = None
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        """A signal or state trajectory by name."""
+        for table in (self.signals, self.states):
+            if name in table:
+                return table[name]
+        raise KeyError(f"no signal or state {name!r}; signals: {sorted(self.signals)}, states: {sorted(self.states)}")
+
+    def record(self) -> dict[str, np.ndarray]:
+        """The measured and input signals with the time column ``t``, as data files hold them."""
+        return {"t": self.t, **self.signals}
+
+
+def simulate(
+    model: BondGraph | StateEquations,
+    t_span: tuple[float, float],
+    inputs: Mapping | None = None,
+    *,
+    x0: Mapping | None = None,
+    parameters: Mapping | None = None,
+    t_eval: np.ndarray | None = None,
+    method: str = "LSODA",
+    rtol: float = 1e-8,
+    atol: float = 1e-10,
+    max_step: float = np.inf,
+) -> SimulationResult:
+    """Simulate a bond graph from its state equations.
+
+    Parameters
+    ----------
+    model : BondGraph or StateEquations
+    t_span : (t0, t1)
+    inputs : mapping, optional
+        Signal name -> number, ``u(t)``, ``u(t, y)`` or controller.  Sources
+        with a constant ``value`` need no entry.
+    x0 : mapping, optional
+        Initial state by state name (``q_C``) or element name (``C``); default 0.
+    parameters : mapping, optional
+        Parameter name -> value or callable of t, overriding nominal values.
+    t_eval : array, optional
+        Output times; default 501 points over ``t_span``.
+    method, rtol, atol, max_step
+        Passed to :func:`scipy.integrate.solve_ivp`.
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit
+    >>> result = simulate(rlc_circuit(), (0.0, 0.5), {"V": 1.0})
+    >>> round(float(result["v_C"][-1]), 3)
+    1.0
+    """
+    equations = model.state_equations() if isinstance(model, BondGraph) else model
+    sources = model.elements if isinstance(model, BondGraph) else {}
+    plan = _Plan(equations, inputs or {}, parameters or {}, sources)
+    x0_vector = _initial_state(equations, x0 or {})
+    z0 = np.concatenate([x0_vector] + [np.asarray(c.initial_state(), float) for c in plan.controllers.values()])
+    if t_eval is None:
+        t_eval = np.linspace(t_span[0], t_span[1], 501)
+    solution = solve_ivp(plan.derivative, t_span, z0, method=method, t_eval=t_eval,
+                         rtol=rtol, atol=atol, max_step=max_step)
+    if not solution.success:
+        raise SimulationError(f"integration failed at t = {solution.t[-1] if solution.t.size else t_span[0]}: {solution.message}")
+    return plan.result(solution)
+
+
+def _initial_state(equations: StateEquations, x0: Mapping) -> np.ndarray:
+    names = [str(s) for s in equations.states]
+    by_element = {str(e): i for i, e in enumerate(equations.elements)}
+    vector = np.zeros(len(names))
+    for key, value in x0.items():
+        index = names.index(str(key)) if str(key) in names else by_element.get(str(key))
+        if index is None:
+            raise SimulationError(f"x0: {key!r} is not a state; states are {names} (or elements {list(by_element)})")
+        vector[index] = float(value)
+    return vector
+
+
+def _arity(function: Callable) -> int:
+    try:
+        params = inspect.signature(function).parameters.values()
+    except (TypeError, ValueError):
+        return 1
+    positional = [p for p in params if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD) and p.default is p.empty]
+    return len(positional)
+
+
+class _Plan:
+    """Compiled numeric functions and the input schedule of one simulation."""
+
+    def __init__(self, equations: StateEquations, inputs: Mapping, parameters: Mapping, sources: Mapping):
+        self.equations = equations
+        self.n = len(equations.states)
+        names = list(equations.inputs)
+        unknown = set(inputs) - set(names)
+        if unknown:
+            raise SimulationError(f"inputs {sorted(unknown)} are not inputs of the model; its inputs are {names}")
+        constants = {e.signal: e.value for e in sources.values() if getattr(e, "value", None) is not None and e.signal}
+        self.open_loop: dict[str, Callable] = {}
+        self.feedback: dict[str, Callable] = {}
+        self.controllers: dict[str, object] = {}
+        for name in names:
+            spec = inputs.get(name, constants.get(name))
+            if spec is None:
+                raise SimulationError(f"no value for input {name!r}; pass inputs={{{name!r}: ...}}")
+            if hasattr(spec, "output") and hasattr(spec, "derivative"):
+                self.controllers[name] = spec
+            elif callable(spec):
+                (self.feedback if _arity(spec) >= 2 else self.open_loop)[name] = spec
+            else:
+                try:
+                    value = float(spec)
+                except (TypeError, ValueError):
+                    raise SimulationError(f"input {name!r}: {spec!r} is not a number, a callable or a controller") from None
+                self.open_loop[name] = lambda t, v=value: v
+        unknown = set(parameters) - set(equations.parameters)
+        if unknown:
+            raise SimulationError(f"parameters {sorted(unknown)} are not in the model; it has {sorted(equations.parameters)}")
+        self.parameter_names = list(equations.parameters)
+        self.parameter_values = {**equations.parameters, **parameters}
+        self.input_names = names
+        self._compile()
+
+    def _compile(self) -> None:
+        eq = self.equations
+        u_symbols = [sp.Symbol(f"_u_{name}") for name in self.input_names]
+        to_symbol = {signal_function(name): s for name, s in zip(self.input_names, u_symbols)}
+        theta = [sp.Symbol(name) for name in self.parameter_names]
+        args = (T, eq.states, u_symbols, theta)
+
+        def compile_list(expressions):
+            expressions = [sp.sympify(x).xreplace(to_symbol) for x in expressions]
+            return sp.lambdify(args, expressions, modules="numpy", cse=True), expressions
+
+        self.f_rhs, _ = compile_list(eq.rhs)
+        self.output_names = list(eq.outputs)
+        self.f_outputs, outputs = compile_list(eq.outputs.values())
+        closed = {to_symbol[signal_function(n)] for n in (*self.feedback, *self.controllers)}
+        for name, expression in zip(self.output_names, outputs):
+            if expression.free_symbols & closed:
+                raise SimulationError(
+                    f"measured signal {name!r} depends directly on a feedback input; the loop is algebraic"
+                )
+        self.labels = list(eq.efforts)
+        self.f_bonds, _ = compile_list([*eq.efforts.values(), *eq.flows.values()])
+
+    def _theta(self, t):
+        return [v(t) if callable(v) else v for v in (self.parameter_values[n] for n in self.parameter_names)]
+
+    def _inputs(self, t, x, z_controllers, theta):
+        u = {name: 0.0 for name in self.input_names}
+        for name, function in self.open_loop.items():
+            u[name] = function(t)
+        y = {}
+        if self.feedback or self.controllers:
+            values = self.f_outputs(t, x, [u[n] for n in self.input_names], theta)
+            y = dict(zip(self.output_names, values))
+            offset = 0
+            for name, controller in self.controllers.items():
+                k = controller.n_states
+                u[name] = controller.output(t, z_controllers[offset:offset + k], y)
+                offset += k
+            for name, function in self.feedback.items():
+                u[name] = function(t, y)
+        return [u[n] for n in self.input_names], y
+
+    def derivative(self, t, z):
+        x, zc = z[: self.n], z[self.n:]
+        theta = self._theta(t)
+        u, y = self._inputs(t, x, zc, theta)
+        dx = np.asarray(self.f_rhs(t, x, u, theta), dtype=float).reshape(-1)
+        parts = [dx]
+        offset = 0
+        for controller in self.controllers.values():
+            k = controller.n_states
+            parts.append(np.asarray(controller.derivative(t, zc[offset:offset + k], y), float).reshape(-1))
+            offset += k
+        return np.concatenate(parts)
+
+    def result(self, solution) -> SimulationResult:
+        t, z = solution.t, solution.y
+        n_t = t.size
+        u_history = np.empty((len(self.input_names), n_t))
+        thetas = []
+        for k in range(n_t):  # inputs may be arbitrary Python callables: one call per sample
+            theta = self._theta(t[k])
+            thetas.append(theta)
+            u_history[:, k] = self._inputs(t[k], z[: self.n, k], z[self.n:, k], theta)[0]
+        theta_history = [np.array(column, float) for column in zip(*thetas)] if thetas else []
+
+        def evaluate(function):
+            values = function(t, z[: self.n], list(u_history), theta_history)
+            return [np.broadcast_to(np.asarray(v, float), (n_t,)).copy() for v in values]
+
+        bonds = evaluate(self.f_bonds)
+        m = len(self.labels)
+        signals = dict(zip(self.input_names, u_history))
+        signals.update(zip(self.output_names, evaluate(self.f_outputs)))
+        controller_states, offset = {}, self.n
+        for name, controller in self.controllers.items():
+            controller_states[name] = z[offset:offset + controller.n_states].T
+            offset += controller.n_states
+        return SimulationResult(
+            t=t,
+            states={str(s): z[i] for i, s in enumerate(self.equations.states)},
+            efforts=dict(zip(self.labels, bonds[:m])),
+            flows=dict(zip(self.labels, bonds[m:])),
+            signals=signals,
+            controller_states=controller_states,
+            solver=solution,
+        )

@@ -1,0 +1,1 @@
+"""prognosis: fault model, particle filters, RUL prediction, metrics (issue 4)."""
