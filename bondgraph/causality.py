@@ -150,13 +150,10 @@ def assign_causality(bg: BondGraph, preferred: str = INTEGRAL, *, dualize_detect
 
 class _Scap:
     def __init__(self, bg: BondGraph, preferred: str, dualize: bool):
-        self.elements = bg.elements
-        self.all_bonds = bg.bonds
-        self.bonds = [b for b in self.all_bonds if not b.is_signal or dualize]
-        self.at: dict[Hashable, list[Bond]] = {n: [] for n in self.elements}
-        for bond in self.bonds:
-            self.at[bond.tail].append(bond)
-            self.at[bond.head].append(bond)
+        structure = bg.structure()
+        self.elements = structure.elements
+        self.bonds = [b for b in structure.bonds if not b.is_signal or dualize]
+        self.at = {n: [b for b in bonds if not b.is_signal or dualize] for n, bonds in structure.at.items()}
         self.result = Causality(preferred, bonds=self.bonds)
         self.effort_from = self.result.effort_from
         self.origin: dict[tuple, Hashable] = {}  # which element's choice fixed a bond

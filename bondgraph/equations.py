@@ -84,11 +84,8 @@ def model_equations(bg: BondGraph) -> list[sp.Eq]:
     >>> model_equations(rlc_circuit())[0]
     Eq(e_1, V(t))
     """
-    elements, bonds = bg.elements, bg.bonds
-    at: dict[Hashable, list] = {n: [] for n in elements}
-    for bond in bonds:
-        at[bond.tail].append(bond)
-        at[bond.head].append(bond)
+    structure = bg.structure()
+    elements, at = structure.elements, structure.at
     equations: list[sp.Eq] = []
     for name, element in elements.items():
         power = [b for b in at[name] if not b.is_signal]
@@ -173,7 +170,7 @@ class CausalEquations:
         return substitute(expression, self.resolved)
 
 
-def causal_equations(bg: BondGraph, causality: Causality) -> CausalEquations:
+def causal_equations(bg: BondGraph, causality: Causality, structure=None) -> CausalEquations:
     """Orient every element equation of ``bg`` according to ``causality``.
 
     Raises
@@ -185,13 +182,10 @@ def causal_equations(bg: BondGraph, causality: Causality) -> CausalEquations:
         problems = "; ".join(str(i) for i in causality.conflicts) or "some bonds have no causality"
         raise CausalityError(f"cannot orient the equations: {problems}")
     result = CausalEquations(causality)
-    elements = bg.elements
-    at: dict[Hashable, list] = {n: [] for n in elements}
-    for bond in bg.bonds:
-        at[bond.tail].append(bond)
-        at[bond.head].append(bond)
+    structure = structure or bg.structure()
+    elements = structure.elements
     for name, element in elements.items():
-        _orient(result, name, element, at[name], elements, causality)
+        _orient(result, name, element, structure.at[name], elements, causality)
     return result
 
 
@@ -278,7 +272,17 @@ def _orient_junction(result, name, kind, bonds, elements, causality):
             result.outputs[elements[b.head].signal] = value
 
 
+# Explicit forms of the default linear laws, so they need no symbolic solve.
+_LINEAR_FORMS = {
+    ("C", "e"): lambda th: Q_ / th, ("C", "q"): lambda th: th * E_,
+    ("I", "f"): lambda th: P_ / th, ("I", "p"): lambda th: th * F_,
+    ("R", "e"): lambda th: th * F_, ("R", "f"): lambda th: E_ / th,
+}
+
+
 def _solve(law: sp.Expr, variable: sp.Symbol, element: Element) -> sp.Expr:
+    if element.law is None:
+        return _LINEAR_FORMS[(element.kind, variable.name)](sp.Symbol(element.param))
     try:
         return solve_for(law, variable, where=str(element))
     except LawError as exc:
@@ -407,19 +411,20 @@ def state_equations(bg: BondGraph, causality: Causality | None = None) -> StateE
         causality = assign_causality(bg, INTEGRAL, dualize_detectors=False)
     if causality.dualized:
         raise CausalityError("state equations need detectors as measurements, not dualized sources")
-    oriented = causal_equations(bg, causality)
+    structure = bg.structure()
+    oriented = causal_equations(bg, causality, structure)
     resolved = oriented.resolved
     names = list(oriented.states)
     functions = [oriented.states[n] for n in names]
     symbols = [sp.Symbol(str(x.func)) for x in functions]
     to_symbol = dict(zip(functions, symbols))
     rhs = [substitute(oriented.derivatives[n], resolved) for n in names]
-    rhs = _solve_for_derivatives(rhs, functions, [bg.elements[n] for n in names])
+    rhs = _solve_for_derivatives(rhs, functions, [structure.elements[n] for n in names])
 
     def finish(expression):
         return expression.xreplace(to_symbol)
 
-    labels = [b.label for b in bg.bonds if not b.is_signal]
+    labels = [b.label for b in structure.bonds if not b.is_signal]
     efforts = {k: finish(resolved.get(effort(k), effort(k))) for k in labels}
     flows = {k: finish(resolved.get(flow(k), flow(k))) for k in labels}
     outputs = {s: finish(oriented.express(expr)) for s, expr in oriented.outputs.items()}
@@ -434,11 +439,11 @@ def state_equations(bg: BondGraph, causality: Causality | None = None) -> StateE
         states=symbols,
         elements=names,
         rhs=[finish(r) for r in rhs],
-        inputs=bg.inputs,
+        inputs=structure.inputs,
         outputs=outputs,
         efforts=efforts,
         flows=flows,
-        parameters=bg.parameters,
+        parameters=structure.parameters,
         causality=causality,
         algebraic_loops=oriented.loops,
     )

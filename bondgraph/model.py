@@ -106,6 +106,28 @@ class Bond:
         return f"{name}({self.tail!r} -> {self.head!r})"
 
 
+@dataclass(frozen=True)
+class Structure:
+    """A validated snapshot of a bond graph, taken once per analysis.
+
+    ``at[node]`` lists the bonds (power and signal) touching ``node``.
+    """
+
+    elements: dict
+    bonds: list
+    parameters: dict
+    at: dict
+
+    @property
+    def inputs(self) -> list[str]:
+        names = [e.signal for e in self.elements.values() if e.kind in el.SOURCES | el.MODULATED_TWO_PORTS]
+        return list(dict.fromkeys(names))
+
+    @property
+    def outputs(self) -> list[str]:
+        return [e.signal for e in self.elements.values() if e.kind in el.DETECTORS]
+
+
 class BondGraph:
     """A bond graph model following the DESIGN.md contract.
 
@@ -165,22 +187,38 @@ class BondGraph:
     # -- views ------------------------------------------------------------
     def validate(self) -> None:
         """Check the whole model; raise :class:`ModelError` naming the node or bond at fault."""
-        self._structure()
+        self.structure()
+
+    def structure(self) -> Structure:
+        """Validate the model and return a snapshot of its elements, bonds and parameters.
+
+        The graph may be edited between calls, so every call validates afresh.
+        """
+        elements = {name: _read_element(name, data) for name, data in self._graph.nodes(data=True)}
+        bonds = _read_bonds(self._graph, elements)
+        from .validation import check_model
+
+        parameters = check_model(elements, bonds)
+        at: dict[Hashable, list[Bond]] = {name: [] for name in elements}
+        for bond in bonds:
+            at[bond.tail].append(bond)
+            at[bond.head].append(bond)
+        return Structure(elements, bonds, parameters, at)
 
     @property
     def elements(self) -> dict[Hashable, Element]:
         """Validated elements by node name, in insertion order."""
-        return dict(self._structure()[0])
+        return self.structure().elements
 
     @property
     def bonds(self) -> list[Bond]:
         """Power bonds (with labels) followed by signal bonds, in edge order."""
-        return list(self._structure()[1])
+        return self.structure().bonds
 
     @property
     def parameters(self) -> dict[str, float]:
         """Nominal value of every parameter (element parameters, then law constants)."""
-        return dict(self._structure()[2])
+        return self.structure().parameters
 
     @property
     def uncertainties(self) -> dict[str, tuple[float, float]]:
@@ -190,13 +228,12 @@ class BondGraph:
     @property
     def inputs(self) -> list[str]:
         """Input signal names: sources and modulating signals of MTF/MGY."""
-        names = [e.signal for e in self.elements.values() if e.kind in el.SOURCES | el.MODULATED_TWO_PORTS]
-        return list(dict.fromkeys(names))
+        return self.structure().inputs
 
     @property
     def outputs(self) -> list[str]:
         """Measured signal names (detectors)."""
-        return [e.signal for e in self.elements.values() if e.kind in el.DETECTORS]
+        return self.structure().outputs
 
     def symbol(self, parameter: str) -> sp.Symbol:
         """The sympy symbol of a parameter."""
@@ -230,15 +267,6 @@ class BondGraph:
             kinds[kind] = kinds.get(kind, 0) + 1
         summary = ", ".join(f"{n} {k}" for k, n in sorted(kinds.items()))
         return f"<BondGraph {self.name!r}: {self._graph.number_of_edges()} bonds; {summary}>"
-
-    # -- validation ---------------------------------------------------------
-    def _structure(self):
-        elements = {name: _read_element(name, data) for name, data in self._graph.nodes(data=True)}
-        bonds = _read_bonds(self._graph, elements)
-        from .validation import check_model
-
-        parameters = check_model(elements, bonds)
-        return elements, bonds, parameters
 
 
 def _read_element(name: Hashable, data: Mapping) -> Element:
