@@ -8,7 +8,7 @@
 
 from .causality import Causality, CausalIssue, assign_causality
 from .control import PIController
-from .equations import StateEquations, causal_equations, model_equations, state_equations
+from .equations import AlgebraicLoopError, StateEquations, causal_equations, model_equations, state_equations
 from .errors import CausalityError, EquationError, LawError, ModelError, SimulationError
 from .model import BondGraph, Bond, Element, signal_function
 from .simulation import SimulationResult, simulate
@@ -17,5 +17,5 @@ __all__ = [
     "BondGraph", "Bond", "Element", "Causality", "CausalIssue", "PIController", "StateEquations",
     "SimulationResult", "assign_causality", "causal_equations", "model_equations", "state_equations",
     "simulate", "signal_function", "ModelError", "LawError", "CausalityError", "EquationError",
-    "SimulationError",
+    "SimulationError", "AlgebraicLoopError",
 ]

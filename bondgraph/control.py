@@ -24,10 +24,15 @@ import numpy as np
 class PIController:
     """Proportional-integral controller with output saturation.
 
-    ``u = clip(kp * err + ki * z, lo, hi)``, ``dz/dt = err`` with
-    ``err = setpoint(t) - y[measured]``.  Anti-windup by conditional
-    integration: while the output is saturated and the error would push it
-    further, the integral is frozen.
+    ``v = kp * err + ki * z``, ``u = clip(v, lo, hi)`` with
+    ``err = setpoint(t) - y[measured]``, and back-calculation anti-windup::
+
+        dz/dt = err + (u - v) / (ki * tracking_time)
+
+    which bleeds the integral while the output is saturated.  The tracking
+    time defaults to the integral time ``kp / ki``.  Unlike freezing the
+    integral (conditional integration), this right-hand side is continuous in
+    the state, so adaptive ODE solvers do not chatter on the saturation edge.
 
     Examples
     --------
@@ -41,6 +46,7 @@ class PIController:
     kp: float
     ki: float
     limits: tuple[float, float] | None = None
+    tracking_time: float | None = None
     n_states: int = 1
 
     def initial_state(self) -> np.ndarray:
@@ -57,12 +63,13 @@ class PIController:
         u = self._unsaturated(t, z, y)
         if self.limits is not None:
             u = min(max(u, self.limits[0]), self.limits[1])
-        return u
+        return float(u)
 
     def derivative(self, t: float, z, y: dict) -> np.ndarray:
         err = self.error(t, y)
-        if self.limits is not None:
-            u = self._unsaturated(t, z, y)
-            if (u >= self.limits[1] and err > 0) or (u <= self.limits[0] and err < 0):
-                return np.zeros(1)
-        return np.array([err])
+        if self.limits is None:
+            return np.array([err])
+        v = self._unsaturated(t, z, y)
+        u = min(max(v, self.limits[0]), self.limits[1])
+        tracking = self.tracking_time if self.tracking_time is not None else self.kp / self.ki
+        return np.array([err + (u - v) / (self.ki * tracking)])

@@ -41,6 +41,14 @@ from .model import PORT_SYMBOLS, T, BondGraph, Element, signal_function
 E_, F_, Q_, P_ = (PORT_SYMBOLS[n] for n in "efqp")
 
 
+class AlgebraicLoopError(EquationError):
+    """An algebraic loop sympy cannot solve explicitly; ``variables`` are its bond variables."""
+
+    def __init__(self, message: str, variables):
+        super().__init__(message)
+        self.variables = tuple(variables)
+
+
 class ddt(sp.Function):
     """Marker for a time derivative to be taken once its argument is known."""
 
@@ -155,6 +163,7 @@ class CausalEquations:
     derivatives: dict = field(default_factory=dict)
     outputs: dict = field(default_factory=dict)
     balances: dict = field(default_factory=dict)
+    owners: dict = field(default_factory=dict)
     loops: list = field(default_factory=list)
     _resolved: dict | None = field(default=None, repr=False)
 
@@ -162,7 +171,11 @@ class CausalEquations:
     def resolved(self) -> dict:
         """Bond variable -> expression in known quantities only (cached)."""
         if self._resolved is None:
-            self._resolved, self.loops = resolve(self.assignments)
+            try:
+                self._resolved, self.loops = resolve(self.assignments)
+            except AlgebraicLoopError as exc:
+                names = ", ".join(dict.fromkeys(str(self.owners[v]) for v in exc.variables))
+                raise AlgebraicLoopError(f"{exc} [elements in the loop: {names}]", exc.variables) from None
         return self._resolved
 
     def express(self, expression: sp.Expr) -> sp.Expr:
@@ -185,7 +198,10 @@ def causal_equations(bg: BondGraph, causality: Causality, structure=None) -> Cau
     structure = structure or bg.structure()
     elements = structure.elements
     for name, element in elements.items():
+        before = len(result.assignments)
         _orient(result, name, element, structure.at[name], elements, causality)
+        for var in list(result.assignments)[before:]:
+            result.owners[var] = element
     return result
 
 
@@ -328,19 +344,61 @@ def resolve(assignments: dict) -> tuple[dict, list]:
             resolved[members[0]] = substitute(assignments[members[0]], resolved)
             continue
         equations = [var - substitute(assignments[var], resolved) for var in members]
-        try:
-            solutions = sp.solve(equations, members, dict=True)
-        except NotImplementedError:
-            solutions = []
-        if len(solutions) != 1 or set(solutions[0]) != set(members):
-            names = ", ".join(map(str, members))
-            raise EquationError(
-                f"algebraic loop in {names}: sympy found {len(solutions)} explicit solution(s); "
-                "equations: " + "; ".join(f"{eq} = 0" for eq in equations)
-            )
-        resolved.update({var: sp.simplify(value) for var, value in solutions[0].items()})
+        resolved.update(solve_loop(equations, members))
         loops.append(tuple(members))
     return resolved, loops
+
+
+def solve_loop(equations: list, unknowns: list) -> dict:
+    """Solve the equations of an algebraic loop (each ``= 0``) for ``unknowns``.
+
+    Variables that enter an equation linearly, with a coefficient free of the
+    loop's unknowns, are eliminated one by one.  What is left must be
+    polynomial and have a single solution, which sympy then finds; a loop
+    through ``sign``, ``Abs``, ``sqrt``... is reported rather than handed to
+    ``sympy.solve``, which may not terminate on it.
+
+    Examples
+    --------
+    >>> x, y, a = sp.symbols("x y a")
+    >>> solve_loop([x - a*y - 1, y - x/2], [x, y])
+    {x: -2/(a - 2), y: -1/(a - 2)}
+    """
+    pending, free, solution = list(equations), list(unknowns), {}
+    progress = True
+    while pending and progress:
+        progress = False
+        for equation in pending:
+            variable = next((v for v in free if _enters_linearly(equation, v, free)), None)
+            if variable is None:
+                continue
+            value = -equation.subs(variable, 0) / sp.diff(equation, variable)
+            pending.remove(equation)
+            free.remove(variable)
+            pending = [eq.xreplace({variable: value}) for eq in pending]
+            solution = {v: x.xreplace({variable: value}) for v, x in solution.items()}
+            solution[variable] = value
+            progress = True
+            break
+    if pending:
+        polynomial = all(eq.is_polynomial(*free) for eq in pending)
+        roots = sp.solve(pending, free, dict=True) if polynomial else []
+        if len(roots) != 1 or set(roots[0]) != set(free):
+            reason = (f"{len(roots)} solution(s)" if polynomial else "it is not polynomial in them")
+            raise AlgebraicLoopError(
+                f"algebraic loop in {', '.join(map(str, unknowns))}: no unique explicit solution for "
+                f"{', '.join(map(str, free))} ({reason}); remaining: "
+                + "; ".join(f"{eq} = 0" for eq in pending),
+                unknowns,
+            )
+        solution = {v: x.xreplace(roots[0]) for v, x in solution.items()}
+        solution.update(roots[0])
+    return {v: sp.simplify(x) for v, x in solution.items()}
+
+
+def _enters_linearly(equation: sp.Expr, variable: sp.Symbol, unknowns: list) -> bool:
+    coefficient = sp.diff(equation, variable)
+    return coefficient != 0 and not any(coefficient.has(u) for u in unknowns)
 
 
 # ---------------------------------------------------------------------------
@@ -405,7 +463,7 @@ def state_equations(bg: BondGraph, causality: Causality | None = None) -> StateE
     >>> from bondgraph.library import rlc_circuit
     >>> eqs = rlc_circuit().state_equations()
     >>> eqs.states, eqs.rhs[0]
-    ([p_L, q_C], -R*p_L/L + V(t) - q_C/C)
+    ([p_L, q_C], V(t) - R*p_L/L - q_C/C)
     """
     if causality is None:
         causality = assign_causality(bg, INTEGRAL, dualize_detectors=False)

@@ -9,6 +9,7 @@ the caller allows and the functions in :data:`FUNCTIONS` are accepted.
 from __future__ import annotations
 
 import ast
+import math
 from collections.abc import Mapping
 
 import sympy as sp
@@ -30,6 +31,7 @@ FUNCTIONS = {
 CONSTANTS = {"pi": sp.pi}
 MAX_LENGTH = 2000
 MAX_EXPONENT = 100
+MAX_POWER_BITS = 4096  # a power of numbers may not be larger than this many bits
 
 _BINARY = {
     ast.Add: lambda a, b: a + b,
@@ -77,6 +79,8 @@ def _build(node: ast.AST, names: Mapping[str, sp.Basic], where: str) -> sp.Expr:
         value = node.value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             raise LawError(f"{where}: constant {value!r} is not a real number")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise LawError(f"{where}: a numeric constant overflows to infinity")
         return sp.Integer(value) if isinstance(value, int) else sp.Float(value)
     if isinstance(node, ast.Name):
         if node.id in names:
@@ -95,9 +99,11 @@ def _build(node: ast.AST, names: Mapping[str, sp.Basic], where: str) -> sp.Expr:
     if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Pow):
         base = _build(node.left, names, where)
         exponent = _build(node.right, names, where)
-        # Guard against 9**9**9 style expressions that sympy would expand exactly.
+        # Guard against 9**9**9 or ((9**99)**99)**99 that sympy would expand exactly.
         if exponent.is_Number and abs(float(exponent)) > MAX_EXPONENT:
             raise LawError(f"{where}: exponent {exponent} exceeds {MAX_EXPONENT} in absolute value")
+        if base.is_Number and exponent.is_Number and _bits(base) * abs(float(exponent)) > MAX_POWER_BITS:
+            raise LawError(f"{where}: the power {ast.unparse(node)} is too large a number")
         return base**exponent
     if isinstance(node, ast.Call):
         if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
@@ -108,8 +114,18 @@ def _build(node: ast.AST, names: Mapping[str, sp.Basic], where: str) -> sp.Expr:
         args = [_build(arg, names, where) for arg in node.args]
         if not args:
             raise LawError(f"{where}: {node.func.id}() needs an argument")
-        return FUNCTIONS[node.func.id](*args)
+        try:
+            return FUNCTIONS[node.func.id](*args)
+        except (TypeError, ValueError) as exc:
+            raise LawError(f"{where}: {ast.unparse(node)}: {exc}") from None
     raise LawError(f"{where}: {type(node).__name__} not allowed in {ast.unparse(node)!r}")
+
+
+def _bits(number: sp.Number) -> int:
+    """Size in bits of a sympy number (numerator or denominator of a rational)."""
+    if number.is_Rational:
+        return max(abs(number.p).bit_length(), number.q.bit_length(), 1)
+    return 64
 
 
 def solve_for(law: sp.Expr, variable: sp.Symbol, *, where: str) -> sp.Expr:

@@ -182,13 +182,21 @@ class _Plan:
         theta = [sp.Symbol(name) for name in self.parameter_names]
         args = (T, eq.states, u_symbols, theta)
 
-        def compile_list(expressions):
-            expressions = [sp.sympify(x).xreplace(to_symbol) for x in expressions]
+        def compile_list(expressions, names):
+            expressions = [sp.sympify(x) for x in expressions]
+            for name, expression in zip(names, expressions):
+                if expression.has(sp.Derivative):
+                    derivatives = ", ".join(sorted(map(str, expression.atoms(sp.Derivative))))
+                    raise SimulationError(
+                        f"{name} needs {derivatives}: a storage element in derivative causality is driven "
+                        "directly by an input; simulate with a smooth input model instead"
+                    )
+            expressions = [x.xreplace(to_symbol) for x in expressions]
             return sp.lambdify(args, expressions, modules="numpy", cse=True), expressions
 
-        self.f_rhs, _ = compile_list(eq.rhs)
+        self.f_rhs, _ = compile_list(eq.rhs, [f"d{x}/dt" for x in eq.states])
         self.output_names = list(eq.outputs)
-        self.f_outputs, outputs = compile_list(eq.outputs.values())
+        self.f_outputs, outputs = compile_list(eq.outputs.values(), [f"signal {n!r}" for n in eq.outputs])
         closed = {to_symbol[signal_function(n)] for n in (*self.feedback, *self.controllers)}
         for name, expression in zip(self.output_names, outputs):
             if expression.free_symbols & closed:
@@ -196,7 +204,8 @@ class _Plan:
                     f"measured signal {name!r} depends directly on a feedback input; the loop is algebraic"
                 )
         self.labels = list(eq.efforts)
-        self.f_bonds, _ = compile_list([*eq.efforts.values(), *eq.flows.values()])
+        self.f_bonds, _ = compile_list([*eq.efforts.values(), *eq.flows.values()],
+                                       [f"effort of bond {k}" for k in eq.efforts] + [f"flow of bond {k}" for k in eq.flows])
 
     def _theta(self, t):
         return [v(t) if callable(v) else v for v in (self.parameter_values[n] for n in self.parameter_names)]

@@ -93,9 +93,18 @@ def _check_parameters(elements) -> dict[str, float]:
         if name not in values or values[name] is None:
             values[name], owners[name] = value, owner
 
+    intervals: dict[str, tuple] = {}
     for element in elements.values():
         if element.param is not None:
             declare(element.param, element.value, str(element))
+            if element.uncertainty is not None:
+                if element.param in intervals and intervals[element.param][0] != element.uncertainty:
+                    first, owner = intervals[element.param]
+                    raise ModelError(
+                        f"parameter {element.param!r} has conflicting uncertainty intervals: {first} ({owner}) "
+                        f"and {element.uncertainty} ({element})"
+                    )
+                intervals.setdefault(element.param, (element.uncertainty, str(element)))
     for element in elements.values():
         for name, value in element.constants.items():
             declare(name, value, f"{element} constant")

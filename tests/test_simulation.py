@@ -1,0 +1,95 @@
+"""Simulation: inputs of t, feedback inputs, controllers, time-varying parameters, bad input."""
+
+import numpy as np
+import pytest
+
+from bondgraph import BondGraph, PIController, SimulationError, simulate
+from bondgraph.library import dc_motor, rlc_circuit, torsion_bar, torsion_bar_controller
+
+
+def test_result_holds_every_effort_flow_and_signal():
+    bg = rlc_circuit()
+    result = simulate(bg, (0.0, 0.2), {"V": lambda t: np.sin(50 * t)})
+    power_bonds = [b for b in bg.bonds if not b.is_signal]
+    assert set(result.efforts) == set(result.flows) == {b.label for b in power_bonds}
+    assert set(result.signals) == {"V", "i", "v_C"}
+    assert np.allclose(result.signals["V"], np.sin(50 * result.t))
+    # Kirchhoff on the 1-junction: V = v_R + v_L + v_C at every sample
+    e = result.efforts
+    assert np.allclose(e[1], e[2] + e[3] + e[4], atol=1e-12)
+    assert np.allclose(result["i"], result.flows[2])
+    record = result.record()
+    assert list(record)[0] == "t" and record["v_C"] is result.signals["v_C"]
+
+
+def test_feedback_input_of_time_and_outputs():
+    # proportional speed loop u = K (w_ref - w) on the DC motor: steady speed from the algebra
+    K, w_ref = 2.0, 100.0
+    bg = dc_motor()
+    p = bg.parameters
+    result = simulate(bg, (0.0, 3.0), {"U": lambda t, y: K * (w_ref - y["omega"])})
+    km, Ra, b = p["k_m"], p["R_a"], p["b"]
+    # k_m i = b w and U = Ra i + k_m w with U = K (w_ref - w)
+    w = K * w_ref / (K + km + Ra * b / km)
+    assert result["omega"][-1] == pytest.approx(w, rel=1e-5)
+
+
+def test_pi_controller_tracks_the_set_point_and_saturates():
+    result = simulate(torsion_bar(), (0.0, 5.0), {"U": torsion_bar_controller()})
+    assert result["omega_m"][-1] == pytest.approx(112.5, rel=1e-4)
+    assert np.all(np.abs(result["U"]) <= 12.0 + 1e-12)
+    heavy = simulate(torsion_bar(), (0.0, 5.0), {"U": torsion_bar_controller()}, parameters={"b_Md": 0.05})
+    assert heavy["U"][-1] == pytest.approx(12.0)  # saturated: the speed cannot be held
+    assert heavy["omega_m"][-1] < 100.0
+    assert heavy.controller_states["U"].shape == (heavy.t.size, 1)
+
+
+def test_time_varying_parameter():
+    ramp = simulate(dc_motor(), (0.0, 2.0), {"U": 12.0}, parameters={"b": lambda t: 1e-4 * (1 + 4 * t)})
+    fixed = simulate(dc_motor(), (0.0, 2.0), {"U": 12.0})
+    assert ramp["omega"][-1] < fixed["omega"][-1]
+    km, Ra = 3.89e-2, 1.23
+    b_end = 1e-4 * 9
+    assert ramp["omega"][-1] == pytest.approx(12.0 * km / (km**2 + Ra * b_end), rel=0.02)
+
+
+def test_initial_state_by_element_or_state_name():
+    a = simulate(rlc_circuit(), (0.0, 0.01), {"V": 0.0}, x0={"C": 1e-3})
+    b = simulate(rlc_circuit(), (0.0, 0.01), {"V": 0.0}, x0={"q_C": 1e-3})
+    assert a["v_C"][0] == pytest.approx(1.0) and np.allclose(a["v_C"], b["v_C"])
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"inputs": {"W": 1.0}}, "'W'"),
+        ({"inputs": {}}, "no value for input 'V'"),
+        ({"inputs": {"V": "high"}}, "input 'V'"),
+        ({"inputs": {"V": 1.0}, "parameters": {"Rx": 1.0}}, "'Rx'"),
+        ({"inputs": {"V": 1.0}, "x0": {"C9": 1.0}}, "'C9'"),
+    ],
+)
+def test_bad_simulation_input_names_the_culprit(kwargs, message):
+    with pytest.raises(SimulationError, match=message):
+        simulate(rlc_circuit(), (0.0, 0.1), **kwargs)
+
+
+def test_pi_on_unknown_signal_is_a_clear_error():
+    with pytest.raises(KeyError, match="omega_x"):
+        simulate(dc_motor(), (0.0, 0.1), {"U": PIController("omega_x", 1.0, 1.0, 1.0)})
+
+
+def test_feedback_through_a_direct_feedthrough_is_refused():
+    bg = BondGraph()
+    bg.add("V", "Se"), bg.add("j", "0"), bg.add("R", "R", value=1.0), bg.add("v", "De")
+    bg.bond("V", "j"), bg.bond("j", "R"), bg.bond("j", "v")
+    with pytest.raises(SimulationError, match="'v' depends directly on a feedback input"):
+        simulate(bg, (0.0, 1.0), {"V": lambda t, y: 1.0 - y["v"]})
+
+
+def test_input_derivative_needed_is_a_clear_error():
+    bg = BondGraph()
+    bg.add("V", "Se"), bg.add("j", "0"), bg.add("C", "C", value=1.0), bg.add("R", "R", value=1.0)
+    bg.bond("V", "j"), bg.bond("j", "C"), bg.bond("j", "R")
+    with pytest.raises(SimulationError, match=r"Derivative\(V\(t\), t\)"):
+        simulate(bg, (0.0, 1.0), {"V": np.sin})
