@@ -383,3 +383,24 @@ def test_solve_parsed_valve_law_on_element():
 def test_solve_does_not_pick_one_of_several_roots(law):
     with pytest.raises(LawError, match=re.escape("R 'valve'")):
         solve_for(law, e, where="R 'valve'")
+
+
+# Regressions for defects found while writing these tests.
+@pytest.mark.parametrize("text", ["(((9**99)**99)**99)**99", "((((2**99)**99)**99)**99)*e"])
+def test_towers_of_powers_are_rejected_quickly(text):
+    import time
+
+    start = time.perf_counter()
+    with pytest.raises(LawError, match="too large"):
+        parse_expression(text, {"e": sp.Symbol("e")}, where="R 'tower'")
+    assert time.perf_counter() - start < 1.0
+
+
+def test_wrong_arity_of_an_allowed_function_is_a_law_error():
+    with pytest.raises(LawError, match=r"R 'v'.*sign\(e, e\)"):
+        parse_expression("sign(e, e)", {"e": sp.Symbol("e")}, where="R 'v'")
+
+
+def test_overflowing_literal_is_rejected():
+    with pytest.raises(LawError, match="infinity"):
+        parse_expression("1e999*e", {"e": sp.Symbol("e")}, where="R 'v'")

@@ -490,3 +490,14 @@ def test_invalid_graph_is_not_modified():
     # nan != nan: compare the repr of the attribute dicts
     assert repr(list(G.nodes(data=True))) == repr(nodes_before)
     assert list(G.edges(data=True)) == edges_before
+
+
+def test_shared_parameter_with_conflicting_uncertainty_is_rejected():
+    bg = BondGraph()
+    bg.add("u", "Se"), bg.add("j", "1")
+    bg.add("R1", "R", param="b", value=1.0, uncertainty=(-0.1, 0.1))
+    bg.add("R2", "R", param="b", value=1.0, uncertainty=(-0.5, 0.5))
+    for tail, head in [("u", "j"), ("j", "R1"), ("j", "R2")]:
+        bg.bond(tail, head)
+    with pytest.raises(ModelError, match=r"'b'.*conflicting uncertainty.*R 'R1'.*R 'R2'"):
+        bg.validate()
