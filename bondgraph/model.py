@@ -291,8 +291,8 @@ def _read_element(name: Hashable, data: Mapping) -> Element:
         uncertainty = _read_uncertainty(where, data["uncertainty"])
     if kind in el.SOURCES | el.DETECTORS | el.MODULATED_TWO_PORTS:
         signal = str(data.get("signal", name))
-        if signal in RESERVED_NAMES:
-            raise ModelError(f"{where}: signal name {signal!r} is reserved (e, f, q, p, t)")
+        if signal == "t":  # signals are functions of the time symbol t
+            raise ModelError(f"{where}: signal name 't' is reserved for time")
     if kind in el.SOURCES and data.get("value") is not None:
         value = _read_value(where, data["value"])  # optional constant input
 
