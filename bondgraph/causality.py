@@ -164,12 +164,12 @@ class _Scap:
         kinds = {name: e.kind for name, e in self.elements.items()}
         for name, kind in kinds.items():
             if kind in el.SOURCES:
-                self._fix_source(name, self._effort_from_source(name, kind))
+                self._fix_source(name)
         if self.dualize:
             for name, kind in kinds.items():
                 if kind in el.DETECTORS:
                     self.result.dualized[name] = "SSe" if kind == "De" else "SSf"
-                    self._fix_source(name, self._effort_from_source(name, kind))
+                    self._fix_source(name)
         for name, kind in kinds.items():
             if kind in el.STORAGE:
                 self._fix_storage(name)
@@ -181,21 +181,19 @@ class _Scap:
                 self._fix_free(bond, bond.tail, None)
         return self.result
 
-    def _effort_from_source(self, name: Hashable, kind: str) -> Hashable:
-        bond = self.at[name][0]
-        imposes_effort = kind in el.EFFORT_SOURCES or kind == "De"
-        return name if imposes_effort else bond.other(name)
-
-    def _fix_source(self, name: Hashable, effort_from: Hashable) -> None:
-        bond = self.at[name][0]
-        role = "SSe" if self.elements[name].kind == "De" else "SSf" if self.elements[name].kind == "Df" else None
-        label = f"{role} {name!r} (dualized {self.elements[name].kind})" if role else str(self.elements[name])
+    def _fix_source(self, name: Hashable) -> None:
+        """A source (or dualized detector) imposes its effort or its flow on its bond."""
+        element, bond = self.elements[name], self.at[name][0]
+        effort_from = name if element.kind in el.EFFORT_SOURCES or element.kind == "De" else bond.other(name)
+        role = self.result.dualized.get(name)
+        label = f"{role} {name!r} (dualized {element.kind})" if role else str(element)
         current = self.effort_from.get(bond.key)
         if current is not None:
             if current != effort_from:
-                self._issue("conflict", (name, self.origin[bond.key]), (bond.key,),
+                origin = self.origin[bond.key]
+                self._issue("conflict", (name, origin), (bond.key,),
                             f"{label} cannot impose its {'effort' if effort_from == name else 'flow'} on {bond}: "
-                            f"already imposed through propagation from {self.elements[self.origin[bond.key]]}")
+                            f"already imposed through propagation from {self.elements[origin]}")
             return
         try:
             self._propagate(bond, effort_from, name)
@@ -210,14 +208,14 @@ class _Scap:
         integral_from = name if kind == "C" else bond.other(name)
         current = self.effort_from.get(bond.key)
         if current is None:
-            wanted = integral_from if preferred == INTEGRAL else _opposite(bond, integral_from)
+            wanted = integral_from if preferred == INTEGRAL else bond.other(integral_from)
             try:
                 self._propagate(bond, wanted, name)
                 current = wanted
             except _Conflict:
                 try:
-                    self._propagate(bond, _opposite(bond, wanted), name)
-                    current = _opposite(bond, wanted)
+                    self._propagate(bond, bond.other(wanted), name)
+                    current = bond.other(wanted)
                 except _Conflict as conflict:
                     self._issue("conflict", (name, conflict.node), (bond.key,),
                                 f"{self.elements[name]}: no causality is consistent: {conflict}")
@@ -241,7 +239,7 @@ class _Scap:
         return name
 
     def _fix_free(self, bond: Bond, effort_from: Hashable, element: Hashable | None) -> None:
-        for choice in (effort_from, _opposite(bond, effort_from)):
+        for choice in (effort_from, bond.other(effort_from)):
             try:
                 self._propagate(bond, choice, element if element is not None else choice)
                 break
@@ -330,7 +328,3 @@ class _Scap:
         # TF: effort in on one port, out on the other; GY: same role on both ports
         out_on_other = (not imposes) if kind in el.TRANSFORMERS else imposes
         return [(other, node if out_on_other else other.other(node))]
-
-
-def _opposite(bond: Bond, end: Hashable) -> Hashable:
-    return bond.other(end)

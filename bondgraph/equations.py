@@ -479,20 +479,18 @@ def state_equations(bg: BondGraph, causality: Causality | None = None) -> StateE
     rhs = [substitute(oriented.derivatives[n], resolved) for n in names]
     rhs = _solve_for_derivatives(rhs, functions, [structure.elements[n] for n in names])
 
+    rates = {sp.Derivative(x, T): r for x, r in zip(functions, rhs)}
+
     def finish(expression):
+        """Dependent storage leaves d(state)/dt in efforts and flows: use the state equations."""
+        if expression.has(sp.Derivative):
+            expression = expression.xreplace(rates)
         return expression.xreplace(to_symbol)
 
     labels = [b.label for b in structure.bonds if not b.is_signal]
     efforts = {k: finish(resolved.get(effort(k), effort(k))) for k in labels}
     flows = {k: finish(resolved.get(flow(k), flow(k))) for k in labels}
     outputs = {s: finish(oriented.express(expr)) for s, expr in oriented.outputs.items()}
-    for table in (efforts, flows, outputs):
-        for key, expression in table.items():
-            if expression.has(sp.Derivative):
-                expression = expression.xreplace(
-                    {sp.Derivative(x, T): r for x, r in zip(symbols, [finish(r) for r in rhs])}
-                )
-                table[key] = expression
     return StateEquations(
         states=symbols,
         elements=names,

@@ -235,12 +235,6 @@ class BondGraph:
         """Measured signal names (detectors)."""
         return self.structure().outputs
 
-    def symbol(self, parameter: str) -> sp.Symbol:
-        """The sympy symbol of a parameter."""
-        if parameter not in self.parameters:
-            raise KeyError(f"unknown parameter {parameter!r}; the model has {sorted(self.parameters)}")
-        return sp.Symbol(parameter)
-
     # -- analysis -----------------------------------------------------------
     def assign_causality(self, preferred: str = "integral", *, dualize_detectors: bool | None = None):
         """Sequential causality assignment; see :func:`bondgraph.causality.assign_causality`."""
@@ -285,10 +279,10 @@ def _read_element(name: Hashable, data: Mapping) -> Element:
         if param in RESERVED_NAMES:
             raise ModelError(f"{where}: parameter name {param!r} is reserved (e, f, q, p, t)")
         value = _read_value(where, data.get("value"))
-    elif "uncertainty" in data and data["uncertainty"] is not None:
+        if data.get("uncertainty") is not None:
+            uncertainty = _read_uncertainty(where, data["uncertainty"])
+    elif data.get("uncertainty") is not None:
         raise ModelError(f"{where}: has an uncertainty but no parameter (only C, I, R, TF, GY, MTF, MGY do)")
-    if kind in el.PARAMETRIC and data.get("uncertainty") is not None:
-        uncertainty = _read_uncertainty(where, data["uncertainty"])
     if kind in el.SOURCES | el.DETECTORS | el.MODULATED_TWO_PORTS:
         signal = str(data.get("signal", name))
         if signal == "t":  # signals are functions of the time symbol t
@@ -304,8 +298,8 @@ def _read_element(name: Hashable, data: Mapping) -> Element:
     if kind in el.TWO_PORTS:
         modulus = _read_modulus(where, kind, data.get("modulus"), names, param, signal)
     if kind in el.PARAMETRIC and value is None:
-        uses_param = sp.Symbol(param) in (law if law is not None else modulus if modulus is not None else sp.Symbol(param)).free_symbols
-        if uses_param:
+        form = next((x for x in (law, modulus) if x is not None), sp.Symbol(param))
+        if sp.Symbol(param) in form.free_symbols:  # a law or modulus may not need the parameter
             raise ModelError(f"{where}: missing nominal 'value' for parameter {param!r}")
     return Element(name, kind, param, value, uncertainty, law, modulus, signal, constants)
 

@@ -77,6 +77,10 @@ def test_torsion_bar_dependent_inertia_is_reflected_through_the_belt():
     index = [str(x) for x in eqs.states].index("p_J_m")
     assert sp.simplify(eqs.rhs[index] - s["J_m"] * domega) == 0
     assert eqs.dependent_storage == ["J_Md"]
+    # the effort of the dependent inertia, J_Md d(omega_Md)/dt, is expressed through the state equations
+    bond = next(b for b in torsion_bar().bonds if b.key == ("1_Md", "J_Md"))
+    assert not eqs.efforts[bond.label].has(sp.Derivative)
+    assert sp.simplify(eqs.efforts[bond.label] - s["J_Md"] * domega / s["k_belt"]) == 0
 
 
 def test_three_tank_state_equations_match_seed_001():
