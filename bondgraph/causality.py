@@ -124,7 +124,7 @@ class _Conflict(Exception):
         self.node = node
 
 
-def assign_causality(bg: BondGraph, preferred: str = INTEGRAL, *, dualize_detectors: bool | None = None) -> Causality:
+def assign_causality(bg: BondGraph, preferred: str = INTEGRAL, *, dualize_detectors=None) -> Causality:
     """Assign causality to every bond of ``bg`` by SCAP.
 
     Parameters
@@ -133,9 +133,10 @@ def assign_causality(bg: BondGraph, preferred: str = INTEGRAL, *, dualize_detect
     preferred : {"integral", "derivative"}
         Preferred storage causality: integral for simulation, derivative for
         diagnosis (no unknown initial conditions).
-    dualize_detectors : bool, optional
+    dualize_detectors : bool or iterable of detector names, optional
         Turn De into SSe and Df into SSf (they impose their measured effort or
-        flow on their junction).  Default: True for derivative preference.
+        flow on their junction): all detectors (True), none (False) or the
+        named ones.  Default: all for derivative preference, none otherwise.
 
     Returns
     -------
@@ -149,15 +150,26 @@ def assign_causality(bg: BondGraph, preferred: str = INTEGRAL, *, dualize_detect
 
 
 class _Scap:
-    def __init__(self, bg: BondGraph, preferred: str, dualize: bool):
+    def __init__(self, bg: BondGraph, preferred: str, dualize):
         structure = bg.structure()
         self.elements = structure.elements
-        self.bonds = [b for b in structure.bonds if not b.is_signal or dualize]
-        self.at = {n: [b for b in bonds if not b.is_signal or dualize] for n, bonds in structure.at.items()}
+        detectors = [n for n, e in self.elements.items() if e.kind in el.DETECTORS]
+        if isinstance(dualize, bool):
+            self.dualized = set(detectors) if dualize else set()
+        else:
+            self.dualized = set(dualize)
+            unknown = self.dualized - set(detectors)
+            if unknown:
+                raise ValueError(f"cannot dualize {sorted(map(str, unknown))}: not detectors of the model")
+
+        def kept(bond):
+            return not bond.is_signal or bond.head in self.dualized
+
+        self.bonds = [b for b in structure.bonds if kept(b)]
+        self.at = {n: [b for b in bonds if kept(b)] for n, bonds in structure.at.items()}
         self.result = Causality(preferred, bonds=self.bonds)
         self.effort_from = self.result.effort_from
         self.origin: dict[tuple, Hashable] = {}  # which element's choice fixed a bond
-        self.dualize = dualize
 
     # -- driver -----------------------------------------------------------
     def run(self) -> Causality:
@@ -165,11 +177,10 @@ class _Scap:
         for name, kind in kinds.items():
             if kind in el.SOURCES:
                 self._fix_source(name)
-        if self.dualize:
-            for name, kind in kinds.items():
-                if kind in el.DETECTORS:
-                    self.result.dualized[name] = "SSe" if kind == "De" else "SSf"
-                    self._fix_source(name)
+        for name, kind in kinds.items():
+            if name in self.dualized:
+                self.result.dualized[name] = "SSe" if kind == "De" else "SSf"
+                self._fix_source(name)
         for name, kind in kinds.items():
             if kind in el.STORAGE:
                 self._fix_storage(name)

@@ -155,6 +155,10 @@ class CausalEquations:
     balances : dict
         Junction carrying a dualized detector -> its power balance (effort or
         flow sum), in bond variables: the candidate ARR of that junction.
+    blocked : dict
+        With ``keep_blocked``: placeholder symbol -> (element, law) for a law
+        with no explicit solution in the form causality needs; the placeholder
+        stands for the unknown port variable and ``law = 0`` still relates it.
     """
 
     causality: Causality
@@ -164,15 +168,23 @@ class CausalEquations:
     outputs: dict = field(default_factory=dict)
     balances: dict = field(default_factory=dict)
     owners: dict = field(default_factory=dict)
+    blocked: dict = field(default_factory=dict)
+    keep_blocked: bool = False
     loops: list = field(default_factory=list)
+    unsolved: list = field(default_factory=list)
     _resolved: dict | None = field(default=None, repr=False)
 
     @property
     def resolved(self) -> dict:
-        """Bond variable -> expression in known quantities only (cached)."""
+        """Bond variable -> expression in known quantities only (cached).
+
+        With ``keep_blocked`` (diagnosis), an algebraic or differential loop
+        that cannot be solved leaves its variables unresolved (listed in
+        ``unsolved``) instead of raising.
+        """
         if self._resolved is None:
             try:
-                self._resolved, self.loops = resolve(self.assignments)
+                self._resolved, self.loops, self.unsolved = resolve(self.assignments, strict=not self.keep_blocked)
             except AlgebraicLoopError as exc:
                 names = ", ".join(dict.fromkeys(str(self.owners[v]) for v in exc.variables))
                 raise AlgebraicLoopError(f"{exc} [elements in the loop: {names}]", exc.variables) from None
@@ -180,11 +192,16 @@ class CausalEquations:
 
     def express(self, expression: sp.Expr) -> sp.Expr:
         """Rewrite ``expression`` (in bond variables) in known quantities."""
-        return substitute(expression, self.resolved)
+        return substitute(expression, self.resolved, set(self.assignments))
 
 
-def causal_equations(bg: BondGraph, causality: Causality, structure=None) -> CausalEquations:
+def causal_equations(bg: BondGraph, causality: Causality, structure=None, *,
+                     keep_blocked: bool = False) -> CausalEquations:
     """Orient every element equation of ``bg`` according to ``causality``.
+
+    ``keep_blocked``: a law that cannot be solved for the variable causality
+    asks of it yields a placeholder (see ``CausalEquations.blocked``) instead
+    of an :class:`EquationError`.
 
     Raises
     ------
@@ -194,7 +211,7 @@ def causal_equations(bg: BondGraph, causality: Causality, structure=None) -> Cau
     if causality.conflicts or not causality.is_valid:
         problems = "; ".join(str(i) for i in causality.conflicts) or "some bonds have no causality"
         raise CausalityError(f"cannot orient the equations: {problems}")
-    result = CausalEquations(causality)
+    result = CausalEquations(causality, keep_blocked=keep_blocked)
     structure = structure or bg.structure()
     elements = structure.elements
     for name, element in elements.items():
@@ -221,9 +238,9 @@ def _orient(result: CausalEquations, name, element: Element, bonds, elements, ca
         elif kind == "R":
             law = constitutive_law(element)
             if ef[b.key] == name:  # resistance causality: e = phi(f)
-                assign[e] = _solve(law, E_, element).xreplace({F_: s * f})
+                assign[e] = _solve(result, law, E_, element, {F_: s * f})
             else:  # conductance causality: f = phi^-1(e)
-                assign[f] = s * _solve(law, F_, element).xreplace({E_: e})
+                assign[f] = s * _solve(result, law, F_, element, {E_: e})
         else:
             _orient_storage(result, name, element, b, s, causality.storage[name])
     elif kind in el.TWO_PORTS:
@@ -250,16 +267,16 @@ def _orient_storage(result, name, element, bond, s, state):
     x = energy_variable(element)
     if element.kind == "C":
         if state == INTEGRAL:  # e = phi(q), dq/dt = flow in
-            result.assignments[e] = _solve(law, E_, element).xreplace({Q_: x})
+            result.assignments[e] = _solve(result, law, E_, element, {Q_: x})
             result.states[name], result.derivatives[name] = x, s * f
         else:  # f = d/dt phi^-1(e)
-            result.assignments[f] = s * ddt(_solve(law, Q_, element).xreplace({E_: e}))
+            result.assignments[f] = s * ddt(_solve(result, law, Q_, element, {E_: e}))
     else:
         if state == INTEGRAL:  # f = phi(p), dp/dt = e
-            result.assignments[f] = s * _solve(law, F_, element).xreplace({P_: x})
+            result.assignments[f] = s * _solve(result, law, F_, element, {P_: x})
             result.states[name], result.derivatives[name] = x, e
         else:  # e = d/dt phi^-1(f)
-            result.assignments[e] = ddt(_solve(law, P_, element).xreplace({F_: s * f}))
+            result.assignments[e] = ddt(_solve(result, law, P_, element, {F_: s * f}))
 
 
 def _orient_junction(result, name, kind, bonds, elements, causality):
@@ -296,39 +313,53 @@ _LINEAR_FORMS = {
 }
 
 
-def _solve(law: sp.Expr, variable: sp.Symbol, element: Element) -> sp.Expr:
+def _solve(result: CausalEquations, law: sp.Expr, variable: sp.Symbol, element: Element, ports: dict) -> sp.Expr:
+    """The law solved for ``variable``, with the other port variable(s) replaced by ``ports``."""
     if element.law is None:
-        return _LINEAR_FORMS[(element.kind, variable.name)](sp.Symbol(element.param))
+        return _LINEAR_FORMS[(element.kind, variable.name)](sp.Symbol(element.param)).xreplace(ports)
     try:
-        return solve_for(law, variable, where=str(element))
+        return solve_for(law, variable, where=str(element)).xreplace(ports)
     except LawError as exc:
-        raise EquationError(f"{exc} (the causality puts {element} in a form that needs {variable})") from None
+        if not result.keep_blocked:
+            raise EquationError(f"{exc} (the causality puts {element} in a form that needs {variable})") from None
+    placeholder = sp.Symbol(f"_{variable}_{element.name}")
+    result.blocked[placeholder] = (element, law.xreplace({variable: placeholder, **ports}))
+    return placeholder
 
 
 # ---------------------------------------------------------------------------
 # resolution
 
 
-def substitute(expression: sp.Expr, resolved: dict) -> sp.Expr:
-    """Replace resolved bond variables and carry out pending ``ddt`` derivatives."""
+def substitute(expression: sp.Expr, resolved: dict, unknowns: set = frozenset()) -> sp.Expr:
+    """Replace resolved bond variables and carry out pending ``ddt`` derivatives.
+
+    A ``ddt`` whose argument still holds one of ``unknowns`` stays pending:
+    differentiating an unresolved symbol would wrongly give zero.
+    """
     mapping = {s: resolved[s] for s in expression.free_symbols if s in resolved}
     if mapping:
         expression = expression.xreplace(mapping)
     if expression.has(ddt):
-        expression = expression.replace(ddt, lambda inner: sp.diff(inner, T))
+        expression = expression.replace(
+            lambda e: isinstance(e, ddt) and not (e.free_symbols & unknowns),
+            lambda e: sp.diff(e.args[0], T),
+        )
     return expression
 
 
-def resolve(assignments: dict) -> tuple[dict, list]:
+def resolve(assignments: dict, *, strict: bool = True) -> tuple[dict, list, list]:
     """Express every assigned variable in known quantities.
 
-    Returns the resolved mapping and the list of algebraic loops solved, each
-    a tuple of the variables involved.
+    Returns the resolved mapping, the algebraic loops solved and the loops
+    left unsolved (``strict=False`` only), each a tuple of its variables.
+    An unsolved loop's variables resolve to themselves, so whatever depends
+    on them visibly keeps an unknown.
 
     Raises
     ------
-    EquationError
-        for an algebraic loop sympy cannot solve, naming its variables.
+    AlgebraicLoopError
+        with ``strict``, for a loop that has no unique explicit solution.
     """
     unknowns = set(assignments)
     graph = nx.DiGraph()
@@ -338,15 +369,22 @@ def resolve(assignments: dict) -> tuple[dict, list]:
     condensed = nx.condensation(graph)
     resolved: dict = {}
     loops: list = []
+    unsolved: list = []
     for component in nx.topological_sort(condensed):
         members = sorted(condensed.nodes[component]["members"], key=sp.default_sort_key)
         if len(members) == 1 and not graph.has_edge(members[0], members[0]):
-            resolved[members[0]] = substitute(assignments[members[0]], resolved)
+            resolved[members[0]] = substitute(assignments[members[0]], resolved, unknowns)
             continue
-        equations = [var - substitute(assignments[var], resolved) for var in members]
-        resolved.update(solve_loop(equations, members))
-        loops.append(tuple(members))
-    return resolved, loops
+        equations = [var - substitute(assignments[var], resolved, unknowns) for var in members]
+        try:
+            resolved.update(solve_loop(equations, members))
+            loops.append(tuple(members))
+        except AlgebraicLoopError:
+            if strict:
+                raise
+            resolved.update({var: var for var in members})
+            unsolved.append(tuple(members))
+    return resolved, loops, unsolved
 
 
 def solve_loop(equations: list, unknowns: list) -> dict:
@@ -393,6 +431,11 @@ def solve_loop(equations: list, unknowns: list) -> dict:
             )
         solution = {v: x.xreplace(roots[0]) for v, x in solution.items()}
         solution.update(roots[0])
+    if any(x.has(ddt) for x in solution.values()):  # a derivative of a loop variable: a differential loop
+        raise AlgebraicLoopError(
+            f"differential loop in {', '.join(map(str, unknowns))}: a variable depends on its own time derivative",
+            unknowns,
+        )
     return {v: sp.simplify(x) for v, x in solution.items()}
 
 

@@ -1,0 +1,272 @@
+"""Interval-valued analytical redundancy relations (I-ARRs) from a bond graph.
+
+Seed 003 section 2.1 (after Samantaray, Djeziri and Ould Bouamama's BG-LFT):
+
+1. preferred derivative causality, detectors dualized (De -> SSe, Df -> SSf);
+2. one candidate ARR per junction carrying a dualized detector: its power
+   balance ``sum(s e) = 0`` (1-junction) or ``sum(s f) = 0`` (0-junction)
+   (eqs. 8-9); a detector that cannot be dualized (its junction's variable is
+   already imposed) stays a measurement and gives ``y - computed y``;
+3. unknown efforts and flows eliminated along causal paths back to inputs,
+   measured signals and their derivatives; storage left in integral causality
+   with a known input becomes an integral from the start of the record
+   (seed 003 eq. 45, the shaft spring; the energy variable is taken as zero at
+   the start of the record);
+4. the uncertain parameters split each ARR into a nominal part ``r_n``
+   (Psi_1, nominal values) and an uncertain part Psi_2 in the multiplicative
+   deviations ``delta_<param>``, true value ``value * (1 + delta)``.
+
+Psi_2 is the difference between the balance written with the uncertain laws
+and the nominal one, so ``r_n + Psi_2 = 0`` holds exactly for the true system
+for any delta in the box.  Element by element it is the BG-LFT uncertain
+effort or flow: ``-delta * z`` where the parameter multiplies the law (eq. 7),
+the exact difference otherwise (``-delta/(1 + delta) * z`` for ``e = q/C``).
+
+Example
+-------
+>>> from bondgraph.library import rlc_circuit
+>>> arrs = derive_arrs(rlc_circuit())
+>>> [(arr.junction, str(arr.nominal)) for arr in arrs]
+[('J1', '-L*Derivative(i(t), t) - R*i(t) + V(t) - v_C(t)'), ('J0', '-C*Derivative(v_C(t), t) + i(t)')]
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+from collections.abc import Hashable
+from dataclasses import dataclass, field
+
+import sympy as sp
+
+from bondgraph import BondGraph
+from bondgraph import elements as el
+from bondgraph.causality import DERIVATIVE, assign_causality
+from bondgraph.equations import causal_equations, constitutive_law, substitute
+from bondgraph.model import T, Structure, signal_function
+
+
+class ARRWarning(UserWarning):
+    """A candidate ARR that could not be expressed in known variables."""
+
+
+def delta(parameter: str) -> sp.Symbol:
+    """The multiplicative uncertainty symbol of a parameter: ``delta_<param>``."""
+    return sp.Symbol(f"delta_{parameter}")
+
+
+@dataclass
+class ARR:
+    """An interval-valued analytical redundancy relation ``r_n + Psi_2 = 0``.
+
+    Attributes
+    ----------
+    name : str
+        ``ARR_<junction>`` (or ``ARR_<detector>`` for a measurement ARR).
+    junction : hashable
+        The junction whose balance gives the relation.
+    nominal : sympy.Expr
+        ``r_n`` (Psi_1): signals ``x(t)``, ``Derivative(x(t), t)``,
+        ``Integral(..., (t, 0, t))`` and nominal parameter symbols.
+    uncertain : sympy.Expr
+        Psi_2, in the same signals and ``delta_<param>`` symbols.
+    terms : dict
+        Uncertain parameter -> its contribution to Psi_2 (the BG-LFT
+        uncertain effort or flow ``w`` as seen at the junction).
+    parameters : frozenset of str
+        Model parameters ``r_n`` is sensitive to.
+    values : dict
+        Nominal value of every parameter in the relation.
+    uncertainties : dict
+        Parameter -> ``(delta_lo, delta_hi)`` for the deltas in Psi_2.
+    implicit : bool
+        True when an element law could not be inverted and the relation keeps
+        that law in implicit form; ``blocked_by`` names the elements.
+    """
+
+    name: str
+    junction: Hashable
+    nominal: sp.Expr
+    uncertain: sp.Expr
+    terms: dict
+    parameters: frozenset
+    values: dict
+    uncertainties: dict
+    candidates: tuple = ()
+    detector: Hashable | None = None
+    implicit: bool = False
+    blocked_by: tuple = ()
+
+    @property
+    def signals(self) -> list[str]:
+        """Names of the measured and input signals the relation uses."""
+        return sorted({f.func.__name__ for f in self.nominal.atoms(sp.core.function.AppliedUndef)})
+
+    def __str__(self) -> str:
+        return f"{self.name}: r_n = {self.nominal}\n  Psi_2 = {self.uncertain}"
+
+    def latex(self) -> str:
+        """LaTeX of ``r_n`` and Psi_2."""
+        return (f"r_{{n}} = {sp.latex(self.nominal)}, \\quad "
+                f"\\Psi_2 = {sp.latex(self.uncertain)}")
+
+    def _repr_latex_(self) -> str:
+        return f"$\\displaystyle {self.latex()}$"
+
+    def evaluate(self, record, **options):
+        """Residual, thresholds and alarms over a record; see :func:`diagnosis.detection.evaluate`."""
+        from .detection import evaluate
+
+        return evaluate(self, record, **options)
+
+
+def derive_arrs(bg: BondGraph) -> list[ARR]:
+    """Derive the I-ARRs of a bond graph with detectors.
+
+    Parameters
+    ----------
+    bg : BondGraph
+        A model following the DESIGN.md contract, with De/Df detectors.
+
+    Returns
+    -------
+    list of ARR
+        One per junction carrying a dualized detector, then one per detector
+        that had to stay a measurement.  Candidates that cannot be expressed
+        in known variables are left out with an :class:`ARRWarning`.
+    """
+    structure = bg.structure()
+    causality = _diagnosis_causality(bg, structure)
+    nominal = causal_equations(bg, causality, structure, keep_blocked=True)
+    true = causal_equations(bg, causality, _uncertain_structure(structure), keep_blocked=True)
+    candidates = tuple(dict.fromkeys(e.param for e in structure.elements.values() if e.param is not None))
+
+    arrs = []
+    sources = [(junction, None, nominal.balances[junction], true.balances[junction]) for junction in nominal.balances]
+    for detector, element in structure.elements.items():
+        if element.kind in el.DETECTORS and detector not in causality.dualized:
+            y = signal_function(element.signal)
+            junction = next(b.tail for b in structure.at[detector])
+            sources.append((junction, detector, y - nominal.outputs[element.signal], y - true.outputs[element.signal]))
+    for junction, detector, balance, true_balance in sources:
+        name = f"ARR_{junction if detector is None else detector}"
+        try:
+            r_n, blocked_by = _known(balance, nominal)
+            r_true, _ = _known(true_balance, true)
+        except _Unknown as exc:
+            warnings.warn(f"{name}: cannot be expressed in known variables ({exc})", ARRWarning, stacklevel=2)
+            continue
+        arrs.append(_split(name, junction, detector, r_n, r_true, blocked_by, structure, candidates))
+    return arrs
+
+
+def _diagnosis_causality(bg: BondGraph, structure: Structure):
+    """Derivative causality with as many detectors dualized as causality allows."""
+    dualized = {n for n, e in structure.elements.items() if e.kind in el.DETECTORS}
+    while True:
+        causality = assign_causality(bg, DERIVATIVE, dualize_detectors=dualized)
+        clashing = {n for issue in causality.conflicts for n in issue.elements if n in dualized}
+        if not clashing:
+            return causality
+        dualized -= {sorted(clashing, key=str)[-1]}  # keep the first sensor, measure the other
+
+
+def _uncertain_structure(structure: Structure) -> Structure:
+    """The same model with every uncertain parameter theta replaced by theta (1 + delta_theta)."""
+    uncertain = {e.param: e.uncertainty for e in structure.elements.values() if e.uncertainty is not None}
+    mapping = {sp.Symbol(p): sp.Symbol(p) * (1 + delta(p)) for p in uncertain}
+    elements = {}
+    for name, element in structure.elements.items():
+        if element.kind in el.LAW_VARIABLES and (element.law is not None or element.param in uncertain):
+            element = dataclasses.replace(element, law=constitutive_law(element).xreplace(mapping))
+        elif element.modulus is not None:
+            element = dataclasses.replace(element, modulus=element.modulus.xreplace(mapping))
+        elements[name] = element
+    return dataclasses.replace(structure, elements=elements)
+
+
+class _Unknown(Exception):
+    pass
+
+
+def _known(expression: sp.Expr, equations) -> tuple[sp.Expr, tuple]:
+    """Rewrite a balance in known variables: signals, their derivatives and integrals."""
+    expression = equations.express(expression)
+    expression = expression.xreplace(_integrals(equations))
+    blocked_by = ()
+    for placeholder, (element, law) in equations.blocked.items():
+        if not expression.has(placeholder):
+            continue
+        law = equations.express(law).xreplace(_integrals(equations))
+        coefficient = sp.diff(expression, placeholder)
+        if coefficient == 0 or coefficient.has(placeholder):
+            raise _Unknown(f"{element} law cannot be inverted and does not enter the balance linearly")
+        # the balance gives the blocked variable; its law, written with it, is the (implicit) relation
+        value = -expression.subs(placeholder, 0) / coefficient
+        expression = law.xreplace({placeholder: value})
+        blocked_by += (element.name,)
+    leftover = expression.free_symbols & (set(equations.assignments) | set(equations.blocked))
+    states = {f for f in expression.atoms(sp.core.function.AppliedUndef) if f in set(equations.states.values())}
+    if leftover or states:
+        named = [f"{v} (from {equations.owners[v]})" if v in equations.owners else str(v)
+                 for v in sorted(leftover | states, key=str)]
+        raise _Unknown(f"needs unmeasured {', '.join(named)}")
+    return expression, blocked_by
+
+
+def _integrals(equations) -> dict:
+    """Energy variables of storage left in integral causality, as integrals of known flows/efforts."""
+    pending = {x: substitute(equations.derivatives[name], equations.resolved) for name, x in equations.states.items()}
+    known: dict = {}
+    progress = True
+    while progress:
+        progress = False
+        for x, rate in list(pending.items()):
+            rate = rate.xreplace(known)
+            if not any(rate.has(other) for other in pending if other is not x) and not rate.has(x):
+                known[x] = sp.Integral(rate, (T, 0, T))
+                del pending[x]
+                progress = True
+    return known
+
+
+def _split(name, junction, detector, r_n, r_true, blocked_by, structure, candidates) -> ARR:
+    deltas = sorted((s for s in r_true.free_symbols if s.name.startswith("delta_")), key=str)
+    parameters = {e.param: e.uncertainty for e in structure.elements.values() if e.uncertainty is not None}
+    terms = {}
+    for d in deltas:
+        others = {o: 0 for o in deltas if o is not d}
+        terms[d.name[len("delta_"):]] = _tidy(r_true.xreplace(others) - r_n)
+    uncertain = sp.Add(*terms.values())
+    cross = _tidy(r_true - r_n - uncertain)
+    if cross != 0:  # an uncertain element driven through another one: keep the product terms too
+        uncertain = uncertain + cross
+    names = {s.name for s in r_n.free_symbols}
+    values = {p: v for p, v in structure.parameters.items() if p in names or p in terms}
+    return ARR(
+        name=name,
+        junction=junction,
+        nominal=r_n,
+        uncertain=uncertain,
+        terms=terms,
+        parameters=frozenset(p for p in candidates if p in names),
+        values=values,
+        uncertainties={p: parameters[p] for p in terms},
+        candidates=candidates,
+        detector=detector,
+        implicit=bool(blocked_by),
+        blocked_by=blocked_by,
+    )
+
+
+def _tidy(expression: sp.Expr) -> sp.Expr:
+    """Cancel a difference of balances over a common denominator.
+
+    Derivatives and integrals are frozen as atoms so they are neither split
+    nor merged, and no ``simplify`` rewrites ``sign(x)*sqrt(Abs(x))`` into a
+    Piecewise that interval arithmetic could not evaluate.
+    """
+    frozen = {a: sp.Dummy() for a in expression.atoms(sp.Derivative, sp.Integral)}
+    numerator, denominator = sp.fraction(sp.together(expression.xreplace(frozen)))
+    tidy = sp.factor_terms(sp.expand(numerator) / denominator)
+    return tidy.xreplace({d: a for a, d in frozen.items()})

@@ -1,0 +1,82 @@
+"""Structural fault signatures of a set of ARRs.
+
+The fault signature matrix has a row per parameter (fault candidate) and a
+column per ARR; entry 1 when the ARR's nominal part depends on the parameter.
+A parameter is *detectable* (Mb = 1) when some ARR is sensitive to it and
+*isolable* (Ib = 1) when, moreover, no other row has the same signature.
+
+Example
+-------
+>>> from bondgraph.library import dc_motor
+>>> from diagnosis import derive_arrs
+>>> print(signature_matrix(derive_arrs(dc_motor())))
+     ARR_1_e  ARR_1_m  Mb  Ib
+R_a        1        0   1   0
+L_a        1        0   1   0
+k_m        1        1   1   1
+J          0        1   1   0
+b          0        1   1   0
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class SignatureMatrix:
+    """Fault signature matrix with detectability and isolability per row."""
+
+    rows: tuple
+    columns: tuple
+    matrix: np.ndarray
+
+    @property
+    def detectable(self) -> np.ndarray:
+        """Mb per row: 1 if at least one ARR is sensitive."""
+        return self.matrix.any(axis=1).astype(int)
+
+    @property
+    def isolable(self) -> np.ndarray:
+        """Ib per row: 1 if detectable and its signature differs from every other row's."""
+        signatures = [tuple(row) for row in self.matrix]
+        return np.array([int(any(sig) and signatures.count(sig) == 1) for sig in signatures])
+
+    def row(self, name: str) -> dict:
+        """The signature of one parameter: ARR name -> 0/1."""
+        return dict(zip(self.columns, self.matrix[self.rows.index(name)].tolist()))
+
+    def to_dict(self) -> dict:
+        return {"rows": list(self.rows), "columns": list(self.columns), "matrix": self.matrix.tolist(),
+                "Mb": self.detectable.tolist(), "Ib": self.isolable.tolist()}
+
+    def __str__(self) -> str:
+        width = max(len(str(r)) for r in self.rows) if self.rows else 1
+        columns = [str(c) for c in self.columns] + ["Mb", "Ib"]
+        lines = [" " * width + "".join(f"  {c:>{max(len(c), 2)}}" for c in columns)]
+        table = np.column_stack([self.matrix, self.detectable, self.isolable]) if self.rows else []
+        for name, values in zip(self.rows, table):
+            lines.append(f"{str(name):<{width}}" + "".join(f"  {v:>{max(len(c), 2)}}" for c, v in zip(columns, values)))
+        return "\n".join(lines)
+
+
+def signature_matrix(arrs: Sequence, rows: Sequence[str] | None = None) -> SignatureMatrix:
+    """The fault signature matrix of ``arrs``.
+
+    Parameters
+    ----------
+    arrs : sequence of ARR
+    rows : sequence of str, optional
+        Parameters to list; default: every element parameter of the model
+        that has an uncertainty or appears in some ARR, in model order.
+    """
+    if rows is None:
+        candidates = list(dict.fromkeys(p for arr in arrs for p in arr.candidates))
+        involved = {p for arr in arrs for p in arr.parameters}
+        uncertain = {p for arr in arrs for p in arr.uncertainties}
+        rows = [p for p in candidates if p in involved or p in uncertain]
+    matrix = np.array([[int(p in arr.parameters) for arr in arrs] for p in rows], dtype=int).reshape(len(rows), len(arrs))
+    return SignatureMatrix(tuple(rows), tuple(arr.name for arr in arrs), matrix)
