@@ -1,0 +1,144 @@
+"""Fault detection with interval-valued ARRs (seed 003 Table I).
+
+At every sample the nominal residual ``r_n`` is compared with the range of the
+uncertain part: normal when ``-r_n`` lies in ``[B_lo, B_hi]`` (eq. 19), fault
+when it leaves it (eq. 20).  Two options make this usable on measured data,
+where noise alone crosses the bare parametric band:
+
+* a noise margin ``m`` widening the band to ``[B_lo - m, B_hi + m]``,
+  typically ``k`` standard deviations of the residual on a nominal record
+  (:func:`noise_margin`);
+* persistence: an alarm is raised only after ``m`` consecutive violations.
+
+Samples where the residual or the band is NaN (gaps in the data, derivative
+stencils touching a gap) are undecided: never a violation, and they break a
+run of consecutive violations.
+
+Example
+-------
+>>> import numpy as np
+>>> from bondgraph import simulate
+>>> from bondgraph.library import rlc_circuit
+>>> from diagnosis import derive_arrs
+>>> bg = rlc_circuit()
+>>> data = simulate(bg, (0, 0.5), {"V": 1.0}, t_eval=np.linspace(0, 0.5, 2001)).record()
+>>> result = derive_arrs(bg)[0].evaluate(data)
+>>> bool(result.alarm.any())
+False
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+
+from .residuals import compile_arr, read_record
+from .thresholds import bglft_threshold, interval_threshold
+
+
+@dataclass
+class Evaluation:
+    """An ARR evaluated over a record.
+
+    Attributes
+    ----------
+    t, residual : ndarray
+        Time and nominal residual ``r_n``.
+    lower, upper : ndarray
+        Interval threshold ``[B_lo, B_hi]`` on ``-r_n`` (without margin).
+    bglft : ndarray
+        BG-LFT half-width ``sum |w_i|`` (band ``[-bglft, bglft]``).
+    margin : float
+        Noise margin added on both sides.
+    violation, alarm : ndarray of bool
+        ``-r_n`` outside the widened band; violation persisting ``persistence`` samples.
+    detection_time : float or None
+        Time of the first alarm.
+    """
+
+    name: str
+    t: np.ndarray
+    residual: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    bglft: np.ndarray
+    margin: float
+    persistence: int
+    violation: np.ndarray
+    alarm: np.ndarray
+
+    @property
+    def detection_time(self) -> float | None:
+        index = np.flatnonzero(self.alarm)
+        return float(self.t[index[0]]) if index.size else None
+
+    def false_alarms(self, before: float) -> int:
+        """Number of alarm onsets (rising edges) strictly before time ``before``."""
+        onsets = self.alarm & ~np.concatenate([[False], self.alarm[:-1]])
+        return int(np.count_nonzero(onsets & (self.t < before)))
+
+
+def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, polyorder: int = 3,
+             exact_derivatives: Mapping | None = None, margin: float = 0.0, persistence: int = 1,
+             threshold: str = "interval") -> Evaluation:
+    """Residual, thresholds and alarms of one ARR over a record.
+
+    Parameters
+    ----------
+    arr : ARR
+    record : mapping or DataFrame
+        Column ``t`` and one column per signal of the ARR.
+    method, window, polyorder : derivative estimator (``"savgol"`` or ``"central"``).
+    exact_derivatives : mapping, optional
+        Signal name (``"x"``, or ``"x:2"`` for the second derivative) -> exact values.
+    margin : float
+        Noise margin widening the band on both sides (see :func:`noise_margin`).
+    persistence : int
+        Consecutive violations needed to raise an alarm.
+    threshold : {"interval", "bglft"}
+        Which band decides: the interval range of Psi_2 or the BG-LFT ``sum |w_i|``.
+    """
+    if threshold not in ("interval", "bglft"):
+        raise ValueError(f"threshold must be 'interval' or 'bglft', got {threshold!r}")
+    if persistence < 1:
+        raise ValueError(f"persistence must be at least 1 sample, got {persistence}")
+    if not np.isfinite(margin) or margin < 0:
+        raise ValueError(f"noise margin must be a finite non-negative number, got {margin}")
+    data = read_record(arr, record)
+    compiled = compile_arr(arr)
+    points = compiled.point_values(data, method=method, window=window, polyorder=polyorder, exact=exact_derivatives)
+    residual = compiled.residual(points)
+    lower, upper = interval_threshold(compiled, points)
+    bglft = bglft_threshold(compiled, points)
+    lo, hi = (lower, upper) if threshold == "interval" else (-bglft, bglft)
+    with np.errstate(invalid="ignore"):
+        violation = (-residual < lo - margin) | (-residual > hi + margin)
+    alarm = persistent(violation, persistence)
+    return Evaluation(arr.name, data.t, residual, lower, upper, bglft, float(margin), persistence, violation, alarm)
+
+
+def persistent(violation: np.ndarray, samples: int) -> np.ndarray:
+    """True where the last ``samples`` entries (this one included) are all True.
+
+    >>> persistent(np.array([1, 1, 0, 1, 1, 1], bool), 2).astype(int).tolist()
+    [0, 1, 0, 0, 1, 1]
+    """
+    if samples <= 1:
+        return violation.copy()
+    run = np.convolve(violation.astype(int), np.ones(samples, int))[: violation.size]
+    return run >= samples
+
+
+def noise_margin(arr, nominal_record, k: float = 3.0, **options) -> float:
+    """``k`` times the standard deviation of ``r_n`` on a fault-free record.
+
+    The standard deviation includes the slow residual variation that the
+    parametric band already covers, so the margin errs on the wide side.
+    """
+    result = evaluate(arr, nominal_record, **options)
+    finite = result.residual[np.isfinite(result.residual)]
+    if finite.size < 2:
+        raise ValueError(f"{arr.name}: the nominal record gives fewer than 2 finite residual values")
+    return float(k * np.std(finite))

@@ -1,0 +1,135 @@
+"""Numerical evaluation of ARR expressions on recorded data.
+
+An ARR holds signals ``x(t)``, derivatives ``Derivative(x(t), (t, n))`` and
+integrals ``Integral(g, (t, 0, t))`` of known expressions.  :class:`CompiledARR`
+replaces each by a plain symbol once, lambdifies the nominal part, and turns a
+record into the point values those symbols take at every sample:
+
+* signals are read from the record's columns;
+* derivatives are estimated (Savitzky-Golay by default, central differences,
+  or exact values the user supplies), see :mod:`diagnosis.signals`;
+* integrals are cumulative trapezoids of the integrand from the start of the
+  record (the energy variable is taken as zero there).
+
+Everything is vectorized over samples.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+import sympy as sp
+from sympy.core.function import AppliedUndef
+
+from .signals import Record, RecordError, as_record, cumulative_integral, derivative
+
+
+@dataclass
+class CompiledARR:
+    """An ARR's expressions in plain point symbols, ready for numpy.
+
+    Attributes
+    ----------
+    points : list of sympy.Symbol
+        Point-valued inputs, in order: signals, derivatives, integrals.
+    signals : list of str
+    derivatives : dict
+        Point symbol -> (signal name, order).
+    integrals : dict
+        Point symbol -> integrand (in the point symbols of signals/derivatives).
+    nominal : sympy.Expr
+        ``r_n`` in the point symbols with nominal parameter values.
+    uncertain : sympy.Expr
+        Psi_2 in the point symbols, nominal values and ``delta_*`` symbols.
+    terms : dict
+        Parameter -> its Psi_2 term in the same symbols.
+    """
+
+    arr: object
+    points: list
+    signals: list
+    derivatives: dict
+    integrals: dict
+    nominal: sp.Expr
+    uncertain: sp.Expr
+    terms: dict
+    _functions: dict = field(default_factory=dict, repr=False)
+
+    @classmethod
+    def from_arr(cls, arr) -> "CompiledARR":
+        replace: dict = {}
+        signals = sorted({f.func.__name__ for f in (arr.nominal + arr.uncertain).atoms(AppliedUndef)})
+        signal_symbols = {name: sp.Symbol(name) for name in signals}
+        for name in signals:
+            replace[sp.Function(name)(sp.Symbol("t"))] = signal_symbols[name]
+        derivatives, integrals = {}, {}
+        for d in sorted((arr.nominal + arr.uncertain).atoms(sp.Derivative), key=str):
+            (variable, order), = d.variable_count
+            if not isinstance(d.expr, AppliedUndef) or str(variable) != "t":
+                raise ValueError(f"{arr.name}: cannot evaluate {d} (only time derivatives of signals)")
+            symbol = sp.Symbol(f"d{order}_{d.expr.func.__name__}")
+            derivatives[symbol] = (d.expr.func.__name__, int(order))
+            replace[d] = symbol
+        for k, integral in enumerate(sorted((arr.nominal + arr.uncertain).atoms(sp.Integral), key=str)):
+            symbol = sp.Symbol(f"int{k}")
+            integrals[symbol] = integral.function.xreplace(replace)
+            replace[integral] = symbol
+        values = {sp.Symbol(p): v for p, v in arr.values.items()}
+        points = [signal_symbols[n] for n in signals] + list(derivatives) + list(integrals)
+        return cls(
+            arr=arr,
+            points=points,
+            signals=signals,
+            derivatives=derivatives,
+            integrals={s: g.xreplace(values) for s, g in integrals.items()},
+            nominal=arr.nominal.xreplace(replace).xreplace(values),
+            uncertain=arr.uncertain.xreplace(replace).xreplace(values),
+            terms={p: w.xreplace(replace).xreplace(values) for p, w in arr.terms.items()},
+        )
+
+    def function(self, key: str, expression: sp.Expr, extra: tuple = ()):
+        """A cached numpy function of the point symbols (and ``extra`` symbols)."""
+        if key not in self._functions:
+            self._functions[key] = sp.lambdify([*self.points, *extra], expression, modules="numpy", cse=True)
+        return self._functions[key]
+
+    def point_values(self, record: Record, *, method: str = "savgol", window: int | None = None,
+                     polyorder: int = 3, exact: Mapping | None = None) -> list[np.ndarray]:
+        """The value of every point symbol at every sample of ``record``."""
+        exact = dict(exact or {})
+        values: dict = {sp.Symbol(name): record[name] for name in self.signals}
+        for symbol, (name, order) in self.derivatives.items():
+            key = name if order == 1 else f"{name}:{order}"
+            if key in exact:
+                values[symbol] = derivative(record, name, order=order, method="exact", exact=exact[key], name=name)
+            else:
+                values[symbol] = derivative(record, name, order=order, method=method, window=window,
+                                            polyorder=polyorder, name=name)
+        for symbol, integrand in self.integrals.items():
+            inputs = [values.get(p, np.zeros(len(record))) for p in self.points]
+            integrand_values = np.broadcast_to(
+                np.asarray(self.function(f"integrand {symbol}", integrand)(*inputs), float), record.t.shape)
+            values[symbol] = cumulative_integral(record, integrand_values, name=str(integrand))
+        return [values[p] for p in self.points]
+
+    def residual(self, points: list[np.ndarray]) -> np.ndarray:
+        """The nominal residual ``r_n`` at every sample."""
+        return np.broadcast_to(np.asarray(self.function("nominal", self.nominal)(*points), float),
+                               points[0].shape if points else ()).copy()
+
+
+def compile_arr(arr) -> CompiledARR:
+    """Compile an ARR once (cached on the ARR object)."""
+    if arr._compiled is None:
+        arr._compiled = CompiledARR.from_arr(arr)
+    return arr._compiled
+
+
+def read_record(arr, data, name: str = "record") -> Record:
+    """Validate a record for an ARR: a ``t`` column and one column per signal it uses."""
+    try:
+        return as_record(data, compile_arr(arr).signals, name=name)
+    except RecordError as exc:
+        raise RecordError(f"{arr.name}: {exc}") from None
