@@ -24,7 +24,9 @@ need not be uniform.
   :class:`RecordError` suggesting ``method="central"``.
 * ``derivative(method="central")`` uses :func:`numpy.gradient` with
   second-order differences in the interior and at the ends, second-order
-  accurate on uneven grids too; order 2 applies it twice.
+  accurate on uneven grids too.  Order 2 applies it twice: exact for
+  quadratics on any grid, second-order accurate in the interior where the
+  steps vary smoothly, but only first order in the two samples at each end.
 * ``derivative(method="exact", exact=values)`` takes a derivative the user
   knows (from a simulation, say), checked against the record.
 * :func:`cumulative_integral` uses the trapezoidal rule, on any grid.
@@ -35,10 +37,12 @@ NaN in a signal column marks a gap: missing data, not a value (``inf`` is
 an error).  Nothing is interpolated across a gap and no estimate uses a NaN
 sample; where an estimate would need one, the result is NaN.
 
-* ``method="savgol"``: the filter runs on each finite run of samples
-  separately, and is NaN within half a window of a gap.  A gap is missing
-  data, not the end of the record: no one-sided estimate is made next to
-  it.  Every value that is not NaN therefore equals the value the same
+* ``method="savgol"``: NaN wherever the window the value is fitted on
+  holds a NaN: within half a window of a gap, and over the first (last)
+  half window of the record if a gap is in its first (last) window.  A gap
+  is missing data, not the end of the record, so no one-sided estimate is
+  made next to it.  The filter runs on each finite run of samples
+  separately, so every value that is not NaN equals the value the same
   record without the gap would give; runs shorter than the window are all
   NaN.
 * ``method="central"``: NaN where the difference stencil touches a gap, one
@@ -264,7 +268,8 @@ def _float_column(values: object, column: str, name: str = "record") -> np.ndarr
     cells = arr if keep else np.array(values, dtype=object)
     for row, cell in enumerate(cells):
         if isinstance(cell, (bool, np.bool_)) or not isinstance(cell, numbers.Real):
-            raise RecordError(f"{name}: column {column!r} has a non-numeric value {cell!r} at row {row}"
+            value = cell.item() if isinstance(cell, np.generic) else cell  # True, not np.True_
+            raise RecordError(f"{name}: column {column!r} has a non-numeric value {value!r} at row {row}"
                               " (use float('nan') for a gap)")
     return cells.astype(float)
 
