@@ -22,7 +22,7 @@ Example
 >>> from diagnosis import derive_arrs
 >>> bg = rlc_circuit()
 >>> data = simulate(bg, (0, 0.5), {"V": 1.0}, t_eval=np.linspace(0, 0.5, 2001)).record()
->>> result = derive_arrs(bg)[0].evaluate(data)
+>>> result = derive_arrs(bg)[0].evaluate(data, margin=1e-5)
 >>> bool(result.alarm.any())
 False
 """
@@ -81,8 +81,8 @@ class Evaluation:
 
 
 def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, polyorder: int = 3,
-             exact_derivatives: Mapping | None = None, margin: float = 0.0, persistence: int = 1,
-             threshold: str = "interval") -> Evaluation:
+             exact_derivatives: Mapping | None = None, antiderivatives: Mapping | None = None,
+             margin: float = 0.0, persistence: int = 1, threshold: str = "interval") -> Evaluation:
     """Residual, thresholds and alarms of one ARR over a record.
 
     Parameters
@@ -93,6 +93,10 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     method, window, polyorder : derivative estimator (``"savgol"`` or ``"central"``).
     exact_derivatives : mapping, optional
         Signal name (``"x"``, or ``"x:2"`` for the second derivative) -> exact values.
+    antiderivatives : mapping, optional
+        Signal name -> record column holding its integral, e.g. encoder angles
+        ``{"omega_m": "theta_m"}``; integrals linear in such signals are read
+        from it instead of integrating (noisy) samples.
     margin : float
         Noise margin widening the band on both sides (see :func:`noise_margin`).
     persistence : int
@@ -106,9 +110,10 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
         raise ValueError(f"persistence must be at least 1 sample, got {persistence}")
     if not np.isfinite(margin) or margin < 0:
         raise ValueError(f"noise margin must be a finite non-negative number, got {margin}")
-    data = read_record(arr, record)
+    data = read_record(arr, record, extra=tuple((antiderivatives or {}).values()))
     compiled = compile_arr(arr)
-    points = compiled.point_values(data, method=method, window=window, polyorder=polyorder, exact=exact_derivatives)
+    points = compiled.point_values(data, method=method, window=window, polyorder=polyorder,
+                                   exact=exact_derivatives, antiderivatives=antiderivatives)
     residual = compiled.residual(points)
     lower, upper = interval_threshold(compiled, points)
     bglft = bglft_threshold(compiled, points)
@@ -132,13 +137,16 @@ def persistent(violation: np.ndarray, samples: int) -> np.ndarray:
 
 
 def noise_margin(arr, nominal_record, k: float = 3.0, **options) -> float:
-    """``k`` times the standard deviation of ``r_n`` on a fault-free record.
+    """``k`` robust standard deviations of ``r_n`` on a fault-free record.
 
-    The standard deviation includes the slow residual variation that the
-    parametric band already covers, so the margin errs on the wide side.
+    ``sigma = 1.4826 * median(|r_n - median(r_n)|)`` (the MAD, scaled to
+    the standard deviation of Gaussian noise): start-up transients and the
+    edges of the derivative estimator are outliers that a plain standard
+    deviation would turn into a band wide enough to hide faults; persistence
+    (:func:`evaluate`) deals with them instead.
     """
     result = evaluate(arr, nominal_record, **options)
     finite = result.residual[np.isfinite(result.residual)]
     if finite.size < 2:
         raise ValueError(f"{arr.name}: the nominal record gives fewer than 2 finite residual values")
-    return float(k * np.std(finite))
+    return float(k * 1.4826 * np.median(np.abs(finite - np.median(finite))))

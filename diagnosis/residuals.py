@@ -9,7 +9,10 @@ record into the point values those symbols take at every sample:
 * derivatives are estimated (Savitzky-Golay by default, central differences,
   or exact values the user supplies), see :mod:`diagnosis.signals`;
 * integrals are cumulative trapezoids of the integrand from the start of the
-  record (the energy variable is taken as zero there).
+  record (the energy variable is taken as zero there), or, when the record
+  holds the antiderivative of a signal (encoder angles for measured speeds),
+  differences of it: integrating measured noise would otherwise make a
+  random walk.
 
 Everything is vectorized over samples.
 """
@@ -96,8 +99,14 @@ class CompiledARR:
         return self._functions[key]
 
     def point_values(self, record: Record, *, method: str = "savgol", window: int | None = None,
-                     polyorder: int = 3, exact: Mapping | None = None) -> list[np.ndarray]:
-        """The value of every point symbol at every sample of ``record``."""
+                     polyorder: int = 3, exact: Mapping | None = None,
+                     antiderivatives: Mapping | None = None) -> list[np.ndarray]:
+        """The value of every point symbol at every sample of ``record``.
+
+        ``exact``: signal (``"x"`` or ``"x:2"``) -> exact derivative values.
+        ``antiderivatives``: signal -> record column holding its integral
+        (e.g. ``{"omega_m": "theta_m"}``), used for integrals linear in them.
+        """
         exact = dict(exact or {})
         values: dict = {sp.Symbol(name): record[name] for name in self.signals}
         for symbol, (name, order) in self.derivatives.items():
@@ -108,6 +117,10 @@ class CompiledARR:
                 values[symbol] = derivative(record, name, order=order, method=method, window=window,
                                             polyorder=polyorder, name=name)
         for symbol, integrand in self.integrals.items():
+            direct = _from_antiderivatives(integrand, record, antiderivatives or {})
+            if direct is not None:
+                values[symbol] = direct
+                continue
             inputs = [values.get(p, np.zeros(len(record))) for p in self.points]
             integrand_values = np.broadcast_to(
                 np.asarray(self.function(f"integrand {symbol}", integrand)(*inputs), float), record.t.shape)
@@ -120,6 +133,21 @@ class CompiledARR:
                                points[0].shape if points else ()).copy()
 
 
+def _from_antiderivatives(integrand: sp.Expr, record: Record, antiderivatives: Mapping) -> np.ndarray | None:
+    """``int_0^t sum(c_i x_i) = sum c_i (X_i(t) - X_i(0))`` when every ``x_i`` has its antiderivative ``X_i``."""
+    symbols = {sp.Symbol(signal): column for signal, column in antiderivatives.items()}
+    if not integrand.free_symbols or not integrand.free_symbols <= set(symbols):
+        return None
+    coefficients = {x: sp.diff(integrand, x) for x in integrand.free_symbols}
+    if any(not c.is_number for c in coefficients.values()) or integrand.xreplace({x: 0 for x in coefficients}) != 0:
+        return None
+    total = np.zeros(len(record))
+    for x, c in coefficients.items():
+        position = record[symbols[x]]
+        total += float(c) * (position - position[0])
+    return total
+
+
 def compile_arr(arr) -> CompiledARR:
     """Compile an ARR once (cached on the ARR object)."""
     if arr._compiled is None:
@@ -127,9 +155,9 @@ def compile_arr(arr) -> CompiledARR:
     return arr._compiled
 
 
-def read_record(arr, data, name: str = "record") -> Record:
-    """Validate a record for an ARR: a ``t`` column and one column per signal it uses."""
+def read_record(arr, data, name: str = "record", extra: tuple = ()) -> Record:
+    """Validate a record for an ARR: a ``t`` column and one column per signal it uses (and ``extra``)."""
     try:
-        return as_record(data, compile_arr(arr).signals, name=name)
+        return as_record(data, [*compile_arr(arr).signals, *extra], name=name)
     except RecordError as exc:
         raise RecordError(f"{arr.name}: {exc}") from None

@@ -1,0 +1,116 @@
+"""Detection: thresholds, margin, persistence, NaN handling, bad records."""
+
+import numpy as np
+import pytest
+
+from bondgraph import simulate
+from bondgraph.library import rlc_circuit, torsion_bar_monitorable
+from diagnosis import derive_arrs
+from diagnosis.detection import evaluate, noise_margin, persistent
+from diagnosis.signals import RecordError
+
+
+@pytest.fixture(scope="module")
+def rlc():
+    bg = rlc_circuit()
+    record = simulate(bg, (0, 0.5), {"V": lambda t: 1.0 + 0.5 * np.sin(40 * t)}, t_eval=np.linspace(0, 0.5, 2001)).record()
+    return derive_arrs(bg), record
+
+
+def test_interval_band_is_exact_for_the_linear_form(rlc):
+    arrs, record = rlc
+    arr = arrs[0]  # -L di/dt - R i + V - v_C: Psi_2 = -delta_L L di/dt - delta_R R i
+    result = arr.evaluate(record, margin=1e-5)
+    L, R = arr.values["L"], arr.values["R"]
+    from diagnosis.residuals import compile_arr, read_record
+
+    compiled = compile_arr(arr)
+    points = compiled.point_values(read_record(arr, record))
+    di = points[compiled.points.index(next(s for s in compiled.derivatives))]
+    i = np.asarray(record["i"])
+    corners = np.array([-dl * L * di - dr * R * i for dl in (-0.05, 0.05) for dr in (-0.05, 0.05)])
+    assert np.all(result.lower <= corners.min(axis=0)) and np.all(result.upper >= corners.max(axis=0))
+    assert np.allclose(result.lower, corners.min(axis=0), rtol=1e-12, atol=1e-15)
+    assert np.allclose(result.upper, corners.max(axis=0), rtol=1e-12, atol=1e-15)
+    # BG-LFT: sum of worst-case |w_i|, never narrower
+    assert np.allclose(result.bglft, 0.05 * L * np.abs(di) + 0.05 * R * np.abs(i))
+    assert np.all(result.upper - result.lower <= 2 * result.bglft * (1 + 1e-12))
+
+
+def test_fault_raises_an_alarm_and_threshold_choice_matters(rlc):
+    arrs, _ = rlc
+    bg = rlc_circuit()
+    faulty = simulate(bg, (0, 0.5), {"V": lambda t: 1.0 + 0.5 * np.sin(40 * t)}, parameters={"R": 12.0},
+                      t_eval=np.linspace(0, 0.5, 2001)).record()
+    result = arrs[0].evaluate(faulty, margin=1e-5, persistence=3)
+    assert result.detection_time is not None and result.detection_time < 0.1
+    assert arrs[1].evaluate(faulty, margin=1e-5).alarm.sum() == 0  # R is not in ARR_J0
+    bglft = arrs[0].evaluate(faulty, margin=1e-5, persistence=3, threshold="bglft")
+    assert bglft.alarm.sum() <= result.alarm.sum()
+
+
+def test_persistence_counts_consecutive_violations():
+    v = np.array([1, 0, 1, 1, 1, 0, 1, 1], bool)
+    assert persistent(v, 1).tolist() == v.tolist()
+    assert persistent(v, 3).astype(int).tolist() == [0, 0, 0, 0, 1, 0, 0, 0]
+
+
+def test_nan_gap_is_undecided_not_an_alarm(rlc):
+    arrs, record = rlc
+    gappy = {k: np.array(v, float) for k, v in record.items()}
+    gappy["i"][1000:1010] = np.nan
+    result = arrs[0].evaluate(gappy, margin=1e-5)
+    assert np.isnan(result.residual[1000:1010]).all()
+    assert not result.violation[np.isnan(result.residual)].any()
+    assert not result.alarm.any()
+
+
+def test_noise_margin_is_robust_to_outliers(rlc):
+    arrs, record = rlc
+    rng = np.random.default_rng(0)
+    noisy = dict(record, i=record["i"] + rng.normal(0, 1e-4, record["i"].size))
+    margin = noise_margin(arrs[1], noisy, k=3)  # ARR_J0 = i - C dv_C/dt: sigma of r_n ~ 1e-4
+    assert 2e-4 < margin < 4e-4
+
+
+@pytest.mark.parametrize("record, message", [
+    ({"time": [0, 1, 2]}, "'t'"),
+    ({"t": [0, 1, 2, 3], "V": [0, 1, 2, 3], "i": [0, 1, 2, 3]}, "v_C"),
+    ({"t": [0, 2, 1, 3], "V": [0] * 4, "i": [0] * 4, "v_C": [0] * 4}, "increasing"),
+])
+def test_bad_records_name_the_arr_and_column(rlc, record, message):
+    arrs, _ = rlc
+    with pytest.raises(RecordError, match=rf"ARR_J1.*{message}"):
+        arrs[0].evaluate(record)
+
+
+def test_bad_options_are_rejected(rlc):
+    arrs, record = rlc
+    with pytest.raises(ValueError, match="persistence"):
+        evaluate(arrs[0], record, persistence=0)
+    with pytest.raises(ValueError, match="margin"):
+        evaluate(arrs[0], record, margin=-1.0)
+    with pytest.raises(ValueError, match="threshold"):
+        evaluate(arrs[0], record, threshold="loose")
+
+
+def test_nonlinear_uncertainty_uses_a_sound_natural_extension():
+    # the C stays in integral causality: e = q/(C(1+delta)) contributes delta/(1+delta) * q/C, not linear in delta
+    from bondgraph import BondGraph
+
+    bg = BondGraph()
+    bg.add("u", "Sf"), bg.add("j", "1"), bg.add("R", "R", value=2.0), bg.add("C", "C", value=0.5, uncertainty=(-0.2, 0.2))
+    bg.add("y", "Df"), bg.add("j0", "0"), bg.add("v", "De")
+    for tail, head in [("u", "j0"), ("j0", "j"), ("j", "R"), ("j", "C"), ("j", "y"), ("j0", "v")]:
+        bg.bond(tail, head)
+    arr = next(a for a in derive_arrs(bg) if "C" in a.terms)
+    t = np.linspace(0, 2, 4001)
+    true = simulate(bg, (0, 2), {"u": lambda s: 1 + np.sin(3 * s)}, parameters={"C": 0.5 * 1.2}, t_eval=t,
+                    rtol=1e-10, atol=1e-12).record()
+    result = arr.evaluate(true, method="central")
+    assert not result.violation.any()  # sound: the true system at the box edge stays inside
+    charge = np.abs(result.residual) * 1.2 / 0.2  # |q/C| from -r_n = 0.2/1.2 q/C
+    exact_hi = 0.2 / 1.2 * charge  # exact range of delta/(1+delta) over [-0.2, 0.2] is [-0.25, 0.1667]
+    late = t > 0.5
+    assert np.all(result.upper[late] >= exact_hi[late] * (1 - 1e-6))
+    assert np.all(result.upper[late] > 1.4 * exact_hi[late])  # natural extension overestimates (0.25 vs 0.1667)
