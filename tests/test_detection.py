@@ -114,3 +114,13 @@ def test_nonlinear_uncertainty_uses_a_sound_natural_extension():
     late = t > 0.5
     assert np.all(result.upper[late] >= exact_hi[late] * (1 - 1e-6))
     assert np.all(result.upper[late] > 1.4 * exact_hi[late])  # natural extension overestimates (0.25 vs 0.1667)
+
+
+def test_a_pandas_dataframe_record_gives_the_same_evaluation(rlc):
+    import pandas as pd
+
+    arrs, record = rlc
+    from_dict = arrs[0].evaluate(record, margin=1e-5)
+    from_frame = arrs[0].evaluate(pd.DataFrame(record), margin=1e-5)
+    assert np.array_equal(from_dict.residual, from_frame.residual)
+    assert np.array_equal(from_dict.lower, from_frame.lower)

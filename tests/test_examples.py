@@ -53,3 +53,6 @@ def test_readme_python_blocks_run(capsys):
         exec(compile(block, "README.md", "exec"), {})
     printed = capsys.readouterr().out
     assert "{'L': 'integral'}" in printed and "dp_L/dt = V(t) - R*p_L/L" in printed
+    assert "r_n = -J*Derivative(omega(t), t) - b*omega(t) + k_m*i(t)" in printed
+    detection = float(printed.strip().splitlines()[-1])  # the tripled friction is detected early in the run
+    assert 0.0 <= detection < 0.5
