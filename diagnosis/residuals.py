@@ -48,6 +48,8 @@ class CompiledARR:
         Psi_2 in the point symbols, nominal values and ``delta_*`` symbols.
     terms : dict
         Parameter -> its Psi_2 term in the same symbols.
+    symbols : dict
+        Signal, derivative and integral expressions -> their point symbols.
     """
 
     arr: object
@@ -58,6 +60,7 @@ class CompiledARR:
     nominal: sp.Expr
     uncertain: sp.Expr
     terms: dict
+    symbols: dict = field(default_factory=dict, repr=False)
     _functions: dict = field(default_factory=dict, repr=False)
 
     @classmethod
@@ -90,6 +93,7 @@ class CompiledARR:
             nominal=arr.nominal.xreplace(replace).xreplace(values),
             uncertain=arr.uncertain.xreplace(replace).xreplace(values),
             terms={p: w.xreplace(replace).xreplace(values) for p, w in arr.terms.items()},
+            symbols=replace,
         )
 
     def function(self, key: str, expression: sp.Expr, extra: tuple = ()):

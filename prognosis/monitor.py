@@ -1,0 +1,228 @@
+"""Health monitoring of one prognostic candidate (seed 003 Table V).
+
+Detection with the candidate's I-ARR (:mod:`diagnosis`) runs until the first
+alarm; the particle filter then starts from the candidate's uncertainty
+interval (eq. 39), takes ``y = -r_n`` every ``dt`` seconds, and predicts the
+RUL every ``rul_every`` filter steps.  :meth:`HealthMonitor.run` processes a
+whole record; :meth:`HealthMonitor.update` takes one sample at a time and
+processes every filter step whose sample is at least half a derivative
+window old (the Savitzky-Golay estimate is centred), so online results lag
+the newest sample by that half window.  Results are deterministic for a seed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from diagnosis.residuals import compile_arr, read_record
+from diagnosis.signals import default_window
+
+from . import metrics
+from .filter import ParticleFilter, VarianceAdaptation
+from .observation import observation_model
+from .rul import RULPrediction, predict_rul
+
+
+@dataclass
+class MonitorResult:
+    """Time-indexed output of a health monitor (one asset)."""
+
+    detection_time: float | None
+    t: np.ndarray = field(default_factory=lambda: np.empty(0))
+    theta: dict = field(default_factory=dict)
+    gamma: dict = field(default_factory=dict)
+    rul_t: np.ndarray = field(default_factory=lambda: np.empty(0))
+    rul: list = field(default_factory=list)
+    degenerate_steps: list = field(default_factory=list)
+
+    @property
+    def rul_mean(self) -> np.ndarray:
+        return np.array([p.mean[0] for p in self.rul])
+
+    @property
+    def rul_median(self) -> np.ndarray:
+        return np.array([p.median[0] for p in self.rul])
+
+    def rul_percentiles(self, q=(5, 95)) -> np.ndarray:
+        return np.array([p.percentile(q)[0] for p in self.rul])
+
+    def metrics(self, theta_true, gamma_true, eol: float, *, after: float | None = None,
+                alpha: float = 0.1, beta: float = 0.5) -> dict:
+        """Seed 003 section 5 metrics against the truth.
+
+        ``theta_true``, ``gamma_true``: callables of t; ``eol``: true end of
+        life (s); ``after``: RA and RMAD of the RUL only over predictions at
+        or after this time (the seed uses t = 52 s).
+        """
+        theta_star = np.asarray([theta_true(t) for t in self.t])
+        gamma_star = np.asarray([gamma_true(t) for t in self.t])
+        keep = np.ones(self.rul_t.size, bool) if after is None else self.rul_t >= after
+        rul_true = eol - self.rul_t[keep]
+        predictions = [p for p, k in zip(self.rul, keep) if k]
+        samples = np.array([p.samples[0] for p in predictions]).reshape(len(predictions), -1)
+        weights = np.array([p.weights[0] for p in predictions]).reshape(len(predictions), -1)
+        mass, passed = metrics.alpha_lambda(samples, weights, rul_true, alpha, beta)
+        rmad_rul = [metrics.rmad(np.where(np.isfinite(s), s, np.nan)[np.isfinite(s)], w[np.isfinite(s)])
+                    if np.isfinite(s).any() else np.nan for s, w in zip(samples, weights)]
+        ra = metrics.relative_accuracy(rul_true, np.array([p.mean[0] for p in predictions]))
+        return {
+            "rmse_theta": float(metrics.relative_rmse(self.theta["mean"], theta_star)),
+            "rmse_gamma": float(metrics.relative_rmse(self.gamma["mean"], gamma_star)),
+            "rmad_gamma": float(np.nanmean(self.gamma["rmad"])),
+            "ra": float(metrics.mean_relative_accuracy(ra)),
+            "rmad_rul": float(np.nanmean(rmad_rul)),
+            "alpha_lambda_pass_rate": float(np.mean(passed)) if len(passed) else float("nan"),
+            "prognostic_horizon_s": _number(metrics.prognostic_horizon(self.rul_t[keep], passed, eol)),
+        }
+
+
+def _number(value) -> float | None:
+    return None if value is None or not np.isfinite(value) else float(value)
+
+
+class HealthMonitor:
+    """Detection, then estimation of theta and gamma, then RUL, for one candidate.
+
+    Parameters
+    ----------
+    arr : ARR sensitive to ``candidate``
+    candidate : str
+    model : degradation model
+    theta_fail : float
+    direction : {"up", "down"}
+    dt : float
+        Filter step (s); the record's sampling step must divide it.
+    n_particles, noise_std, inflation, gamma_std, gamma0, resampling, resample_below
+        Particle filter settings (:class:`~prognosis.filter.ParticleFilter`).
+    adaptation : VarianceAdaptation, optional
+    rul_every : int
+        Predict the RUL every this many filter steps.
+    horizon : float
+        RUL horizon cap (s).
+    detection : mapping
+        Options of :func:`diagnosis.evaluate` (``margin``, ``persistence``,
+        ``antiderivatives``, ``method``...).
+    seed : int
+    """
+
+    def __init__(self, arr, candidate: str, model, *, theta_fail: float, direction: str = "up", dt: float = 0.1,
+                 n_particles: int = 500, noise_std: float = 0.01, inflation: float = 4.0, gamma_std=0.02,
+                 gamma0=0.0, adaptation: VarianceAdaptation | None = None, resampling: str = "systematic",
+                 resample_below: float = 1.0, rul_every: int = 1, horizon: float = 500.0,
+                 detection: Mapping | None = None, seed: int = 0):
+        self.arr, self.candidate, self.model = arr, candidate, model
+        self.observation = observation_model(arr, candidate)
+        self.theta_fail, self.direction, self.dt = theta_fail, direction, dt
+        nominal = self.observation.nominal
+        lo, hi = arr.uncertainties.get(candidate, (0.0, 0.0))
+        self.theta_bounds = (nominal * (1 + lo), nominal * (1 + hi))
+        if (direction == "up") != (theta_fail > nominal):
+            raise ValueError(f"failure value {theta_fail} of {candidate!r} is on the wrong side of its nominal "
+                             f"value {nominal} for direction {direction!r}")
+        self.filter = ParticleFilter(model, self.observation, n_particles=n_particles, dt=dt, noise_std=noise_std,
+                                     inflation=inflation, gamma_std=gamma_std, adaptation=adaptation,
+                                     resampling=resampling, resample_below=resample_below, seed=seed)
+        self.gamma0, self.rul_every, self.horizon = gamma0, rul_every, horizon
+        self.detection = dict(detection or {})
+        self.rng = np.random.default_rng(seed + 1)
+        self._buffer: list = []
+        self._reset()
+
+    def _reset(self) -> None:
+        self.result = MonitorResult(None)
+        self._rows: list = []
+        self._rul_t: list = []
+        self._next_index = None
+        self._steps = 0
+        self._processed = -1
+
+    # -- whole record -------------------------------------------------------
+    def run(self, record) -> MonitorResult:
+        """Process a whole record (mapping or DataFrame with ``t`` and the ARR's signals)."""
+        self._reset()
+        self._advance(record, last=None)
+        return self._finish()
+
+    # -- one sample at a time ------------------------------------------------
+    def update(self, sample: Mapping) -> MonitorResult:
+        """Append one sample (``t`` and the signals) and process what has become final."""
+        self._buffer.append(dict(sample))
+        final = len(self._buffer) - 1 - self._half_window()  # samples whose centred derivative is known
+        # re-evaluate once per filter step's worth of samples: O(n) work per stride, not per sample
+        if len(self._buffer) < 2 * self._half_window() + 3 or final - self._processed < self._stride_guess():
+            return self._finish()
+        record = {key: np.array([row[key] for row in self._buffer], float) for key in self._buffer[0]}
+        self._advance(record, last=final)
+        self._processed = final
+        return self._finish()
+
+    def _stride_guess(self) -> int:
+        t = [row["t"] for row in self._buffer[-3:]]
+        return max(1, int(round(self.dt / (t[-1] - t[-2])))) if len(t) >= 2 and t[-1] > t[-2] else 1
+
+    def _half_window(self) -> int:
+        window = self.detection.get("window") or default_window(self.detection.get("polyorder", 3))
+        return window // 2
+
+    # -- shared ----------------------------------------------------------------
+    def _advance(self, record, last: int | None) -> None:
+        evaluation = self.arr.evaluate(record, **self.detection)
+        t = evaluation.t
+        last = t.size - 1 if last is None else last
+        if self.result.detection_time is None:
+            alarms = np.flatnonzero(evaluation.alarm[: last + 1])
+            if not alarms.size:
+                return
+            start = alarms[0]
+            self.result.detection_time = float(t[start])
+            self.filter.initialize(self.theta_bounds, self.gamma0)
+            self._next_index = start
+        stride = self._stride(t)
+        anti = self.detection.get("antiderivatives")
+        compiled = compile_arr(self.arr)
+        data = read_record(self.arr, record, extra=tuple((anti or {}).values()))
+        points = compiled.point_values(data, method=self.detection.get("method", "savgol"),
+                                       window=self.detection.get("window"),
+                                       polyorder=self.detection.get("polyorder", 3), antiderivatives=anti)
+        while self._next_index is not None and self._next_index <= last:
+            k = self._next_index
+            self._filter_step(t[k], -evaluation.residual[k], [p[k:k + 1] for p in points])
+            self._next_index = k + stride
+
+    def _stride(self, t: np.ndarray) -> int:
+        step = float(np.median(np.diff(t)))
+        stride = int(round(self.dt / step))
+        if stride < 1 or abs(stride * step - self.dt) > 1e-6 * self.dt:
+            raise ValueError(f"the filter step dt = {self.dt} s is not a multiple of the record's step {step} s")
+        return stride
+
+    def _filter_step(self, time: float, y: float, points: list) -> None:
+        diagnostics = self.filter.step(np.array([y]), points)
+        if diagnostics.degenerate.any():
+            self.result.degenerate_steps.append(time)
+        estimate = self.filter.estimate()
+        self._rows.append((time, estimate))
+        if self._steps % self.rul_every == 0:
+            prediction = predict_rul(self.model, self.filter.theta, self.filter.gamma, self.filter.weights,
+                                     dt=self.dt, theta_fail=self.theta_fail, direction=self.direction,
+                                     gamma_std=np.sqrt(self.filter.variance), horizon=self.horizon, rng=self.rng)
+            self.result.rul.append(prediction)
+            self._rul_t.append(time)
+        self._steps += 1
+
+    def _finish(self) -> MonitorResult:
+        result = self.result
+        result.t = np.array([row[0] for row in self._rows])
+        if self._rows:
+            est = [row[1] for row in self._rows]
+            result.theta = {"mean": np.array([e["theta_mean"][0] for e in est]),
+                            "rmad": np.array([e["theta_rmad"][0] for e in est]),
+                            "quantiles": np.array([e["theta_quantiles"][0] for e in est])}
+            result.gamma = {"mean": np.array([e["gamma_mean"][0, 0] for e in est]),
+                            "rmad": np.array([e["gamma_rmad"][0, 0] for e in est]),
+                            "quantiles": np.array([e["gamma_quantiles"][0, 0] for e in est])}
+        result.rul_t = np.array(self._rul_t)
+        return result

@@ -1,0 +1,94 @@
+"""Observation equation from an ARR's nominal part (seed 003 section 3.2).
+
+With the prognostic candidate theta^d free and every other parameter at its
+nominal value, the balance of the junction holds for the true system:
+``R(theta) = 0``, where ``R`` is the nominal part written with ``theta`` in
+place of ``theta_n``, so that ``r_n = R(theta_n)``.  Hence (eqs. 24-26)
+
+    y = -r_n = R(theta) - R(theta_n) = A^T (phi(theta) - phi(theta_n)),
+
+and when ``R`` is linear in theta, ``y = a_1 (theta - theta_n)`` with
+``a_1 = d r_n / d theta`` (eq. 27).  For the torsion bar's b_Md this is
+eq. (52), ``y = (b_Md - b_Md,n)(-omega_m / k_belt^2)``.
+
+The expression is compiled once into a numpy function of the particles and of
+the point values (signals, derivative estimates, integrals) at step k, using
+the same point symbols as :mod:`diagnosis.residuals`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import sympy as sp
+
+from diagnosis.residuals import compile_arr
+
+
+@dataclass
+class ObservationModel:
+    """``y = h(theta, signals)``: the measurement ``-r_n`` a particle ``theta`` predicts.
+
+    Attributes
+    ----------
+    candidate : str
+        The prognostic candidate (a parameter of the ARR).
+    nominal : float
+        Its nominal value theta_n.
+    expression : sympy.Expr
+        ``h`` in the ARR's signals and the symbol of the candidate.
+    coefficient : sympy.Expr or None
+        ``a_1 = d r_n / d theta`` when ``h`` is linear in theta, else None.
+    """
+
+    arr: object
+    candidate: str
+    nominal: float
+    expression: sp.Expr
+    coefficient: sp.Expr | None
+    _function: object = field(default=None, repr=False)
+
+    @property
+    def symbol(self) -> sp.Symbol:
+        return sp.Symbol(self.candidate)
+
+    def function(self):
+        """``h(theta, *points)``, vectorized; ``points`` in the order of the compiled ARR."""
+        if self._function is None:
+            compiled = compile_arr(self.arr)
+            values = {sp.Symbol(p): v for p, v in self.arr.values.items() if p != self.candidate}
+            numeric = self.expression.xreplace(compiled.symbols).xreplace(values)
+            self._function = sp.lambdify([self.symbol, *compiled.points], numeric, modules="numpy", cse=True)
+        return self._function
+
+    def __call__(self, theta: np.ndarray, points) -> np.ndarray:
+        """Predicted measurement for particles ``theta`` (..., N) with point values (...,) per asset."""
+        values = [np.asarray(p, float)[..., None] for p in points]
+        return np.broadcast_to(np.asarray(self.function()(theta, *values), float), np.shape(theta))
+
+
+def observation_model(arr, candidate: str) -> ObservationModel:
+    """The observation equation of ``arr`` for the prognostic candidate ``candidate``.
+
+    Examples
+    --------
+    >>> from bondgraph.library import torsion_bar_monitorable
+    >>> from diagnosis import derive_arrs
+    >>> arr = derive_arrs(torsion_bar_monitorable())[0]
+    >>> observation_model(arr, "b_Md").expression
+    -(b_Md - 0.005025)*omega_m(t)/k_belt**2
+    """
+    if candidate not in arr.parameters:
+        raise ValueError(
+            f"{arr.name} is not sensitive to {candidate!r}; it is sensitive to {sorted(arr.parameters)}"
+        )
+    theta = sp.Symbol(candidate)
+    nominal = float(arr.values[candidate])
+    balance = arr.nominal  # R(theta): the nominal part with theta free
+    h = sp.factor_terms(sp.expand(balance - balance.xreplace({theta: nominal})))
+    slope = sp.diff(h, theta)
+    coefficient = sp.simplify(slope) if not slope.has(theta) else None
+    if coefficient is not None:
+        h = (theta - nominal) * coefficient
+    return ObservationModel(arr, candidate, nominal, h, coefficient)
