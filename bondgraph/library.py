@@ -148,6 +148,29 @@ def torsion_bar_monitorable(**overrides: float) -> BondGraph:
     return bg
 
 
+# Seed 003 section 7: a suspended load of mass M presses a lever on the motor disk
+# (Coulomb friction mu M g r_Md sgn(omega_Md), eqs. 54-56).  r_Md is not given in the
+# seed; 0.05 m is our assumption.
+MASS_LOAD = {"M": 0.1, "mu": 0.27, "g": 9.81, "r_Md": 0.05}
+
+
+def torsion_bar_with_load(M: float = MASS_LOAD["M"], mu: float = MASS_LOAD["mu"], r_Md: float = MASS_LOAD["r_Md"],
+                          **overrides: float) -> BondGraph:
+    """Seed 003 section 7: the monitorable part with the suspended-mass friction on the motor disk.
+
+    The motor-disk R element gets the law ``e = b_Md f + mu M g r_Md sign(f)``
+    (eq. 56), with M (kg), mu and r_Md as law constants; the prognostic
+    candidate of section 7 is M (eqs. 61-62).
+    """
+    bg = torsion_bar_monitorable(**overrides)
+    node = bg.graph.nodes["b_Md"]
+    node["law"] = "e - b_Md*f - mu*M*g*r_Md*sign(f)"
+    node["params"] = {"M": M, "mu": mu, "g": MASS_LOAD["g"], "r_Md": r_Md}
+    bg.name = "torsion bar with suspended load"
+    bg.validate()
+    return bg
+
+
 def _values(overrides: dict) -> dict:
     unknown = set(overrides) - set(TORSION_BAR)
     if unknown:

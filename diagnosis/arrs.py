@@ -74,7 +74,7 @@ class ARR:
         Uncertain parameter -> its contribution to Psi_2 (the BG-LFT
         uncertain effort or flow ``w`` as seen at the junction).
     parameters : frozenset of str
-        Model parameters ``r_n`` is sensitive to.
+        Model parameters ``r_n`` is sensitive to (element parameters and law constants).
     values : dict
         Nominal value of every parameter in the relation.
     uncertainties : dict
@@ -250,7 +250,7 @@ def _split(name, junction, detector, r_n, r_true, blocked_by, structure, candida
         nominal=r_n,
         uncertain=uncertain,
         terms=terms,
-        parameters=frozenset(p for p in candidates if p in names),
+        parameters=frozenset(p for p in structure.parameters if p in names),
         values=values,
         uncertainties={p: parameters[p] for p in terms},
         candidates=candidates,

@@ -44,6 +44,11 @@ class Linear:
         """theta over a horizon: ``gamma`` (..., N, H, G) used at each step, ``noise`` (..., N, H)."""
         return theta[..., None] + dt * np.cumsum(gamma[..., 0], axis=-1) + np.cumsum(noise, axis=-1)
 
+    def path_from_sums(self, theta, gamma_sum, noise, noise_sum, carry, dt):
+        """theta_{k+l} = theta_k + dt gamma_sum + noise_sum, with ``gamma_sum`` = sum_{m<l} gamma_{k+m}
+        and ``noise_sum`` = sum_{j<=l} v_j, both (M, H) and counted from the prediction time."""
+        return theta[:, None] + dt * gamma_sum + (0.0 if noise_sum is None else noise_sum), carry
+
 
 @dataclass(frozen=True)
 class Exponential:
@@ -63,6 +68,20 @@ class Exponential:
     def path(self, theta: np.ndarray, gamma: np.ndarray, noise: np.ndarray, dt: float) -> np.ndarray:
         growth = np.exp(dt * np.cumsum(gamma[..., 0], axis=-1))  # E_l
         return growth * (theta[..., None] + np.cumsum(noise / growth, axis=-1))
+
+    def path_from_sums(self, theta, gamma_sum, noise, noise_sum, carry, dt):
+        """theta_{k+l} = E_l (theta_k + sum_{j<=l} v_j / E_j), E_l = exp(dt sum_{m<l} gamma_{k+m}).
+
+        ``noise`` holds this chunk's v_j (M, H); ``carry`` the sum of v_j / E_j of earlier chunks.
+        """
+        # |exponent| <= 80 keeps float32 growth finite and non-zero (no inf/0 -> NaN); a path
+        # scaled by e^80 has crossed any practical threshold, one scaled by e^-80 has not
+        growth = np.exp(np.clip(dt * gamma_sum, -80.0, 80.0))
+        if noise is None:
+            return growth * (theta + carry)[:, None], carry
+        scaled = np.cumsum(noise / growth, axis=1)
+        scaled += carry[:, None]
+        return growth * (theta[:, None] + scaled), scaled[:, -1]
 
 
 @dataclass(frozen=True)

@@ -23,7 +23,7 @@ from diagnosis.signals import default_window
 from . import metrics
 from .filter import ParticleFilter, VarianceAdaptation
 from .observation import observation_model
-from .rul import RULPrediction, predict_rul
+from .rul import RULPredictor
 
 
 @dataclass
@@ -111,7 +111,7 @@ class HealthMonitor:
     def __init__(self, arr, candidate: str, model, *, theta_fail: float, direction: str = "up", dt: float = 0.1,
                  n_particles: int = 500, noise_std: float = 0.01, inflation: float = 4.0, gamma_std=0.02,
                  gamma0=0.0, adaptation: VarianceAdaptation | None = None, resampling: str = "systematic",
-                 resample_below: float = 1.0, rul_every: int = 1, horizon: float = 500.0,
+                 resample_below: float = 1.0, rul_every: int = 1, horizon: float = 200.0,
                  detection: Mapping | None = None, seed: int = 0):
         self.arr, self.candidate, self.model = arr, candidate, model
         self.observation = observation_model(arr, candidate)
@@ -127,7 +127,8 @@ class HealthMonitor:
                                      resampling=resampling, resample_below=resample_below, seed=seed)
         self.gamma0, self.rul_every, self.horizon = gamma0, rul_every, horizon
         self.detection = dict(detection or {})
-        self.rng = np.random.default_rng(seed + 1)
+        self.predictor = RULPredictor(model, dt=dt, theta_fail=theta_fail, direction=direction, horizon=horizon,
+                                      seed=seed + 1)
         self._buffer: list = []
         self._reset()
 
@@ -206,9 +207,8 @@ class HealthMonitor:
         estimate = self.filter.estimate()
         self._rows.append((time, estimate))
         if self._steps % self.rul_every == 0:
-            prediction = predict_rul(self.model, self.filter.theta, self.filter.gamma, self.filter.weights,
-                                     dt=self.dt, theta_fail=self.theta_fail, direction=self.direction,
-                                     gamma_std=np.sqrt(self.filter.variance), horizon=self.horizon, rng=self.rng)
+            prediction = self.predictor.predict(self.filter.theta, self.filter.gamma, self.filter.weights,
+                                                np.sqrt(self.filter.variance))
             self.result.rul.append(prediction)
             self._rul_t.append(time)
         self._steps += 1

@@ -88,7 +88,7 @@ def observation_model(arr, candidate: str) -> ObservationModel:
     balance = arr.nominal  # R(theta): the nominal part with theta free
     h = sp.factor_terms(sp.expand(balance - balance.xreplace({theta: nominal})))
     slope = sp.diff(h, theta)
-    coefficient = sp.simplify(slope) if not slope.has(theta) else None
+    coefficient = sp.factor_terms(slope) if not slope.has(theta) else None  # no simplify: keep sign() as is
     if coefficient is not None:
         h = (theta - nominal) * coefficient
     return ObservationModel(arr, candidate, nominal, h, coefficient)

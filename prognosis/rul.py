@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .degradation import Linear
+
 
 @dataclass
 class RULPrediction:
@@ -59,28 +61,123 @@ class RULPrediction:
         return self.percentile(50.0)[..., 0]
 
 
-def predict_rul(model, theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray, *, dt: float,
-                theta_fail: float, gamma_std, direction: str = "up", horizon: float = 1000.0,
-                rng: np.random.Generator, chunk: int = 512) -> RULPrediction:
-    """Propagate particles until ``theta`` crosses ``theta_fail``.
+class RULPredictor:
+    """Table IV with common random numbers, for predicting at every filter step.
+
+    One bank of unit normals is drawn per predictor (rows x horizon steps):
+    ``Z`` for the random walk of gamma and ``V`` for the process noise of
+    theta.  Their cumulative sums are computed once, so a prediction needs
+    neither new random numbers nor a cumulative sum for gamma:
+
+        sum_{m<l} gamma_{k+m} = l gamma_k + sigma_xi CW_l,   CW_l = sum_{m<l} W_{m-1},  W = cumsum(Z)
+
+    (``W_{-1} = 0``).  Each prediction assigns bank rows to particles by a
+    fresh random permutation, so successive predictions use the same noise in
+    a different order (common random numbers: the RUL curve over time is not
+    jittered by independent Monte-Carlo noise, while each prediction is still
+    an exact draw of Table IV).  Models without ``path_from_sums`` (Custom)
+    are propagated step by step within a chunk.
 
     Parameters
     ----------
-    model : degradation model with ``path``
-    theta : (A, N); gamma : (A, N, G); weights : (A, N)
+    model : degradation model
     dt : float
-        Step of the propagation (the filter's step).
     theta_fail : float
-        Failure value of theta.
-    gamma_std : array (A, G) or scalar
-        Random-walk standard deviation of gamma during the prediction.
     direction : {"up", "down"}
-        Failure when theta rises above (``up``) or falls below ``theta_fail``.
     horizon : float
-        Cap in seconds; particles not failed by then are censored.
-    rng : numpy Generator
+        Cap (s); particles that have not failed by then are censored.
+    seed : int
     chunk : int
         Most steps propagated at once (chunks start at 32 steps and double).
+    """
+
+    def __init__(self, model, *, dt: float, theta_fail: float, direction: str = "up", horizon: float = 200.0,
+                 seed: int = 0, chunk: int = 512):
+        if direction not in ("up", "down"):
+            raise ValueError(f"direction must be 'up' or 'down', got {direction!r}")
+        if horizon <= 0 or dt <= 0:
+            raise ValueError(f"horizon and dt must be positive, got horizon={horizon}, dt={dt}")
+        self.model, self.dt, self.theta_fail, self.direction = model, dt, theta_fail, direction
+        self.horizon, self.chunk = horizon, chunk
+        self.steps = int(np.ceil(horizon / dt - 1e-9))
+        self.rng = np.random.default_rng(seed)
+        self._bank = None
+
+    def _bank_rows(self, rows: int):
+        if self._bank is None or self._bank["Z"].shape[0] < rows:
+            z = self.rng.standard_normal((rows, self.steps), dtype=np.float32)
+            walk = np.cumsum(z, axis=1)
+            v = self.rng.standard_normal((rows, self.steps), dtype=np.float32)
+            self._bank = {"Z": z, "CW": np.cumsum(walk - z, axis=1), "V": v, "CV": np.cumsum(v, axis=1)}
+        return self._bank
+
+    def predict(self, theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray, gamma_std) -> RULPrediction:
+        """RUL distribution of particles ``theta`` (A, N), ``gamma`` (A, N, G) with their weights."""
+        assets, n, g = gamma.shape
+        std = np.broadcast_to(np.broadcast_to(np.asarray(gamma_std, float), (assets, g))[:, None, :], (assets, n, g))
+        theta_now = theta.astype(float).reshape(-1)
+        gamma_now, std = gamma.astype(float).reshape(-1, g), std.reshape(-1, g)
+        rul = np.full(theta_now.size, np.inf)
+        failed = _crossed(theta_now, self.theta_fail, self.direction)
+        rul[failed] = 0.0
+        alive = np.flatnonzero(~failed)
+        if hasattr(self.model, "path_from_sums") and g == 1:
+            self._propagate_with_sums(theta_now, gamma_now[:, 0], std[:, 0], alive, rul)
+        else:
+            self._propagate_stepwise(theta_now, gamma_now, std, alive, rul)
+        return RULPrediction(rul.reshape(assets, n), weights, self.horizon)
+
+    def _propagate_with_sums(self, theta, gamma, std, alive, rul) -> None:
+        bank = self._bank_rows(theta.size)
+        rows = self.rng.permutation(bank["Z"].shape[0])[: theta.size]
+        carry = np.zeros(theta.size)
+        sigma_v = np.float32(self.model.process_noise)
+        done, h = 0, min(self.chunk, 32)
+        with np.errstate(over="ignore", invalid="ignore"):
+            while done < self.steps and alive.size:
+                h = min(h, self.steps - done)
+                window, r = slice(done, done + h), rows[alive]
+                steps = np.arange(done + 1, done + h + 1, dtype=np.float32)
+                gamma_sum = (steps * gamma[alive, None].astype(np.float32)
+                             + std[alive, None].astype(np.float32) * bank["CW"][r, window])
+                # the exponential model needs this chunk's noise, the linear one its running sum
+                uses_sum = isinstance(self.model, Linear)
+                noise = sigma_v * bank["V"][r, window] if sigma_v and not uses_sum else None
+                noise_sum = sigma_v * bank["CV"][r, window] if sigma_v and uses_sum else None
+                path, carry[alive] = self.model.path_from_sums(theta[alive], gamma_sum, noise, noise_sum,
+                                                               carry[alive], self.dt)
+                alive = self._record_crossings(path, alive, done, rul)
+                done += h
+                h = min(2 * h, self.chunk)
+
+    def _propagate_stepwise(self, theta, gamma, std, alive, rul) -> None:
+        g = gamma.shape[1]
+        done, h = 0, min(self.chunk, 32)
+        with np.errstate(over="ignore", invalid="ignore"):
+            while done < self.steps and alive.size:
+                h = min(h, self.steps - done)
+                increments = self.rng.standard_normal((alive.size, h, g)) * std[alive, None, :]
+                walk = np.cumsum(increments, axis=1)
+                used = gamma[alive, None, :] + (walk - increments)  # gamma_{k+l-1} at step l
+                noise = self.rng.standard_normal((alive.size, h)) * self.model.process_noise
+                path = self.model.path(theta[alive], used, noise, self.dt)
+                theta[alive], gamma[alive] = path[:, -1], gamma[alive] + walk[:, -1, :]
+                alive = self._record_crossings(path, alive, done, rul)
+                done += h
+                h = min(2 * h, self.chunk)
+
+    def _record_crossings(self, path, alive, done, rul):
+        crossed = path >= self.theta_fail if self.direction == "up" else path <= self.theta_fail
+        first = np.argmax(crossed, axis=1)
+        hit = crossed[np.arange(first.size), first]
+        rul[alive[hit]] = (done + first[hit] + 1) * self.dt
+        return alive[~hit]
+
+
+def predict_rul(model, theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray, *, dt: float,
+                theta_fail: float, gamma_std, direction: str = "up", horizon: float = 200.0,
+                rng: np.random.Generator, chunk: int = 512) -> RULPrediction:
+    """One-off RUL prediction (Table IV); see :class:`RULPredictor` for repeated predictions.
 
     Examples
     --------
@@ -91,37 +188,9 @@ def predict_rul(model, theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray
     >>> float(rul.samples[0, 0])
     2.0
     """
-    if direction not in ("up", "down"):
-        raise ValueError(f"direction must be 'up' or 'down', got {direction!r}")
-    assets, n, g = gamma.shape
-    std = np.broadcast_to(np.broadcast_to(np.asarray(gamma_std, float), (assets, g))[:, None, :], (assets, n, g))
-    steps_total = int(np.ceil(horizon / dt - 1e-9))
-    # flatten assets x particles and carry only the particles that have not failed yet
-    theta_now, gamma_now = theta.astype(float).reshape(-1), gamma.astype(float).reshape(-1, g)
-    std = std.reshape(-1, g)
-    rul = np.full(theta_now.size, np.inf)
-    failed = _crossed(theta_now, theta_fail, direction)
-    rul[failed] = 0.0
-    alive = np.flatnonzero(~failed)
-    done, h = 0, min(chunk, 32)
-    with np.errstate(over="ignore", invalid="ignore"):
-        while done < steps_total and alive.size:
-            h = min(h, steps_total - done)
-            increments = rng.standard_normal((alive.size, h, g)) * std[alive, None, :]
-            walk = np.cumsum(increments, axis=1)
-            # gamma used at step l is gamma_{k+l-1}: the current one, then the random walk
-            used = gamma_now[alive, None, :] + np.concatenate([np.zeros((alive.size, 1, g)), walk[:, :-1, :]], axis=1)
-            noise = (rng.standard_normal((alive.size, h)) * model.process_noise if model.process_noise
-                     else np.zeros((alive.size, h)))
-            path = model.path(theta_now[alive], used, noise, dt)
-            crossed = _crossed(path, theta_fail, direction) | np.isnan(path)  # NaN only after an overflow to inf
-            hit = crossed.any(axis=1)
-            rul[alive[hit]] = (done + np.argmax(crossed[hit], axis=1) + 1) * dt
-            theta_now[alive], gamma_now[alive] = path[:, -1], gamma_now[alive] + walk[:, -1, :]
-            alive = alive[~hit]
-            done += h
-            h = min(2 * h, chunk)  # short first chunks: near-failure particles leave early
-    return RULPrediction(rul.reshape(assets, n), weights, horizon)
+    predictor = RULPredictor(model, dt=dt, theta_fail=theta_fail, direction=direction, horizon=horizon,
+                             seed=int(rng.integers(2**63)), chunk=chunk)
+    return predictor.predict(theta, gamma, weights, gamma_std)
 
 
 def _crossed(theta: np.ndarray, theta_fail: float, direction: str) -> np.ndarray:

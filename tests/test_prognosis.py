@@ -1,0 +1,255 @@
+"""Prognosis: degradation models, observation equation, particle filter, variance adaptation, RUL."""
+
+import numpy as np
+import pytest
+import sympy as sp
+
+from bondgraph.library import torsion_bar_monitorable, torsion_bar_with_load
+from diagnosis import derive_arrs
+from diagnosis.residuals import compile_arr
+from prognosis.degradation import Custom, Exponential, Linear, degradation_model
+from prognosis.filter import ParticleFilter, VarianceAdaptation
+from prognosis.observation import observation_model
+from prognosis.rul import RULPredictor, predict_rul
+
+t = sp.Symbol("t")
+B_N, K_BELT, OMEGA = 5.025e-3, 3.75, 112.5
+
+
+@pytest.fixture(scope="module")
+def torsion_arr():
+    return next(a for a in derive_arrs(torsion_bar_monitorable()) if a.junction == "1_1")
+
+
+# -- degradation ---------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("model", [Linear(process_noise=1e-3), Exponential(process_noise=1e-3),
+                                   Custom(lambda th, g, dt: th * np.exp(g[..., 0] * dt), process_noise=1e-3)])
+def test_horizon_path_equals_stepping(model):
+    rng = np.random.default_rng(0)
+    theta = rng.uniform(0.5, 1.0, (2, 4))
+    gamma = rng.normal(0.1, 0.05, (2, 4, 6, 1))
+    noise = rng.normal(0, 1e-3, (2, 4, 6))
+    path = model.path(theta, gamma, noise, 0.1)
+    current = theta
+    for step in range(6):
+        current = model.step(current, gamma[..., step, :], 0.1) + noise[..., step]
+        assert np.allclose(path[..., step], current, rtol=1e-12)
+
+
+def test_unknown_degradation_model_names_the_choices():
+    with pytest.raises(ValueError, match="linear.*exponential|exponential.*linear"):
+        degradation_model("quadratic")
+
+
+# -- observation equation -----------------------------------------------------------------------
+
+def test_observation_equation_for_b_md_is_eq_52(torsion_arr):
+    model = observation_model(torsion_arr, "b_Md")
+    b, k, w = sp.Symbol("b_Md"), sp.Symbol("k_belt"), sp.Function("omega_m")(t)
+    assert sp.simplify(model.expression - (b - B_N) * (-w / k**2)) == 0
+    assert sp.simplify(model.coefficient - (-w / k**2)) == 0  # a_1 = d r_n / d b_Md (eq. 27)
+    compiled = compile_arr(torsion_arr)
+    points = [np.array([OMEGA if str(p) == "omega_m" else 0.0]) for p in compiled.points]
+    theta = np.array([[B_N, 2 * B_N, 0.45]])
+    assert np.allclose(model(theta, points), (theta - B_N) * (-OMEGA / K_BELT**2))
+
+
+def test_observation_equation_for_the_mass_is_eq_62():
+    arr = derive_arrs(torsion_bar_with_load(M=0.2))[0]
+    model = observation_model(arr, "M")
+    M, mu, g, r, k = sp.symbols("M mu g r_Md k_belt")
+    w = sp.Function("omega_m")(t)
+    expected = (M - 0.2) * (-mu * g * r * sp.sign(w / k) / k)
+    assert sp.simplify(model.expression - expected) == 0
+
+
+def test_candidate_the_arr_is_not_sensitive_to(torsion_arr):
+    with pytest.raises(ValueError, match="J_Ld"):
+        observation_model(torsion_arr, "J_Ld")
+
+
+# -- particle filter -------------------------------------------------------------------------------
+
+def linear_observation(theta, points):
+    """y = -8 (theta - 1): a stand-in observation with a known slope."""
+    return -8.0 * (theta - 1.0)
+
+
+def make_filter(**options):
+    defaults = dict(n_particles=400, dt=0.1, noise_std=0.05, inflation=4.0, gamma_std=0.01, seed=3)
+    defaults.update(options)
+    return ParticleFilter(Linear(process_noise=1e-3), linear_observation, **defaults)
+
+
+def test_initialisation_is_uniform_over_the_interval():
+    pf = make_filter()
+    pf.initialize((0.9, 1.2), assets=3)
+    assert pf.theta.shape == (3, 400) and pf.gamma.shape == (3, 400, 1)
+    assert pf.theta.min() >= 0.9 and pf.theta.max() <= 1.2
+    assert np.allclose(pf.weights.sum(axis=1), 1.0)
+
+
+def test_fleet_of_assets_is_filtered_in_one_step():
+    rates = np.array([0.1, 0.2, 0.4])  # three machines degrading at different speeds
+    pf = make_filter(gamma_std=0.02)
+    pf.initialize((1.0, 1.0), assets=3)
+    rng = np.random.default_rng(0)
+    for k in range(1, 301):
+        truth = 1.0 + rates * 0.1 * k
+        pf.step(-8.0 * (truth - 1.0) + rng.normal(0, 0.05, 3))
+    estimate = pf.estimate()
+    assert np.allclose(estimate["theta_mean"], 1.0 + rates * 30.0, rtol=0.02)
+    assert np.allclose(estimate["gamma_mean"][:, 0], rates, rtol=0.15)
+
+
+def test_log_weights_survive_hopeless_likelihoods():
+    pf = make_filter(resample_below=0.0)
+    pf.initialize((0.9, 1.1))
+    diagnostics = pf.step(np.array([1e6]))  # every particle is ~1e13 sigma away
+    assert not diagnostics.degenerate.any()  # finite log-likelihoods: the best particle wins
+    assert np.all(np.isfinite(pf.weights)) and np.isclose(pf.weights.sum(), 1.0)
+    assert np.all(np.isfinite(pf.theta))
+
+
+def test_degenerate_weights_are_reset_and_reported():
+    pf = ParticleFilter(Linear(), lambda theta, points: np.full(theta.shape, np.nan), n_particles=50, seed=0)
+    pf.initialize((0.9, 1.1))
+    diagnostics = pf.step(np.array([0.0]))
+    assert diagnostics.degenerate.all()
+    assert np.allclose(pf.weights, 1 / 50) and np.all(np.isfinite(pf.theta))
+
+
+def test_missing_measurement_predicts_without_update():
+    pf = make_filter(resample_below=0.0)
+    pf.initialize((0.9, 1.1))
+    before = pf.weights.copy()
+    diagnostics = pf.step(np.array([np.nan]))
+    assert not diagnostics.updated.any()
+    assert np.allclose(pf.weights, before)
+
+
+def test_resampling_only_when_ess_is_low():
+    pf = make_filter(resample_below=0.5, resampling="stratified")
+    pf.initialize((0.9, 1.1))
+    assert not pf.step(np.array([0.0])).resampled.any() or True  # first step may or may not degenerate
+    pf.initialize((0.0, 2.0))
+    diagnostics = pf.step(np.array([0.0]))  # y = 0 favours theta near 1: the ESS collapses
+    assert diagnostics.resampled.all() and diagnostics.ess[0] < 0.5 * 400
+
+
+def test_filter_is_deterministic_for_a_seed():
+    runs = []
+    for _ in range(2):
+        pf = make_filter(seed=11)
+        pf.initialize((0.9, 1.1))
+        for y in np.linspace(0, -2, 20):
+            pf.step(np.array([y]))
+        runs.append(pf.theta.copy())
+    assert np.array_equal(*runs)
+
+
+def test_bad_filter_settings():
+    with pytest.raises(ValueError, match="gamma_std"):
+        ParticleFilter(Linear(), linear_observation, gamma_std=[0.1, 0.2])
+    with pytest.raises(ValueError, match="inflation"):
+        ParticleFilter(Linear(), linear_observation, inflation=0.0)
+    with pytest.raises(ValueError, match="systematic"):
+        ParticleFilter(Linear(), linear_observation, resampling="best")
+
+
+# -- variance adaptation (Table III with the DESIGN.md sign) ---------------------------------------
+
+def test_adaptation_shrinks_a_too_wide_random_walk_inside_the_band():
+    adaptation = VarianceAdaptation(band=(0.03, 0.07), reference=0.10, gain=0.01, window=3)
+    adaptation.reset()
+    rng = np.random.default_rng(0)
+    gamma = rng.normal(0.05, 0.02, (1, 1000, 1))  # spread RMAD ~ 27 % > 10 %
+    weights = np.full((1, 1000), 1e-3)
+    initial = np.array([4e-4])
+    variance = adaptation(gamma, weights, initial[None, :].copy(), initial)
+    assert variance[0, 0] < initial[0]
+    narrow = rng.normal(0.05, 0.001, (1, 1000, 1))  # spread ~1.3 % < 10 %: grow back, capped at the initial value
+    assert adaptation(narrow, weights, variance, initial)[0, 0] > variance[0, 0]
+
+
+def test_adaptation_resets_outside_the_band():
+    adaptation = VarianceAdaptation(band=(0.03, 0.07), window=0)
+    adaptation.reset()
+    gamma = np.full((1, 100, 1), 0.2)  # moving average far above the band
+    variance = adaptation(gamma, np.full((1, 100), 0.01), np.array([[1e-6]]), np.array([4e-4]))
+    assert variance[0, 0] == 4e-4
+
+
+# -- RUL ----------------------------------------------------------------------------------------------
+
+def test_deterministic_linear_and_exponential_rul():
+    theta, gamma, weights = np.array([[1.0, 2.0]]), np.array([[[0.5], [0.5]]]), np.array([[0.5, 0.5]])
+    linear = predict_rul(Linear(), theta, gamma, weights, dt=0.1, theta_fail=3.0, gamma_std=0.0,
+                         rng=np.random.default_rng(0))
+    assert np.allclose(linear.samples, [[4.0, 2.0]])  # (3 - theta) / 0.5
+    exponential = predict_rul(Exponential(), np.array([[0.005025]]), np.array([[[0.05]]]), np.array([[1.0]]),
+                              dt=0.1, theta_fail=0.45, gamma_std=0.0, rng=np.random.default_rng(0))
+    assert exponential.samples[0, 0] == pytest.approx(np.log(0.45 / 0.005025) / 0.05, abs=0.1)
+
+
+def test_downward_failure_and_censoring():
+    theta, weights = np.array([[1.0, 1.0, 1.0]]), np.full((1, 3), 1 / 3)
+    gamma = np.array([[[-0.5], [-0.25], [0.0]]])  # the last particle never degrades
+    rul = predict_rul(Linear(), theta, gamma, weights, dt=0.1, theta_fail=0.5, gamma_std=0.0, direction="down",
+                      horizon=10.0, rng=np.random.default_rng(0))
+    assert np.allclose(rul.samples[0, :2], [1.0, 2.0]) and np.isinf(rul.samples[0, 2])
+    assert rul.censored_weight[0] == pytest.approx(1 / 3)
+    assert rul.mean[0] == pytest.approx(1.5)  # over crossed particles, reported with the censored weight
+    assert rul.median[0] == pytest.approx(2.0)
+
+
+def test_stepwise_and_closed_form_predictions_agree_in_distribution():
+    rng = np.random.default_rng(5)
+    theta = np.full((1, 4000), 0.05)
+    gamma = rng.normal(0.05, 0.005, (1, 4000, 1))
+    weights = np.full((1, 4000), 1 / 4000)
+    closed = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, seed=1).predict(theta, gamma, weights, 0.002)
+    custom = Custom(lambda th, g, dt: th * np.exp(g[..., 0] * dt), process_noise=1e-4)
+    stepwise = RULPredictor(custom, dt=0.1, theta_fail=0.45, seed=2).predict(theta, gamma, weights, 0.002)
+    a, b = closed.samples[np.isfinite(closed.samples)], stepwise.samples[np.isfinite(stepwise.samples)]
+    standard_error = np.hypot(a.std() / np.sqrt(a.size), b.std() / np.sqrt(b.size))
+    assert abs(a.mean() - b.mean()) < 4 * standard_error
+    assert abs(np.median(a) - np.median(b)) < 4 * 1.2533 * standard_error  # SE of a median ~ 1.25 SE of a mean
+
+
+def test_a_collapsing_path_is_never_counted_as_a_failure():
+    # gamma far below zero: exp(dt * sum gamma) underflows in single precision without the clip
+    theta, weights = np.full((1, 50), 0.05), np.full((1, 50), 0.02)
+    gamma = np.full((1, 50, 1), -5.0)
+    rul = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, horizon=300.0, seed=0).predict(
+        theta, gamma, weights, 0.0)
+    assert rul.censored.all()
+
+
+def test_successive_predictions_differ_but_are_reproducible():
+    theta, gamma, weights = np.full((1, 200), 0.05), np.full((1, 200, 1), 0.05), np.full((1, 200), 1 / 200)
+    predictor = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, seed=7)
+    first, second = predictor.predict(theta, gamma, weights, 0.01), predictor.predict(theta, gamma, weights, 0.01)
+    again = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, seed=7).predict(theta, gamma, weights, 0.01)
+    assert not np.array_equal(first.samples, second.samples)
+    assert np.array_equal(first.samples, again.samples)
+
+
+def test_filter_and_rul_on_the_seed_b_md_problem(torsion_arr):
+    """Seed 003 section 6.3 fault model on synthetic y (eq. 52-53): estimate and predict."""
+    observation = observation_model(torsion_arr, "b_Md")
+    compiled = compile_arr(torsion_arr)
+    points = [np.array([OMEGA if str(p) == "omega_m" else 0.0]) for p in compiled.points]
+    pf = ParticleFilter(Exponential(1e-5), observation, n_particles=500, dt=0.1, noise_std=0.01, inflation=4.0,
+                        gamma_std=0.02, adaptation=VarianceAdaptation(band=(0.03, 0.07)), seed=0)
+    pf.initialize((B_N, 1.2 * B_N))
+    rng = np.random.default_rng(0)
+    predictor = RULPredictor(Exponential(1e-5), dt=0.1, theta_fail=0.45, seed=1)
+    for k in range(1, 701):  # t = 10.1 .. 80 s
+        truth = B_N * np.exp(0.05 * 0.1 * k)
+        pf.step(np.array([(truth - B_N) * (-OMEGA / K_BELT**2) + rng.normal(0, 0.01)]), points)
+    estimate = pf.estimate()
+    assert estimate["theta_mean"][0] == pytest.approx(B_N * np.exp(3.5), rel=0.05)
+    rul = predictor.predict(pf.theta, pf.gamma, pf.weights, np.sqrt(pf.variance))
+    assert 10.0 < rul.median[0] < 35.0  # true RUL at t = 80 s: 20 s
