@@ -73,15 +73,22 @@ class Exponential:
         """theta_{k+l} = E_l (theta_k + sum_{j<=l} v_j / E_j), E_l = exp(dt sum_{m<l} gamma_{k+m}).
 
         ``noise`` holds this chunk's v_j (M, H); ``carry`` the sum of v_j / E_j of earlier chunks.
+        Works in place on ``gamma_sum`` and ``noise`` (scratch arrays of the caller).
         """
         # |exponent| <= 80 keeps float32 growth finite and non-zero (no inf/0 -> NaN); a path
         # scaled by e^80 has crossed any practical threshold, one scaled by e^-80 has not
-        growth = np.exp(np.clip(dt * gamma_sum, -80.0, 80.0))
+        growth = gamma_sum
+        growth *= dt
+        np.clip(growth, -80.0, 80.0, out=growth)
+        np.exp(growth, out=growth)
         if noise is None:
             return growth * (theta + carry)[:, None], carry
-        scaled = np.cumsum(noise / growth, axis=1)
-        scaled += carry[:, None]
-        return growth * (theta[:, None] + scaled), scaled[:, -1]
+        np.divide(noise, growth, out=noise)
+        noise[:, 0] += theta + carry  # one pass: the prefix sum gives theta + S_l directly
+        level = prefix_sum(noise)
+        carry = level[:, -1] - theta
+        level *= growth
+        return level, carry
 
 
 @dataclass(frozen=True)
@@ -112,6 +119,32 @@ class Custom:
             current = self.step(current, gamma[..., step, :], dt) + noise[..., step]
             out[..., step] = current
         return out
+
+
+_BLOCK = 16
+_TRIANGLE = np.triu(np.ones((_BLOCK, _BLOCK), np.float32))
+
+
+def prefix_sum(x: np.ndarray) -> np.ndarray:
+    """Cumulative sum along axis 1 of a 2-D array.
+
+    numpy's ``cumsum`` along a row is a serial loop (about 4 ns an element);
+    for long rows, sums inside blocks of 16 as one matrix product with a
+    triangular matrix (BLAS) plus a cumulative sum of the block totals is
+    faster.  Short rows use ``cumsum``.
+
+    >>> import numpy as np
+    >>> x = np.arange(40, dtype=np.float32).reshape(1, 40)
+    >>> bool(np.allclose(prefix_sum(x), np.cumsum(x, axis=1)))
+    True
+    """
+    rows, h = x.shape
+    if h < 128 or h % _BLOCK or x.dtype != np.float32:
+        return np.cumsum(x, axis=1)
+    blocks = x.reshape(rows, h // _BLOCK, _BLOCK) @ _TRIANGLE
+    offsets = np.cumsum(blocks[:, :, -1], axis=1)
+    blocks[:, 1:, :] += offsets[:, :-1, None]
+    return blocks.reshape(rows, h)
 
 
 MODELS = {"linear": Linear, "exponential": Exponential}

@@ -72,10 +72,18 @@ class VarianceAdaptation:
         average = np.mean(np.stack(self._means), axis=0)  # eq. 36 (all available steps when k < L)
         lo, hi = (np.broadcast_to(np.asarray(b, float), mean.shape) for b in self.band)
         inside = (average >= lo) & (average <= hi)
-        spread = rmad(np.moveaxis(gamma, -1, 1), weights[:, None, :])  # (A, G)
+        spread = _spread(np.moveaxis(gamma, -1, 1), weights)  # (A, G)
         factor = 1.0 - self.gain * (spread - self.reference) / self.reference
         adapted = np.clip(variance * np.nan_to_num(factor, nan=1.0), self.floor * initial, initial)
         return np.where(inside, adapted, initial)
+
+
+def _spread(values: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """RMAD (eq. 35) along the last axis; after resampling the weights are equal and a plain median does."""
+    if np.all(weights == weights[..., :1]):
+        median = np.median(values, axis=-1, keepdims=True)
+        return np.median(np.abs(values - median), axis=-1) / median[..., 0]
+    return rmad(values, weights[:, None, :])
 
 
 @dataclass

@@ -108,6 +108,7 @@ class RULPredictor:
             z = self.rng.standard_normal((rows, self.steps), dtype=np.float32)
             walk = np.cumsum(z, axis=1)
             v = self.rng.standard_normal((rows, self.steps), dtype=np.float32)
+            v *= np.float32(self.model.process_noise)  # the bank holds the process noise itself
             self._bank = {"Z": z, "CW": np.cumsum(walk - z, axis=1), "V": v, "CV": np.cumsum(v, axis=1)}
         return self._bank
 
@@ -132,7 +133,7 @@ class RULPredictor:
         rows = self.rng.permutation(bank["Z"].shape[0])[: theta.size]
         carry = np.zeros(theta.size)
         sigma_v = np.float32(self.model.process_noise)
-        done, h = 0, min(self.chunk, 32)
+        done, h = 0, min(self.chunk, 64)
         with np.errstate(over="ignore", invalid="ignore"):
             while done < self.steps and alive.size:
                 h = min(h, self.steps - done)
@@ -142,8 +143,8 @@ class RULPredictor:
                              + std[alive, None].astype(np.float32) * bank["CW"][r, window])
                 # the exponential model needs this chunk's noise, the linear one its running sum
                 uses_sum = isinstance(self.model, Linear)
-                noise = sigma_v * bank["V"][r, window] if sigma_v and not uses_sum else None
-                noise_sum = sigma_v * bank["CV"][r, window] if sigma_v and uses_sum else None
+                noise = bank["V"][r, window] if sigma_v and not uses_sum else None
+                noise_sum = bank["CV"][r, window] if sigma_v and uses_sum else None
                 path, carry[alive] = self.model.path_from_sums(theta[alive], gamma_sum, noise, noise_sum,
                                                                carry[alive], self.dt)
                 alive = self._record_crossings(path, alive, done, rul)
@@ -152,7 +153,7 @@ class RULPredictor:
 
     def _propagate_stepwise(self, theta, gamma, std, alive, rul) -> None:
         g = gamma.shape[1]
-        done, h = 0, min(self.chunk, 32)
+        done, h = 0, min(self.chunk, 64)
         with np.errstate(over="ignore", invalid="ignore"):
             while done < self.steps and alive.size:
                 h = min(h, self.steps - done)
