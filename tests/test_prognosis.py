@@ -253,3 +253,21 @@ def test_filter_and_rul_on_the_seed_b_md_problem(torsion_arr):
     assert estimate["theta_mean"][0] == pytest.approx(B_N * np.exp(3.5), rel=0.05)
     rul = predictor.predict(pf.theta, pf.gamma, pf.weights, np.sqrt(pf.variance))
     assert 10.0 < rul.median[0] < 35.0  # true RUL at t = 80 s: 20 s
+
+
+def test_two_progression_parameters_through_filter_and_rul():
+    # theta_k = theta_{k-1} (1 + gamma_1 dt + gamma_2 dt^2): two random-walk progression parameters
+    model = Custom(lambda th, g, dt: th * (1 + g[..., 0] * dt + g[..., 1] * dt**2), n_gamma=2, process_noise=1e-4)
+    pf = ParticleFilter(model, linear_observation, n_particles=300, dt=0.1, noise_std=0.05, gamma_std=[0.01, 0.01],
+                        seed=2)
+    pf.initialize((1.0, 1.0))
+    truth = 1.0
+    rng = np.random.default_rng(1)
+    for _ in range(200):
+        truth *= 1 + 0.05 * 0.1
+        pf.step(np.array([-8.0 * (truth - 1.0) + rng.normal(0, 0.05)]))
+    assert pf.gamma.shape == (1, 300, 2)
+    assert pf.estimate()["theta_mean"][0] == pytest.approx(truth, rel=0.05)
+    rul = RULPredictor(model, dt=0.1, theta_fail=2 * truth, seed=0).predict(pf.theta, pf.gamma, pf.weights,
+                                                                              np.sqrt(pf.variance))
+    assert np.isfinite(rul.median[0]) and rul.median[0] > 0
