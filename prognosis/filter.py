@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .metrics import rmad
+from .metrics import rmad, weighted_quantiles
 from .resampling import effective_sample_size, get_scheme, normalize_log_weights
 
 
@@ -204,16 +204,6 @@ class ParticleFilter:
             "theta_rmad": rmad(self.theta, weights),
             "gamma_mean": np.einsum("an,agn->ag", weights, gamma),
             "gamma_rmad": rmad(gamma, weights[:, None, :]),
-            "theta_quantiles": _weighted_quantiles(self.theta, weights, (0.05, 0.5, 0.95)),
-            "gamma_quantiles": _weighted_quantiles(gamma, weights[:, None, :], (0.05, 0.5, 0.95)),
+            "theta_quantiles": weighted_quantiles(self.theta, weights, (0.05, 0.5, 0.95)),
+            "gamma_quantiles": weighted_quantiles(gamma, weights[:, None, :], (0.05, 0.5, 0.95)),
         }
-
-
-def _weighted_quantiles(values: np.ndarray, weights: np.ndarray, q) -> np.ndarray:
-    """Quantiles along the last axis: the smallest value whose cumulative weight reaches q."""
-    order = np.argsort(values, axis=-1)
-    sorted_values = np.take_along_axis(values, order, axis=-1)
-    cumulative = np.cumsum(np.take_along_axis(np.broadcast_to(weights, values.shape), order, axis=-1), axis=-1)
-    cumulative /= cumulative[..., -1:]
-    index = np.stack([np.argmax(cumulative >= level - 1e-12, axis=-1) for level in q], axis=-1)
-    return np.take_along_axis(sorted_values, index, axis=-1)

@@ -441,3 +441,22 @@ def convergence(times: ArrayLike, metric_values: ArrayLike, t_start: ArrayLike |
         x_c = 0.5 * np.sum(np.diff(t**2, axis=-1) * left, axis=-1) / area
         y_c = 0.5 * np.sum(dt * left**2, axis=-1) / area
     return np.hypot(x_c - start, y_c)[()]
+
+
+def weighted_quantiles(values: np.ndarray, weights: np.ndarray, levels) -> np.ndarray:
+    """Quantiles along the last axis: the smallest value whose cumulative weight reaches each level.
+
+    ``levels`` in [0, 1]; the output has the shape of ``values`` without its
+    last axis, plus one axis of ``len(levels)``.  ``+inf`` samples (censored
+    RULs) sort last.
+
+    >>> import numpy as np
+    >>> weighted_quantiles(np.array([3.0, 1.0, 2.0]), np.array([0.2, 0.5, 0.3]), (0.5, 0.9)).tolist()
+    [1.0, 3.0]
+    """
+    order = np.argsort(values, axis=-1)
+    sorted_values = np.take_along_axis(values, order, axis=-1)
+    cumulative = np.cumsum(np.take_along_axis(np.broadcast_to(weights, values.shape), order, axis=-1), axis=-1)
+    cumulative = cumulative / cumulative[..., -1:]
+    index = np.stack([np.argmax(cumulative >= level - 1e-12, axis=-1) for level in levels], axis=-1)
+    return np.take_along_axis(sorted_values, index, axis=-1)

@@ -65,8 +65,8 @@ class MonitorResult:
         samples = np.array([p.samples[0] for p in predictions]).reshape(len(predictions), -1)
         weights = np.array([p.weights[0] for p in predictions]).reshape(len(predictions), -1)
         mass, passed = metrics.alpha_lambda(samples, weights, rul_true, alpha, beta)
-        rmad_rul = [metrics.rmad(np.where(np.isfinite(s), s, np.nan)[np.isfinite(s)], w[np.isfinite(s)])
-                    if np.isfinite(s).any() else np.nan for s, w in zip(samples, weights)]
+        rmad_rul = [metrics.rmad(s[np.isfinite(s)], w[np.isfinite(s)]) if np.isfinite(s).any() else np.nan
+                    for s, w in zip(samples, weights)]  # spread of the RUL over crossed particles
         ra = metrics.relative_accuracy(rul_true, np.array([p.mean[0] for p in predictions]))
         return {
             "rmse_theta": float(metrics.relative_rmse(self.theta["mean"], theta_star)),

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .degradation import Linear
+from .metrics import weighted_quantiles
 
 
 @dataclass
@@ -48,13 +49,7 @@ class RULPrediction:
 
     def percentile(self, q) -> np.ndarray:
         """Weighted percentiles (q in [0, 100]), censored samples as +inf; shape (A, len(q))."""
-        q = np.atleast_1d(np.asarray(q, float)) / 100.0
-        order = np.argsort(self.samples, axis=-1)
-        values = np.take_along_axis(self.samples, order, axis=-1)
-        cumulative = np.cumsum(np.take_along_axis(self.weights, order, axis=-1), axis=-1)
-        cumulative /= cumulative[..., -1:]
-        index = np.stack([np.argmax(cumulative >= level - 1e-12, axis=-1) for level in q], axis=-1)
-        return np.take_along_axis(values, index, axis=-1)
+        return weighted_quantiles(self.samples, self.weights, np.atleast_1d(np.asarray(q, float)) / 100.0)
 
     @property
     def median(self) -> np.ndarray:
