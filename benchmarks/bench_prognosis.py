@@ -12,8 +12,11 @@ Monte-Carlo predictor; the ratios compare the two.
     python benchmarks/bench_prognosis.py --json     # {"total_s", "rul_speedup_vs_progpy", "filter_step_ratio_vs_progpy", ...}
     python benchmarks/bench_prognosis.py --no-progpy
 
-Targets (issue 4): whole run under 3 s; RUL prediction >= 500x faster than
-ProgPy's per prediction; filter step no slower than ProgPy's.
+Targets (issue 4): whole run under 3 s on this 2-core machine (the RUL
+predictions run in worker processes beside the filter: they are independent
+given the particles, and keyed by step so the results equal the one-process
+run, which is checked); RUL prediction >= 500x faster than ProgPy's per
+prediction (measured in one process); filter step no slower than ProgPy's.
 """
 
 from __future__ import annotations
@@ -32,7 +35,7 @@ from diagnosis.residuals import compile_arr
 from prognosis.degradation import Exponential
 from prognosis.filter import ParticleFilter, VarianceAdaptation
 from prognosis.observation import observation_model
-from prognosis.rul import RULPredictor
+from prognosis.rul import ParallelRUL, RULPredictor
 
 B_N, K_BELT, OMEGA_M, GAMMA_TRUE, SIGMA_W = 5.025e-3, 3.75, 112.5, 0.05, 0.01
 
@@ -44,7 +47,7 @@ def measurements(steps: int, dt: float, seed: int) -> tuple[np.ndarray, np.ndarr
     return t, y
 
 
-def ours(steps: int, particles: int, dt: float, seed: int) -> dict:
+def ours(steps: int, particles: int, dt: float, seed: int, workers: int = 1) -> dict:
     arr = next(a for a in derive_arrs(torsion_bar_monitorable()) if a.junction == "1_1")
     observation = observation_model(arr, "b_Md")
     compiled = compile_arr(arr)
@@ -60,18 +63,29 @@ def ours(steps: int, particles: int, dt: float, seed: int) -> dict:
     pf.initialize((B_N, B_N * 1.2))
     filter_time = rul_time = 0.0
     ruls = []
-    for k in range(steps):
-        tick = time.perf_counter()
-        pf.step(y[k:k + 1], points)
-        tock = time.perf_counter()
-        prediction = predictor.predict(pf.theta, pf.gamma, pf.weights, np.sqrt(pf.variance))
-        rul_time += time.perf_counter() - tock
-        filter_time += tock - tick
-        ruls.append(float(prediction.mean[0]))
+    if workers > 1:  # predictions in worker processes, overlapping with the filter
+        with ParallelRUL(model, workers=workers, dt=dt, theta_fail=0.45, horizon=200.0, seed=seed + 1) as pool:
+            futures = []
+            for k in range(steps):
+                tick = time.perf_counter()
+                pf.step(y[k:k + 1], points)
+                filter_time += time.perf_counter() - tick
+                futures.append(pool.submit(pf.theta, pf.gamma, pf.weights, np.sqrt(pf.variance), key=k))
+            ruls = [float(f.result().mean[0]) for f in futures]
+        rul_time = float("nan")
+    else:
+        for k in range(steps):
+            tick = time.perf_counter()
+            pf.step(y[k:k + 1], points)
+            tock = time.perf_counter()
+            prediction = predictor.predict(pf.theta, pf.gamma, pf.weights, np.sqrt(pf.variance), key=k)
+            rul_time += time.perf_counter() - tock
+            filter_time += tock - tick
+            ruls.append(float(prediction.mean[0]))
     total = time.perf_counter() - start
     return {"total_s": total, "filter_seconds_per_step": filter_time / steps, "rul_seconds_each": rul_time / steps,
             "final_estimate_b": float(np.sum(pf.weights * pf.theta)), "rul_at_50s": ruls[int(round((50 - 10) / dt)) - 1],
-            "true_rul_at_50s": 100.0 - 50.0}
+            "true_rul_at_50s": 100.0 - 50.0, "ruls": ruls}
 
 
 def main() -> None:
@@ -82,9 +96,16 @@ def main() -> None:
     parser.add_argument("--predictions", type=int, default=3, help="ProgPy prediction points")
     parser.add_argument("--no-progpy", action="store_true", help="skip the ProgPy baseline")
     parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--workers", type=int, default=2, help="processes for the RUL predictions (this machine: 2 cores)")
     args = parser.parse_args()
 
-    figures = ours(args.steps, args.particles, 0.1, args.seed)
+    # per-prediction time in one process (for the ratio to ProgPy), whole run with the prediction workers
+    single = ours(args.steps, args.particles, 0.1, args.seed, workers=1)
+    parallel = ours(args.steps, args.particles, 0.1, args.seed, workers=args.workers)
+    if not np.allclose(single.pop("ruls"), parallel.pop("ruls"), equal_nan=True):
+        raise SystemExit("RUL predictions differ between one process and the workers")
+    figures = {**single, "total_s_one_process": single["total_s"], "total_s": parallel["total_s"],
+               "workers": args.workers}
     if not args.no_progpy:
         sys.path.insert(0, str(Path(__file__).resolve().parent))
         from progpy_baseline import run_baseline
@@ -97,7 +118,8 @@ def main() -> None:
         print(json.dumps(figures))
         return
     print(f"torsion-bar fault model, N = {args.particles}, {args.steps} filter steps, RUL at every step")
-    print(f"  whole run: {figures['total_s']:.2f} s (target < 3 s)")
+    print(f"  whole run: {figures['total_s']:.2f} s with {args.workers} prediction worker(s) (target < 3 s); "
+          f"{figures['total_s_one_process']:.2f} s in one process")
     print(f"  filter step: {figures['filter_seconds_per_step'] * 1e3:.3f} ms; RUL prediction: "
           f"{figures['rul_seconds_each'] * 1e3:.3f} ms each")
     print(f"  final b_Md estimate {figures['final_estimate_b']:.4f} (true 0.452); RUL at t = 50 s: "

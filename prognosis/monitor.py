@@ -23,7 +23,7 @@ from diagnosis.signals import default_window
 from . import metrics
 from .filter import ParticleFilter, VarianceAdaptation
 from .observation import observation_model
-from .rul import RULPredictor
+from .rul import ParallelRUL, RULPredictor
 
 
 @dataclass
@@ -139,12 +139,25 @@ class HealthMonitor:
         self._next_index = None
         self._steps = 0
         self._processed = -1
+        self._pool = None
 
     # -- whole record -------------------------------------------------------
-    def run(self, record) -> MonitorResult:
-        """Process a whole record (mapping or DataFrame with ``t`` and the ARR's signals)."""
+    def run(self, record, *, workers: int = 1) -> MonitorResult:
+        """Process a whole record (mapping or DataFrame with ``t`` and the ARR's signals).
+
+        ``workers > 1`` computes the RUL predictions in that many processes while the filter goes
+        on; the results are the same as with one process (predictions are keyed by filter step).
+        """
         self._reset()
-        self._advance(record, last=None)
+        if workers > 1:
+            with ParallelRUL(self.model, workers=workers, dt=self.dt, theta_fail=self.theta_fail,
+                             direction=self.direction, horizon=self.horizon, seed=self.predictor.seed) as pool:
+                self._pool = pool
+                self._advance(record, last=None)
+                self.result.rul = [f.result() for f in self.result.rul]
+            self._pool = None
+        else:
+            self._advance(record, last=None)
         return self._finish()
 
     # -- one sample at a time ------------------------------------------------
@@ -207,8 +220,11 @@ class HealthMonitor:
         estimate = self.filter.estimate()
         self._rows.append((time, estimate))
         if self._steps % self.rul_every == 0:
-            prediction = self.predictor.predict(self.filter.theta, self.filter.gamma, self.filter.weights,
-                                                np.sqrt(self.filter.variance))
+            arguments = (self.filter.theta, self.filter.gamma, self.filter.weights, np.sqrt(self.filter.variance))
+            if self._pool is not None:
+                prediction = self._pool.submit(*arguments, key=self._steps)
+            else:
+                prediction = self.predictor.predict(*arguments, key=self._steps)
             self.result.rul.append(prediction)
             self._rul_t.append(time)
         self._steps += 1

@@ -95,8 +95,13 @@ class RULPredictor:
         self.model, self.dt, self.theta_fail, self.direction = model, dt, theta_fail, direction
         self.horizon, self.chunk = horizon, chunk
         self.steps = int(np.ceil(horizon / dt - 1e-9))
+        self.seed = seed
         self.rng = np.random.default_rng(seed)
         self._bank = None
+        self._draws = None
+
+    def _generator(self) -> np.random.Generator:
+        return self._draws if self._draws is not None else self.rng
 
     def _bank_rows(self, rows: int):
         if self._bank is None or self._bank["Z"].shape[0] < rows:
@@ -107,8 +112,14 @@ class RULPredictor:
             self._bank = {"Z": z, "CW": np.cumsum(walk - z, axis=1), "V": v, "CV": np.cumsum(v, axis=1)}
         return self._bank
 
-    def predict(self, theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray, gamma_std) -> RULPrediction:
-        """RUL distribution of particles ``theta`` (A, N), ``gamma`` (A, N, G) with their weights."""
+    def predict(self, theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray, gamma_std, *,
+                key: int | None = None) -> RULPrediction:
+        """RUL distribution of particles ``theta`` (A, N), ``gamma`` (A, N, G) with their weights.
+
+        ``key`` (e.g. the filter step) makes this prediction's randomness a function of the seed and
+        the key alone, so predictions computed in any order or process give the same result.
+        """
+        self._draws = None if key is None else np.random.default_rng([self.seed, key])
         assets, n, g = gamma.shape
         std = np.broadcast_to(np.broadcast_to(np.asarray(gamma_std, float), (assets, g))[:, None, :], (assets, n, g))
         theta_now = theta.astype(float).reshape(-1)
@@ -125,7 +136,7 @@ class RULPredictor:
 
     def _propagate_with_sums(self, theta, gamma, std, alive, rul) -> None:
         bank = self._bank_rows(theta.size)
-        rows = self.rng.permutation(bank["Z"].shape[0])[: theta.size]
+        rows = self._generator().permutation(bank["Z"].shape[0])[: theta.size]
         carry = np.zeros(theta.size)
         sigma_v = np.float32(self.model.process_noise)
         done, h = 0, min(self.chunk, 64)
@@ -152,10 +163,10 @@ class RULPredictor:
         with np.errstate(over="ignore", invalid="ignore"):
             while done < self.steps and alive.size:
                 h = min(h, self.steps - done)
-                increments = self.rng.standard_normal((alive.size, h, g)) * std[alive, None, :]
+                increments = self._generator().standard_normal((alive.size, h, g)) * std[alive, None, :]
                 walk = np.cumsum(increments, axis=1)
                 used = gamma[alive, None, :] + (walk - increments)  # gamma_{k+l-1} at step l
-                noise = self.rng.standard_normal((alive.size, h)) * self.model.process_noise
+                noise = self._generator().standard_normal((alive.size, h)) * self.model.process_noise
                 path = self.model.path(theta[alive], used, noise, self.dt)
                 theta[alive], gamma[alive] = path[:, -1], gamma[alive] + walk[:, -1, :]
                 alive = self._record_crossings(path, alive, done, rul)
@@ -168,6 +179,50 @@ class RULPredictor:
         hit = crossed[np.arange(first.size), first]
         rul[alive[hit]] = (done + first[hit] + 1) * self.dt
         return alive[~hit]
+
+
+class ParallelRUL:
+    """RUL predictions in worker processes, so they overlap with filtering on a multi-core machine.
+
+    Predictions at different filter steps are independent given the particles, so they can run in
+    parallel; each is keyed by its step (:meth:`RULPredictor.predict`), so the results do not depend
+    on which worker computes them or when.  Use as a context manager.
+
+    >>> import numpy as np
+    >>> from prognosis.degradation import Linear
+    >>> with ParallelRUL(Linear(), dt=0.1, theta_fail=2.0, workers=2) as pool:
+    ...     future = pool.submit(np.zeros((1, 3)), np.ones((1, 3, 1)), np.full((1, 3), 1 / 3), 0.0, key=0)
+    ...     future.result().samples.tolist()
+    [[2.0, 2.0, 2.0]]
+    """
+
+    def __init__(self, model, *, workers: int = 2, **predictor):
+        import multiprocessing
+        from concurrent.futures import ProcessPoolExecutor
+
+        self._pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"),
+                                         initializer=_start_worker, initargs=(model, predictor))
+
+    def submit(self, theta, gamma, weights, gamma_std, *, key: int):
+        return self._pool.submit(_predict_in_worker, theta, gamma, weights, gamma_std, key)
+
+    def __enter__(self) -> "ParallelRUL":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self._pool.shutdown()
+
+
+_WORKER_PREDICTOR = None
+
+
+def _start_worker(model, predictor) -> None:
+    global _WORKER_PREDICTOR
+    _WORKER_PREDICTOR = RULPredictor(model, **predictor)
+
+
+def _predict_in_worker(theta, gamma, weights, gamma_std, key) -> RULPrediction:
+    return _WORKER_PREDICTOR.predict(theta, gamma, weights, gamma_std, key=key)
 
 
 def predict_rul(model, theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray, *, dt: float,

@@ -66,6 +66,15 @@ def test_sample_by_sample_equals_the_whole_record(scenario):
     assert np.allclose(result.theta["mean"], whole.theta["mean"][:n])
 
 
+def test_prediction_workers_give_the_same_result(scenario):
+    arr, record = scenario
+    one = monitor(arr, seed=8).run(record)
+    two = monitor(arr, seed=8).run(record, workers=2)
+    assert len(one.rul) == len(two.rul)
+    for a, b in zip(one.rul, two.rul):
+        assert np.array_equal(a.samples, b.samples)
+
+
 def test_failure_value_on_the_wrong_side_is_refused(scenario):
     arr, _ = scenario
     with pytest.raises(ValueError, match="wrong side"):

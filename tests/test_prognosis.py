@@ -227,6 +227,16 @@ def test_a_collapsing_path_is_never_counted_as_a_failure():
     assert rul.censored.all()
 
 
+def test_keyed_predictions_do_not_depend_on_call_order():
+    theta, gamma, weights = np.full((1, 200), 0.05), np.full((1, 200, 1), 0.05), np.full((1, 200), 1 / 200)
+    forward = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, seed=7)
+    backward = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, seed=7)
+    a = [forward.predict(theta, gamma, weights, 0.01, key=k).samples for k in range(3)]
+    b = [backward.predict(theta, gamma, weights, 0.01, key=k).samples for k in reversed(range(3))][::-1]
+    assert all(np.array_equal(x, y) for x, y in zip(a, b))
+    assert not np.array_equal(a[0], a[1])
+
+
 def test_successive_predictions_differ_but_are_reproducible():
     theta, gamma, weights = np.full((1, 200), 0.05), np.full((1, 200, 1), 0.05), np.full((1, 200), 1 / 200)
     predictor = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, seed=7)
