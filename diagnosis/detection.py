@@ -30,7 +30,7 @@ False
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -56,6 +56,9 @@ class Evaluation:
         ``-r_n`` outside the widened band; violation persisting ``persistence`` samples.
     detection_time : float or None
         Time of the first alarm.
+    points : list of ndarray
+        The ARR's point values per sample (signals, derivative estimates,
+        integrals), in the order of :class:`~diagnosis.residuals.CompiledARR`.
     """
 
     name: str
@@ -68,6 +71,7 @@ class Evaluation:
     persistence: int
     violation: np.ndarray
     alarm: np.ndarray
+    points: list = field(default_factory=list, repr=False)
 
     @property
     def detection_time(self) -> float | None:
@@ -121,7 +125,8 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     with np.errstate(invalid="ignore"):
         violation = (-residual < lo - margin) | (-residual > hi + margin)
     alarm = persistent(violation, persistence)
-    return Evaluation(arr.name, data.t, residual, lower, upper, bglft, float(margin), persistence, violation, alarm)
+    return Evaluation(arr.name, data.t, residual, lower, upper, bglft, float(margin), persistence, violation, alarm,
+                      points)
 
 
 def persistent(violation: np.ndarray, samples: int) -> np.ndarray:

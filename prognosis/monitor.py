@@ -17,7 +17,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from diagnosis.residuals import compile_arr, read_record
 from diagnosis.signals import default_window
 
 from . import metrics
@@ -166,16 +165,13 @@ class HealthMonitor:
         self._buffer.append(dict(sample))
         final = len(self._buffer) - 1 - self._half_window()  # samples whose centred derivative is known
         # re-evaluate once per filter step's worth of samples: O(n) work per stride, not per sample
-        if len(self._buffer) < 2 * self._half_window() + 3 or final - self._processed < self._stride_guess():
+        recent = np.array([row["t"] for row in self._buffer[-3:]], float)
+        if len(self._buffer) < 2 * self._half_window() + 3 or final - self._processed < self._stride(recent):
             return self._finish()
         record = {key: np.array([row[key] for row in self._buffer], float) for key in self._buffer[0]}
         self._advance(record, last=final)
         self._processed = final
         return self._finish()
-
-    def _stride_guess(self) -> int:
-        t = [row["t"] for row in self._buffer[-3:]]
-        return max(1, int(round(self.dt / (t[-1] - t[-2])))) if len(t) >= 2 and t[-1] > t[-2] else 1
 
     def _half_window(self) -> int:
         window = self.detection.get("window") or default_window(self.detection.get("polyorder", 3))
@@ -195,12 +191,7 @@ class HealthMonitor:
             self.filter.initialize(self.theta_bounds, self.gamma0)
             self._next_index = start
         stride = self._stride(t)
-        anti = self.detection.get("antiderivatives")
-        compiled = compile_arr(self.arr)
-        data = read_record(self.arr, record, extra=tuple((anti or {}).values()))
-        points = compiled.point_values(data, method=self.detection.get("method", "savgol"),
-                                       window=self.detection.get("window"),
-                                       polyorder=self.detection.get("polyorder", 3), antiderivatives=anti)
+        points = evaluation.points  # the observation equation uses the same signals, derivatives, integrals
         while self._next_index is not None and self._next_index <= last:
             k = self._next_index
             self._filter_step(t[k], -evaluation.residual[k], [p[k:k + 1] for p in points])
