@@ -152,6 +152,7 @@ def torsion_bar_monitorable(**overrides: float) -> BondGraph:
 # (Coulomb friction mu M g r_Md sgn(omega_Md), eqs. 54-56).  r_Md is not given in the
 # seed; 0.05 m is our assumption.
 MASS_LOAD = {"M": 0.1, "mu": 0.27, "g": 9.81, "r_Md": 0.05}
+MU_UNCERTAINTY = (-0.1, 0.1)
 
 
 def torsion_bar_with_load(M: float = MASS_LOAD["M"], mu: float = MASS_LOAD["mu"], r_Md: float = MASS_LOAD["r_Md"],
@@ -166,6 +167,7 @@ def torsion_bar_with_load(M: float = MASS_LOAD["M"], mu: float = MASS_LOAD["mu"]
     node = bg.graph.nodes["b_Md"]
     node["law"] = "e - b_Md*f - mu*M*g*r_Md*sign(f)"
     node["params"] = {"M": M, "mu": mu, "g": MASS_LOAD["g"], "r_Md": r_Md}
+    node["uncertainties"] = {"mu": MU_UNCERTAINTY}  # Table VI
     bg.name = "torsion bar with suspended load"
     bg.validate()
     return bg

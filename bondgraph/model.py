@@ -76,6 +76,13 @@ class Element:
     modulus: sp.Expr | None = None
     signal: str | None = None
     constants: Mapping[str, float] = field(default_factory=dict)
+    constant_uncertainties: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+
+    @property
+    def uncertainties(self) -> dict[str, tuple[float, float]]:
+        """Multiplicative interval of the element's parameter and of its uncertain law constants."""
+        own = {self.param: self.uncertainty} if self.uncertainty is not None else {}
+        return {**own, **self.constant_uncertainties}
 
     def __str__(self) -> str:
         return f"{self.kind} {self.name!r}"
@@ -223,7 +230,7 @@ class BondGraph:
     @property
     def uncertainties(self) -> dict[str, tuple[float, float]]:
         """Multiplicative interval ``(delta_lo, delta_hi)`` of each uncertain parameter."""
-        return {e.param: e.uncertainty for e in self.elements.values() if e.uncertainty is not None}
+        return {p: u for e in self.elements.values() for p, u in e.uncertainties.items()}
 
     @property
     def inputs(self) -> list[str]:
@@ -273,6 +280,7 @@ def _read_element(name: Hashable, data: Mapping) -> Element:
     where = f"{kind} {name!r}"
     param = value = uncertainty = law = modulus = signal = None
     constants = _read_constants(where, data.get("params"))
+    constant_uncertainties = _read_constant_uncertainties(where, data.get("uncertainties"), constants)
 
     if kind in el.PARAMETRIC:
         param = str(data.get("param", name))
@@ -301,7 +309,7 @@ def _read_element(name: Hashable, data: Mapping) -> Element:
         form = next((x for x in (law, modulus) if x is not None), sp.Symbol(param))
         if sp.Symbol(param) in form.free_symbols:  # a law or modulus may not need the parameter
             raise ModelError(f"{where}: missing nominal 'value' for parameter {param!r}")
-    return Element(name, kind, param, value, uncertainty, law, modulus, signal, constants)
+    return Element(name, kind, param, value, uncertainty, law, modulus, signal, constants, constant_uncertainties)
 
 
 def _read_value(where: str, value) -> float | None:
@@ -348,6 +356,19 @@ def _read_constants(where: str, params) -> dict[str, float]:
         if constants[str(key)] is None:
             raise ModelError(f"{where}: constant {key!r} has no value")
     return constants
+
+
+def _read_constant_uncertainties(where: str, intervals, constants: Mapping) -> dict[str, tuple[float, float]]:
+    """``uncertainties={"mu": (-0.1, 0.1)}``: multiplicative intervals of law constants."""
+    if intervals is None:
+        return {}
+    if not isinstance(intervals, Mapping):
+        raise ModelError(f"{where}: 'uncertainties' must map law constants to (delta_lo, delta_hi), got {intervals!r}")
+    unknown = sorted(str(k) for k in intervals if str(k) not in constants)
+    if unknown:
+        raise ModelError(f"{where}: 'uncertainties' names {unknown}, which are not law constants in 'params' "
+                         f"({sorted(constants)}); the element parameter's interval goes in 'uncertainty'")
+    return {str(k): _read_uncertainty(f"{where} constant {k!r}", v) for k, v in intervals.items()}
 
 
 def _read_law(where: str, kind: str, law, names: dict, param: str) -> sp.Expr:

@@ -97,14 +97,14 @@ def _check_parameters(elements) -> dict[str, float]:
     for element in elements.values():
         if element.param is not None:
             declare(element.param, element.value, str(element))
-            if element.uncertainty is not None:
-                if element.param in intervals and intervals[element.param][0] != element.uncertainty:
-                    first, owner = intervals[element.param]
-                    raise ModelError(
-                        f"parameter {element.param!r} has conflicting uncertainty intervals: {first} ({owner}) "
-                        f"and {element.uncertainty} ({element})"
-                    )
-                intervals.setdefault(element.param, (element.uncertainty, str(element)))
+        for name, interval in element.uncertainties.items():
+            if name in intervals and intervals[name][0] != interval:
+                first, owner = intervals[name]
+                raise ModelError(
+                    f"parameter {name!r} has conflicting uncertainty intervals: {first} ({owner}) "
+                    f"and {interval} ({element})"
+                )
+            intervals.setdefault(name, (interval, str(element)))
     for element in elements.values():
         for name, value in element.constants.items():
             declare(name, value, f"{element} constant")

@@ -174,7 +174,7 @@ def _diagnosis_causality(bg: BondGraph, structure: Structure):
 
 def _uncertain_structure(structure: Structure) -> Structure:
     """The same model with every uncertain parameter theta replaced by theta (1 + delta_theta)."""
-    uncertain = {e.param: e.uncertainty for e in structure.elements.values() if e.uncertainty is not None}
+    uncertain = _uncertainties(structure)
     mapping = {sp.Symbol(p): sp.Symbol(p) * (1 + delta(p)) for p in uncertain}
     elements = {}
     for name, element in structure.elements.items():
@@ -184,6 +184,11 @@ def _uncertain_structure(structure: Structure) -> Structure:
             element = dataclasses.replace(element, modulus=element.modulus.xreplace(mapping))
         elements[name] = element
     return dataclasses.replace(structure, elements=elements)
+
+
+def _uncertainties(structure: Structure) -> dict:
+    """Parameter -> multiplicative interval, element parameters and law constants alike."""
+    return {p: u for e in structure.elements.values() for p, u in e.uncertainties.items()}
 
 
 class _Unknown(Exception):
@@ -233,7 +238,7 @@ def _integrals(equations) -> dict:
 
 def _split(name, junction, detector, r_n, r_true, blocked_by, structure, candidates) -> ARR:
     deltas = sorted((s for s in r_true.free_symbols if s.name.startswith("delta_")), key=str)
-    parameters = {e.param: e.uncertainty for e in structure.elements.values() if e.uncertainty is not None}
+    parameters = _uncertainties(structure)
     terms = {}
     for d in deltas:
         others = {o: 0 for o in deltas if o is not d}

@@ -97,6 +97,11 @@ class HealthMonitor:
     n_particles, noise_std, inflation, gamma_std, gamma0, resampling, resample_below
         Particle filter settings (:class:`~prognosis.filter.ParticleFilter`).
     adaptation : VarianceAdaptation, optional
+    prediction_walk : float
+        Scale of the random-walk standard deviation of gamma in the RUL
+        prediction: 1 propagates gamma with the current adapted variance as in
+        Table IV, 0 holds each particle's gamma at its estimate (the walk is an
+        estimation device, not a model of the future).
     rul_every : int
         Predict the RUL every this many filter steps.
     horizon : float
@@ -110,7 +115,7 @@ class HealthMonitor:
     def __init__(self, arr, candidate: str, model, *, theta_fail: float, direction: str = "up", dt: float = 0.1,
                  n_particles: int = 500, noise_std: float = 0.01, inflation: float = 4.0, gamma_std=0.02,
                  gamma0=0.0, adaptation: VarianceAdaptation | None = None, resampling: str = "systematic",
-                 resample_below: float = 1.0, rul_every: int = 1, horizon: float = 200.0,
+                 resample_below: float = 1.0, prediction_walk: float = 1.0, rul_every: int = 1, horizon: float = 200.0,
                  detection: Mapping | None = None, seed: int = 0):
         self.arr, self.candidate, self.model = arr, candidate, model
         self.observation = observation_model(arr, candidate)
@@ -124,7 +129,10 @@ class HealthMonitor:
         self.filter = ParticleFilter(model, self.observation, n_particles=n_particles, dt=dt, noise_std=noise_std,
                                      inflation=inflation, gamma_std=gamma_std, adaptation=adaptation,
                                      resampling=resampling, resample_below=resample_below, seed=seed)
+        if prediction_walk < 0:
+            raise ValueError(f"prediction_walk must be >= 0, got {prediction_walk}")
         self.gamma0, self.rul_every, self.horizon = gamma0, rul_every, horizon
+        self.prediction_walk = float(prediction_walk)
         self.detection = dict(detection or {})
         self.predictor = RULPredictor(model, dt=dt, theta_fail=theta_fail, direction=direction, horizon=horizon,
                                       seed=seed + 1)
@@ -211,7 +219,7 @@ class HealthMonitor:
         estimate = self.filter.estimate()
         self._rows.append((time, estimate))
         if self._steps % self.rul_every == 0:
-            arguments = (self.filter.theta, self.filter.gamma, self.filter.weights, np.sqrt(self.filter.variance))
+            arguments = (self.filter.theta, self.filter.gamma, self.filter.weights, self.prediction_walk * np.sqrt(self.filter.variance))
             if self._pool is not None:
                 prediction = self._pool.submit(*arguments, key=self._steps)
             else:

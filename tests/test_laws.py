@@ -159,6 +159,26 @@ def test_law_constants_from_params_are_allowed_names():
     assert bg.parameters == {"a": 0.3, "S": 5e-5, "rho": 1000.0}
 
 
+def test_law_constants_may_carry_uncertainty_intervals():
+    G = valve_graph("f - a*S*sign(e)*sqrt(2*Abs(e)/rho)", params={"S": 5e-5, "rho": 1000.0},
+                    uncertainty=(-0.05, 0.05), uncertainties={"S": (-0.1, 0.2)})
+    bg = BondGraph(G)
+    assert bg.uncertainties == {"a": (-0.05, 0.05), "S": (-0.1, 0.2)}
+
+
+@pytest.mark.parametrize("uncertainties, match", [
+    ({"rho2": (-0.1, 0.1)}, r"\['rho2'\].*not law constants"),
+    ({"S": (0.1, 0.2)}, "must contain 0"),
+    ({"S": "wide"}, "not a pair"),
+    ([("S", (-0.1, 0.1))], "must map law constants"),
+])
+def test_bad_constant_uncertainties_name_the_element_and_constant(uncertainties, match):
+    G = valve_graph("f - a*S*sign(e)*sqrt(2*Abs(e)/rho)", params={"S": 5e-5, "rho": 1000.0},
+                    uncertainties=uncertainties)
+    with pytest.raises(ModelError, match=r"'valve'.*" + match):
+        BondGraph(G)
+
+
 # ---------------------------------------------------------------------------
 # Rejected expressions
 # ---------------------------------------------------------------------------

@@ -64,6 +64,14 @@ def test_observation_equation_for_the_mass_is_eq_62():
     assert sp.simplify(model.expression - expected) == 0
 
 
+def test_mu_uncertainty_enters_the_mass_arr_as_in_eq_58():
+    arr = next(a for a in derive_arrs(torsion_bar_with_load(M=0.2)) if a.junction == "1_1")
+    M, mu, g, r, k, d = sp.symbols("M mu g r_Md k_belt delta_mu")
+    w = sp.Function("omega_m")(t)
+    assert arr.uncertainties["mu"] == (-0.1, 0.1)
+    assert sp.simplify(arr.terms["mu"] - (-d * mu * M * g * r * sp.sign(w / k) / k)) == 0
+
+
 def test_candidate_the_arr_is_not_sensitive_to(torsion_arr):
     with pytest.raises(ValueError, match="J_Ld"):
         observation_model(torsion_arr, "J_Ld")
