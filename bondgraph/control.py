@@ -60,10 +60,11 @@ class PIController:
         return self.kp * self.error(t, y) + self.ki * z[0]
 
     def output(self, t: float, z, y: dict) -> float:
+        """The control signal; also vectorized over samples (``z`` of shape (1, n), ``y`` of arrays)."""
         u = self._unsaturated(t, z, y)
         if self.limits is not None:
-            u = min(max(u, self.limits[0]), self.limits[1])
-        return float(u)
+            u = np.clip(u, self.limits[0], self.limits[1])
+        return float(u) if np.ndim(u) == 0 else np.asarray(u, float)
 
     def derivative(self, t: float, z, y: dict) -> np.ndarray:
         err = self.error(t, y)

@@ -160,15 +160,25 @@ def torsion_bar_with_load(M: float = MASS_LOAD["M"], mu: float = MASS_LOAD["mu"]
     """Seed 003 section 7: the monitorable part with the suspended-mass friction on the motor disk.
 
     The motor-disk R element gets the law ``e = b_Md f + mu M g r_Md sign(f)``
-    (eq. 56), with M (kg), mu and r_Md as law constants; the prognostic
-    candidate of section 7 is M (eqs. 61-62).
+    (eq. 56), with M (kg), mu and r_Md as law constants and mu uncertain as in
+    Table VI; the prognostic candidate of section 7 is M (eqs. 61-62).
     """
-    bg = torsion_bar_monitorable(**overrides)
+    bg = with_suspended_load(torsion_bar_monitorable(**overrides), M=M, mu=mu, r_Md=r_Md)
+    bg.name = "torsion bar with suspended load"
+    return bg
+
+
+def with_suspended_load(bg: BondGraph, M: float = MASS_LOAD["M"], mu: float = MASS_LOAD["mu"],
+                        r_Md: float = MASS_LOAD["r_Md"]) -> BondGraph:
+    """Add the suspended-load Coulomb friction (eqs. 54-56) to the R element ``b_Md`` of a torsion bar.
+
+    Works on :func:`torsion_bar` (to simulate the experiments of section 7) and on
+    :func:`torsion_bar_monitorable` (to derive their I-ARR, eq. 57).  Modifies and returns ``bg``.
+    """
     node = bg.graph.nodes["b_Md"]
     node["law"] = "e - b_Md*f - mu*M*g*r_Md*sign(f)"
     node["params"] = {"M": M, "mu": mu, "g": MASS_LOAD["g"], "r_Md": r_Md}
     node["uncertainties"] = {"mu": MU_UNCERTAINTY}  # Table VI
-    bg.name = "torsion bar with suspended load"
     bg.validate()
     return bg
 

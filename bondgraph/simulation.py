@@ -111,10 +111,14 @@ def simulate(
     z0 = np.concatenate([x0_vector] + [np.asarray(c.initial_state(), float) for c in plan.controllers.values()])
     if t_eval is None:
         t_eval = np.linspace(t_span[0], t_span[1], 501)
-    solution = solve_ivp(plan.derivative, t_span, z0, method=method, t_eval=t_eval,
-                         rtol=rtol, atol=atol, max_step=max_step)
+    with np.errstate(invalid="ignore", divide="ignore"):  # Piecewise laws evaluate unselected branches too
+        solution = solve_ivp(plan.derivative, t_span, z0, method=method, t_eval=t_eval,
+                             rtol=rtol, atol=atol, max_step=max_step)
     if not solution.success:
         raise SimulationError(f"integration failed at t = {solution.t[-1] if solution.t.size else t_span[0]}: {solution.message}")
+    if not np.all(np.isfinite(solution.y)):
+        k = int(np.argmax(~np.all(np.isfinite(solution.y), axis=0)))
+        raise SimulationError(f"the state became NaN or infinite at t = {solution.t[k]:g}; check the laws and parameters")
     return plan.result(solution)
 
 
@@ -240,24 +244,66 @@ class _Plan:
             offset += k
         return np.concatenate(parts)
 
+    def _history_per_sample(self, t, z, samples) -> tuple[np.ndarray, np.ndarray]:
+        """Inputs (m, K) and parameters (p, K) at ``samples``, one call of every callable per sample."""
+        u = np.empty((len(self.input_names), len(samples)))
+        theta = np.empty((len(self.parameter_names), len(samples)))
+        for j, k in enumerate(samples):
+            theta[:, j] = self._theta(t[k])
+            u[:, j] = self._inputs(t[k], z[: self.n, k], z[self.n:, k], list(theta[:, j]))[0]
+        return u, theta
+
+    def _history_vectorized(self, t, z) -> tuple[np.ndarray, np.ndarray]:
+        """The same, calling each callable once with all samples (raises if one cannot take arrays)."""
+        n_t = t.size
+
+        def column(value):
+            out = np.asarray(value, float)
+            if out.shape not in ((), (n_t,)):
+                raise ValueError("not vectorized")
+            return np.broadcast_to(out, (n_t,))
+
+        theta = np.array([column(v(t) if callable(v) else v)
+                          for v in (self.parameter_values[n] for n in self.parameter_names)]).reshape(-1, n_t)
+        u = {name: np.zeros(n_t) for name in self.input_names}
+        for name, function in self.open_loop.items():
+            u[name] = column(function(t))
+        if self.feedback or self.controllers:
+            values = self.f_outputs(t, z[: self.n], [u[n] for n in self.input_names], list(theta))
+            y = {name: column(v) for name, v in zip(self.output_names, values)}
+            offset = self.n
+            for name, controller in self.controllers.items():
+                u[name] = column(controller.output(t, z[offset:offset + controller.n_states], y))
+                offset += controller.n_states
+            for name, function in self.feedback.items():
+                u[name] = column(function(t, y))
+        return np.array([u[n] for n in self.input_names]).reshape(-1, n_t), theta
+
     def result(self, solution) -> SimulationResult:
         t, z = solution.t, solution.y
         n_t = t.size
-        u_history = np.empty((len(self.input_names), n_t))
-        thetas = []
-        for k in range(n_t):  # inputs may be arbitrary Python callables: one call per sample
-            theta = self._theta(t[k])
-            thetas.append(theta)
-            u_history[:, k] = self._inputs(t[k], z[: self.n, k], z[self.n:, k], theta)[0]
-        theta_history = [np.array(column, float) for column in zip(*thetas)] if thetas else []
+        # inputs and time-varying parameters may be arbitrary Python callables: call them with all
+        # samples at once when they accept arrays and agree with per-sample calls on a few samples
+        try:
+            with np.errstate(all="ignore"):
+                u_history, theta_history = self._history_vectorized(t, z)
+            spot = sorted({0, n_t // 2, n_t - 1}) if n_t else []
+            u_spot, theta_spot = self._history_per_sample(t, z, spot)
+            if not (np.allclose(u_history[:, spot], u_spot, rtol=1e-12, atol=0, equal_nan=True)
+                    and np.allclose(theta_history[:, spot], theta_spot, rtol=1e-12, atol=0, equal_nan=True)):
+                raise ValueError("vectorized and per-sample calls disagree")
+        except (TypeError, ValueError, IndexError, AttributeError):
+            u_history, theta_history = self._history_per_sample(t, z, range(n_t))
+        u_history, theta_history = list(u_history), list(theta_history)
 
         def evaluate(function):
-            values = function(t, z[: self.n], list(u_history), theta_history)
+            with np.errstate(invalid="ignore", divide="ignore"):  # numpy evaluates every Piecewise branch
+                values = function(t, z[: self.n], u_history, theta_history)
             return [np.broadcast_to(np.asarray(v, float), (n_t,)).copy() for v in values]
 
         bonds = evaluate(self.f_bonds)
         m = len(self.labels)
-        signals = dict(zip(self.input_names, u_history))
+        signals = {name: np.array(values) for name, values in zip(self.input_names, u_history)}
         signals.update(zip(self.output_names, evaluate(self.f_outputs)))
         controller_states, offset = {}, self.n
         for name, controller in self.controllers.items():

@@ -139,14 +139,25 @@ class ParticleFilter:
         self.rng = np.random.default_rng(seed)
         self.theta = self.gamma = self.log_weights = self.variance = None
 
-    def initialize(self, theta_bounds, gamma0=0.0, assets: int = 1) -> None:
-        """Particles at detection: theta ~ U(lo, hi) per asset (eq. 39), gamma = gamma0."""
+    def initialize(self, theta_bounds, gamma0=0.0, assets: int = 1, gamma_bounds=None) -> None:
+        """Particles at detection: theta ~ U(lo, hi) per asset (eq. 39), gamma = gamma0.
+
+        ``gamma_bounds = (lo, hi)`` (each a scalar or (G,)) draws gamma uniformly instead, e.g. over
+        the band of :class:`VarianceAdaptation`, the prior knowledge of gamma the seed already uses.
+        """
         lo, hi = (np.broadcast_to(np.asarray(b, float), (assets,)) for b in theta_bounds)
         if np.any(lo > hi):
             raise ValueError(f"theta bounds have lo > hi: {theta_bounds}")
         self.theta = lo[:, None] + (hi - lo)[:, None] * self.rng.random((assets, self.n))
-        gamma0 = np.broadcast_to(np.asarray(gamma0, float), (self.model.n_gamma,))
-        self.gamma = np.broadcast_to(gamma0, (assets, self.n, self.model.n_gamma)).copy()
+        shape = (assets, self.n, self.model.n_gamma)
+        if gamma_bounds is None:
+            gamma0 = np.broadcast_to(np.asarray(gamma0, float), (self.model.n_gamma,))
+            self.gamma = np.broadcast_to(gamma0, shape).copy()
+        else:
+            g_lo, g_hi = (np.broadcast_to(np.asarray(b, float), (self.model.n_gamma,)) for b in gamma_bounds)
+            if np.any(g_lo > g_hi):
+                raise ValueError(f"gamma bounds have lo > hi: {gamma_bounds}")
+            self.gamma = g_lo + (g_hi - g_lo) * self.rng.random(shape)
         self.log_weights = np.full((assets, self.n), -np.log(self.n))
         self.variance = np.broadcast_to(self.initial_variance, (assets, self.model.n_gamma)).copy()
         if self.adaptation is not None:

@@ -309,13 +309,26 @@ def alpha_lambda(rul_samples: ArrayLike, weights: ArrayLike | None, rul_true: Ar
         raise ValueError(f"alpha must be a finite number >= 0, got {alpha}")
     if not 0 <= beta <= 1:
         raise ValueError(f"beta must lie in [0, 1], got {beta}")
+    true = np.asarray(rul_true, dtype=float)
+    mass = mass_within(rul_samples, weights, (1 - alpha) * true, (1 + alpha) * true)
+    return mass, np.asarray(mass >= beta)[()]
+
+
+def mass_within(rul_samples: ArrayLike, weights: ArrayLike | None, lower: ArrayLike, upper: ArrayLike) -> np.ndarray:
+    """Probability mass of the RUL distribution in ``[lower, upper]`` (closed), per prediction point.
+
+    ``pi = sum_i w_i [lower <= RUL_i <= upper] / sum_i w_i``; censored (inf or NaN) samples count as
+    outside.  The alpha-lambda cone is ``[(1 - alpha) RUL*, (1 + alpha) RUL*]``; the prognostic
+    horizon's fixed-width bounds are ``RUL* -+ alpha EOL`` (Saxena et al. 2010).
+
+    >>> float(mass_within([1.0, 2.0, 3.0, np.inf], None, 1.5, 3.0))
+    0.5
+    """
     x = _last_axis(rul_samples, -1)
-    true = np.asarray(rul_true, dtype=float)[..., None]
-    x = np.broadcast_to(x, np.broadcast_shapes(x.shape, true.shape))
+    lo, hi = np.asarray(lower, dtype=float)[..., None], np.asarray(upper, dtype=float)[..., None]
+    x = np.broadcast_to(x, np.broadcast_shapes(x.shape, lo.shape, hi.shape))
     w = _weights_like(x, weights)
-    inside = (x >= (1 - alpha) * true) & (x <= (1 + alpha) * true)
-    mass = np.sum(w * inside, axis=-1)
-    return mass[()], (mass >= beta)[()]
+    return np.sum(w * ((x >= lo) & (x <= hi)), axis=-1)[()]
 
 
 def prognostic_horizon(times: ArrayLike, passed: ArrayLike, eol: ArrayLike) -> np.ndarray | float:

@@ -53,29 +53,44 @@ class MonitorResult:
         """Seed 003 section 5 metrics against the truth.
 
         ``theta_true``, ``gamma_true``: callables of t; ``eol``: true end of
-        life (s); ``after``: RA and RMAD of the RUL only over predictions at
-        or after this time (the seed uses t = 52 s).
+        life (s).  RA, RMAD of the RUL and the alpha-lambda pass rate use the
+        predictions made at or after ``after`` (the seed uses t = 52 s) and
+        before the end of life (the true RUL must be positive).  The
+        prognostic horizon is ``eol - t_j`` from the first prediction after
+        which at least ``beta`` of the RUL mass stays within ``RUL* -+ alpha
+        eol`` (fixed-width bounds, Saxena et al. 2010; the alpha-lambda cone
+        shrinks to zero width at the end of life, where no prediction can
+        stay inside it).
         """
         theta_star = np.asarray([theta_true(t) for t in self.t])
         gamma_star = np.asarray([gamma_true(t) for t in self.t])
-        keep = np.ones(self.rul_t.size, bool) if after is None else self.rul_t >= after
-        rul_true = eol - self.rul_t[keep]
-        predictions = [p for p, k in zip(self.rul, keep) if k]
-        samples = np.array([p.samples[0] for p in predictions]).reshape(len(predictions), -1)
-        weights = np.array([p.weights[0] for p in predictions]).reshape(len(predictions), -1)
-        mass, passed = metrics.alpha_lambda(samples, weights, rul_true, alpha, beta)
+        alive = self.rul_t < eol
+        keep = alive & (self.rul_t >= (-np.inf if after is None else after))
+        samples, weights = self._rul_arrays()
+        rul_true = eol - self.rul_t
+        _, passed = metrics.alpha_lambda(samples[keep], weights[keep], rul_true[keep], alpha, beta)
+        horizon_ok = metrics.mass_within(samples[alive], weights[alive], rul_true[alive] - alpha * eol,
+                                         rul_true[alive] + alpha * eol) >= beta
         rmad_rul = [metrics.rmad(s[np.isfinite(s)], w[np.isfinite(s)]) if np.isfinite(s).any() else np.nan
-                    for s, w in zip(samples, weights)]  # spread of the RUL over crossed particles
-        ra = metrics.relative_accuracy(rul_true, np.array([p.mean[0] for p in predictions]))
+                    for s, w in zip(samples[keep], weights[keep])]  # spread of the RUL over crossed particles
+        ra = metrics.relative_accuracy(rul_true[keep], self.rul_mean[keep]) if keep.any() else np.array([np.nan])
         return {
             "rmse_theta": float(metrics.relative_rmse(self.theta["mean"], theta_star)),
             "rmse_gamma": float(metrics.relative_rmse(self.gamma["mean"], gamma_star)),
             "rmad_gamma": float(np.nanmean(self.gamma["rmad"])),
             "ra": float(metrics.mean_relative_accuracy(ra)),
-            "rmad_rul": float(np.nanmean(rmad_rul)),
-            "alpha_lambda_pass_rate": float(np.mean(passed)) if len(passed) else float("nan"),
-            "prognostic_horizon_s": _number(metrics.prognostic_horizon(self.rul_t[keep], passed, eol)),
+            "rmad_rul": float(np.nanmean(rmad_rul)) if rmad_rul else float("nan"),
+            "alpha_lambda_pass_rate": float(np.mean(passed)) if np.size(passed) else float("nan"),
+            "prognostic_horizon_s": (_number(metrics.prognostic_horizon(self.rul_t[alive], horizon_ok, eol))
+                                     if alive.any() else None),
         }
+
+    def _rul_arrays(self) -> tuple[np.ndarray, np.ndarray]:
+        """RUL samples and weights of the single asset, (K, N) each."""
+        k = len(self.rul)
+        samples = np.array([p.samples[0] for p in self.rul]).reshape(k, -1)
+        weights = np.array([p.weights[0] for p in self.rul]).reshape(k, -1)
+        return samples, weights
 
 
 def _number(value) -> float | None:
@@ -96,6 +111,15 @@ class HealthMonitor:
         Filter step (s); the record's sampling step must divide it.
     n_particles, noise_std, inflation, gamma_std, gamma0, resampling, resample_below
         Particle filter settings (:class:`~prognosis.filter.ParticleFilter`).
+    gamma_bounds : (lo, hi), optional
+        Draw the initial gamma uniformly over this interval instead of ``gamma0``.
+    start : {"residual", "eq39"}
+        Initial theta interval.  ``"eq39"``: the candidate's uncertainty interval, as in the seed.
+        ``"residual"``: that interval widened to contain the theta that explains the residual on
+        the ``persistence`` samples that raised the alarm (inverting the observation equation);
+        by the time a degradation is detected, theta has usually left the uncertainty interval.
+    theta_bounds : (lo, hi), optional
+        Replaces the candidate's uncertainty interval (needed when the ARR gives none).
     adaptation : VarianceAdaptation, optional
     prediction_walk : float
         Scale of the random-walk standard deviation of gamma in the RUL
@@ -114,7 +138,7 @@ class HealthMonitor:
 
     def __init__(self, arr, candidate: str, model, *, theta_fail: float, direction: str = "up", dt: float = 0.1,
                  n_particles: int = 500, noise_std: float = 0.01, inflation: float = 4.0, gamma_std=0.02,
-                 gamma0=0.0, adaptation: VarianceAdaptation | None = None, resampling: str = "systematic",
+                 gamma0=0.0, gamma_bounds=None, start: str = "residual", theta_bounds=None, adaptation: VarianceAdaptation | None = None, resampling: str = "systematic",
                  resample_below: float = 1.0, prediction_walk: float = 1.0, rul_every: int = 1, horizon: float = 200.0,
                  detection: Mapping | None = None, seed: int = 0):
         self.arr, self.candidate, self.model = arr, candidate, model
@@ -122,7 +146,10 @@ class HealthMonitor:
         self.theta_fail, self.direction, self.dt = theta_fail, direction, dt
         nominal = self.observation.nominal
         lo, hi = arr.uncertainties.get(candidate, (0.0, 0.0))
-        self.theta_bounds = (nominal * (1 + lo), nominal * (1 + hi))
+        self.theta_bounds = (nominal * (1 + lo), nominal * (1 + hi)) if theta_bounds is None else tuple(theta_bounds)
+        if start not in ("residual", "eq39"):
+            raise ValueError(f"start must be 'residual' or 'eq39', got {start!r}")
+        self.start, self.gamma_bounds = start, gamma_bounds
         if (direction == "up") != (theta_fail > nominal):
             raise ValueError(f"failure value {theta_fail} of {candidate!r} is on the wrong side of its nominal "
                              f"value {nominal} for direction {direction!r}")
@@ -196,7 +223,8 @@ class HealthMonitor:
                 return
             start = alarms[0]
             self.result.detection_time = float(t[start])
-            self.filter.initialize(self.theta_bounds, self.gamma0)
+            self.filter.initialize(self._start_bounds(evaluation, start), self.gamma0,
+                                   gamma_bounds=self.gamma_bounds)
             self._next_index = start
         stride = self._stride(t)
         points = evaluation.points  # the observation equation uses the same signals, derivatives, integrals
@@ -204,6 +232,20 @@ class HealthMonitor:
             k = self._next_index
             self._filter_step(t[k], -evaluation.residual[k], [p[k:k + 1] for p in points])
             self._next_index = k + stride
+
+    def _start_bounds(self, evaluation, k: int) -> tuple[float, float]:
+        """Initial theta interval at detection (see ``start``)."""
+        lo, hi = self.theta_bounds
+        if self.start == "eq39":
+            return lo, hi
+        window = slice(max(0, k - evaluation.persistence + 1), k + 1)
+        bracket = (min(lo, self.theta_fail), max(hi, self.theta_fail))
+        explained = self.observation.invert(-evaluation.residual[window], [p[window] for p in evaluation.points],
+                                            bracket)
+        explained = np.clip(explained[np.isfinite(explained)], *bracket)
+        if not explained.size:
+            return lo, hi
+        return min(lo, float(explained.min())), max(hi, float(explained.max()))
 
     def _stride(self, t: np.ndarray) -> int:
         step = float(np.median(np.diff(t)))

@@ -68,6 +68,29 @@ class ObservationModel:
         return np.broadcast_to(np.asarray(self.function()(theta, *values), float), np.shape(theta))
 
 
+    def invert(self, y: np.ndarray, points, bracket: tuple[float, float]) -> np.ndarray:
+        """The theta that explains each measurement ``y`` (K,) at its point values (K,) each.
+
+        Linear ``h``: ``theta = theta_n + y / a_1``.  Otherwise a bracketed root search per sample
+        (:func:`scipy.optimize.brentq` on ``h(theta) - y`` over ``bracket``); NaN where ``h - y``
+        does not change sign on the bracket.
+        """
+        y = np.asarray(y, float)
+        values = [np.asarray(p, float)[:, None] for p in points]
+        if self.coefficient is not None:
+            slope = np.asarray(self.function()(np.full((y.size, 1), self.nominal + 1.0), *values), float)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                return self.nominal + y / np.broadcast_to(slope, (y.size, 1))[:, 0]
+        from scipy.optimize import brentq
+
+        def root(k):
+            def gap(theta):
+                return float(np.squeeze(self.function()(theta, *(v[k] for v in values)))) - y[k]
+            lo, hi = bracket
+            return brentq(gap, lo, hi) if np.sign(gap(lo)) != np.sign(gap(hi)) else np.nan
+        return np.array([root(k) for k in range(y.size)])
+
+
 def observation_model(arr, candidate: str) -> ObservationModel:
     """The observation equation of ``arr`` for the prognostic candidate ``candidate``.
 

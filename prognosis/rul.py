@@ -138,6 +138,7 @@ class RULPredictor:
         bank = self._bank_rows(theta.size)
         rows = self._generator().permutation(bank["Z"].shape[0])[: theta.size]
         carry = np.zeros(theta.size)
+        previous = theta.copy()  # theta before the current chunk, for interpolating the crossing
         sigma_v = np.float32(self.model.process_noise)
         done, h = 0, min(self.chunk, 64)
         with np.errstate(over="ignore", invalid="ignore"):
@@ -153,12 +154,13 @@ class RULPredictor:
                 noise_sum = bank["CV"][r, window] if sigma_v and uses_sum else None
                 path, carry[alive] = self.model.path_from_sums(theta[alive], gamma_sum, noise, noise_sum,
                                                                carry[alive], self.dt)
-                alive = self._record_crossings(path, alive, done, rul)
+                alive = self._record_crossings(path, alive, done, rul, previous)
                 done += h
                 h = min(2 * h, self.chunk)
 
     def _propagate_stepwise(self, theta, gamma, std, alive, rul) -> None:
         g = gamma.shape[1]
+        previous = theta.copy()
         done, h = 0, min(self.chunk, 64)
         with np.errstate(over="ignore", invalid="ignore"):
             while done < self.steps and alive.size:
@@ -169,15 +171,27 @@ class RULPredictor:
                 noise = self._generator().standard_normal((alive.size, h)) * self.model.process_noise
                 path = self.model.path(theta[alive], used, noise, self.dt)
                 theta[alive], gamma[alive] = path[:, -1], gamma[alive] + walk[:, -1, :]
-                alive = self._record_crossings(path, alive, done, rul)
+                alive = self._record_crossings(path, alive, done, rul, previous)
                 done += h
                 h = min(2 * h, self.chunk)
 
-    def _record_crossings(self, path, alive, done, rul):
+    def _record_crossings(self, path, alive, done, rul, previous):
+        """RUL of the particles whose path crosses theta_fail in this chunk.
+
+        The crossing time is interpolated linearly between the last step below the threshold and the
+        first step at or beyond it, ``l - 1 + (theta_fail - theta_{l-1}) / (theta_l - theta_{l-1})``
+        steps, rather than rounded up to whole steps (which biases the RUL by dt/2 on average).
+        """
         crossed = path >= self.theta_fail if self.direction == "up" else path <= self.theta_fail
         first = np.argmax(crossed, axis=1)
         hit = crossed[np.arange(first.size), first]
-        rul[alive[hit]] = (done + first[hit] + 1) * self.dt
+        rows, col = np.flatnonzero(hit), first[hit]
+        after = path[rows, col].astype(float)
+        before = np.where(col > 0, path[rows, np.maximum(col - 1, 0)], previous[alive[rows]])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            fraction = np.clip(np.nan_to_num((self.theta_fail - before) / (after - before), nan=1.0), 0.0, 1.0)
+        rul[alive[hit]] = (done + col + fraction) * self.dt
+        previous[alive] = path[:, -1]
         return alive[~hit]
 
 

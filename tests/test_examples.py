@@ -1,6 +1,5 @@
 """The main job (examples/torsion_bar.py) runs and reproduces the facts DESIGN.md states for seed 003."""
 
-import importlib.util
 import json
 from pathlib import Path
 
@@ -9,39 +8,85 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def load(name):
-    spec = importlib.util.spec_from_file_location(name, ROOT / "examples" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+@pytest.fixture(scope="module")
+def b_md(example):
+    """The simulated b_Md scenario (deterministic), shared by the tests below."""
+    return example.simulate_case(example.CASES["b-md"])
 
 
-def test_torsion_bar_example_reproduces_the_degradation_scenario(tmp_path):
-    example = load("torsion_bar")
-    summary, nominal, degraded, evaluations = example.run(t_end=100.0)
-    assert summary["dependent_storage_integral"] == ["J_Md"]
-    assert summary["integral_storage_in_derivative_causality"] == ["k_s"]
-    assert summary["nominal_omega_Md_end_rad_s"] == pytest.approx(30.0, rel=1e-4)
+def test_torsion_bar_example_reproduces_the_degradation_scenario(example, b_md):
+    facts = b_md.facts
+    assert facts["dependent_storage"] == ["J_Md"]
+    assert facts["omega_Md_end_nominal_rad_s"] == pytest.approx(30.0, rel=1e-4)
     # DESIGN.md: saturation in the mid-40 s, omega_Md = 3 rad/s and b_Md = 0.45 at t = 100 s
-    assert 42.0 < summary["degraded_saturation_time_s"] < 48.0
-    assert summary["degraded_omega_Md_end_rad_s"] == pytest.approx(3.0, abs=0.1)
-    assert summary["degraded_b_Md_end"] == pytest.approx(0.452, abs=0.002)
-    example.write(tmp_path, summary, nominal, degraded, evaluations)
-    assert json.loads((tmp_path / "summary.json").read_text())["states"] == summary["states"]
-    header = (tmp_path / "timeseries.csv").read_text().splitlines()[0]
-    assert header.startswith("t,U_nominal") and "residual_degraded" in header
+    assert 42.0 < facts["saturation_time_s"] < 48.0
+    assert facts["omega_Md_end_degraded_rad_s"] == pytest.approx(3.0, abs=0.1)
+    case = example.CASES["b-md"]
+    assert case.truth(100.0) == pytest.approx(0.452, abs=0.002)
+    assert case.truth(case.eol) == pytest.approx(0.45) and 99.0 < case.eol < 100.0
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_torsion_bar_detection_without_false_alarms(seed):
+def test_torsion_bar_detection_without_false_alarms(example, b_md, seed):
     """Issue 3: no false alarm on a 100 s nominal run; the b_Md degradation from t = 10 s is detected."""
-    summary = load("torsion_bar").run(t_end=100.0, seed=seed)[0]
-    assert summary["arrs"] == ["ARR_1_1", "ARR_1_2"]
-    assert summary["false_alarms_nominal"] == 0
+    figures = example.run("b-md", seed=seed, scenario=b_md, n_particles=20, workers=1).figures
+    assert figures["arrs"] == ["ARR_1_1", "ARR_1_2"]
+    assert figures["false_alarms_nominal"] == 0
     # b_Md must leave its [0, +20 %] box plus the noise margin: about 4.4 s after onset at 112.5 rad/s
-    assert 3.0 < summary["detection_delay_s"] < 6.0
-    assert summary["interval_never_wider_than_bglft"]
-    assert summary["interval_width_median"] < summary["bglft_width_median"]
+    assert 3.0 < figures["detection_delay_s"] < 6.0
+    assert figures["interval_never_wider_than_bglft"]
+    assert figures["interval_width_median"] < figures["bglft_width_median"]
+
+
+def test_b_md_prognosis_figures_on_a_short_run(example):
+    """The whole chain with fewer particles and a 65 s horizon: the figures land within loose bounds."""
+    figures = example.run("b-md", seed=3, t_end=65.0, n_particles=100, workers=1).figures
+    assert figures["filter_steps"] == pytest.approx((65.0 - figures["detection_time_s"]) / 0.1, abs=1.5)
+    assert figures["rmse_theta"] < 0.05 and figures["rmse_gamma"] < 0.15
+    assert figures["ra"] > 0.9 and figures["alpha_lambda_pass_rate"] > 0.7
+    assert 0 < figures["rmad_rul"] < 0.3 and figures["prognostic_horizon_s"] > 40.0
+
+
+def test_seed_preset_keeps_the_seeds_tuning(example):
+    case = example.CASES["b-md"]
+    settings = example.tuning(case, "seed", residual_std=1e-3)
+    assert settings["noise_std"] == 0.01 and settings["inflation"] == 4.0 and settings["gamma_std"] == 0.02
+    assert settings["adaptation"].gain == 0.001 and settings["adaptation"].reference == 0.10
+    assert settings["adaptation"].band == (0.03, 0.07) and settings["start"] == "eq39"
+    assert settings["prediction_walk"] == 1.0  # Table IV keeps the random walk in the prediction
+    with pytest.raises(ValueError, match="unknown preset 'tuned'"):
+        example.tuning(case, "tuned", residual_std=1e-3)
+
+
+@pytest.mark.parametrize("case, law", [("mass-linear", "linear"), ("mass-exponential", "exponential")])
+def test_mass_cases_simulate_the_load_and_estimate_it(example, case, law):
+    """Section 7 as simulations: the load M follows its law to M_fail and the chain estimates it."""
+    spec = example.CASES[case]
+    assert spec.law == law and spec.truth(spec.eol) == pytest.approx(spec.theta_fail)
+    r = example.run(case, seed=0, n_particles=50, workers=1)
+    f = r.figures
+    assert f["false_alarms_nominal"] == 0 and f["detection_time_s"] < spec.after
+    assert f["rmse_theta"] < 0.1 and f["ra"] > 0.85
+    assert r.arr.uncertainties["mu"] == (-0.1, 0.1)  # Table VI's mu enters the thresholds
+
+
+def test_main_writes_results_csv_and_plots_over_runs(example, tmp_path, capsys):
+    figures = example.main(["--case", "mass-exponential", "--runs", "2", "--particles", "30", "--workers", "1",
+                            "--out", str(tmp_path)])
+    results = json.loads((tmp_path / "results.json").read_text())
+    assert results == json.loads(json.dumps(figures))
+    for key in example.KEYS:
+        assert key in results and f"{key}_std" in results
+    assert results["seeds"] == [0, 1] and len(results["runs"]) == 2
+    mean = sum(r["rmse_theta"] for r in results["runs"]) / 2
+    assert results["rmse_theta"] == pytest.approx(mean)
+    header = (tmp_path / "prognosis.csv").read_text().splitlines()[0].split(",")
+    assert header[:3] == ["t", "theta_true", "theta_mean"] and "rul_median" in header
+    assert (tmp_path / "timeseries.csv").read_text().startswith("t,theta_true,U_nominal")
+    for name in ("fig08_speed_voltage", "fig09_residual_thresholds", "fig10_theta", "fig11_gamma", "fig12_rul"):
+        assert (tmp_path / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    printed = capsys.readouterr().out
+    assert "RMSE theta (%)" in printed and "seed 003" in printed
 
 
 def test_readme_python_blocks_run(capsys):

@@ -1,8 +1,5 @@
 """Health monitor (seed 003 Table V): detection, then estimation and RUL, whole record or sample by sample."""
 
-import importlib.util
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -14,18 +11,20 @@ from prognosis.degradation import Exponential
 from prognosis.filter import VarianceAdaptation
 from prognosis.monitor import HealthMonitor
 
-ROOT = Path(__file__).resolve().parents[1]
-spec = importlib.util.spec_from_file_location("torsion_bar_example", ROOT / "examples" / "torsion_bar.py")
-example = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(example)
+ANTIDERIVATIVES = {"omega_m": "theta_m", "omega_Ld": "theta_Ld"}  # encoder angles
+
+
+def b_md_degrading(t):
+    """b_Md,n exp(0.05 (t - 10)) from t = 10 s (seed 003 section 6.3.2)."""
+    return 5.025e-3 * np.exp(0.05 * np.maximum(np.asarray(t, float) - 10.0, 0.0))
 
 
 @pytest.fixture(scope="module")
-def scenario():
+def scenario(example):
     bg = torsion_bar()
     t = np.arange(0.0, 30.0 + 1e-9, 0.01)
     degraded = simulate(bg, (0, 30), {"U": torsion_bar_controller()}, t_eval=t,
-                        parameters={"b_Md": example.b_md_degrading})
+                        parameters={"b_Md": b_md_degrading})
     record = add_noise(as_record(example.measured(degraded, bg)), {"omega_m": 0.01, "omega_Ld": 0.01}, seed=5)
     arr = next(a for a in derive_arrs(torsion_bar_monitorable()) if a.junction == "1_1")
     return arr, record
@@ -34,7 +33,7 @@ def scenario():
 def monitor(arr, **options):
     settings = dict(theta_fail=0.45, dt=0.1, n_particles=200, noise_std=0.01, inflation=4.0, gamma_std=0.02,
                     adaptation=VarianceAdaptation(band=(0.03, 0.07)), rul_every=10, horizon=200.0, seed=1,
-                    detection={"margin": 1.7e-3, "persistence": 10, "antiderivatives": example.ANTIDERIVATIVES})
+                    detection={"margin": 1.7e-3, "persistence": 10, "antiderivatives": ANTIDERIVATIVES})
     settings.update(options)
     return HealthMonitor(arr, "b_Md", Exponential(1e-5), **settings)
 
@@ -44,11 +43,11 @@ def test_monitor_detects_then_estimates_and_predicts(scenario):
     result = monitor(arr).run(record)
     assert 12.0 < result.detection_time < 17.0
     assert result.t[0] == pytest.approx(result.detection_time) and np.allclose(np.diff(result.t), 0.1)
-    truth = example.b_md_degrading(result.t[-1])
+    truth = b_md_degrading(result.t[-1])
     assert result.theta["mean"][-1] == pytest.approx(truth, rel=0.1)
     assert len(result.rul) == int(np.ceil(result.t.size / 10))
     assert np.all(result.rul_percentiles((5, 95))[:, 0] <= result.rul_median)
-    figures = result.metrics(example.b_md_degrading, lambda t: 0.05, eol=100.0)
+    figures = result.metrics(b_md_degrading, lambda t: 0.05, eol=100.0)
     assert set(figures) >= {"rmse_theta", "rmse_gamma", "ra", "rmad_rul", "alpha_lambda_pass_rate"}
     assert figures["rmse_theta"] < 0.5
 
@@ -81,7 +80,7 @@ def test_failure_value_on_the_wrong_side_is_refused(scenario):
         monitor(arr, theta_fail=0.001)
 
 
-def test_a_record_without_degradation_starts_no_filter(scenario):
+def test_a_record_without_degradation_starts_no_filter(scenario, example):
     arr, _ = scenario
     bg = torsion_bar()
     t = np.arange(0.0, 20.0 + 1e-9, 0.01)

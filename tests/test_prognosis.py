@@ -201,6 +201,15 @@ def test_deterministic_linear_and_exponential_rul():
     assert exponential.samples[0, 0] == pytest.approx(np.log(0.45 / 0.005025) / 0.05, abs=0.1)
 
 
+@pytest.mark.parametrize("model", [Linear(), Custom(lambda theta, gamma, dt: theta + gamma[..., 0] * dt)])
+def test_crossing_time_is_interpolated_within_the_step(model):
+    # theta = 1 + 0.5 t crosses 1.337 at t = 0.674, between the steps at 0.6 and 0.7; also in a later chunk
+    for fail, expected in [(1.337, 0.674), (1.0 + 0.5 * 123.456, 123.456)]:
+        rul = predict_rul(model, np.array([[1.0]]), np.array([[[0.5]]]), np.array([[1.0]]), dt=0.1,
+                          theta_fail=fail, gamma_std=0.0, rng=np.random.default_rng(0))
+        assert rul.samples[0, 0] == pytest.approx(expected, rel=1e-5)
+
+
 def test_downward_failure_and_censoring():
     theta, weights = np.array([[1.0, 1.0, 1.0]]), np.full((1, 3), 1 / 3)
     gamma = np.array([[[-0.5], [-0.25], [0.0]]])  # the last particle never degrades

@@ -53,6 +53,28 @@ def test_time_varying_parameter():
     assert ramp["omega"][-1] == pytest.approx(12.0 * km / (km**2 + Ra * b_end), rel=0.02)
 
 
+def test_scalar_only_callables_give_the_same_record_as_vectorized_ones():
+    """Post-processing calls inputs and parameters with all samples at once when they accept arrays,
+    and once per sample when they do not (``if``, ``math``, ``float``); both give the same record."""
+    import math
+
+    t_eval = np.linspace(0.0, 2.0, 401)
+    vectorized = simulate(dc_motor(), (0.0, 2.0), {"U": lambda t: 12.0 * np.minimum(t, 1.0)}, t_eval=t_eval,
+                          parameters={"b": lambda t: 1e-4 * np.exp(t)})
+    scalar = simulate(dc_motor(), (0.0, 2.0), {"U": lambda t: 12.0 * t if t < 1.0 else 12.0}, t_eval=t_eval,
+                      parameters={"b": lambda t: 1e-4 * math.exp(t)})
+    for name in ("U", "omega", "i"):
+        assert np.allclose(vectorized[name], scalar[name], rtol=1e-6, atol=1e-9), name
+    assert vectorized["U"][-1] == 12.0 and scalar["U"][200] == pytest.approx(12.0)
+    # a callable that accepts arrays but ignores them (one scalar for all samples) is caught by the spot check
+    calls = []
+    def stateful(t):
+        calls.append(t)
+        return 12.0 if np.ndim(t) == 0 else 0.0
+    odd = simulate(dc_motor(), (0.0, 1.0), {"U": stateful}, t_eval=np.linspace(0.0, 1.0, 11))
+    assert np.all(odd["U"] == 12.0)
+
+
 def test_initial_state_by_element_or_state_name():
     a = simulate(rlc_circuit(), (0.0, 0.01), {"V": 0.0}, x0={"C": 1e-3})
     b = simulate(rlc_circuit(), (0.0, 0.01), {"V": 0.0}, x0={"q_C": 1e-3})
