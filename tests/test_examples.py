@@ -101,3 +101,20 @@ def test_readme_python_blocks_run(capsys):
     assert "r_n = -J*Derivative(omega(t), t) - b*omega(t) + k_m*i(t)" in printed
     detection = float(printed.strip().splitlines()[-1])  # the tripled friction is detected early in the run
     assert 0.0 <= detection < 0.5
+
+
+def test_sweep_ladder_ends_at_the_default_preset_and_runs_a_group(example):
+    from conftest import load_example
+
+    sweep = load_example("torsion_bar_sweep")
+    case = example.CASES["mass-linear"]
+    default = example.tuning(case, "default", residual_std=6e-4)
+    last = sweep.ladder(case, residual_std=6e-4)[-1][2]
+    for key in ("noise_std", "inflation", "gamma_std", "start", "gamma_bounds", "prediction_walk"):
+        assert last[key] == default[key], key
+    assert last["adaptation"] == default["adaptation"]
+    rows = sweep.sweep("mass-linear", seeds=1, n_particles=20, workers=1, quiet=True, parameters=["band"])
+    assert [r["value"] for r in rows] == ["[0.0224, 0.0336]", "[0.0168, 0.0392]", "[0.0056, 0.0504]"]
+    assert all(0.0 <= r["alpha_lambda_pass_rate"] <= 1.0 and r["rmse_theta"] > 0 for r in rows)
+    with pytest.raises(ValueError, match="unknown sweep parameter"):
+        sweep.sweep("mass-linear", seeds=1, n_particles=20, workers=1, quiet=True, parameters=["gain"])
