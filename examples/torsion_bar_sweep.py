@@ -63,9 +63,12 @@ def ladder(case, residual_std: float) -> list[tuple[str, str, dict]]:
              ("+ start from the alarm's residual", {"start": "residual"}),
              ("+ gamma prior over the band", {"gamma_bounds": default["gamma_bounds"]}),
              ("+ gamma held in the RUL prediction", {"prediction_walk": 0.0}),
-             ("+ P = 0.01, v* = 2 %, sigma_xi0 = 0.2 gamma*, 4x inflation (default)",
-              {"adaptation": default["adaptation"], "gamma_std": default["gamma_std"],
-               "inflation": default["inflation"]})]
+             ("+ gain P = 0.01", {"adaptation": VarianceAdaptation(band=seed["adaptation"].band,
+                                                                   reference=seed["adaptation"].reference,
+                                                                   gain=default["adaptation"].gain)}),
+             ("+ reference v* = 2 %", {"adaptation": default["adaptation"]}),
+             ("+ sigma_xi0 = 0.2 gamma*, 4x inflation (default)", {"gamma_std": default["gamma_std"],
+                                                                  "inflation": default["inflation"]})]
     rows, settings = [], dict(seed)
     for label, change in steps:
         settings = {**settings, **change}
@@ -125,19 +128,25 @@ def plot(rows: list[dict], path: Path, case) -> None:
     import matplotlib.pyplot as plt
 
     groups = list(dict.fromkeys(r["parameter"] for r in rows))
-    fig, axes = plt.subplots(1, len(groups), figsize=(4 * len(groups), 4.2), sharey=True)
-    for ax, group in zip(np.atleast_1d(axes), groups):
+    studies = [g for g in groups if g != "seed -> default"]
+    fig = plt.figure(figsize=(3.6 * max(len(studies), 1), 8.5))
+    grid = fig.add_gridspec(2, max(len(studies), 1), height_ratios=(1, 1.3))
+    axes = [fig.add_subplot(grid[0, i]) for i in range(len(studies))]
+    if "seed -> default" in groups:
+        axes.append(fig.add_subplot(grid[1, :]))
+        studies.append("seed -> default")
+    for ax, group in zip(axes, studies):
         part = [r for r in rows if r["parameter"] == group]
         x = np.arange(len(part))
         for key, label in (("ra", "RA"), ("alpha_lambda_pass_rate", "alpha-lambda pass"),
                            ("rmse_gamma", "RMSE gamma"), ("rmad_rul", "RMAD RUL")):
             ax.plot(x, [np.nan if r[key] is None else r[key] for r in part], "o-", label=label)
-        ax.set_xticks(x, [r["value"] for r in part], rotation=35 if group != "seed -> default" else 80,
-                      ha="right", fontsize=7)
-        ax.set_title(group)
+        ladder_panel = group == "seed -> default"
+        ax.set_xticks(x, [r["value"] for r in part], rotation=12 if ladder_panel else 30, ha="right", fontsize=7)
+        ax.set_title(group if not ladder_panel else "from the seed's tuning to the default, one change at a time")
         ax.set_ylim(0, 1.05)
         ax.grid(alpha=0.3)
-    np.atleast_1d(axes)[0].legend(fontsize=8)
+    axes[0].legend(fontsize=8)
     fig.suptitle(f"Seed 003 section 6.4 as a sweep, case {case.name} (means over seeds)")
     fig.tight_layout()
     fig.savefig(path, dpi=100)
