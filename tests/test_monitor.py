@@ -21,11 +21,8 @@ def b_md_degrading(t):
 
 @pytest.fixture(scope="module")
 def scenario(example):
-    bg = torsion_bar()
-    t = np.arange(0.0, 30.0 + 1e-9, 0.01)
-    degraded = simulate(bg, (0, 30), {"U": torsion_bar_controller()}, t_eval=t,
-                        parameters={"b_Md": b_md_degrading})
-    record = add_noise(as_record(example.measured(degraded, bg)), {"omega_m": 0.01, "omega_Ld": 0.01}, seed=5)
+    clean = example.simulate_case(example.CASES["b-md"], t_end=30.0).clean_degraded
+    record = add_noise(as_record(clean), {"omega_m": 0.01, "omega_Ld": 0.01}, seed=5)
     arr = next(a for a in derive_arrs(torsion_bar_monitorable()) if a.junction == "1_1")
     return arr, record
 
@@ -50,6 +47,27 @@ def test_monitor_detects_then_estimates_and_predicts(scenario):
     figures = result.metrics(b_md_degrading, lambda t: 0.05, eol=100.0)
     assert set(figures) >= {"rmse_theta", "rmse_gamma", "ra", "rmad_rul", "alpha_lambda_pass_rate"}
     assert figures["rmse_theta"] < 0.5
+
+
+def test_residual_start_contains_theta_at_the_alarm_and_eq39_does_not(scenario):
+    """At the alarm b_Md has left its [0, +20 %] box: the residual start finds it, the eq. 39 box cannot."""
+    arr, record = scenario
+    residual = monitor(arr, start="residual", noise_std=6e-4).run(record)
+    box = monitor(arr, start="eq39", noise_std=6e-4).run(record)
+    truth = b_md_degrading(residual.t[0])
+    assert truth > 1.2 * 5.025e-3
+    assert residual.theta["mean"][0] == pytest.approx(truth, rel=0.05)
+    assert box.theta["quantiles"][0, 2] < truth  # 95 % quantile still below the truth
+    with pytest.raises(ValueError, match="start must be"):
+        monitor(arr, start="middle")
+
+
+def test_gamma_prior_over_an_interval_and_prediction_walk(scenario):
+    arr, record = scenario
+    result = monitor(arr, gamma_bounds=(0.03, 0.07), gamma_std=1e-6, prediction_walk=0.0).run(record)
+    assert 0.03 <= result.gamma["quantiles"][0, 0] and result.gamma["quantiles"][0, 2] <= 0.07
+    with pytest.raises(ValueError, match="prediction_walk"):
+        monitor(arr, prediction_walk=-1.0)
 
 
 def test_sample_by_sample_equals_the_whole_record(scenario):

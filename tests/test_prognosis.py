@@ -72,6 +72,35 @@ def test_mu_uncertainty_enters_the_mass_arr_as_in_eq_58():
     assert sp.simplify(arr.terms["mu"] - (-d * mu * M * g * r * sp.sign(w / k) / k)) == 0
 
 
+def test_invert_recovers_theta_for_linear_and_nonlinear_observations(torsion_arr):
+    from bondgraph import BondGraph
+
+    linear = observation_model(torsion_arr, "b_Md")
+    omega = np.array([112.5, 60.0])
+    points = [omega if str(p) == "omega_m" else np.zeros(2) for p in compile_arr(torsion_arr).points]
+    theta = np.array([0.01, 0.2])
+    y = (theta - B_N) * (-omega / K_BELT**2)  # eq. 52
+    assert np.allclose(linear.invert(y, points, (0.0, 1.0)), theta)
+    # e = f / k: y = R(k) - R(k_n) = i (1/k_n - 1/k) is not linear in k; a bracketed root search inverts it
+    bg = BondGraph()
+    bg.add("u", "MSe")
+    bg.add("J", "1")
+    bg.add("R", "R", param="k", value=2.0, uncertainty=(-0.1, 0.1), law="e - f/k")
+    bg.add("i", "Df")
+    for tail, head in [("u", "J"), ("J", "R"), ("J", "i")]:
+        bg.bond(tail, head)
+    model = observation_model(derive_arrs(bg)[0], "k")
+    assert model.coefficient is None
+    current = np.array([1.0, 3.0, 1.0])
+    k_true = np.array([2.5, 4.0, 50.0])
+    y = current * (1 / 2.0 - 1 / k_true)
+    names = [str(p) for p in compile_arr(model.arr).points]
+    values = [current if n == "i" else np.zeros(3) for n in names]
+    assert np.allclose(model(k_true[:, None], values)[:, 0], y)
+    found = model.invert(y, values, (2.0, 10.0))
+    assert np.allclose(found[:2], k_true[:2]) and np.isnan(found[2])  # k = 50 lies outside the bracket
+
+
 def test_candidate_the_arr_is_not_sensitive_to(torsion_arr):
     with pytest.raises(ValueError, match="J_Ld"):
         observation_model(torsion_arr, "J_Ld")
@@ -298,3 +327,12 @@ def test_two_progression_parameters_through_filter_and_rul():
     rul = RULPredictor(model, dt=0.1, theta_fail=2 * truth, seed=0).predict(pf.theta, pf.gamma, pf.weights,
                                                                               np.sqrt(pf.variance))
     assert np.isfinite(rul.median[0]) and rul.median[0] > 0
+
+
+def test_initial_gamma_drawn_over_bounds():
+    pf = ParticleFilter(Linear(), linear_observation, n_particles=400, seed=3)
+    pf.initialize((1.0, 1.2), gamma_bounds=(0.03, 0.07), assets=2)
+    assert pf.gamma.shape == (2, 400, 1)
+    assert pf.gamma.min() >= 0.03 and pf.gamma.max() <= 0.07 and pf.gamma.std() > 0.01
+    with pytest.raises(ValueError, match="gamma bounds have lo > hi"):
+        pf.initialize((1.0, 1.2), gamma_bounds=(0.07, 0.03))
