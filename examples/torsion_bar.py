@@ -146,7 +146,8 @@ def tuning(case: Case, preset: str, residual_std: float) -> dict:
     the RUL prediction (Table IV).  ``default``: the residual noise as calibrated on the nominal
     record with a 4x variance inflation, gamma's prior over the band, theta's start widened to
     explain the alarm's residual, sigma_xi,0 = 0.2 gamma*, faster adaptation (P = 0.01) to a
-    tighter reference (v* = 2 %), and gamma held in the RUL prediction.
+    tighter reference (v* = 2 %) with the variance kept above 1e-3 of its initial value (so that
+    50 particles cannot stagnate on a wrong gamma), and gamma held in the RUL prediction.
     examples/torsion_bar_sweep.py shows what each change does.
     """
     seed = case.seed_tuning
@@ -157,7 +158,7 @@ def tuning(case: Case, preset: str, residual_std: float) -> dict:
                     "start": "eq39", "gamma0": 0.0, "prediction_walk": 1.0}
     elif preset == "default":
         settings = {"gamma_std": 0.2 * case.gamma, "noise_std": residual_std, "inflation": 4.0,
-                    "adaptation": VarianceAdaptation(band=seed["band"], reference=0.02, gain=0.01),
+                    "adaptation": VarianceAdaptation(band=seed["band"], reference=0.02, gain=0.01, floor=1e-3),
                     "start": "residual", "gamma_bounds": seed["band"], "prediction_walk": 0.0}
     else:
         raise ValueError(f"unknown preset {preset!r}; choose one of {', '.join(PRESETS)}")
