@@ -66,7 +66,7 @@ def ladder(case, residual_std: float) -> list[tuple[str, str, dict]]:
              ("+ gain P = 0.01", {"adaptation": VarianceAdaptation(band=seed["adaptation"].band,
                                                                    reference=seed["adaptation"].reference,
                                                                    gain=default["adaptation"].gain)}),
-             ("+ reference v* = 2 %", {"adaptation": default["adaptation"]}),
+             ("+ reference v* = 2 %, variance floor 1e-3", {"adaptation": default["adaptation"]}),
              ("+ sigma_xi0 = 0.2 gamma*, 4x inflation (default)", {"gamma_std": default["gamma_std"],
                                                                   "inflation": default["inflation"]})]
     rows, settings = [], dict(seed)
