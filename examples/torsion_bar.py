@@ -262,7 +262,7 @@ def run(case: str | Case = "b-md", preset: str = "default", seed: int = 0, *, sc
     filter_start = time.perf_counter()
     result = monitor.run(degraded, workers=workers)
     filter_time = time.perf_counter() - filter_start
-    faulty = arr.evaluate(degraded, **detection)
+    faulty = result.evaluation  # residual and thresholds of the degraded record, as the monitor saw them
     figures = {"case": case.name, "preset": preset, "seed": seed,
                "detection_time_s": result.detection_time,
                "detection_delay_s": None if result.detection_time is None else result.detection_time - case.onset,

@@ -36,6 +36,7 @@ class MonitorResult:
     rul_t: np.ndarray = field(default_factory=lambda: np.empty(0))
     rul: list = field(default_factory=list)
     degenerate_steps: list = field(default_factory=list)
+    evaluation: object = None  # the detection Evaluation of the last processed record (residual, thresholds)
 
     @property
     def rul_mean(self) -> np.ndarray:
@@ -215,6 +216,7 @@ class HealthMonitor:
     # -- shared ----------------------------------------------------------------
     def _advance(self, record, last: int | None) -> None:
         evaluation = self.arr.evaluate(record, **self.detection)
+        self.result.evaluation = evaluation
         t = evaluation.t
         last = t.size - 1 if last is None else last
         if self.result.detection_time is None:

@@ -39,6 +39,8 @@ def test_monitor_detects_then_estimates_and_predicts(scenario):
     arr, record = scenario
     result = monitor(arr).run(record)
     assert 12.0 < result.detection_time < 17.0
+    assert result.evaluation.detection_time == result.detection_time  # the record's residual and thresholds
+    assert result.evaluation.t.size == len(record)
     assert result.t[0] == pytest.approx(result.detection_time) and np.allclose(np.diff(result.t), 0.1)
     truth = b_md_degrading(result.t[-1])
     assert result.theta["mean"][-1] == pytest.approx(truth, rel=0.1)
