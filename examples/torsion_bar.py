@@ -83,6 +83,7 @@ class Case:
     process_noise: float  # sigma_v of the degradation model
     seed_tuning: dict
     seed_figures: dict = field(default_factory=dict)
+    theta_bounds: tuple | None = None  # eq. 39 start; None: the candidate's uncertainty interval in the ARR
 
     def truth(self, t):
         """The true theta(t) the simulation uses."""
@@ -127,14 +128,16 @@ CASES = {
     "mass-linear": Case("mass-linear", "M", "linear", M_N, 0.028, 10.0, 1.5, 50, 35.0, 0.2, 1e-3,
                         seed_tuning={"gamma_std": 0.2 * 0.028, "gain": 0.007, "reference": 0.05,
                                      "band": (0.6 * 0.028, 1.4 * 0.028), "noise_std": 5e-3, "inflation": 9.0},
-                        seed_figures={"rmse_theta": 0.0398, "ra": 0.9864, "rmad_rul": 0.094}),
+                        seed_figures={"rmse_theta": 0.0398, "ra": 0.9864, "rmad_rul": 0.094},
+                        theta_bounds=(M_N, 1.2 * M_N)),  # M, a law constant, has no uncertainty interval
     # Section 7.2: gamma_3* = 0.05 1/s from the known load at t = 0, M_fail = 1.8 kg (t = 57.8 s);
     # sigma_xi,0^2 = 4e-6, P = 0.003, v* = 10 %, band [0.01, 0.09], sigma_v = 8e-4 kg.
     "mass-exponential": Case("mass-exponential", "M", "exponential", M_N, 0.05, 0.0, 1.8, 50, 32.0, 0.2, 8e-4,
                              seed_tuning={"gamma_std": 2e-3, "gain": 0.003, "reference": 0.10, "band": (0.01, 0.09),
                                           "noise_std": 5e-3, "inflation": 9.0},
                              seed_figures={"rmse_theta": 0.0378, "rmse_gamma": 0.076, "ra": 0.9702,
-                                           "rmad_rul": 0.094}),
+                                           "rmad_rul": 0.094},
+                             theta_bounds=(M_N, 1.2 * M_N)),
 }
 PRESETS = ("default", "seed")
 
@@ -235,15 +238,11 @@ class Run:
     figures: dict
 
 
-def run(case: str | Case = "b-md", preset: str = "default", seed: int = 0, *, scenario: Scenario | None = None,
-        t_end: float | None = None, n_particles: int | None = None, workers: int = 2, **overrides) -> Run:
-    """The whole chain for one noise seed; ``overrides`` replace HealthMonitor settings of the preset."""
-    case = CASES[case] if isinstance(case, str) else case
-    start = time.perf_counter()
-    if scenario is None:
-        scenario = simulate_case(case, t_end)
-    else:  # a shared simulation counts in every run's wall time, as if each run simulated
-        start -= scenario.seconds
+def detection_setup(case: Case, scenario: Scenario, seed: int):
+    """The I-ARR and the noisy records of one seed, with the noise margin calibrated on its own record.
+
+    Returns ``(arrs, arr, detection options, nominal record, degraded record)``.
+    """
     _, monitorable = case.bond_graphs()
     arrs = derive_arrs(monitorable)
     arr = next(a for a in arrs if a.junction == "1_1")
@@ -253,12 +252,25 @@ def run(case: str | Case = "b-md", preset: str = "default", seed: int = 0, *, sc
     detection = {"antiderivatives": ANTIDERIVATIVES}
     margin = noise_margin(arr, calibration, k=MARGIN_SIGMAS, **detection)
     detection.update(margin=margin, persistence=PERSISTENCE)
+    return arrs, arr, detection, nominal, degraded
+
+
+def run(case: str | Case = "b-md", preset: str = "default", seed: int = 0, *, scenario: Scenario | None = None,
+        t_end: float | None = None, n_particles: int | None = None, workers: int = 2, **overrides) -> Run:
+    """The whole chain for one noise seed; ``overrides`` replace HealthMonitor settings of the preset."""
+    case = CASES[case] if isinstance(case, str) else case
+    start = time.perf_counter()
+    if scenario is None:
+        scenario = simulate_case(case, t_end)
+    else:  # a shared simulation counts in every run's wall time, as if each run simulated
+        start -= scenario.seconds
+    arrs, arr, detection, nominal, degraded = detection_setup(case, scenario, seed)
+    margin = detection["margin"]
     quiet = arr.evaluate(nominal, **detection)
     settings = {**tuning(case, preset, margin / MARGIN_SIGMAS), **overrides}
     monitor = HealthMonitor(arr, case.candidate, case.degradation_model(), theta_fail=case.theta_fail, dt=DT_FILTER,
                             n_particles=n_particles or case.n_particles, detection=detection, seed=seed,
-                            theta_bounds=(case.theta_n, 1.2 * case.theta_n) if case.candidate == "M" else None,
-                            **settings)
+                            theta_bounds=case.theta_bounds, **settings)
     filter_start = time.perf_counter()
     result = monitor.run(degraded, workers=workers)
     filter_time = time.perf_counter() - filter_start
@@ -357,17 +369,19 @@ def _timeseries(r: Run) -> dict:
     return columns
 
 
+PROGNOSIS_COLUMNS = ("t", "theta_true", "theta_mean", "theta_q05", "theta_q95", "gamma_mean", "gamma_rmad",
+                     "gamma_q05", "gamma_q95", "rul_true", "rul_mean", "rul_q05", "rul_median", "rul_q95")
+
+
 def _prognosis(r: Run) -> dict:
     m = r.monitor
-    q_rul = m.rul_percentiles((5, 50, 95)) if m.rul else np.empty((0, 3))
-    return {"t": m.t, "theta_true": r.case.truth(m.t), "theta_mean": m.theta.get("mean", []),
-            "theta_q05": m.theta["quantiles"][:, 0] if m.t.size else [],
-            "theta_q95": m.theta["quantiles"][:, 2] if m.t.size else [],
-            "gamma_mean": m.gamma.get("mean", []), "gamma_rmad": m.gamma.get("rmad", []),
-            "gamma_q05": m.gamma["quantiles"][:, 0] if m.t.size else [],
-            "gamma_q95": m.gamma["quantiles"][:, 2] if m.t.size else [],
-            "rul_true": r.case.eol - m.rul_t, "rul_mean": m.rul_mean if m.rul else [],
-            "rul_q05": q_rul[:, 0], "rul_median": q_rul[:, 1], "rul_q95": q_rul[:, 2]}
+    if not m.t.size:  # no detection, no filter steps
+        return {name: [] for name in PROGNOSIS_COLUMNS}
+    q_rul = m.rul_percentiles((5, 50, 95))
+    columns = (m.t, r.case.truth(m.t), m.theta["mean"], m.theta["quantiles"][:, 0], m.theta["quantiles"][:, 2],
+               m.gamma["mean"], m.gamma["rmad"], m.gamma["quantiles"][:, 0], m.gamma["quantiles"][:, 2],
+               r.case.eol - m.rul_t, m.rul_mean, q_rul[:, 0], q_rul[:, 1], q_rul[:, 2])
+    return dict(zip(PROGNOSIS_COLUMNS, columns))
 
 
 def plot(out: Path, r: Run) -> list[Path]:

@@ -84,8 +84,8 @@ def sweep(case_name: str = "b-md", seeds: int = 3, n_particles: int | None = Non
     """
     case = example.CASES[case_name]
     scenario = example.simulate_case(case)
-    probe = example.run(case, "seed", 0, scenario=scenario, n_particles=10, workers=1)
-    residual_std = probe.margin / example.MARGIN_SIGMAS
+    detection = example.detection_setup(case, scenario, seed=0)[2]
+    residual_std = detection["margin"] / example.MARGIN_SIGMAS
     plan = [(p, v, {**example.tuning(case, "seed", residual_std), **o}) for p, v, o in seed_study(case)]
     plan += ladder(case, residual_std)
     if parameters is not None:
