@@ -1,0 +1,481 @@
+"""Kalman filters for joint state-parameter estimation, with strong tracking.
+
+Every filter here, and :class:`prognosis.bootstrap.BootstrapParticleFilter`,
+has one interface on a :class:`prognosis.statespace.DiscreteModel`:
+
+* ``predict(u)``: time update with the inputs of the step;
+* ``update(z, u=None)``: measurement update, returns an :class:`Innovation`
+  (NaN entries of ``z`` are skipped, an all-NaN ``z`` skips the update);
+* ``step(z, u)``: both; ``mean`` and ``covariance``: the current estimate;
+* ``copy()``: an independent filter, for look-ahead runs.
+
+Filters
+-------
+:class:`ExtendedKalmanFilter`
+    Linearization by the model's sympy Jacobians; Joseph-form update.
+:class:`UnscentedKalmanFilter`
+    Scaled unscented transform (alpha, beta, kappa), covariance form.
+:class:`CubatureKalmanFilter`
+    Square-root cubature Kalman filter (Arasaratnam and Haykin 2009; seed 001
+    eqs. 21-26, 37-46): ``2n`` points ``x + S xi_i``, ``xi_i = +-sqrt(n) e_i``,
+    equal weights, and the covariance carried as a lower-triangular factor
+    ``S`` (``P = S S^T``) updated by QR triangularization only, so that it
+    stays positive semi-definite by construction.
+
+Strong tracking (seed 001 section 3; Zhou et al. 1990)
+------------------------------------------------------
+Pass ``fading=StrongTracking()`` to any of them.  At the measurement update
+the predicted covariance's propagated part is inflated by a suboptimal fading
+factor ``lambda_k >= 1`` (eq. 7, 36)::
+
+    P_{k|k-1} = lambda_k (P*_{k|k-1} - Q_{k-1}) + Q_{k-1},
+    lambda_k = max(1, tr N_k / tr M_k),
+    N_k = V_k - H Q H^T - beta R_k,          M_k = H (P* - Q) H^T,
+    V_k = eps_1 eps_1^T (k = 1),  (rho V_{k-1} + eps_k eps_k^T) / (1 + rho),
+
+so that the innovation sequence stays orthogonal when the model is wrong
+(a drifting parameter whose law is unknown).  The derivative-free form
+(eqs. 17-20, 27-35) replaces ``H`` by ``P_xz^T P*^{-1}`` (eq. 17) from the
+sigma or cubature points drawn from ``P*``; the EKF uses its Jacobian.
+
+Note on eq. (35): substituting eq. (20) it writes
+``M_k = Z Z^T - V_k + N_k``, which drops the ``+ R_k`` that ``P_zz`` carries in
+eq. (32); eq. (20) itself gives ``M_k = Z Z^T - H Q H^T = H (P* - Q) H^T``,
+which is what is computed here (with the printed form ``M`` can turn negative
+when the measurement noise dominates).
+
+Example
+-------
+>>> import sympy as sp
+>>> from types import SimpleNamespace
+>>> from prognosis.statespace import discretize
+>>> x, a = sp.symbols("x a")
+>>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
+>>> model = discretize(decay, dt=1.0, augment=["a"])
+>>> ckf = CubatureKalmanFilter(model, [1.0, 0.2], np.diag([1e-4, 1e-2]), np.diag([1e-8, 1e-6]), [[1e-6]],
+...                            fading=StrongTracking())
+>>> truth = 1.0
+>>> for k in range(60):
+...     truth *= 0.9
+...     _ = ckf.step([truth])
+>>> round(float(ckf.mean[1]), 3)
+0.1
+"""
+
+from __future__ import annotations
+
+import copy as _copy
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.linalg import cho_factor, cho_solve, solve_triangular
+
+__all__ = [
+    "CubatureKalmanFilter", "ExtendedKalmanFilter", "FilterWarning", "Innovation", "StrongTracking",
+    "UnscentedKalmanFilter", "psd_sqrt", "tria",
+]
+
+
+class FilterWarning(RuntimeWarning):
+    """A covariance had to be repaired, or a measurement was rejected as non-finite."""
+
+
+@dataclass
+class Innovation:
+    """What one measurement update saw.
+
+    Attributes
+    ----------
+    residual : ndarray (m,)
+        ``z_k - z_hat_{k|k-1}`` over the measured entries (NaN where skipped).
+    covariance : ndarray (m, m)
+        Innovation covariance ``P_zz`` (rows and columns of skipped entries NaN).
+    nis : float
+        Normalized innovation squared ``eps^T P_zz^{-1} eps`` (chi-square with as
+        many degrees of freedom as measured entries when the filter is consistent).
+    fading : float
+        Strong-tracking factor ``lambda_k`` applied (1 without strong tracking).
+    """
+
+    residual: np.ndarray
+    covariance: np.ndarray
+    nis: float
+    fading: float = 1.0
+
+
+@dataclass
+class StrongTracking:
+    """Suboptimal fading factor of the strong tracking filter (seed 001 eqs. 7-10, 17-20).
+
+    Parameters
+    ----------
+    forgetting : float
+        ``rho`` of eq. (10), in (0, 1]: weight of the past in ``V_k``.  The seed
+        does not give it; 0.95 is the value of Zhou et al.
+    softening : float
+        ``beta >= 1`` multiplying ``R_k`` in ``N_k`` (1 in the seed); a larger value
+        makes the filter fade less on measurement noise.
+    max_factor : float
+        Upper bound on ``lambda_k`` (no bound by default).
+    """
+
+    forgetting: float = 0.95
+    softening: float = 1.0
+    max_factor: float = np.inf
+    _v: np.ndarray = field(default=None, repr=False)
+
+    def __post_init__(self):
+        if not 0.0 < self.forgetting <= 1.0:
+            raise ValueError(f"forgetting (rho) must be in (0, 1], got {self.forgetting}")
+        if self.softening < 1.0:
+            raise ValueError(f"softening (beta) must be >= 1, got {self.softening}")
+        if not self.max_factor >= 1.0:
+            raise ValueError(f"max_factor must be >= 1, got {self.max_factor}")
+
+    def reset(self) -> None:
+        self._v = None
+
+    def factor(self, residual: np.ndarray, predicted: np.ndarray, cross: np.ndarray, innovation: np.ndarray,
+               process: np.ndarray, noise: np.ndarray) -> float:
+        """``lambda_k`` from the innovation ``eps`` (m,), ``P*`` (n, n), ``P_xz`` (n, m), ``P_zz`` (m, m), Q, R."""
+        outer = np.outer(residual, residual)
+        rho = self.forgetting
+        self._v = outer if self._v is None or self._v.shape != outer.shape else (rho * self._v + outer) / (1 + rho)
+        h = _solve_psd(predicted, cross).T  # eq. 17: H = P_xz^T P*^{-1}
+        hqh = h @ process @ h.T
+        n = self._v - hqh - self.softening * noise
+        m = innovation - noise - hqh  # eq. 20: M = H (P* - Q) H^T
+        trace_m = float(np.trace(m))
+        if not trace_m > 0.0:
+            return 1.0
+        return float(np.clip(np.trace(n) / trace_m, 1.0, self.max_factor))
+
+
+class _GaussianFilter:
+    """Shared plumbing: validation, NaN handling, the public interface."""
+
+    def __init__(self, model, mean, covariance, process_noise, measurement_noise, fading: StrongTracking | None):
+        n, m = model.n_states, model.n_outputs
+        self.model = model
+        self._x = _vector(mean, n, "mean", model.states)
+        self.process_noise = _matrix(process_noise, n, "process_noise (Q)", model.states)
+        self.measurement_noise = _matrix(measurement_noise, m, "measurement_noise (R)", model.outputs)
+        if np.any(np.linalg.eigvalsh(self.measurement_noise) <= 0):
+            raise ValueError("measurement_noise (R) must be positive definite")
+        self._sqrt_q = psd_sqrt(self.process_noise)
+        self.fading = _copy.deepcopy(fading)
+        if self.fading is not None:
+            self.fading.reset()
+        self._predicted = False
+        self._set_covariance(_matrix(covariance, n, "covariance (P0)", model.states))
+
+    @property
+    def mean(self) -> np.ndarray:
+        return self._x.copy()
+
+    def step(self, z, u=None) -> Innovation:
+        """``predict(u)`` then ``update(z, u)``."""
+        self.predict(u)
+        return self.update(z, u)
+
+    def copy(self):
+        """An independent copy (for a look-ahead on forecast measurements)."""
+        return _copy.deepcopy(self)
+
+    def update(self, z, u=None) -> Innovation:
+        z = np.asarray(z, float).reshape(-1)
+        if z.shape != (self.model.n_outputs,):
+            raise ValueError(f"z: expected {self.model.n_outputs} values for {list(self.model.outputs)}, "
+                             f"got shape {z.shape}")
+        rows = np.isfinite(z)
+        m = self.model.n_outputs
+        if not rows.any():
+            self._predicted = False
+            return Innovation(np.full(m, np.nan), np.full((m, m), np.nan), np.nan)
+        residual, pzz, fading = self._update(z[rows], rows, u)
+        self._predicted = False
+        full_r = np.full(m, np.nan)
+        full_r[rows] = residual
+        full_p = np.full((m, m), np.nan)
+        full_p[np.ix_(rows, rows)] = pzz
+        nis = float(residual @ _solve_psd(pzz, residual))
+        return Innovation(full_r, full_p, nis, fading)
+
+    def _measure(self, points: np.ndarray, rows: np.ndarray, u) -> np.ndarray:
+        return self.model.measure(points, u)[rows]
+
+    def _fade(self, residual, predicted, cross, innovation, noise) -> float:
+        if self.fading is None:
+            return 1.0
+        return self.fading.factor(residual, predicted, cross, innovation, self.process_noise, noise)
+
+
+class ExtendedKalmanFilter(_GaussianFilter):
+    """EKF with the model's sympy Jacobians (no finite differences).
+
+    Parameters
+    ----------
+    model : DiscreteModel
+    mean, covariance : initial estimate ``x_0|0`` (n,) and ``P_0|0`` (n, n)
+    process_noise, measurement_noise : Q (n, n) and R (m, m)
+    fading : StrongTracking, optional
+        Strong tracking EKF (Zhou et al. 1990; seed 001 eqs. 7-12).
+    """
+
+    def __init__(self, model, mean, covariance, process_noise, measurement_noise, *,
+                 fading: StrongTracking | None = None):
+        super().__init__(model, mean, covariance, process_noise, measurement_noise, fading)
+
+    @property
+    def covariance(self) -> np.ndarray:
+        return self._p.copy()
+
+    def _set_covariance(self, p: np.ndarray) -> None:
+        self._p = _symmetric(p)
+
+    def predict(self, u=None) -> None:
+        f = self.model.transition_jacobian(self._x, u)
+        self._x = self.model.transition(self._x, u)
+        self._spread = _symmetric(f @ self._p @ f.T)
+        self._p = self._spread + self.process_noise
+        self._predicted = True
+
+    def _update(self, z, rows, u):
+        r = self.measurement_noise[np.ix_(rows, rows)]
+        h = self.model.measurement_jacobian(self._x, u)[rows]
+        predicted = self.model.measure(self._x, u)[rows]
+        residual = z - predicted
+        fading = 1.0
+        if self._predicted and self.fading is not None:
+            fading = self._fade(residual, self._p, self._p @ h.T, h @ self._p @ h.T + r, r)
+            self._p = fading * self._spread + self.process_noise
+        pzz = _symmetric(h @ self._p @ h.T + r)
+        gain = _solve_psd(pzz, h @ self._p).T
+        self._x = self._x + gain @ residual
+        joseph = np.eye(self.model.n_states) - gain @ h
+        self._p = _symmetric(joseph @ self._p @ joseph.T + gain @ r @ gain.T)
+        return residual, pzz, fading
+
+
+class UnscentedKalmanFilter(_GaussianFilter):
+    """UKF with the scaled unscented transform (Julier 2002; Wan and van der Merwe 2000).
+
+    ``2n + 1`` sigma points ``x, x +- sqrt(n + l) S_i`` with ``l = alpha^2 (n + kappa) - n``,
+    mean weights ``l / (n + l)`` and ``1 / (2 (n + l))``, covariance weight of the centre
+    ``l / (n + l) + 1 - alpha^2 + beta``.  Defaults are Wan and van der Merwe's
+    ``alpha = 1e-3, beta = 2, kappa = 0``.  The covariance is carried in full form: when
+    rounding leaves it indefinite, it is repaired by clipping its eigenvalues and a
+    :class:`FilterWarning` says so.
+    """
+
+    def __init__(self, model, mean, covariance, process_noise, measurement_noise, *,
+                 alpha: float = 1e-3, beta: float = 2.0, kappa: float = 0.0,
+                 fading: StrongTracking | None = None):
+        n = model.n_states
+        if not alpha > 0:
+            raise ValueError(f"alpha must be positive, got {alpha}")
+        spread = alpha ** 2 * (n + kappa) - n
+        if not n + spread > 0:
+            raise ValueError(f"n + lambda = alpha^2 (n + kappa) must be positive, got {n + spread}")
+        self._scale = np.sqrt(n + spread)
+        self._wm = np.full(2 * n + 1, 0.5 / (n + spread))
+        self._wm[0] = spread / (n + spread)
+        self._wc = self._wm.copy()
+        self._wc[0] += 1.0 - alpha ** 2 + beta
+        super().__init__(model, mean, covariance, process_noise, measurement_noise, fading)
+
+    @property
+    def covariance(self) -> np.ndarray:
+        return self._p.copy()
+
+    def _set_covariance(self, p: np.ndarray) -> None:
+        self._p = _symmetric(p)
+
+    def _sigma_points(self, p: np.ndarray) -> np.ndarray:
+        root = _cholesky_or_repair(p, "UKF covariance")
+        offsets = self._scale * root
+        return self._x[:, None] + np.hstack([np.zeros((len(self._x), 1)), offsets, -offsets])
+
+    def _moments(self, points: np.ndarray):
+        mean = points @ self._wm
+        deviation = points - mean[:, None]
+        return mean, deviation
+
+    def predict(self, u=None) -> None:
+        propagated = self.model.transition(self._sigma_points(self._p), u)
+        self._x, deviation = self._moments(propagated)
+        self._spread = _symmetric((deviation * self._wc) @ deviation.T)
+        self._p = self._spread + self.process_noise
+        self._predicted = True
+
+    def _transform(self, rows, u, r):
+        points = self._sigma_points(self._p)
+        z_points = self._measure(points, rows, u)
+        z_mean, z_dev = self._moments(z_points)
+        x_dev = points - self._x[:, None]
+        pzz = _symmetric((z_dev * self._wc) @ z_dev.T + r)
+        pxz = (x_dev * self._wc) @ z_dev.T
+        return z_mean, pzz, pxz
+
+    def _update(self, z, rows, u):
+        r = self.measurement_noise[np.ix_(rows, rows)]
+        z_mean, pzz, pxz = self._transform(rows, u, r)
+        fading = 1.0
+        if self._predicted and self.fading is not None:
+            fading = self._fade(z - z_mean, self._p, pxz, pzz, r)
+            if fading > 1.0:
+                self._p = fading * self._spread + self.process_noise
+                z_mean, pzz, pxz = self._transform(rows, u, r)
+        residual = z - z_mean
+        gain = _solve_psd(pzz, pxz.T).T
+        self._x = self._x + gain @ residual
+        self._p = _symmetric(self._p - gain @ pzz @ gain.T)
+        return residual, pzz, fading
+
+
+class CubatureKalmanFilter(_GaussianFilter):
+    """Square-root cubature Kalman filter (seed 001 eqs. 21-46); with ``fading``, the STSCKF.
+
+    The estimate's covariance is held as ``S`` (lower triangular, non-negative
+    diagonal, ``P = S S^T``) and only ever rebuilt by :func:`tria`, so it stays
+    symmetric positive semi-definite whatever the rounding.
+    """
+
+    def __init__(self, model, mean, covariance, process_noise, measurement_noise, *,
+                 fading: StrongTracking | None = None):
+        n = model.n_states
+        self._xi = np.sqrt(n) * np.hstack([np.eye(n), -np.eye(n)])  # eq. 22 (m = 2n points)
+        super().__init__(model, mean, covariance, process_noise, measurement_noise, fading)
+        self._sqrt_r = np.linalg.cholesky(self.measurement_noise)
+
+    @property
+    def covariance(self) -> np.ndarray:
+        return self._s @ self._s.T
+
+    @property
+    def sqrt_covariance(self) -> np.ndarray:
+        """The lower-triangular factor ``S`` of ``P = S S^T``."""
+        return self._s.copy()
+
+    def _set_covariance(self, p: np.ndarray) -> None:
+        self._s = tria(psd_sqrt(p))
+
+    def _points(self, s: np.ndarray) -> np.ndarray:
+        return self._x[:, None] + s @ self._xi  # eq. 21, 27, 37
+
+    def predict(self, u=None) -> None:
+        propagated = self.model.transition(self._points(self._s), u)  # eq. 23
+        self._x = propagated.mean(axis=1)  # eq. 24
+        self._chi = (propagated - self._x[:, None]) / np.sqrt(propagated.shape[1])  # eq. 26
+        self._s = tria(np.hstack([self._chi, self._sqrt_q]))  # eq. 25
+        self._predicted = True
+
+    def _transform(self, rows, u):
+        points = self._points(self._s)
+        eta = self._measure(points, rows, u)  # eq. 28, 38
+        z_mean = eta.mean(axis=1)  # eq. 29, 39
+        scale = np.sqrt(points.shape[1])
+        z_dev = (eta - z_mean[:, None]) / scale  # eq. 34, 41
+        x_dev = (points - self._x[:, None]) / scale  # eq. 33, 43
+        return z_mean, z_dev, x_dev
+
+    def _update(self, z, rows, u):
+        sqrt_r = np.linalg.cholesky(self.measurement_noise[np.ix_(rows, rows)]) if not rows.all() else self._sqrt_r
+        z_mean, z_dev, x_dev = self._transform(rows, u)
+        fading = 1.0
+        if self._predicted and self.fading is not None:
+            r = sqrt_r @ sqrt_r.T
+            p_star = self._s @ self._s.T  # eq. 30
+            fading = self._fade(z - z_mean, p_star, x_dev @ z_dev.T, z_dev @ z_dev.T + r, r)  # eqs. 31-35
+            if fading > 1.0:
+                self._s = tria(np.hstack([np.sqrt(fading) * self._chi, self._sqrt_q]))  # eq. 36
+                z_mean, z_dev, x_dev = self._transform(rows, u)
+        s_zz = tria(np.hstack([z_dev, sqrt_r]))  # eq. 40
+        pxz = x_dev @ z_dev.T  # eq. 42
+        gain = solve_triangular(s_zz, solve_triangular(s_zz, pxz.T, lower=True), lower=True, trans="T").T  # eq. 44
+        residual = z - z_mean
+        self._x = self._x + gain @ residual  # eq. 45
+        self._s = tria(np.hstack([x_dev - gain @ z_dev, gain @ sqrt_r]))  # eq. 46
+        return residual, s_zz @ s_zz.T, fading
+
+
+def tria(matrix: np.ndarray) -> np.ndarray:
+    """Lower-triangular ``S`` with ``S S^T = C C^T`` from the QR decomposition of ``C^T`` (seed 001 eq. 25).
+
+    The diagonal is made non-negative (column signs are free).
+
+    >>> c = np.array([[1.0, 2.0, 0.5], [0.0, 1.0, 3.0]])
+    >>> s = tria(c)
+    >>> bool(np.allclose(s @ s.T, c @ c.T)), bool(s[0, 1] == 0), bool(np.all(np.diag(s) >= 0))
+    (True, True, True)
+    """
+    r = np.linalg.qr(np.asarray(matrix, float).T, mode="r")
+    n = matrix.shape[0]
+    s = r[:n, :n].T if r.shape[0] >= n else np.vstack([r, np.zeros((n - r.shape[0], r.shape[1]))]).T[:, :n]
+    signs = np.where(np.diag(s) < 0, -1.0, 1.0)
+    return np.tril(s * signs)
+
+
+def psd_sqrt(matrix: np.ndarray) -> np.ndarray:
+    """A square root ``S`` with ``S S^T = P`` of a symmetric positive semi-definite ``P``.
+
+    Cholesky when ``P`` is definite, else the symmetric root from ``eigh`` (a zero
+    process noise on a state is allowed).
+    """
+    try:
+        return np.linalg.cholesky(matrix)
+    except np.linalg.LinAlgError:
+        values, vectors = np.linalg.eigh(matrix)
+        return vectors * np.sqrt(np.clip(values, 0.0, None))
+
+
+def _cholesky_or_repair(p: np.ndarray, what: str) -> np.ndarray:
+    try:
+        return np.linalg.cholesky(p)
+    except np.linalg.LinAlgError:
+        values, vectors = np.linalg.eigh(p)
+        floor = max(float(values.max()), 1e-300) * 1e-12
+        warnings.warn(f"{what} was not positive definite (smallest eigenvalue {values.min():.3g}); "
+                      f"eigenvalues clipped at {floor:.3g}", FilterWarning, stacklevel=4)
+        return np.linalg.cholesky((vectors * np.maximum(values, floor)) @ vectors.T)
+
+
+def _solve_psd(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+    """``matrix^{-1} rhs`` for a symmetric positive definite matrix (least squares if singular)."""
+    try:
+        return cho_solve(cho_factor(matrix, lower=True), rhs)
+    except np.linalg.LinAlgError:
+        return np.linalg.lstsq(matrix, rhs, rcond=None)[0]
+
+
+def _symmetric(p: np.ndarray) -> np.ndarray:
+    return 0.5 * (p + p.T)
+
+
+def _vector(value, n: int, name: str, labels) -> np.ndarray:
+    vector = np.asarray(value, float).reshape(-1)
+    if vector.shape != (n,):
+        raise ValueError(f"{name}: expected {n} values for {list(labels)}, got shape {vector.shape}")
+    if not np.all(np.isfinite(vector)):
+        raise ValueError(f"{name}: non-finite value for {[labels[i] for i in np.nonzero(~np.isfinite(vector))[0]]}")
+    return vector
+
+
+def _matrix(value, n: int, name: str, labels) -> np.ndarray:
+    matrix = np.asarray(value, float)
+    if matrix.ndim == 1 and matrix.shape == (n,):
+        matrix = np.diag(matrix)
+    if matrix.shape != (n, n):
+        raise ValueError(f"{name}: expected a ({n}, {n}) matrix or {n} variances for {list(labels)}, "
+                         f"got shape {matrix.shape}")
+    if not np.all(np.isfinite(matrix)):
+        raise ValueError(f"{name}: non-finite entries")
+    if not np.allclose(matrix, matrix.T, rtol=1e-10, atol=0.0):
+        raise ValueError(f"{name}: not symmetric")
+    diagonal = np.diag(matrix)
+    if np.any(diagonal < 0):
+        raise ValueError(f"{name}: negative variance for {[labels[i] for i in np.nonzero(diagonal < 0)[0]]}")
+    if np.linalg.eigvalsh(_symmetric(matrix)).min() < -1e-12 * max(float(diagonal.max()), 1e-300):
+        raise ValueError(f"{name}: not positive semi-definite")
+    return _symmetric(matrix)
