@@ -200,23 +200,25 @@ THREE_TANK = {"A_s": 0.0154, "S_n": 5e-5, "g": 9.81, "az1": 0.5, "az2": 0.6, "az
 
 
 def three_tank(az1: float = 0.5, az2: float = 0.6, az3: float = 0.5, A_s: float = 0.0154,
-               uncertainty: float = 0.05) -> BondGraph:
+               uncertainty: float = 0.05, area_uncertainty: float | None = None) -> BondGraph:
     """The DTS200 three-tank system of seed 001 (eq. 57-58).
 
     Tanks 1, 3, 2 in series: ``Q1 -> tank 1 -> valve az1 -> tank 3 -> valve az3
     -> tank 2 -> valve az2 -> out``, ``Q2 -> tank 2``.  Tanks are C elements
     (``h = V / A``), valves nonlinear R elements with the law of eq. 58,
     ``Q = az S_n sign(dh) sqrt(2 g |dh|)``; levels are measured by De:h1..h3.
-    Parameter uncertainty: ``(-uncertainty, +uncertainty)`` on every az and area.
+    Parameter uncertainty: ``(-uncertainty, +uncertainty)`` on every az, and
+    ``+-area_uncertainty`` on the areas (default: the same as the valves).
     """
     box = (-uncertainty, uncertainty)
+    area_box = box if area_uncertainty is None else (-area_uncertainty, area_uncertainty)
     constants = {"S_n": THREE_TANK["S_n"], "g": THREE_TANK["g"]}
     bg = BondGraph(name="three-tank DTS200")
     bg.add("Q1", "Sf")
     bg.add("Q2", "Sf")
     for tank in ("1", "2", "3"):
         bg.add(f"0_{tank}", "0")
-        bg.add(f"A_{tank}", "C", value=A_s, uncertainty=box)
+        bg.add(f"A_{tank}", "C", value=A_s, uncertainty=area_box)
         bg.add(f"h{tank}", "De")
         bg.bond(f"0_{tank}", f"A_{tank}")
         bg.bond(f"0_{tank}", f"h{tank}")
