@@ -1,7 +1,6 @@
 """ARR derivation: seed 003 eqs. (48)-(49), seed 001 tank balances, signatures, implicit relations."""
 
 import networkx as nx
-import numpy as np
 import pytest
 import sympy as sp
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from bondgraph import simulate
-from bondgraph.library import rlc_circuit, torsion_bar_monitorable
+from bondgraph.library import rlc_circuit
 from diagnosis import derive_arrs
 from diagnosis.detection import evaluate, noise_margin, persistent
 from diagnosis.signals import RecordError
