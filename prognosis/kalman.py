@@ -174,6 +174,14 @@ class _GaussianFilter:
     def mean(self) -> np.ndarray:
         return self._x.copy()
 
+    @property
+    def covariance(self) -> np.ndarray:
+        return self._p.copy()
+
+    def _set_covariance(self, p: np.ndarray) -> None:
+        """Full-form covariance (EKF, UKF); the square-root CKF overrides both."""
+        self._p = _symmetric(p)
+
     def step(self, z, u=None) -> Innovation:
         """``predict(u)`` then ``update(z, u)``."""
         self.predict(u)
@@ -227,13 +235,6 @@ class ExtendedKalmanFilter(_GaussianFilter):
                  fading: StrongTracking | None = None):
         super().__init__(model, mean, covariance, process_noise, measurement_noise, fading)
 
-    @property
-    def covariance(self) -> np.ndarray:
-        return self._p.copy()
-
-    def _set_covariance(self, p: np.ndarray) -> None:
-        self._p = _symmetric(p)
-
     def predict(self, u=None) -> None:
         f = self.model.transition_jacobian(self._x, u)
         self._x = self.model.transition(self._x, u)
@@ -284,13 +285,6 @@ class UnscentedKalmanFilter(_GaussianFilter):
         self._wc = self._wm.copy()
         self._wc[0] += 1.0 - alpha ** 2 + beta
         super().__init__(model, mean, covariance, process_noise, measurement_noise, fading)
-
-    @property
-    def covariance(self) -> np.ndarray:
-        return self._p.copy()
-
-    def _set_covariance(self, p: np.ndarray) -> None:
-        self._p = _symmetric(p)
 
     def _sigma_points(self, p: np.ndarray) -> np.ndarray:
         root = _cholesky_or_repair(p, "UKF covariance")
