@@ -39,7 +39,7 @@ import copy as _copy
 
 import numpy as np
 
-from .kalman import Innovation, _matrix, _solve_psd, _vector, psd_sqrt
+from .kalman import Innovation, _matrix, _solve_psd, _vector, innovation, measured_rows, noises, psd_sqrt
 from .resampling import effective_sample_size, get_scheme, normalize_log_weights
 
 __all__ = ["BootstrapParticleFilter"]
@@ -65,13 +65,9 @@ class BootstrapParticleFilter:
                  resampling: str = "systematic", resample_below: float = 0.5, seed: int = 0):
         if n_particles < 2:
             raise ValueError(f"n_particles must be at least 2, got {n_particles}")
-        n, m = model.n_states, model.n_outputs
+        n = model.n_states
         self.model = model
-        self.process_noise = _matrix(process_noise, n, "process_noise (Q)", model.states)
-        self.measurement_noise = _matrix(measurement_noise, m, "measurement_noise (R)", model.outputs)
-        if np.any(np.linalg.eigvalsh(self.measurement_noise) <= 0):
-            raise ValueError("measurement_noise (R) must be positive definite")
-        self._sqrt_q = psd_sqrt(self.process_noise)
+        self.process_noise, self.measurement_noise, self._sqrt_q = noises(model, process_noise, measurement_noise)
         self.resample = get_scheme(resampling)
         self.resample_below = resample_below
         self.rng = np.random.default_rng(seed)
@@ -103,13 +99,9 @@ class BootstrapParticleFilter:
         self.particles = self.model.transition(self.particles, u) + noise
 
     def update(self, z, u=None) -> Innovation:
-        z = np.asarray(z, float).reshape(-1)
-        m = self.model.n_outputs
-        if z.shape != (m,):
-            raise ValueError(f"z: expected {m} values for {list(self.model.outputs)}, got shape {z.shape}")
-        rows = np.isfinite(z)
+        z, rows = measured_rows(z, self.model)
         if not rows.any():
-            return Innovation(np.full(m, np.nan), np.full((m, m), np.nan), np.nan)
+            return innovation(rows)
         r = self.measurement_noise[np.ix_(rows, rows)]
         predicted = self.model.measure(self.particles, u)[rows]  # (m', N)
         weights = self.weights
@@ -126,12 +118,7 @@ class BootstrapParticleFilter:
             self.particles = self.particles[:, self.resample(weights, self.rng)]
             weights = np.full(self.n_particles, 1.0 / self.n_particles)
         self.log_weights = np.log(np.maximum(weights, np.finfo(float).tiny))
-        residual = np.full(m, np.nan)
-        residual[rows] = z[rows] - z_mean
-        covariance = np.full((m, m), np.nan)
-        covariance[np.ix_(rows, rows)] = pzz
-        nis = float(residual[rows] @ _solve_psd(pzz, residual[rows]))
-        return Innovation(residual, covariance, nis)
+        return innovation(rows, z[rows] - z_mean, pzz)
 
     def step(self, z, u=None) -> Innovation:
         """``predict(u)`` then ``update(z, u)``."""

@@ -156,14 +156,10 @@ class _GaussianFilter:
     """Shared plumbing: validation, NaN handling, the public interface."""
 
     def __init__(self, model, mean, covariance, process_noise, measurement_noise, fading: StrongTracking | None):
-        n, m = model.n_states, model.n_outputs
+        n = model.n_states
         self.model = model
         self._x = _vector(mean, n, "mean", model.states)
-        self.process_noise = _matrix(process_noise, n, "process_noise (Q)", model.states)
-        self.measurement_noise = _matrix(measurement_noise, m, "measurement_noise (R)", model.outputs)
-        if np.any(np.linalg.eigvalsh(self.measurement_noise) <= 0):
-            raise ValueError("measurement_noise (R) must be positive definite")
-        self._sqrt_q = psd_sqrt(self.process_noise)
+        self.process_noise, self.measurement_noise, self._sqrt_q = noises(model, process_noise, measurement_noise)
         self.fading = _copy.deepcopy(fading)
         if self.fading is not None:
             self.fading.reset()
@@ -192,23 +188,13 @@ class _GaussianFilter:
         return _copy.deepcopy(self)
 
     def update(self, z, u=None) -> Innovation:
-        z = np.asarray(z, float).reshape(-1)
-        if z.shape != (self.model.n_outputs,):
-            raise ValueError(f"z: expected {self.model.n_outputs} values for {list(self.model.outputs)}, "
-                             f"got shape {z.shape}")
-        rows = np.isfinite(z)
-        m = self.model.n_outputs
+        z, rows = measured_rows(z, self.model)
         if not rows.any():
             self._predicted = False
-            return Innovation(np.full(m, np.nan), np.full((m, m), np.nan), np.nan)
+            return innovation(rows)
         residual, pzz, fading = self._update(z[rows], rows, u)
         self._predicted = False
-        full_r = np.full(m, np.nan)
-        full_r[rows] = residual
-        full_p = np.full((m, m), np.nan)
-        full_p[np.ix_(rows, rows)] = pzz
-        nis = float(residual @ _solve_psd(pzz, residual))
-        return Innovation(full_r, full_p, nis, fading)
+        return innovation(rows, residual, pzz, fading)
 
     def _measure(self, points: np.ndarray, rows: np.ndarray, u) -> np.ndarray:
         return self.model.measure(points, u)[rows]
@@ -394,6 +380,34 @@ class CubatureKalmanFilter(_GaussianFilter):
         self._x = self._x + gain @ residual  # eq. 45
         self._s = tria(np.hstack([x_dev - gain @ z_dev, gain @ sqrt_r]))  # eq. 46
         return residual, s_zz @ s_zz.T, fading
+
+
+def noises(model, process_noise, measurement_noise) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Validated ``Q`` (n, n) and ``R`` (m, m) of ``model`` (R positive definite), and a square root of Q."""
+    q = _matrix(process_noise, model.n_states, "process_noise (Q)", model.states)
+    r = _matrix(measurement_noise, model.n_outputs, "measurement_noise (R)", model.outputs)
+    if np.any(np.linalg.eigvalsh(r) <= 0):
+        raise ValueError("measurement_noise (R) must be positive definite")
+    return q, r, psd_sqrt(q)
+
+
+def measured_rows(z, model) -> tuple[np.ndarray, np.ndarray]:
+    """``z`` as a vector of the model's outputs, and the mask of its finite (measured) entries."""
+    z = np.asarray(z, float).reshape(-1)
+    if z.shape != (model.n_outputs,):
+        raise ValueError(f"z: expected {model.n_outputs} values for {list(model.outputs)}, got shape {z.shape}")
+    return z, np.isfinite(z)
+
+
+def innovation(rows: np.ndarray, residual=None, covariance=None, fading: float = 1.0) -> Innovation:
+    """An :class:`Innovation` over all outputs from the one over the measured ``rows`` (NaN elsewhere)."""
+    m = rows.size
+    full_r, full_p = np.full(m, np.nan), np.full((m, m), np.nan)
+    if residual is None:
+        return Innovation(full_r, full_p, np.nan)
+    full_r[rows] = residual
+    full_p[np.ix_(rows, rows)] = covariance
+    return Innovation(full_r, full_p, float(residual @ _solve_psd(covariance, residual)), fading)
 
 
 def tria(matrix: np.ndarray) -> np.ndarray:

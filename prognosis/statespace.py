@@ -50,6 +50,7 @@ __all__ = ["DiscreteModel", "discretize"]
 
 _TIME = sp.Symbol("t")
 METHODS = ("euler", "rk4")
+_RK4_NODES = (0.0, 0.5, 0.5, 1.0)  # where each RK4 stage is taken, in steps of dt
 
 
 @dataclass(frozen=True)
@@ -136,12 +137,19 @@ class DiscreteModel:
             if self.method == "euler":
                 out = x + dt * _evaluate(f, x, u, n)
             else:
-                k1 = _evaluate(f, x, u, n)
-                k2 = _evaluate(f, x + 0.5 * dt * k1, u, n)
-                k3 = _evaluate(f, x + 0.5 * dt * k2, u, n)
-                k4 = _evaluate(f, x + dt * k3, u, n)
+                k1, k2, k3, k4 = (slope for _, slope in self._rk4_stages(x, u))
                 out = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
         return out[:, 0] if squeeze else out
+
+    def _rk4_stages(self, x: np.ndarray, u: np.ndarray) -> list:
+        """The four (point, slope) pairs of the RK4 step from columns ``x`` (n, M)."""
+        f, n, dt = self._functions["rhs"], self.n_states, self.dt
+        stages, slope = [], None
+        for weight in _RK4_NODES:
+            point = x if slope is None else x + weight * dt * slope
+            slope = _evaluate(f, point, u, n)
+            stages.append((point, slope))
+        return stages
 
     def measure(self, x, u=None) -> np.ndarray:
         """Predicted measurement ``h(x, u)``, shape ``(m,)`` or ``(m, M)``."""
@@ -159,18 +167,12 @@ class DiscreteModel:
         jac = self._jacobian("rhs_jacobian", u, n)
         if self.method == "euler":
             out = eye + dt * jac(x)
-        else:
-            f = self._functions["rhs"]
-            k1 = _evaluate(f, x[:, None], u, n)[:, 0]
-            x2 = x + 0.5 * dt * k1
-            k2 = _evaluate(f, x2[:, None], u, n)[:, 0]
-            x3 = x + 0.5 * dt * k2
-            k3 = _evaluate(f, x3[:, None], u, n)[:, 0]
-            x4 = x + dt * k3
-            d1 = jac(x)
-            d2 = jac(x2) @ (eye + 0.5 * dt * d1)
-            d3 = jac(x3) @ (eye + 0.5 * dt * d2)
-            d4 = jac(x4) @ (eye + dt * d3)
+        else:  # chain rule through the stages: d k_i/dx = J(x_i) (I + c_i dt d k_{i-1}/dx)
+            derivatives = []
+            for (point, _), weight in zip(self._rk4_stages(x[:, None], u), _RK4_NODES):
+                stage = jac(point[:, 0])
+                derivatives.append(stage @ (eye + weight * dt * derivatives[-1]) if derivatives else stage)
+            d1, d2, d3, d4 = derivatives
             out = eye + dt / 6.0 * (d1 + 2 * d2 + 2 * d3 + d4)
         return _finite(out, "transition Jacobian", x, self.states)
 
