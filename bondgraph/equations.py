@@ -484,10 +484,67 @@ class StateEquations:
     parameters: dict
     causality: Causality
     algebraic_loops: list
+    ports: dict = field(default_factory=dict)
 
     @property
     def dependent_storage(self) -> list:
         return self.causality.dependent_storage
+
+    def power(self, element: Hashable) -> sp.Expr:
+        """Power flowing into one-port ``element``, ``sum_k s_k e_k f_k``, in states and inputs.
+
+        For an R element this is the power it dissipates (seed 000 eq. 6: ``P_c = F_c v``).
+
+        >>> from bondgraph.library import rlc_circuit
+        >>> rlc_circuit().state_equations().power("R")
+        R*p_L**2/L**2
+        """
+        if element not in self.ports:
+            raise KeyError(f"{element!r} is not a one-port element of the model; one-ports are {list(self.ports)}")
+        return sum((s * self.efforts[k] * self.flows[k] for k, s in self.ports[element]), sp.S.Zero)
+
+    def coenergy_states(self, names: dict | None = None) -> "StateEquations":
+        """The same equations with each storage state replaced by its co-energy variable.
+
+        An I element's state ``p`` becomes its flow ``f = p/I`` (a velocity), a C
+        element's ``q`` its effort ``e = q/C``; with ``x = g^{-1}(y)``,
+        ``dy/dt = g'(x) dx/dt``.  ``names`` maps storage element -> new state name
+        (default ``f_<I>`` / ``e_<C>``).  The law must be invertible for the state.
+
+        >>> from bondgraph.library import rlc_circuit
+        >>> eqs = rlc_circuit().state_equations().coenergy_states({"L": "i"})
+        >>> eqs.states, eqs.rhs[0]
+        ([i, e_C], (-R*i - e_C + V(t))/L)
+        """
+        names = dict(names or {})
+        unknown = sorted(map(str, set(names) - set(self.elements)))
+        if unknown:
+            raise KeyError(f"{unknown} are not storage elements with a state; they are {self.elements}")
+        new_states, forward, backward = [], {}, {}
+        for x, element in zip(self.states, self.elements):
+            (label, sign), = self.ports[element]
+            kind = "I" if str(x).startswith("p_") else "C"  # energy_variable names them p_<I>, q_<C>
+            co = sign * self.flows[label] if kind == "I" else self.efforts[label]
+            y = sp.Symbol(names.get(element, f"{'f' if kind == 'I' else 'e'}_{element}"))
+            solutions = sp.solve(sp.Eq(co, y), x, dict=True)
+            if len(solutions) != 1 or x not in solutions[0]:
+                raise EquationError(f"storage {element!r}: cannot invert its law {co} for the state {x}")
+            new_states.append(y)
+            forward[x] = co
+            backward[x] = solutions[0][x]
+        rhs = [sp.simplify((sp.diff(forward[x], x) * r).xreplace(backward))
+               for x, r in zip(self.states, self.rhs)]
+
+        def swap(expression):
+            return sp.simplify(expression.xreplace(backward))
+
+        return StateEquations(
+            states=new_states, elements=list(self.elements), rhs=rhs, inputs=list(self.inputs),
+            outputs={k: swap(v) for k, v in self.outputs.items()},
+            efforts={k: swap(v) for k, v in self.efforts.items()}, flows={k: swap(v) for k, v in self.flows.items()},
+            parameters=dict(self.parameters), causality=self.causality, algebraic_loops=list(self.algebraic_loops),
+            ports=dict(self.ports),
+        )
 
     def __str__(self) -> str:
         lines = [f"d{x}/dt = {rhs}" for x, rhs in zip(self.states, self.rhs)]
@@ -545,7 +602,14 @@ def state_equations(bg: BondGraph, causality: Causality | None = None) -> StateE
         parameters=structure.parameters,
         causality=causality,
         algebraic_loops=oriented.loops,
+        ports=_one_ports(structure),
     )
+
+
+def _one_ports(structure) -> dict:
+    """One-port element -> [(bond label, +1 if the bond points at it else -1)]."""
+    return {name: [(b.label, b.sign_into(name)) for b in structure.at[name] if not b.is_signal]
+            for name, element in structure.elements.items() if element.kind in el.ONE_PORTS}
 
 
 def _solve_for_derivatives(rhs: list, states: list, elements: list) -> list:

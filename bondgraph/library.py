@@ -6,6 +6,7 @@
 :func:`torsion_bar`       seed 003 Fig. 5-6: the complete torsion-bar system
 :func:`torsion_bar_monitorable`  seed 003 Fig. 7: its monitorable mechanical part
 :func:`three_tank`        seed 001: the DTS200 three-tank system
+:func:`friction_drive`    seed 000: roller-on-tire friction drive
 :func:`mass_spring_chain` n mass-spring-damper stages (benchmarks)
 ========================  =====================================================
 
@@ -229,6 +230,45 @@ def three_tank(az1: float = 0.5, az2: float = 0.6, az3: float = 0.5, A_s: float 
     bg.add("1_32", "1")
     for tail, head in [("Q1", "0_1"), ("Q2", "0_2"), ("0_1", "1_13"), ("1_13", "az1"), ("1_13", "0_3"),
                        ("0_3", "1_32"), ("1_32", "az3"), ("1_32", "0_2"), ("0_2", "az2")]:
+        bg.bond(tail, head)
+    return bg
+
+
+# Seed 000 Table 1 (SI units) and the contact quality coefficient of eq. (57).
+FRICTION_DRIVE = {"J1": 9.9225e-4, "B1": 6.36e-3, "r1": 0.0315, "alpha": 11.0, "r2": 0.35, "J2": 12.25, "B2": 0.625}
+
+
+def friction_drive(J1: float = 9.9225e-4, B1: float = 6.36e-3, r1: float = 0.0315, alpha: float = 11.0,
+                   r2: float = 0.35, J2: float = 12.25, B2: float = 0.625) -> BondGraph:
+    """The roller-on-tire friction drive of seed 000 (eqs. 1-5, Table 1).
+
+    ``MSe:T_m -> 1_1 (I:J1, R:B1, Df:omega1) -> TF:r1 -> 0_c (R:alpha)
+    -> TF:1/r2 -> 1_2 (I:J2, R:B2, Df:omega2)``.  The 0-junction carries the
+    contact force ``F_c`` (common effort) and balances the tangential speeds,
+    so the contact R element sees ``v = r1 omega1 - r2 omega2`` and
+    ``F_c = alpha v`` (eq. 1); the power it dissipates, ``alpha v^2``, is the
+    deterioration rate of eq. (9).  The state equations are eq. (13).
+
+    >>> friction_drive().state_equations().coenergy_states({"J1": "omega1", "J2": "omega2"}).rhs[1]
+    (-B2*omega2 + alpha*r2*(omega1*r1 - omega2*r2))/J2
+    """
+    bg = BondGraph(name="friction drive")
+    bg.add("T_m", "MSe")
+    bg.add("1_1", "1")
+    bg.add("J1", "I", value=J1)
+    bg.add("B1", "R", value=B1)
+    bg.add("TF_1", "TF", param="r1", value=r1)
+    bg.add("0_c", "0")
+    bg.add("alpha", "R", value=alpha)
+    bg.add("TF_2", "TF", param="r2", value=r2, modulus="1/r2")
+    bg.add("1_2", "1")
+    bg.add("J2", "I", value=J2)
+    bg.add("B2", "R", value=B2)
+    bg.add("omega1", "Df")
+    bg.add("omega2", "Df")
+    for tail, head in [("T_m", "1_1"), ("1_1", "J1"), ("1_1", "B1"), ("1_1", "TF_1"), ("TF_1", "0_c"),
+                       ("0_c", "alpha"), ("0_c", "TF_2"), ("TF_2", "1_2"), ("1_2", "J2"), ("1_2", "B2"),
+                       ("1_1", "omega1"), ("1_2", "omega2")]:
         bg.bond(tail, head)
     return bg
 

@@ -8,17 +8,26 @@
 """
 
 from .bootstrap import BootstrapParticleFilter
+from .chebyshev import chebyshev_bounds, chebyshev_intervals, chebyshev_level, chebyshev_scale, covariance_from_bounds
+from .consistency import ConsistencyReport, InnovationMonitor, innovation_consistency, whiten
 from .degradation import Custom, Exponential, Linear, degradation_model
+from .deterioration import DeteriorationEquations, energy_deterioration
 from .elm import ROSELM, SeriesForecaster
 from .filter import ParticleFilter, StepDiagnostics, VarianceAdaptation
 from .kalman import CubatureKalmanFilter, ExtendedKalmanFilter, FilterWarning, Innovation, StrongTracking, UnscentedKalmanFilter
 from .lookahead import LookAhead, look_ahead, predict_ahead
 from .monitor import HealthMonitor, MonitorResult
+from .montecarlo import RULDistribution, monte_carlo_rul, sample_gaussian
 from .observation import ObservationModel, observation_model
 from .rul import RULPrediction, RULPredictor, predict_rul
+from .rulcontrol import RULController, RULDecision
 from .statespace import DiscreteModel, discretize
 
 __all__ = [
+    "ConsistencyReport", "DeteriorationEquations", "InnovationMonitor", "RULController", "RULDecision",
+    "RULDistribution", "chebyshev_bounds", "chebyshev_intervals", "chebyshev_level", "chebyshev_scale",
+    "covariance_from_bounds", "energy_deterioration", "innovation_consistency", "monte_carlo_rul", "sample_gaussian",
+    "whiten",
     "BootstrapParticleFilter", "CubatureKalmanFilter", "Custom", "DiscreteModel", "Exponential",
     "ExtendedKalmanFilter", "FilterWarning", "HealthMonitor", "Innovation", "Linear", "LookAhead", "MonitorResult",
     "ObservationModel", "ParticleFilter", "ROSELM", "RULPrediction", "RULPredictor", "SeriesForecaster",

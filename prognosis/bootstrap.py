@@ -39,7 +39,7 @@ import copy as _copy
 
 import numpy as np
 
-from .kalman import Innovation, _matrix, _solve_psd, _vector, innovation, measured_rows, noises, psd_sqrt
+from .kalman import Innovation, _block, _matrix, _solve_psd, _vector, innovation, measured_rows, noises, psd_sqrt
 from .resampling import effective_sample_size, get_scheme, normalize_log_weights
 
 __all__ = ["BootstrapParticleFilter"]
@@ -102,7 +102,7 @@ class BootstrapParticleFilter:
         z, rows = measured_rows(z, self.model)
         if not rows.any():
             return innovation(rows)
-        r = self.measurement_noise[np.ix_(rows, rows)]
+        r = _block(self.measurement_noise, rows)
         predicted = self.model.measure(self.particles, u)[rows]  # (m', N)
         weights = self.weights
         z_mean = predicted @ weights

@@ -69,7 +69,7 @@ import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.linalg import cho_factor, cho_solve
+from scipy.linalg import cho_solve
 
 __all__ = [
     "CubatureKalmanFilter", "ExtendedKalmanFilter", "FilterWarning", "Innovation", "StrongTracking",
@@ -178,6 +178,21 @@ class _GaussianFilter:
         """Full-form covariance (EKF, UKF); the square-root CKF overrides both."""
         self._p = _symmetric(p)
 
+    def reinitialize(self, mean=None, covariance=None) -> None:
+        """Restart from a new estimate and/or covariance ``P_0`` (e.g. wider bounds after a model change).
+
+        Strong tracking, if any, starts afresh.  Seed 000 section 6.1 restarts its EKF
+        this way when the estimated ``m`` stops being consistent with ``dm/dt = 0``.
+        """
+        n = self.model.n_states
+        if mean is not None:
+            self._x = _vector(mean, n, "mean", self.model.states)
+        if covariance is not None:
+            self._set_covariance(_matrix(covariance, n, "covariance (P0)", self.model.states))
+        if self.fading is not None:
+            self.fading.reset()
+        self._predicted = False
+
     def step(self, z, u=None) -> Innovation:
         """``predict(u)`` then ``update(z, u)``."""
         self.predict(u)
@@ -222,14 +237,13 @@ class ExtendedKalmanFilter(_GaussianFilter):
         super().__init__(model, mean, covariance, process_noise, measurement_noise, fading)
 
     def predict(self, u=None) -> None:
-        f = self.model.transition_jacobian(self._x, u)
-        self._x = self.model.transition(self._x, u)
+        self._x, f = self.model.transition_with_jacobian(self._x, u)
         self._spread = _symmetric(f @ self._p @ f.T)
         self._p = self._spread + self.process_noise
         self._predicted = True
 
     def _update(self, z, rows, u):
-        r = self.measurement_noise[np.ix_(rows, rows)]
+        r = _block(self.measurement_noise, rows)
         h = self.model.measurement_jacobian(self._x, u)[rows]
         predicted = self.model.measure(self._x, u)[rows]
         residual = z - predicted
@@ -299,7 +313,7 @@ class UnscentedKalmanFilter(_GaussianFilter):
         return z_mean, pzz, pxz
 
     def _update(self, z, rows, u):
-        r = self.measurement_noise[np.ix_(rows, rows)]
+        r = _block(self.measurement_noise, rows)
         z_mean, pzz, pxz = self._transform(rows, u, r)
         fading = 1.0
         if self._predicted and self.fading is not None:
@@ -361,7 +375,7 @@ class CubatureKalmanFilter(_GaussianFilter):
         return z_mean, z_dev, x_dev
 
     def _update(self, z, rows, u):
-        sqrt_r = np.linalg.cholesky(self.measurement_noise[np.ix_(rows, rows)]) if not rows.all() else self._sqrt_r
+        sqrt_r = np.linalg.cholesky(_block(self.measurement_noise, rows)) if not rows.all() else self._sqrt_r
         z_mean, z_dev, x_dev = self._transform(rows, u)
         fading = 1.0
         if self._predicted and self.fading is not None:
@@ -406,7 +420,10 @@ def innovation(rows: np.ndarray, residual=None, covariance=None, fading: float =
     if residual is None:
         return Innovation(full_r, full_p, np.nan)
     full_r[rows] = residual
-    full_p[np.ix_(rows, rows)] = covariance
+    if rows.all():
+        full_p = np.array(covariance, float)
+    else:
+        full_p[np.ix_(rows, rows)] = covariance
     return Innovation(full_r, full_p, float(residual @ _solve_psd(covariance, residual)), fading)
 
 
@@ -453,11 +470,20 @@ def _cholesky_or_repair(p: np.ndarray, what: str) -> np.ndarray:
 
 
 def _solve_psd(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """``matrix^{-1} rhs`` for a symmetric positive definite matrix (least squares if singular)."""
+    """``matrix^{-1} rhs`` for a symmetric positive definite matrix (least squares if singular).
+
+    LAPACK ``gesv`` through numpy: on the few-by-few matrices of a filter step the
+    call overhead dominates, and numpy's is a fraction of scipy's ``cho_solve``.
+    """
     try:
-        return cho_solve(cho_factor(matrix, lower=True), rhs)
+        return np.linalg.solve(matrix, rhs)
     except np.linalg.LinAlgError:
         return np.linalg.lstsq(matrix, rhs, rcond=None)[0]
+
+
+def _block(matrix: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """``matrix[rows][:, rows]`` (the whole matrix when every row is measured)."""
+    return matrix if rows.all() else matrix[np.ix_(rows, rows)]
 
 
 def _symmetric(p: np.ndarray) -> np.ndarray:

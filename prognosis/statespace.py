@@ -69,7 +69,11 @@ class DiscreteModel:
     augmented : tuple of str
         Parameters estimated as states.
     dt : float
+        Sampling interval: one ``transition`` spans ``dt``.
     method : str
+    substeps : int
+        Integration steps per sample (``dt / substeps`` each), for dynamics
+        faster than the sampling (an explicit step must stay stable).
     rhs, measurement : tuple of sympy.Expr
         ``F`` and ``G`` in the state symbols ``states`` and input symbols ``inputs``.
     """
@@ -84,6 +88,7 @@ class DiscreteModel:
     rhs: tuple = field(repr=False)
     measurement: tuple = field(repr=False)
     _functions: dict = field(repr=False, compare=False)
+    substeps: int = 1
 
     @property
     def n_states(self) -> int:
@@ -127,23 +132,30 @@ class DiscreteModel:
         out = _evaluate(self._functions["rhs"], x, self.input_vector(u), self.n_states)
         return out[:, 0] if squeeze else out
 
+    @property
+    def substep(self) -> float:
+        """The integration step, ``dt / substeps``."""
+        return self.dt / self.substeps
+
     def transition(self, x, u=None) -> np.ndarray:
         """One step of the discretized dynamics, vectorized over the columns of ``x``."""
         x, squeeze = _columns(x, self.n_states, "x")
         u = self.input_vector(u)
-        f = self._functions["rhs"]
-        n, dt = self.n_states, self.dt
         with np.errstate(invalid="ignore", divide="ignore"):
-            if self.method == "euler":
-                out = x + dt * _evaluate(f, x, u, n)
-            else:
-                k1, k2, k3, k4 = (slope for _, slope in self._rk4_stages(x, u))
-                out = x + dt / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
-        return out[:, 0] if squeeze else out
+            for _ in range(self.substeps):
+                x = self._substep(x, u)
+        return x[:, 0] if squeeze else x
+
+    def _substep(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
+        h = self.substep
+        if self.method == "euler":
+            return x + h * _evaluate(self._functions["rhs"], x, u, self.n_states)
+        k1, k2, k3, k4 = (slope for _, slope in self._rk4_stages(x, u))
+        return x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
 
     def _rk4_stages(self, x: np.ndarray, u: np.ndarray) -> list:
         """The four (point, slope) pairs of the RK4 step from columns ``x`` (n, M)."""
-        f, n, dt = self._functions["rhs"], self.n_states, self.dt
+        f, n, dt = self._functions["rhs"], self.n_states, self.substep
         stages, slope = [], None
         for weight in _RK4_NODES:
             point = x if slope is None else x + weight * dt * slope
@@ -160,21 +172,32 @@ class DiscreteModel:
 
     def transition_jacobian(self, x, u=None) -> np.ndarray:
         """``df/dx`` of the discrete step at one point ``x`` (n,), from the sympy Jacobian of ``F``."""
+        return self.transition_with_jacobian(x, u)[1]
+
+    def transition_with_jacobian(self, x, u=None) -> tuple[np.ndarray, np.ndarray]:
+        """``f(x, u)`` and ``df/dx`` at one point ``x`` (n,) in one pass over the substeps (the EKF's predict)."""
         x = _point(x, self.n_states)
         u = self.input_vector(u)
-        n, dt = self.n_states, self.dt
-        eye = np.eye(n)
-        jac = self._jacobian("rhs_jacobian", u, n)
+        jac = self._jacobian("rhs_jacobian", u, self.n_states)
+        point, out = x[:, None], None
+        with np.errstate(invalid="ignore", divide="ignore"):
+            for _ in range(self.substeps):  # chain rule over the substeps
+                step = self._substep_jacobian(point, u, jac)
+                out = step if out is None else step @ out
+                point = self._substep(point, u)
+        return point[:, 0], _finite(out, "transition Jacobian", x, self.states)
+
+    def _substep_jacobian(self, point: np.ndarray, u: np.ndarray, jac) -> np.ndarray:
+        eye, h = np.eye(self.n_states), self.substep
         if self.method == "euler":
-            out = eye + dt * jac(x)
-        else:  # chain rule through the stages: d k_i/dx = J(x_i) (I + c_i dt d k_{i-1}/dx)
-            derivatives = []
-            for (point, _), weight in zip(self._rk4_stages(x[:, None], u), _RK4_NODES):
-                stage = jac(point[:, 0])
-                derivatives.append(stage @ (eye + weight * dt * derivatives[-1]) if derivatives else stage)
-            d1, d2, d3, d4 = derivatives
-            out = eye + dt / 6.0 * (d1 + 2 * d2 + 2 * d3 + d4)
-        return _finite(out, "transition Jacobian", x, self.states)
+            return eye + h * jac(point[:, 0])
+        # chain rule through the stages: d k_i/dx = J(x_i) (I + c_i h d k_{i-1}/dx)
+        derivatives = []
+        for (stage_point, _), weight in zip(self._rk4_stages(point, u), _RK4_NODES):
+            stage = jac(stage_point[:, 0])
+            derivatives.append(stage @ (eye + weight * h * derivatives[-1]) if derivatives else stage)
+        d1, d2, d3, d4 = derivatives
+        return eye + h / 6.0 * (d1 + 2 * d2 + 2 * d3 + d4)
 
     def measurement_jacobian(self, x, u=None) -> np.ndarray:
         """``dh/dx`` at one point ``x`` (n,), shape ``(m, n)``."""
@@ -188,15 +211,20 @@ class DiscreteModel:
     def _jacobian(self, key: str, u: np.ndarray, rows: int):
         function = self._functions[key]
 
+        u = u.tolist()
+
         def jac(x):
             with np.errstate(invalid="ignore", divide="ignore"):
-                values = function(*x, *u)
-            return np.array([[float(np.asarray(v)) for v in row] for row in values]).reshape(rows, self.n_states)
+                values = function(*x.tolist(), *u)
+            try:
+                return np.array(values, dtype=float).reshape(rows, self.n_states)
+            except ValueError:  # an entry came back as a length-1 array
+                return np.array([[float(np.asarray(v)) for v in row] for row in values]).reshape(rows, self.n_states)
         return jac
 
 
 def discretize(equations, *, dt: float, augment: Sequence[str] = (), parameters: Mapping | None = None,
-               outputs: Sequence[str] | None = None, method: str = "euler") -> DiscreteModel:
+               outputs: Sequence[str] | None = None, method: str = "euler", substeps: int = 1) -> DiscreteModel:
     """Discrete-time model of ``equations`` with the parameters ``augment`` as extra states.
 
     Parameters
@@ -213,11 +241,16 @@ def discretize(equations, *, dt: float, augment: Sequence[str] = (), parameters:
     outputs : sequence of str, optional
         Measured signals, in the order of ``z`` (default: all outputs).
     method : ``"euler"`` or ``"rk4"``
+    substeps : int
+        Integration steps of ``dt / substeps`` per sample; the Jacobian is chained
+        through them (``F = F_s ... F_2 F_1``).
     """
     if not dt > 0 or not np.isfinite(dt):
         raise ValueError(f"dt must be a positive number, got {dt!r}")
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
+        raise ValueError(f"substeps must be a positive integer, got {substeps!r}")
     nominal = {str(k): v for k, v in equations.parameters.items()}
     parameters = dict(parameters or {})
     for name in [*augment, *parameters]:
@@ -271,6 +304,7 @@ def discretize(equations, *, dt: float, augment: Sequence[str] = (), parameters:
         states=tuple(state_names), outputs=tuple(outputs), inputs=tuple(equations.inputs),
         parameters={k: float(v) for k, v in values.items() if k not in augment}, augmented=tuple(augment),
         dt=float(dt), method=method, rhs=tuple(rhs), measurement=tuple(measurement), _functions=functions,
+        substeps=int(substeps),
     )
 
 
@@ -292,6 +326,11 @@ def _point(x, n: int) -> np.ndarray:
 
 def _evaluate(function, x: np.ndarray, u: np.ndarray, rows: int) -> np.ndarray:
     """Call a lambdified list of ``rows`` expressions on columns ``x`` (n, M); constants are broadcast."""
+    if x.shape[1] == 1:  # one point: Python floats are several times faster than (n, 1) arrays
+        try:
+            return np.array(function(*x[:, 0].tolist(), *u.tolist()), dtype=float).reshape(rows, 1)
+        except (ValueError, TypeError):
+            pass
     values = function(*x, *u)
     out = np.empty((rows, x.shape[1]))
     for i, v in enumerate(values):
