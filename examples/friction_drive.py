@@ -67,7 +67,7 @@ PI_GAINS = (0.0048, 0.0048)   # eq. 59
 D_MAX = 5e6                   # J, maximal admissible deterioration (not given in the seed)
 ALPHA_MIN = 0.0
 MONTE_CARLO = {"n_samples": 1000, "dt": 30.0, "horizon": 12 * HOUR}
-CONTROL = {"rul_ref": 3.0 * HOUR, "eta": 0.05, "gain": 1e-3, "lower": -15.0, "period": 0.5 * HOUR}
+CONTROL = {"rul_ref": 3.0 * HOUR, "eta": 0.05, "gain": 1e-3, "lower": -15.0, "period": 0.5 * HOUR, "tolerance": 36.0}
 MONITOR = {"window": 600, "threshold": 5.0, "persistence": 30}
 RESTART_BOUNDS = {"alpha": 2.0, "m": 2e-6}   # new expected bounds after a model change (eq. 44)
 STATES = ("omega1", "omega2", "alpha", "m", "D")
@@ -87,16 +87,23 @@ class Scenario:
     rul_ref: float = CONTROL["rul_ref"]
     end: float = 14.0 * HOUR
     monitor_window: int = MONITOR["window"]
+    monitor_persistence: int = MONITOR["persistence"]
     d_max: float = D_MAX
     speedup: float = 1.0
 
+    @property
+    def measurement_noise(self) -> np.ndarray:
+        """R of eq. 54; a faster story has k times fewer samples, each k times more precise."""
+        return R / self.speedup
+
     def scaled(self, k: float) -> "Scenario":
-        """The same story ``k`` times faster: m times k, energies (D) and times divided by k."""
+        """The same story ``k`` times faster: m times k, energies (D), times and noise variances divided by k."""
         return replace(self, d_max=self.d_max / k, m_initial=self.m_initial * k, m_after=self.m_after * k, change=self.change / k,
                        predict_without_restart=self.predict_without_restart / k,
                        predict_with_restart=self.predict_with_restart / k, control_start=self.control_start / k,
                        control_period=self.control_period / k, rul_ref=self.rul_ref / k, end=self.end / k,
-                       monitor_window=max(60, int(self.monitor_window / k)), speedup=k)
+                       monitor_window=max(30, int(self.monitor_window / k)),
+                       monitor_persistence=max(3, int(self.monitor_persistence / k)), speedup=k)
 
 
 # -- model ------------------------------------------------------------------------------------------------
@@ -170,9 +177,10 @@ class Drive:
         bounds = X0_BOUNDS.copy()
         bounds[3] *= scenario.speedup
         bounds[4] /= scenario.speedup
-        self.ekf = ExtendedKalmanFilter(ekf_model, estimate, covariance_from_bounds(bounds, C), Q, R)
+        self.ekf = ExtendedKalmanFilter(ekf_model, estimate, covariance_from_bounds(bounds, C), Q,
+                                        scenario.measurement_noise)
         self.twin = self.ekf.copy() if twin else None
-        self.monitor = InnovationMonitor(scenario.monitor_window, MONITOR["threshold"], MONITOR["persistence"])
+        self.monitor = InnovationMonitor(scenario.monitor_window, MONITOR["threshold"], scenario.monitor_persistence)
         self.t, self.integral, self.torque, self.theta = 0.0, 0.0, 0.0, 0.0
         self.restarts: list[float] = []
         self.ekf_seconds, self.ekf_steps = 0.0, 0
@@ -188,7 +196,7 @@ class Drive:
         self.t += DT
         if abs(self.t - s.change) < 0.5 * DT:
             self.x[3] = s.m_after
-        y = self.x[:2] + self.rng.normal(0.0, np.sqrt(np.diag(R)))
+        y = self.x[:2] + self.rng.normal(0.0, np.sqrt(np.diag(self.scenario.measurement_noise)))
         started = time.perf_counter()
         innovation = self.ekf.step(y, [self.torque])
         self.ekf_seconds += time.perf_counter() - started
@@ -252,7 +260,7 @@ def rul_control(drive: Drive, seed: int) -> list[dict]:
     """Scenario 3: the RUL controller re-decides theta every period until the end of life."""
     s = drive.scenario
     controller = RULController(rul_ref=s.rul_ref, eta=CONTROL["eta"], gain=CONTROL["gain"] * s.speedup,
-                               lower=CONTROL["lower"])
+                               lower=CONTROL["lower"], tolerance=CONTROL["tolerance"] / s.speedup)
     decisions, k = [], 0
     while not drive.failed() and drive.t < s.end:
         origin = drive.t
@@ -534,7 +542,7 @@ def main(argv=None) -> dict:
     scenario = Scenario().scaled(args.speedup) if args.speedup != 1.0 else Scenario()
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     print(f"Seed 000 on the friction drive: omega2_ref = {OMEGA2_REF} rad/s, m {scenario.m_initial:g} -> "
-          f"{scenario.m_after:g} at 4 h, D_max = {D_MAX:g} J, {len(seeds)} seeds"
+          f"{scenario.m_after:g} at 4 h, D_max = {scenario.d_max:g} J, {len(seeds)} seeds"
           + (f", {args.speedup:g}x faster" if args.speedup != 1.0 else ""))
     results = []
     if len(seeds) == 1 or args.workers <= 1:

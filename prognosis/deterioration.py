@@ -117,6 +117,8 @@ def energy_deterioration(equations, element: Hashable, *, coefficient: str | Non
     for name in (rate, energy):
         if name in taken or name == coefficient:
             raise ValueError(f"state name {name!r} is already used by the model")
+    if rate == energy:
+        raise ValueError(f"rate and energy need different names, both are {rate!r}")
     if not power.has(sp.Symbol(coefficient)):
         raise ValueError(f"the power of {element!r} ({power}) does not depend on {coefficient!r}")
     alpha, m, d = sp.Symbol(coefficient), sp.Symbol(rate), sp.Symbol(energy)

@@ -9,8 +9,8 @@ solves the chance-constrained problem (eqs. 50-52)::
 where the RUL distribution comes from :func:`prognosis.montecarlo.monte_carlo_rul`
 run with the same draws for every candidate ``theta`` (common random numbers,
 so the predicted quantile is a deterministic, monotone function of ``theta``).
-The constraint is ``q_eta(theta) >= RUL_ref`` with ``q_eta`` the ``eta``
-quantile of the RUL.  When the RUL decreases as ``theta`` grows (more speed,
+On ``N`` draws the constraint holds exactly when ``q_eta``, the
+``(floor(eta N) + 1)``-th smallest RUL, exceeds ``RUL_ref``.  When the RUL decreases as ``theta`` grows (more speed,
 more wear) the feasible set is ``theta <= theta_root``, and the minimal-norm
 decision is ``min(0, theta_root)`` clipped to the admissible range.
 
@@ -54,7 +54,7 @@ class RULDecision:
     theta : float
         The decision (largest feasible value found, at most 0).
     quantile : float
-        ``q_eta`` of the RUL at ``theta``.
+        ``q_eta`` at ``theta``: the ``(floor(eta N) + 1)``-th smallest of the N predicted RULs.
     probability : float
         ``Pr(RUL <= RUL_ref)`` at ``theta`` (at most ``eta`` when ``feasible``).
     feasible : bool
@@ -112,21 +112,25 @@ class RULController:
         history = []
 
         def evaluate(theta):
-            distribution = predict(float(theta))
-            q = distribution.quantile(self.eta)
+            rul = np.asarray(predict(float(theta)).rul, float)
+            # the (floor(eta N) + 1)-th smallest RUL: Pr(RUL <= ref) <= eta on the N draws iff it exceeds ref
+            q = float(np.partition(rul, int(np.floor(self.eta * rul.size)))[int(np.floor(self.eta * rul.size))])
             history.append((float(theta), q))
-            return float(theta), q, distribution.probability_before(self.rul_ref)
+            return float(theta), q, float(np.mean(rul <= self.rul_ref))
 
         def decision(point, feasible):
             return RULDecision(point[0], point[1], point[2], feasible, tuple(history))
 
+        def meets(point):  # eq. 51 on the draws: Pr(RUL <= RUL_ref) <= eta
+            return point[1] > self.rul_ref
+
         high = evaluate(top)
-        if high[1] >= self.rul_ref:  # no change needed: theta = 0 (or upper) is the minimal-norm decision
+        if meets(high):  # no change needed: theta = 0 (or upper) is the minimal-norm decision
             return decision(high, True)
         low = None  # the largest feasible point found
         if np.isfinite(self.lower):
             low = evaluate(self.lower)
-            if low[1] < self.rul_ref:  # even the most cautious operation cannot keep the RUL
+            if not meets(low):  # even the most cautious operation cannot keep the RUL
                 return decision(low, False)
         theta = float(theta0)
         for _ in range(self.max_iterations):
@@ -134,7 +138,7 @@ class RULController:
             if not floor < theta < high[0]:  # outside the bracket: bisect, or search downwards
                 theta = 0.5 * (floor + high[0]) if low is not None else high[0] - 2.0 * max(abs(high[0]), 1.0)
             point = evaluate(theta)
-            if point[1] >= self.rul_ref:
+            if meets(point):
                 low = point
                 if point[1] - self.rul_ref <= self.tolerance:
                     break
