@@ -14,6 +14,9 @@ from .degradation import Custom, Exponential, Linear, degradation_model
 from .deterioration import DeteriorationEquations, energy_deterioration
 from .elm import ROSELM, SeriesForecaster
 from .filter import ParticleFilter, StepDiagnostics, VarianceAdaptation
+from .identification import (EMResult, FeaturePrediction, IdentificationWarning, LinearGaussianModel, OnlineEM,
+                             SmootherResult, WindowIdentification, detect_trend, em_step, fault_trend, fit_em,
+                             initial_model, kalman_smoother, log_likelihood, predict_feature)
 from .kalman import CubatureKalmanFilter, ExtendedKalmanFilter, FilterWarning, Innovation, StrongTracking, UnscentedKalmanFilter
 from .lookahead import LookAhead, look_ahead, predict_ahead
 from .monitor import HealthMonitor, MonitorResult
@@ -27,7 +30,9 @@ __all__ = [
     "ConsistencyReport", "DeteriorationEquations", "InnovationMonitor", "RULController", "RULDecision",
     "RULDistribution", "chebyshev_bounds", "chebyshev_intervals", "chebyshev_level", "chebyshev_scale",
     "covariance_from_bounds", "energy_deterioration", "innovation_consistency", "monte_carlo_rul", "sample_gaussian",
-    "whiten",
+    "whiten", "EMResult", "FeaturePrediction", "IdentificationWarning", "LinearGaussianModel", "OnlineEM",
+    "SmootherResult", "WindowIdentification", "detect_trend", "em_step", "fault_trend", "fit_em", "initial_model",
+    "kalman_smoother", "log_likelihood", "predict_feature",
     "BootstrapParticleFilter", "CubatureKalmanFilter", "Custom", "DiscreteModel", "Exponential",
     "ExtendedKalmanFilter", "FilterWarning", "HealthMonitor", "Innovation", "Linear", "LookAhead", "MonitorResult",
     "ObservationModel", "ParticleFilter", "ROSELM", "RULPrediction", "RULPredictor", "SeriesForecaster",
