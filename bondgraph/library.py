@@ -234,13 +234,9 @@ def three_tank(az1: float = 0.5, az2: float = 0.6, az3: float = 0.5, A_s: float 
     return bg
 
 
-# Seed 000 Table 1 (SI units) and the contact quality coefficient of eq. (57).
-FRICTION_DRIVE = {"J1": 9.9225e-4, "B1": 6.36e-3, "r1": 0.0315, "alpha": 11.0, "r2": 0.35, "J2": 12.25, "B2": 0.625}
-
-
 def friction_drive(J1: float = 9.9225e-4, B1: float = 6.36e-3, r1: float = 0.0315, alpha: float = 11.0,
                    r2: float = 0.35, J2: float = 12.25, B2: float = 0.625) -> BondGraph:
-    """The roller-on-tire friction drive of seed 000 (eqs. 1-5, Table 1).
+    """The roller-on-tire friction drive of seed 000 (eqs. 1-5; defaults: Table 1 in SI units, alpha of eq. 57).
 
     ``MSe:T_m -> 1_1 (I:J1, R:B1, Df:omega1) -> TF:r1 -> 0_c (R:alpha)
     -> TF:1/r2 -> 1_2 (I:J2, R:B2, Df:omega2)``.  The 0-junction carries the

@@ -32,6 +32,7 @@ would be unstable); the seed does not give t_s.
 from __future__ import annotations
 
 import argparse
+import copy
 import json
 import os
 import sys
@@ -48,7 +49,7 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 import sympy as sp  # noqa: E402
 
-from bondgraph.library import FRICTION_DRIVE, friction_drive  # noqa: E402
+from bondgraph.library import friction_drive  # noqa: E402
 from prognosis import (ExtendedKalmanFilter, InnovationMonitor, RULController, chebyshev_intervals,  # noqa: E402
                        covariance_from_bounds, discretize, energy_deterioration, innovation_consistency,
                        monte_carlo_rul)
@@ -240,13 +241,8 @@ class Drive:
 
     def branch(self) -> "Drive":
         """An independent copy (its own noise from here on) for the controlled scenario."""
-        other = object.__new__(Drive)
-        other.__dict__.update({k: v for k, v in self.__dict__.items() if k not in ("ekf", "twin", "monitor", "log",
-                                                                                 "rng", "x", "restarts")})
-        other.ekf, other.twin = self.ekf.copy(), None
-        other.monitor = InnovationMonitor(self.monitor.window, self.monitor.threshold, self.monitor.persistence)
-        other.monitor.__dict__.update({k: (v.copy() if hasattr(v, "copy") else v)
-                                       for k, v in self.monitor.__dict__.items()})
+        other = copy.copy(self)  # models and scalars are shared or immutable; the mutable parts are copied
+        other.ekf, other.twin, other.monitor = self.ekf.copy(), None, copy.deepcopy(self.monitor)
         other.x, other.restarts = self.x.copy(), list(self.restarts)
         other.rng = np.random.default_rng(self.rng.integers(2 ** 63))
         other.log = {k: [] for k in self.log}

@@ -1026,14 +1026,18 @@ def _covariance(name: str, value, size: int) -> np.ndarray:
     return a
 
 
+def _columns(value, name: str) -> np.ndarray:
+    """``value`` as a float array, a 1-D series as one column; a clear error naming it if not numeric."""
+    try:
+        value = np.asarray(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be numeric: {exc}") from None
+    return value[:, None] if value.ndim == 1 else value
+
+
 def _raw_data(y, u) -> tuple[np.ndarray, np.ndarray]:
     """``y`` as (T, m) with NaN allowed, ``u`` as (T, r) finite (r = 0 for None)."""
-    try:
-        y = np.asarray(y, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"y must be numeric: {exc}") from None
-    if y.ndim == 1:
-        y = y[:, None]
+    y = _columns(y, "y")
     if y.ndim != 2 or y.shape[0] == 0 or y.shape[1] == 0:
         raise ValueError(f"y must have shape (T,) or (T, m) with T, m >= 1, got {y.shape}")
     if np.any(np.isinf(y)):
@@ -1048,12 +1052,7 @@ def _inputs(u, steps: int | None, width: int | None, name: str = "u") -> np.ndar
         if steps is None:
             raise ValueError(f"{name} is required")
         return np.zeros((steps, 0))
-    try:
-        u = np.asarray(u, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be numeric: {exc}") from None
-    if u.ndim == 1:
-        u = u[:, None]
+    u = _columns(u, name)
     if u.ndim != 2:
         raise ValueError(f"{name} must have shape (T, r), got {u.shape}")
     if steps is not None and u.shape[0] != steps:

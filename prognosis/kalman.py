@@ -416,13 +416,14 @@ def measured_rows(z, model) -> tuple[np.ndarray, np.ndarray]:
 def innovation(rows: np.ndarray, residual=None, covariance=None, fading: float = 1.0) -> Innovation:
     """An :class:`Innovation` over all outputs from the one over the measured ``rows`` (NaN elsewhere)."""
     m = rows.size
-    full_r, full_p = np.full(m, np.nan), np.full((m, m), np.nan)
+    full_r = np.full(m, np.nan)
     if residual is None:
-        return Innovation(full_r, full_p, np.nan)
+        return Innovation(full_r, np.full((m, m), np.nan), np.nan)
     full_r[rows] = residual
     if rows.all():
         full_p = np.array(covariance, float)
     else:
+        full_p = np.full((m, m), np.nan)
         full_p[np.ix_(rows, rows)] = covariance
     return Innovation(full_r, full_p, float(residual @ _solve_psd(covariance, residual)), fading)
 

@@ -182,22 +182,23 @@ class DiscreteModel:
         point, out = x[:, None], None
         with np.errstate(invalid="ignore", divide="ignore"):
             for _ in range(self.substeps):  # chain rule over the substeps
-                step = self._substep_jacobian(point, u, jac)
+                point, step = self._substep_with_jacobian(point, u, jac)
                 out = step if out is None else step @ out
-                point = self._substep(point, u)
         return point[:, 0], _finite(out, "transition Jacobian", x, self.states)
 
-    def _substep_jacobian(self, point: np.ndarray, u: np.ndarray, jac) -> np.ndarray:
+    def _substep_with_jacobian(self, point: np.ndarray, u: np.ndarray, jac) -> tuple[np.ndarray, np.ndarray]:
+        """One substep from ``point`` (n, 1) and its Jacobian, the RK4 stages evaluated once for both."""
         eye, h = np.eye(self.n_states), self.substep
         if self.method == "euler":
-            return eye + h * jac(point[:, 0])
+            return self._substep(point, u), eye + h * jac(point[:, 0])
         # chain rule through the stages: d k_i/dx = J(x_i) (I + c_i h d k_{i-1}/dx)
-        derivatives = []
-        for (stage_point, _), weight in zip(self._rk4_stages(point, u), _RK4_NODES):
+        stages, derivatives = self._rk4_stages(point, u), []
+        for (stage_point, _), weight in zip(stages, _RK4_NODES):
             stage = jac(stage_point[:, 0])
             derivatives.append(stage @ (eye + weight * h * derivatives[-1]) if derivatives else stage)
+        k1, k2, k3, k4 = (slope for _, slope in stages)
         d1, d2, d3, d4 = derivatives
-        return eye + h / 6.0 * (d1 + 2 * d2 + 2 * d3 + d4)
+        return point + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4), eye + h / 6.0 * (d1 + 2 * d2 + 2 * d3 + d4)
 
     def measurement_jacobian(self, x, u=None) -> np.ndarray:
         """``dh/dx`` at one point ``x`` (n,), shape ``(m, n)``."""
