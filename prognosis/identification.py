@@ -206,6 +206,29 @@ class LinearGaussianModel:
         y = x @ self.C.T + u @ self.D.T + noise[:, n:]
         return x, y
 
+    def transformed(self, T: ArrayLike) -> "LinearGaussianModel":
+        """The same model in the state basis ``x' = T x`` (``T`` invertible): same outputs, same likelihood.
+
+        ``A' = T A T^-1``, ``B' = T B``, ``C' = C T^-1``, ``Q' = T Q T^T``, ``S' = T S``, ``mu1' = T mu1``,
+        ``P1' = T P1 T^T``; ``D``, ``R`` and the eigenvalues are unchanged.  EM cannot tell these models
+        apart, so the basis it lands in is arbitrary; :class:`OnlineEM` uses this to keep it well scaled.
+
+        Example
+        -------
+        >>> m = LinearGaussianModel(A=[[0.5, 1.0], [0.0, 0.9]], B=None, C=[[1.0, 0.0]], D=None,
+        ...                         Q=np.eye(2), R=[[1.0]])
+        >>> m2 = m.transformed(np.diag([2.0, 0.5]))
+        >>> m2.A.tolist(), m2.C.tolist(), bool(np.allclose(m2.eigenvalues, m.eigenvalues))
+        ([[0.5, 4.0], [0.0, 0.9]], [[0.5, 0.0]], True)
+        """
+        t = _matrix("T", T)
+        if t.shape != (self.n_states, self.n_states):
+            raise ValueError(f"T must have shape ({self.n_states}, {self.n_states}), got {t.shape}")
+        t_inv = np.linalg.inv(t)  # raises LinAlgError if T is singular
+        return LinearGaussianModel(A=t @ self.A @ t_inv, B=t @ self.B, C=self.C @ t_inv, D=self.D,
+                                   Q=_symmetric(t @ self.Q @ t.T), R=self.R, S=t @ self.S if np.any(self.S) else None,
+                                   mu1=t @ self.mu1, P1=_symmetric(t @ self.P1 @ t.T))
+
     @property
     def noise_covariance(self) -> np.ndarray:
         """``[[Q, S], [S^T, R]]``, the covariance of ``[w_t; v_t]``."""
@@ -846,7 +869,7 @@ class OnlineEM:
             model = self.initial if self.initial is not None else initial_model(y, u, self.n_states)
             steps = self.initial_iterations
         else:
-            model = self._at_window_start()
+            model = _whitened(self._at_window_start(), self._smoothed, self._since)
             steps = self.iterations
         previous = None
         for _ in range(steps):
@@ -862,6 +885,26 @@ class OnlineEM:
         """Sample index and spectral radius of every identification so far."""
         return (np.array([h.time for h in self.history], dtype=int),
                 np.array([h.spectral_radius for h in self.history]))
+
+
+def _whitened(model: LinearGaussianModel, res: SmootherResult, start: int) -> LinearGaussianModel:
+    """``model`` in the state basis where the smoothed states from ``start`` on have unit second moment.
+
+    EM leaves the state basis free; along a long record a slowly growing mode lets it drift until ``mu1``
+    is 1e7 and ``C`` 1e-2, or two states nearly coincide with ``C`` = 1e6 [1, -1], and the filter then
+    loses the definiteness of ``P`` to round-off.  With ``M = avg E[x_t x_t^T] = L L^T``, ``T = L^-1``.
+    """
+    means, covs = res.smoothed_means[start:], res.smoothed_covariances[start:]
+    if means.shape[0] == 0:
+        return model
+    second = _symmetric(means.T @ means / means.shape[0] + covs.mean(axis=0))
+    try:
+        root = np.linalg.cholesky(second)
+    except np.linalg.LinAlgError:
+        return model
+    if not np.all(np.isfinite(root)) or np.linalg.cond(root) > 1e8:
+        return model
+    return model.transformed(np.linalg.inv(root))
 
 
 # ------------------------------------------------------------------------------------- trend, prediction

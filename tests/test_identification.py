@@ -390,6 +390,36 @@ def test_online_em_first_window_and_warm_start():
     assert shifted > stale
 
 
+def test_a_change_of_state_basis_keeps_the_outputs_and_the_likelihood():
+    t = np.array([[2.0, 0.5], [-0.3, 1.5]])
+    moved = CORRELATED.transformed(t)
+    u = np.random.default_rng(5).standard_normal((40, 2))
+    _, y = CORRELATED.simulate(u, rng=5)
+    assert log_likelihood(moved, y, u) == pytest.approx(log_likelihood(CORRELATED, y, u), rel=1e-12)
+    assert np.sort_complex(moved.eigenvalues) == pytest.approx(np.sort_complex(CORRELATED.eigenvalues))
+    # same noise-free response: the Markov parameters C A^k B agree
+    for k in range(4):
+        assert moved.C @ np.linalg.matrix_power(moved.A, k) @ moved.B == pytest.approx(
+            CORRELATED.C @ np.linalg.matrix_power(CORRELATED.A, k) @ CORRELATED.B)
+    assert moved.transformed(np.linalg.inv(t)).A == pytest.approx(CORRELATED.A)
+    with pytest.raises(ValueError, match="T must have shape"):
+        CORRELATED.transformed(np.eye(3))
+
+
+def test_online_em_warm_start_is_in_a_whitened_state_basis():
+    """EM leaves the basis free; the warm start puts the window's smoothed states at unit second moment."""
+    from prognosis.identification import _whitened
+
+    y, u, _ = drifting_record(3, steps=200, onset=1000)
+    model = fit_em(y, u, 1, max_iter=20, cross_covariance=False).model.transformed([[1e4]])
+    res = kalman_smoother(model, y, u)
+    white = _whitened(model, res, 50)
+    again = kalman_smoother(white, y, u)
+    second = np.mean(again.smoothed_means[50:] ** 2) + np.mean(again.smoothed_covariances[50:])
+    assert second == pytest.approx(1.0, rel=1e-6)
+    assert again.log_likelihood == pytest.approx(res.log_likelihood, rel=1e-10)
+
+
 def test_online_em_accepts_missing_samples():
     y, u, _ = drifting_record(4, steps=260, onset=1000)
     y[[210, 225]] = np.nan
