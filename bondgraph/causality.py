@@ -149,6 +149,25 @@ def assign_causality(bg: BondGraph, preferred: str = INTEGRAL, *, dualize_detect
     return _Scap(bg, preferred, dualize_detectors).run()
 
 
+def diagnosis_causality(bg: BondGraph) -> Causality:
+    """Derivative causality with as many detectors dualized as causality allows (the ARRs' assignment).
+
+    Dualize every detector (De -> SSe, Df -> SSf); while dualized detectors clash, measure the last
+    clashing one instead (it then gives a measurement ARR ``y - computed y``).
+
+    >>> from bondgraph.library import dc_motor
+    >>> diagnosis_causality(dc_motor()).dualized
+    {'i': 'SSf', 'omega': 'SSf'}
+    """
+    dualized = {n for n, e in bg.elements.items() if e.kind in el.DETECTORS}
+    while True:
+        causality = assign_causality(bg, DERIVATIVE, dualize_detectors=dualized)
+        clashing = {n for issue in causality.conflicts for n in issue.elements if n in dualized}
+        if not clashing:
+            return causality
+        dualized -= {sorted(clashing, key=str)[-1]}  # keep the first sensor, measure the other
+
+
 class _Scap:
     def __init__(self, bg: BondGraph, preferred: str, dualize):
         structure = bg.structure()

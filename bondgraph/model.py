@@ -261,6 +261,18 @@ class BondGraph:
 
         return state_equations(self, causality)
 
+    def _repr_svg_(self) -> str:
+        """Jupyter display: the drawing in integral causality (acausal if it cannot be assigned)."""
+        from .drawing import _display_causality, to_svg
+
+        return to_svg(self, _display_causality(self))
+
+    def _repr_html_(self) -> str:
+        """Jupyter display: the SVG drawing inline in a small HTML snippet."""
+        from .drawing import _display_causality, _svg_html, to_svg
+
+        return _svg_html(to_svg(self, _display_causality(self)))
+
     def __repr__(self) -> str:
         kinds: dict[str, int] = {}
         for _, data in self._graph.nodes(data=True):

@@ -41,7 +41,7 @@ import sympy as sp
 
 from bondgraph import BondGraph
 from bondgraph import elements as el
-from bondgraph.causality import DERIVATIVE, assign_causality
+from bondgraph.causality import diagnosis_causality
 from bondgraph.equations import causal_equations, constitutive_law, substitute
 from bondgraph.model import T, Structure, signal_function
 
@@ -137,7 +137,7 @@ def derive_arrs(bg: BondGraph) -> list[ARR]:
         in known variables are left out with an :class:`ARRWarning`.
     """
     structure = bg.structure()
-    causality = _diagnosis_causality(bg, structure)
+    causality = diagnosis_causality(bg)
     nominal = causal_equations(bg, causality, structure, keep_blocked=True)
     true = causal_equations(bg, causality, _uncertain_structure(structure), keep_blocked=True)
     candidates = tuple(dict.fromkeys(e.param for e in structure.elements.values() if e.param is not None))
@@ -159,17 +159,6 @@ def derive_arrs(bg: BondGraph) -> list[ARR]:
             continue
         arrs.append(_split(name, junction, detector, r_n, r_true, blocked_by, structure, candidates))
     return arrs
-
-
-def _diagnosis_causality(bg: BondGraph, structure: Structure):
-    """Derivative causality with as many detectors dualized as causality allows."""
-    dualized = {n for n, e in structure.elements.items() if e.kind in el.DETECTORS}
-    while True:
-        causality = assign_causality(bg, DERIVATIVE, dualize_detectors=dualized)
-        clashing = {n for issue in causality.conflicts for n in issue.elements if n in dualized}
-        if not clashing:
-            return causality
-        dualized -= {sorted(clashing, key=str)[-1]}  # keep the first sensor, measure the other
 
 
 def _uncertain_structure(structure: Structure) -> Structure:
