@@ -22,6 +22,7 @@ import numpy as np
 import sympy as sp
 from scipy.integrate import solve_ivp
 
+from ._optional import pandas_for
 from .equations import StateEquations
 from .errors import SimulationError
 from .model import T, BondGraph, signal_function
@@ -64,6 +65,26 @@ class SimulationResult:
     def record(self) -> dict[str, np.ndarray]:
         """The measured and input signals with the time column ``t``, as data files hold them."""
         return {"t": self.t, **self.signals}
+
+    def to_frame(self):
+        """The time, every signal and every state as a pandas DataFrame (pandas imported on demand).
+
+        Columns: ``t`` (a column, with the default integer index, as in :meth:`record`), then the
+        signals (inputs and measured outputs) in the result's order, then the states; a state named
+        like a signal is left out, as ``result[name]`` gives the signal.  Bond efforts and flows are
+        in :attr:`efforts` and :attr:`flows`.
+
+        >>> from bondgraph.library import rlc_circuit
+        >>> frame = simulate(rlc_circuit(), (0.0, 0.5), {"V": 1.0}, t_eval=np.linspace(0, 0.5, 11)).to_frame()
+        >>> list(frame.columns)
+        ['t', 'V', 'i', 'v_C', 'p_L', 'q_C']
+        >>> frame.shape
+        (11, 6)
+        """
+        pd = pandas_for("to_frame")
+        columns = {"t": self.t, **self.signals}
+        columns.update((name, values) for name, values in self.states.items() if name not in columns)
+        return pd.DataFrame(columns)
 
 
 def simulate(

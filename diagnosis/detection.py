@@ -34,6 +34,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bondgraph._optional import pandas_for
+
 from .residuals import compile_arr, read_record
 from .thresholds import bglft_threshold, interval_threshold
 
@@ -77,6 +79,28 @@ class Evaluation:
     def detection_time(self) -> float | None:
         index = np.flatnonzero(self.alarm)
         return float(self.t[index[0]]) if index.size else None
+
+    def to_frame(self):
+        """The per-sample arrays as a pandas DataFrame (pandas is imported here, on demand).
+
+        Columns ``t, residual, lower, upper, bglft, violation, alarm``, one row per sample, with
+        the default integer index: ``t`` is a column, as in the records that
+        :func:`evaluate` reads.  ``lower`` and ``upper`` are the band without the margin
+        (``self.margin``), as on the object.
+
+        >>> flags = np.array([False, False, True])
+        >>> result = Evaluation("ARR_demo", np.array([0.0, 0.1, 0.2]), residual=np.array([0.0, -0.1, -0.5]),
+        ...                     lower=np.full(3, -0.2), upper=np.full(3, 0.2), bglft=np.full(3, 0.3),
+        ...                     margin=0.05, persistence=1, violation=flags, alarm=flags)
+        >>> frame = result.to_frame()
+        >>> list(frame.columns)
+        ['t', 'residual', 'lower', 'upper', 'bglft', 'violation', 'alarm']
+        >>> frame.loc[frame["alarm"], "t"].tolist()
+        [0.2]
+        """
+        pd = pandas_for("to_frame")
+        return pd.DataFrame({"t": self.t, "residual": self.residual, "lower": self.lower, "upper": self.upper,
+                             "bglft": self.bglft, "violation": self.violation, "alarm": self.alarm})
 
     def false_alarms(self, before: float) -> int:
         """Number of alarm onsets (rising edges) strictly before time ``before``."""

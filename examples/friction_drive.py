@@ -49,6 +49,7 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 import sympy as sp  # noqa: E402
 
+from bgphm.plotting import band, pyplot, save_figure, write_figures  # noqa: E402
 from bondgraph.library import friction_drive  # noqa: E402
 from prognosis import (ExtendedKalmanFilter, InnovationMonitor, RULController, chebyshev_intervals,  # noqa: E402
                        covariance_from_bounds, discretize, energy_deterioration, innovation_consistency,
@@ -420,39 +421,29 @@ def write(out: Path, summary: dict, results: list[dict], first: dict, scenario: 
                                                    "monte_carlo": MONTE_CARLO, "control": CONTROL,
                                                    "monitor": MONITOR, "restart_bounds": RESTART_BOUNDS,
                                                    "speedup": scenario.speedup}}, indent=2))
-    try:
-        written += _plots(out, first, scenario)
-    except ImportError:
-        print("  matplotlib is not installed: no figures (pip install '.[plot]')")
-    return written
+    return written + write_figures(_plots, out, first, scenario)
 
 
 def _plots(out: Path, first: dict, s: Scenario) -> list[Path]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot("Agg")
 
     hours = HOUR / s.speedup
     log, clog = first["logs"]["uncontrolled"], first["logs"]["controlled"]
     t = log["t"] / hours
     paths = []
 
-    def band(ax, time, mean, half, truth, i, label, colour="C0"):
+    def estimate(ax, time, mean, half, truth, i, label, colour="C0"):
         ax.plot(time, truth[:, i], "k", lw=1, label="true")
         ax.plot(time, mean[:, i], colour, lw=1, label=f"{label} estimate")
-        ax.fill_between(time, mean[:, i] - half[:, i], mean[:, i] + half[:, i], color=colour, alpha=0.2,
-                        label="Chebyshev bounds (c = 10)")
+        band(ax, time, mean[:, i] - half[:, i], mean[:, i] + half[:, i], color=colour, alpha=0.2,
+             label="Chebyshev bounds (c = 10)")
 
     def save(fig, name):
-        fig.tight_layout()
-        fig.savefig(out / name, dpi=110)
-        plt.close(fig)
-        paths.append(out / name)
+        paths.append(save_figure(fig, out / name))
 
     fig, axes = plt.subplots(2, 1, figsize=(8, 6), sharex=True)
     for ax, i, unit in zip(axes, (0, 1), ("omega1 (rad/s)", "omega2 (rad/s)")):
-        band(ax, t, log["mean"], log["half"], log["truth"], i, "EKF")
+        estimate(ax, t, log["mean"], log["half"], log["truth"], i, "EKF")
         ax.set_ylabel(unit)
     axes[0].legend(fontsize=8)
     axes[1].set_xlabel("time (h)")
@@ -462,8 +453,8 @@ def _plots(out: Path, first: dict, s: Scenario) -> list[Path]:
                                     ("fig08_alpha_m_no_restart.png", log["twin_mean"], log["twin_half"],
                                      "without restart")):
         fig, axes = plt.subplots(1, 2, figsize=(11, 4))
-        band(axes[0], t, mean, half, log["truth"], 2, "EKF")
-        band(axes[1], t, mean, half, log["truth"], 3, "EKF")
+        estimate(axes[0], t, mean, half, log["truth"], 2, "EKF")
+        estimate(axes[1], t, mean, half, log["truth"], 3, "EKF")
         axes[1].set_ylim(0, 4 * s.m_initial)
         for ax, label in zip(axes, ("alpha", "m")):
             ax.set_xlabel("time (h)")
@@ -476,7 +467,7 @@ def _plots(out: Path, first: dict, s: Scenario) -> list[Path]:
         save(fig, name)
 
     fig, ax = plt.subplots(figsize=(8, 4))
-    band(ax, t, log["mean"], log["half"], log["truth"], 4, "EKF")
+    estimate(ax, t, log["mean"], log["half"], log["truth"], 4, "EKF")
     ax.axhline(s.d_max, color="r", ls=":", label="D_max")
     ax.set_xlabel("time (h)")
     ax.set_ylabel("D (J)")

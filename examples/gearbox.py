@@ -34,6 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bgphm.plotting import band, pyplot, save_figure, write_figures
 from prognosis.identification import (FeaturePrediction, IdentificationWarning, LinearGaussianModel, OnlineEM,
                                       detect_trend, fault_trend, predict_feature)
 
@@ -312,19 +313,12 @@ def write(out: Path, summary: dict, results: list[dict], first: dict, seconds: f
     }
     paths = [out / "results.json"]
     paths[0].write_text(json.dumps(payload, indent=2, default=_json))
-    try:
-        paths += plot(out, first)
-    except ImportError:
-        print("  matplotlib is not installed: no plots (pip install '.[plot]')", file=sys.stderr)
-    return paths
+    return paths + write_figures(plot, out, first)
 
 
 def plot(out: Path, first: dict) -> list[Path]:
     """fig00 record, fig01 spectral radius, fig02/fig03 the predictions at 44 h and 78 h (first seed)."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot("Agg")
 
     record, found = first["record"], first["identified"]
     onset_h, detection_h = record.onset * STEP_H, first["detection_time_h"]
@@ -343,7 +337,7 @@ def plot(out: Path, first: dict) -> list[Path]:
         if detection_h is not None:
             ax.axvline(detection_h, color="tab:green", ls=":", lw=1.5, label="trend detected")
     ax_y.legend(loc="upper left")
-    paths.append(_save(fig, out / "fig00_record.png"))
+    paths.append(save_figure(fig, out / "fig00_record.png"))
 
     fig, ax = plt.subplots(figsize=(8, 3.5))
     ax.plot(found.times * STEP_H, found.radii, lw=1.2, label="spectral radius of A")
@@ -354,7 +348,7 @@ def plot(out: Path, first: dict) -> list[Path]:
     ax.set_xlabel("time (h)")
     ax.set_ylabel("rho(A)")
     ax.legend(fontsize=8)
-    paths.append(_save(fig, out / "fig01_spectral_radius.png"))
+    paths.append(save_figure(fig, out / "fig01_spectral_radius.png"))
 
     for number, (name, p) in enumerate(found.predictions.items(), start=2):
         fig, ax = plt.subplots(figsize=(8, 3.8))
@@ -362,8 +356,8 @@ def plot(out: Path, first: dict) -> list[Path]:
         shown = (record.hours >= max(0.0, record.hours[p.at] - 20.0)) & (record.hours <= lead[-1])
         ax.plot(record.hours[shown], record.feature[shown], ".", ms=2, color="0.4", label="feature (synthetic)")
         ax.plot(lead, p.load.mean[:, 0], color="tab:blue", label="predicted mean, known load")
-        ax.fill_between(lead, p.load.lower[:, 0], p.load.upper[:, 0], color="tab:blue", alpha=0.2,
-                        label=f"{LEVEL:.0%} interval")
+        band(ax, lead, p.load.lower[:, 0], p.load.upper[:, 0], color="tab:blue", alpha=0.2,
+             label=f"{LEVEL:.0%} interval")
         ax.plot(lead, p.constant.mean[:, 0], color="tab:purple", ls="--", lw=1, label="predicted mean, constant load")
         ax.axvline(record.hours[p.at], color="k", lw=1)
         if record.hours[p.at] - 20.0 <= onset_h <= lead[-1]:
@@ -372,17 +366,8 @@ def plot(out: Path, first: dict) -> list[Path]:
         ax.set_xlabel("time (h)")
         ax.set_ylabel("sideband energy")
         ax.legend(fontsize=8, loc="upper left")
-        paths.append(_save(fig, out / f"fig{number:02d}_prediction_{name}.png"))
+        paths.append(save_figure(fig, out / f"fig{number:02d}_prediction_{name}.png"))
     return paths
-
-
-def _save(fig, path: Path) -> Path:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    return path
 
 
 def _matrices(model: LinearGaussianModel) -> dict:

@@ -50,6 +50,7 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
+from bgphm.plotting import pyplot, save_figure, write_figures
 from bondgraph.library import THREE_TANK, three_tank
 from diagnosis import derive_arrs, noise_margin, signature_matrix
 from prognosis import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter, SeriesForecaster,
@@ -288,19 +289,12 @@ def write(out: Path, summary: dict, results: list[dict], first: dict) -> list[Pa
         target = next(iter(runs.values())).target
         for i, k in enumerate(target):
             writer.writerow([int(k), states[k - 1, 3], *(runs[n].predicted[i, 3] for n in names)])
-    try:
-        paths += plot(out, first)
-    except ImportError:
-        print("  matplotlib is not installed: no plots (pip install '.[plot]')", file=sys.stderr)
-    return paths
+    return paths + write_figures(plot, out, first)
 
 
 def plot(out: Path, first: dict) -> list[Path]:
     """Figures like seed 001 Fig. 1-3, and the ARR residuals with their thresholds."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot("Agg")
 
     s, runs, forecasts = first["scenario"], first["runs"], first["forecasts"]
     k = np.arange(1, STEPS + 1)
@@ -314,7 +308,7 @@ def plot(out: Path, first: dict) -> list[Path]:
         ax.set_ylabel(f"z{i + 1} = h{i + 1} (m)")
     axes[0].legend()
     axes[-1].set_xlabel("k")
-    paths.append(_save(fig, out / "fig01_elm_forecasts.png"))
+    paths.append(save_figure(fig, out / "fig01_elm_forecasts.png"))
 
     fig, (ax, ax_err) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
     ax.plot(k, s.states[:, 3], "k", lw=2, label="true az2")
@@ -327,14 +321,14 @@ def plot(out: Path, first: dict) -> list[Path]:
     ax_err.set_ylabel("|prediction error|")
     ax_err.set_yscale("log")
     ax_err.set_xlabel("k")
-    paths.append(_save(fig, out / "fig02_az2_prediction.png"))
+    paths.append(save_figure(fig, out / "fig02_az2_prediction.png"))
 
     if "STSCKF" in runs:
         fig, ax = plt.subplots(figsize=(7, 3))
         ax.plot(k, runs["STSCKF"].fading)
         ax.set_xlabel("k")
         ax.set_ylabel("STSCKF fading factor")
-        paths.append(_save(fig, out / "fig03_fading_factor.png"))
+        paths.append(save_figure(fig, out / "fig03_fading_factor.png"))
 
     evaluations = detect(s)
     fig, axes = plt.subplots(len(evaluations), 1, figsize=(7, 7), sharex=True)
@@ -348,17 +342,8 @@ def plot(out: Path, first: dict) -> list[Path]:
         ax.set_ylabel(f"{name} (m^3/s)")
         ax.legend(fontsize=8)
     axes[-1].set_xlabel("k")
-    paths.append(_save(fig, out / "fig00_detection.png"))
+    paths.append(save_figure(fig, out / "fig00_detection.png"))
     return paths
-
-
-def _save(fig, path: Path) -> Path:
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    import matplotlib.pyplot as plt
-
-    plt.close(fig)
-    return path
 
 
 def main(argv=None) -> dict:

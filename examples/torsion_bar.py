@@ -46,6 +46,7 @@ from pathlib import Path
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
+from bgphm.plotting import band, pyplot, save_figure, write_figures
 from bondgraph import simulate
 from bondgraph.library import (MASS_LOAD, OMEGA_M_REF, TORSION_BAR, U_MAX, torsion_bar, torsion_bar_controller,
                                torsion_bar_monitorable, with_suspended_load)
@@ -340,13 +341,7 @@ def write(out: Path, figures: dict, first: Run) -> list[Path]:
     written[0].write_text(json.dumps(figures, indent=2))
     _write_csv(written[1], _timeseries(first))
     _write_csv(written[2], _prognosis(first))
-    try:
-        import matplotlib
-    except ImportError:
-        print("  matplotlib is not installed: no plots (pip install '.[plot]')")
-        return written
-    matplotlib.use("Agg")
-    return written + plot(out, first)
+    return written + write_figures(plot, out, first)
 
 
 def _write_csv(path: Path, columns: dict) -> None:
@@ -386,17 +381,14 @@ def _prognosis(r: Run) -> dict:
 
 def plot(out: Path, r: Run) -> list[Path]:
     """PNG plots like seed 003 Fig. 8-12."""
-    import matplotlib.pyplot as plt
+    plt = pyplot("Agg")
 
     ts, pr, case = _timeseries(r), _prognosis(r), r.case
     name = "b_{Md}" if case.candidate == "b_Md" else "M"
     files = []
 
     def save(fig, filename):
-        fig.tight_layout()
-        fig.savefig(out / filename, dpi=110)
-        plt.close(fig)
-        files.append(out / filename)
+        files.append(save_figure(fig, out / filename))
 
     fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
     for label, style in (("nominal", "--"), ("degraded", "-")):
@@ -427,7 +419,7 @@ def plot(out: Path, r: Run) -> list[Path]:
     save(fig, "fig09_residual_thresholds.png")
 
     fig, ax = plt.subplots(figsize=(7, 4))
-    ax.fill_between(pr["t"], pr["theta_q05"], pr["theta_q95"], alpha=0.3, label="5-95 %")
+    band(ax, pr["t"], pr["theta_q05"], pr["theta_q95"], alpha=0.3, label="5-95 %")
     ax.plot(pr["t"], pr["theta_mean"], label="estimate (mean)")
     ax.plot(pr["t"], pr["theta_true"], "k--", label="true")
     ax.axhline(case.theta_fail, color="r", lw=0.8, label="failure value")
@@ -436,7 +428,7 @@ def plot(out: Path, r: Run) -> list[Path]:
     save(fig, "fig10_theta.png")
 
     fig, axes = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
-    axes[0].fill_between(pr["t"], pr["gamma_q05"], pr["gamma_q95"], alpha=0.3, label="5-95 %")
+    band(axes[0], pr["t"], pr["gamma_q05"], pr["gamma_q95"], alpha=0.3, label="5-95 %")
     axes[0].plot(pr["t"], pr["gamma_mean"], label="estimate (mean)")
     axes[0].axhline(case.gamma, color="k", ls="--", label=r"$\gamma^*$")
     axes[0].set_ylabel(r"$\gamma$")
@@ -448,10 +440,10 @@ def plot(out: Path, r: Run) -> list[Path]:
     fig, ax = plt.subplots(figsize=(7, 4))
     t = r.monitor.rul_t
     true = case.eol - t
-    ax.fill_between(t, (1 - case.alpha) * true, (1 + case.alpha) * true, color="grey", alpha=0.25,
-                    label=rf"$\alpha$-cone ($\alpha$ = {case.alpha:g})")
+    band(ax, t, (1 - case.alpha) * true, (1 + case.alpha) * true, color="grey", alpha=0.25,
+         label=rf"$\alpha$-cone ($\alpha$ = {case.alpha:g})")
     ax.plot(t, true, "k--", label="true RUL")
-    ax.fill_between(t, pr["rul_q05"], np.minimum(pr["rul_q95"], 2 * case.eol), alpha=0.3, label="5-95 %")
+    band(ax, t, pr["rul_q05"], np.minimum(pr["rul_q95"], 2 * case.eol), alpha=0.3, label="5-95 %")
     ax.plot(t, pr["rul_median"], label="median")
     ax.axvline(case.after, color="k", ls=":", lw=0.8)
     ax.set(xlabel="t (s)", ylabel="RUL (s)", ylim=(0, 1.5 * (case.eol - t[0]) if t.size else 1))

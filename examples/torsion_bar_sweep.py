@@ -32,6 +32,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import torsion_bar as example  # noqa: E402  (the sibling example script)
 
+from bgphm.plotting import pyplot, save_figure, write_figures  # noqa: E402
 from prognosis import VarianceAdaptation  # noqa: E402
 
 FIGURES = ("rmse_theta", "rmse_gamma", "rmad_gamma", "ra", "rmad_rul", "alpha_lambda_pass_rate",
@@ -121,11 +122,8 @@ def table(rows: list[dict]) -> str:
     return "\n".join(lines)
 
 
-def plot(rows: list[dict], path: Path, case) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+def plot(rows: list[dict], path: Path, case) -> list[Path]:
+    plt = pyplot("Agg")
 
     groups = list(dict.fromkeys(r["parameter"] for r in rows))
     studies = [g for g in groups if g != "seed -> default"]
@@ -148,9 +146,7 @@ def plot(rows: list[dict], path: Path, case) -> None:
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
     fig.suptitle(f"Seed 003 section 6.4 as a sweep, case {case.name} (means over seeds)")
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    return [save_figure(fig, path, dpi=100)]
 
 
 def main(argv=None) -> list[dict]:
@@ -175,10 +171,7 @@ def main(argv=None) -> list[dict]:
             writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
             writer.writeheader()
             writer.writerows(rows)
-        try:
-            plot(rows, args.out / "sweep.png", example.CASES[args.case])
-        except ImportError:
-            print("  matplotlib is not installed: no plot (pip install '.[plot]')")
+        write_figures(plot, rows, args.out / "sweep.png", example.CASES[args.case])
         print(f"  wrote {args.out / 'sweep.csv'}, sweep.json and sweep.png")
     return rows
 

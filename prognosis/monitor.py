@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from bondgraph._optional import pandas_for
 from diagnosis.signals import default_window
 
 from . import metrics
@@ -48,6 +49,60 @@ class MonitorResult:
 
     def rul_percentiles(self, q=(5, 95)) -> np.ndarray:
         return np.array([p.percentile(q)[0] for p in self.rul])
+
+    def to_frame(self):
+        """The estimates at every filter step as a pandas DataFrame (pandas imported on demand).
+
+        Columns ``t`` (a column, default integer index), then for ``theta`` and ``gamma`` each:
+        ``_mean``, ``_median``, ``_p5``, ``_p95`` (weighted over the particles) and ``_rmad``.
+        No rows before detection.
+
+        >>> import numpy as np
+        >>> from prognosis.rul import RULPrediction
+        >>> estimate = {"mean": np.array([1.0, 1.2]), "rmad": np.array([0.1, 0.05]),
+        ...             "quantiles": np.array([[0.9, 1.0, 1.1], [1.1, 1.2, 1.3]])}
+        >>> rul = [RULPrediction(np.array([[10.0, 20.0, np.inf]]), np.array([[0.5, 0.25, 0.25]]), 100.0)]
+        >>> result = MonitorResult(0.5, t=np.array([0.5, 0.6]), theta=estimate, gamma=estimate,
+        ...                        rul_t=np.array([0.5]), rul=rul)
+        >>> frame = result.to_frame()
+        >>> list(frame.columns)  # doctest: +NORMALIZE_WHITESPACE
+        ['t', 'theta_mean', 'theta_median', 'theta_p5', 'theta_p95', 'theta_rmad',
+         'gamma_mean', 'gamma_median', 'gamma_p5', 'gamma_p95', 'gamma_rmad']
+        >>> frame["theta_p95"].tolist()
+        [1.1, 1.3]
+        """
+        pd = pandas_for("to_frame")
+        t = np.asarray(self.t, float)
+        columns = {"t": t}
+        missing = np.full(t.size, np.nan)  # no estimate before detection (t is empty then)
+        for name, estimate in (("theta", self.theta), ("gamma", self.gamma)):
+            quantiles = np.asarray(estimate.get("quantiles", np.full((t.size, 3), np.nan)), float).reshape(t.size, 3)
+            for suffix, values in (("mean", estimate.get("mean", missing)), ("median", quantiles[:, 1]),
+                                   ("p5", quantiles[:, 0]), ("p95", quantiles[:, 2]),
+                                   ("rmad", estimate.get("rmad", missing))):
+                columns[f"{name}_{suffix}"] = np.asarray(values, float)
+        return pd.DataFrame(columns)
+
+    def rul_frame(self):
+        """The RUL predictions as a pandas DataFrame (pandas imported on demand).
+
+        Columns ``rul_t`` (prediction time), ``mean`` (over the particles that fail within the
+        horizon), ``median``, ``p5`` and ``p95`` (censored particles counted as ``+inf``, so
+        these may be ``inf``), with the default integer index.
+
+        >>> import numpy as np
+        >>> from prognosis.rul import RULPrediction
+        >>> rul = [RULPrediction(np.array([[10.0, 20.0, np.inf]]), np.array([[0.5, 0.25, 0.25]]), 100.0)]
+        >>> frame = MonitorResult(0.5, rul_t=np.array([0.5]), rul=rul).rul_frame()
+        >>> list(frame.columns)
+        ['rul_t', 'mean', 'median', 'p5', 'p95']
+        >>> float(frame["mean"][0]), float(frame["p95"][0])
+        (13.333333333333334, inf)
+        """
+        pd = pandas_for("rul_frame")
+        q = self.rul_percentiles((5, 50, 95)).reshape(len(self.rul), 3)
+        return pd.DataFrame({"rul_t": np.asarray(self.rul_t, float), "mean": self.rul_mean.reshape(-1),
+                             "median": q[:, 1], "p5": q[:, 0], "p95": q[:, 2]})
 
     def metrics(self, theta_true, gamma_true, eol: float, *, after: float | None = None,
                 alpha: float = 0.1, beta: float = 0.5) -> dict:
