@@ -67,6 +67,7 @@ True
 
 from __future__ import annotations
 
+import math
 import numbers
 import warnings
 from collections.abc import Iterable, Mapping
@@ -84,6 +85,7 @@ __all__ = [
     "add_noise",
     "as_record",
     "cumulative_integral",
+    "read_csv",
     "default_window",
     "derivative",
 ]
@@ -224,6 +226,105 @@ def as_record(data: object, signals: Iterable[str] = (), *, name: str = "record"
     for col, x in arrays.items():
         _check_no_inf(x, col, t, name)
     return Record(t=t, columns=arrays, name=name)
+
+
+MISSING_CELLS = frozenset({"", "nan", "NaN", "NAN", "NA", "N/A", "null"})
+
+
+def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None) -> Record:
+    r"""Read a CSV file with a header row and a time column ``t`` into a :class:`Record`.
+
+    Cells are parsed as numbers, never evaluated; an empty cell or ``nan``/``NA``/``null`` is a gap
+    (NaN).  Errors name the file, the line (1 = the header) and the column: a missing ``t`` or signal
+    column, a duplicate column, a row with too many or too few cells, a non-numeric or infinite cell,
+    a gap or a step back in ``t``.  ``signals`` and the rest of the checks are as in :func:`as_record`.
+
+    Examples
+    --------
+    >>> import os, tempfile
+    >>> path = os.path.join(tempfile.mkdtemp(), "run.csv")
+    >>> _ = open(path, "w").write("t,x\n0,1\n0.5,\n1,3\n")
+    >>> read_csv(path)["x"].tolist()
+    [1.0, nan, 3.0]
+    >>> _ = open(path, "w").write("t,x\n0,1\n0.5,abc\n1,3\n")
+    >>> read_csv(path)
+    Traceback (most recent call last):
+    ...
+    diagnosis.signals.RecordError: ...run.csv line 3, column 'x': 'abc' is not a number
+    """
+    import csv
+    from pathlib import Path
+
+    path = Path(path)
+    name = name or str(path)
+    try:
+        with path.open(newline="", encoding="utf-8-sig") as handle:
+            rows = list(csv.reader(handle))
+    except FileNotFoundError:
+        raise RecordError(f"{name}: no such file") from None
+    except IsADirectoryError:
+        raise RecordError(f"{name}: is a directory, not a CSV file") from None
+    except (OSError, UnicodeDecodeError, csv.Error) as exc:
+        raise RecordError(f"{name}: cannot be read as CSV ({exc})") from None
+    while rows and not any(cell.strip() for cell in rows[-1]):
+        rows.pop()  # trailing blank lines
+    if not rows:
+        raise RecordError(f"{name}: the file is empty (expected a header row with a column {TIME!r})")
+    header = [cell.strip() for cell in rows[0]]
+    seen = set()
+    for column in header:
+        if not column:
+            raise RecordError(f"{name} line 1: a column has no name")
+        if column in seen:
+            raise RecordError(f"{name} line 1: column {column!r} appears twice")
+        seen.add(column)
+    if TIME not in header:
+        hint = [c for c in header if c.lower() in ("time", "t", "t_s", "time_s", "seconds")]
+        raise RecordError(f"{name} line 1: no time column {TIME!r} (columns: {header})"
+                          + (f"; rename {hint[0]!r} to 't'" if hint else ""))
+    columns = {c: np.empty(len(rows) - 1) for c in header}
+    for line, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise RecordError(f"{name} line {line}: {len(row)} cells for {len(header)} columns")
+        for column, cell in zip(header, row):
+            columns[column][line - 2] = _csv_number(cell, name, line, column)
+    t = columns[TIME]
+    for i in np.flatnonzero(~np.isfinite(t)):
+        raise RecordError(f"{name} line {i + 2}, column {TIME!r}: missing time")
+    for i in np.flatnonzero(np.diff(t) <= 0):
+        raise RecordError(f"{name} line {i + 3}, column {TIME!r}: t = {t[i + 1]!r} does not increase "
+                          f"(line {i + 2} has t = {t[i]!r})")
+    return as_record(columns, signals, name=name)
+
+
+def _csv_number(cell: str, name: str, line: int, column: str) -> float:
+    text = cell.strip()
+    if text in MISSING_CELLS:
+        return np.nan
+    try:
+        value = float(text)
+    except ValueError:
+        raise RecordError(f"{name} line {line}, column {column!r}: {text[:40]!r} is not a number") from None
+    if math.isinf(value):
+        raise RecordError(f"{name} line {line}, column {column!r}: {text[:40]!r} is infinite (leave the cell "
+                          "empty for a gap)")
+    if math.isnan(value):
+        return np.nan
+    return value
+
+
+def gaps(record: Record, signals: Iterable[str] | None = None) -> list[tuple[str, float, float, int]]:
+    """Every run of NaN in the record's signals: ``(signal, t_first, t_last, samples)``, by signal.
+
+    >>> gaps(as_record({"t": [0, 1, 2, 3], "x": [1, float("nan"), float("nan"), 4]}))
+    [('x', 1.0, 2.0, 2)]
+    """
+    out = []
+    for signal in (record.signals if signals is None else signals):
+        missing = np.isnan(record[signal])
+        for start, stop in _runs(missing):
+            out.append((signal, float(record.t[start]), float(record.t[stop - 1]), stop - start))
+    return out
 
 
 def _table(data: object, name: str) -> dict:

@@ -1,0 +1,535 @@
+"""The ``bgphm`` command line: ARR reports, simulation, detection and prognosis on recorded data.
+
+::
+
+    bgphm arr MODEL [--format md|html|tex] [--out FILE]
+    bgphm simulate MODEL [--t-end T] [--samples N] [--set PARAM=VALUE ...] [--out CSV]
+    bgphm detect MODEL DATA.csv [--margin M | --calibrate T] [--persistence N] [--out DIR]
+    bgphm prognose MODEL DATA.csv --candidate PARAM --degradation exponential|linear --fail VALUE [--out DIR]
+    bgphm demo [dc-motor|rlc|three-tank|torsion-bar] [--out DIR]
+
+MODEL is a JSON file (networkx node-link form), a Python file defining ``model``, or a built-in example
+name (see :func:`bondgraph.io.load_model`).  DATA.csv has a header row with a time column ``t`` and one
+column per signal the ARRs use (see :func:`diagnosis.signals.read_csv`).
+
+Exit codes: 0 success, 2 bad usage or bad input (one line on stderr naming the file, line, column,
+node or parameter), 1 anything else (an interrupted run included).  Progress goes to stderr;
+``--quiet`` silences it.  Results go to stdout and to ``--out``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+import warnings
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from bondgraph.errors import CausalityError, EquationError, ModelError, SimulationError
+from bondgraph.io import ModelSpec, load_model
+from diagnosis.signals import Record, RecordError, RecordWarning, gaps, read_csv
+
+__all__ = ["main", "UsageError"]
+
+EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
+BAD_INPUT = (ModelError, RecordError, SimulationError, CausalityError, EquationError)
+
+
+class UsageError(ValueError):
+    """Bad arguments or input found after parsing (exit code 2)."""
+
+
+class Progress:
+    """Progress lines on stderr (nothing with ``quiet``)."""
+
+    def __init__(self, quiet: bool):
+        self.quiet = quiet
+        self.start = time.perf_counter()
+
+    def __call__(self, message: str) -> None:
+        if not self.quiet:
+            print(f"[{time.perf_counter() - self.start:6.1f} s] {message}", file=sys.stderr, flush=True)
+
+
+# ------------------------------------------------------------------------------------------- commands
+
+def cmd_arr(args, progress: Progress) -> int:
+    from diagnosis.report import arr_report
+
+    spec = load_model(args.model)
+    progress(f"deriving the ARRs of {spec.model.name!r}")
+    text = arr_report(spec.model, format=args.format)
+    _emit(text, args.out, progress)
+    return EXIT_OK
+
+
+def cmd_simulate(args, progress: Progress) -> int:
+    from bondgraph.simulation import simulate
+
+    spec = load_model(args.model)
+    t_end = args.t_end if args.t_end is not None else (spec.t_end or 1.0)
+    if not (math.isfinite(t_end) and t_end > 0):
+        raise UsageError(f"--t-end must be a positive number of seconds, got {t_end}")
+    if args.samples < 3:
+        raise UsageError(f"--samples must be at least 3, got {args.samples}")
+    parameters = _assignments(args.set, spec.model.parameters, "--set")
+    missing = [s for s in spec.model.inputs if s not in spec.inputs and not _has_value(spec.model, s)]
+    if missing:
+        raise UsageError(f"{spec.source}: no value for the input signal(s) {missing}; give them in the model file "
+                         "('inputs' in a Python file, graph.inputs in JSON)")
+    progress(f"simulating {spec.model.name!r} over [0, {t_end:g}] s")
+    result = simulate(spec.model, (0.0, t_end), spec.inputs, x0=spec.x0, parameters=parameters,
+                      t_eval=np.linspace(0.0, t_end, args.samples))
+    columns = result.record()
+    text = _csv_text(columns)
+    _emit(text, args.out, progress)
+    return EXIT_OK
+
+
+def cmd_detect(args, progress: Progress) -> int:
+    spec = load_model(args.model)
+    arrs = _arrs(spec, progress, args.arr)
+    record = _record(args.data, arrs, progress)
+    evaluations = _detect(arrs, record, args, progress)
+    summary = {"model": spec.model.name, "data": str(args.data), "samples": len(record),
+               "arrs": {e.name: _evaluation_summary(e) for e in evaluations}}
+    first = [e.detection_time for e in evaluations if e.detection_time is not None]
+    summary["detection_time"] = min(first) if first else None
+    summary["alarming_arrs"] = [e.name for e in evaluations if e.detection_time is not None]
+    for e in evaluations:
+        when = "no alarm" if e.detection_time is None else f"alarm at t = {e.detection_time:g} s"
+        print(f"{e.name}: {when} (margin {e.margin:.3g}, persistence {e.persistence})")
+    if args.out:
+        out = _directory(args.out)
+        (out / "detection.json").write_text(json.dumps(summary, indent=2))
+        columns = {"t": record.t}
+        for e in evaluations:
+            columns.update({f"{e.name}.residual": e.residual, f"{e.name}.lower": e.lower - e.margin,
+                            f"{e.name}.upper": e.upper + e.margin, f"{e.name}.alarm": e.alarm.astype(float)})
+        (out / "residuals.csv").write_text(_csv_text(columns))
+        written = [out / "detection.json", out / "residuals.csv"] + _plots("detection", out, evaluations, progress)
+        for path in written:
+            print(f"wrote {path}")
+    return EXIT_OK
+
+
+def cmd_prognose(args, progress: Progress) -> int:
+    from diagnosis.signatures import signature_matrix
+    from prognosis.degradation import degradation_model
+    from prognosis.filter import VarianceAdaptation
+    from prognosis.monitor import HealthMonitor
+
+    spec = load_model(args.model)
+    arrs = _arrs(spec, progress, None)
+    parameters = spec.model.parameters
+    if args.candidate not in parameters:
+        raise UsageError(f"--candidate {args.candidate!r}: the model has no such parameter "
+                         f"(parameters: {', '.join(parameters)})")
+    sensitive = [a for a in arrs if args.candidate in a.parameters]
+    if not sensitive:
+        rows = signature_matrix(arrs)
+        raise UsageError(f"--candidate {args.candidate!r}: no ARR is sensitive to it, so it cannot be monitored "
+                         f"(detectable parameters: {[r for r, d in zip(rows.rows, rows.detectable) if d]})")
+    arr = sensitive[0] if args.arr is None else _named(sensitive, args.arr)
+    nominal = float(parameters[args.candidate])
+    direction = _direction(args, nominal)
+    record = _record(args.data, [arr], progress)
+    (evaluation,) = _detect([arr], record, args, progress)
+    residual_std = _robust_std(evaluation.residual[_calibration(record, args)])
+    step = float(np.median(np.diff(record.t)))
+    dt = args.dt if args.dt is not None else step * max(1, round((record.t[-1] - record.t[0]) / 2000 / step))
+    if args.dt is not None and abs(round(dt / step) * step - dt) > 1e-6 * dt:
+        raise UsageError(f"--dt {dt:g}: the filter step must be a multiple of the record's step {step:g} s")
+    duration = float(record.t[-1] - record.t[0])
+    band = _rate_band(args, nominal, duration)
+    model = degradation_model(args.degradation)
+    detection = {"margin": evaluation.margin, "persistence": args.persistence}
+    if args.window:
+        detection["window"] = args.window
+    monitor = HealthMonitor(arr, args.candidate, model, theta_fail=args.fail, direction=direction, dt=dt,
+                            n_particles=args.particles, noise_std=max(residual_std, 1e-300), inflation=4.0,
+                            gamma_std=0.2 * max(abs(band[0]), abs(band[1])),
+                            adaptation=VarianceAdaptation(band=band, reference=0.02, gain=0.01, floor=1e-3),
+                            gamma_bounds=band, start="residual", prediction_walk=0.0, rul_every=args.rul_every,
+                            horizon=args.horizon or 10.0 * duration, detection=detection, seed=args.seed)
+    progress(f"particle filter on {arr.name} for {args.candidate} ({args.degradation}, {args.particles} particles, "
+             f"dt = {dt:g} s)")
+    result = monitor.run(record)
+    if result.detection_time is None:
+        print(f"{arr.name}: no alarm, so no prognosis (the filter starts at the first alarm)")
+        summary = {"candidate": args.candidate, "arr": arr.name, "detection_time": None}
+    else:
+        summary = _prognosis_summary(args, arr, result, nominal, direction, band, dt, residual_std)
+        last = summary["last"]
+        print(f"{arr.name}: alarm at t = {result.detection_time:g} s; at t = {last['t']:g} s {args.candidate} = "
+              f"{last['theta_mean']:.4g} (nominal {nominal:.4g}, failure at {args.fail:g}); RUL median "
+              f"{_fmt(last['rul_median'])} s, 5-95 % [{_fmt(last['rul_p5'])}, {_fmt(last['rul_p95'])}] s")
+    if args.out:
+        out = _directory(args.out)
+        (out / "prognosis.json").write_text(json.dumps(summary, indent=2, default=_json_value))
+        written = [out / "prognosis.json"]
+        if result.t.size:
+            columns = {"t": result.t, "theta_mean": result.theta["mean"], "gamma_mean": result.gamma["mean"]}
+            (out / "estimates.csv").write_text(_csv_text(columns))
+            p = result.rul_percentiles((5, 50, 95))
+            (out / "rul.csv").write_text(_csv_text({"t": result.rul_t, "rul_mean": result.rul_mean,
+                                                    "rul_p5": p[:, 0], "rul_median": p[:, 1], "rul_p95": p[:, 2]}))
+            written += [out / "estimates.csv", out / "rul.csv"]
+        written += _plots("prognosis", out, (evaluation, result), progress)
+        for path in written:
+            print(f"wrote {path}")
+    return EXIT_OK
+
+
+def cmd_demo(args, progress: Progress) -> int:
+    from bgphm.demo import run_demo
+
+    return run_demo(args.name, Path(args.out), progress, seed=args.seed)
+
+
+# ------------------------------------------------------------------------------------------- helpers
+
+def _arrs(spec: ModelSpec, progress: Progress, name: str | None) -> list:
+    from diagnosis.arrs import ARRWarning, derive_arrs
+
+    progress(f"deriving the ARRs of {spec.model.name!r}")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ARRWarning)
+        arrs = derive_arrs(spec.model)
+    for w in caught:
+        progress(f"warning: {w.message}")
+    if not arrs:
+        raise UsageError(f"{spec.source}: the model gives no ARR (it needs De/Df sensors on its junctions)")
+    return arrs if name is None else [_named(arrs, name)]
+
+
+def _named(arrs: list, name: str):
+    for arr in arrs:
+        if arr.name == name:
+            return arr
+    raise UsageError(f"--arr {name!r}: no such ARR (available: {', '.join(a.name for a in arrs)})")
+
+
+def _record(path, arrs: list, progress: Progress) -> Record:
+    signals = list(dict.fromkeys(s for arr in arrs for s in arr.signals))
+    try:
+        record = read_csv(path, signals)
+    except RecordError as exc:
+        message = str(exc)
+        if "missing column" in message:
+            message += f" (the ARRs {[a.name for a in arrs]} use the signals {signals})"
+        raise RecordError(message) from None
+    for signal in signals:
+        if np.isnan(record[signal]).all():
+            raise RecordError(f"{path}: column {signal!r} has no value (every cell is empty or NaN)")
+    for signal, first, last, count in gaps(record, signals):
+        progress(f"warning: {path}: column {signal!r} has a gap of {count} sample(s) for t in [{first:g}, {last:g}]; "
+                 "no decision is made there")
+    progress(f"read {len(record)} samples of {signals} from {path}")
+    return record
+
+
+def _calibration(record: Record, args) -> np.ndarray:
+    """Samples used to calibrate the noise margin: t <= --calibrate (default: the first 20 % of the record)."""
+    t0, t1 = float(record.t[0]), float(record.t[-1])
+    until = args.calibrate if args.calibrate is not None else t0 + 0.2 * (t1 - t0)
+    mask = record.t <= until
+    if mask.sum() < 20:
+        raise UsageError(f"--calibrate {until:g}: only {int(mask.sum())} samples before it; at least 20 are needed "
+                         "to estimate the residual noise (or give --margin)")
+    return mask
+
+
+def _detect(arrs: list, record: Record, args, progress: Progress) -> list:
+    options = {"persistence": args.persistence}
+    if args.window:
+        options["window"] = args.window
+    evaluations = []
+    for arr in arrs:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", RecordWarning)
+            if args.margin is not None:
+                margin = args.margin
+            else:
+                mask = _calibration(record, args)
+                nominal = {"t": record.t[mask], **{s: record[s][mask] for s in arr.signals}}
+                from diagnosis.detection import noise_margin
+
+                margin = noise_margin(arr, nominal, k=args.k, **options)
+            evaluations.append(arr.evaluate(record, margin=margin, **options))
+        for w in caught:
+            progress(f"warning: {w.message}")
+        progress(f"{arr.name}: evaluated with margin {margin:.3g}")
+    return evaluations
+
+
+def _evaluation_summary(e) -> dict:
+    finite = np.isfinite(e.residual)
+    return {"detection_time": e.detection_time, "margin": e.margin, "persistence": e.persistence,
+            "violations": int(e.violation.sum()), "alarm_samples": int(e.alarm.sum()),
+            "undecided_samples": int((~finite).sum()),
+            "alarm_onsets": e.false_alarms(float("inf"))}
+
+
+def _direction(args, nominal: float) -> str:
+    fail = args.fail
+    if not math.isfinite(fail):
+        raise UsageError(f"--fail must be a finite number, got {fail}")
+    if fail == nominal:
+        raise UsageError(f"--fail {fail:g} equals the nominal value of {args.candidate!r}: the failure value must "
+                         "differ from it")
+    inferred = "up" if fail > nominal else "down"
+    if args.direction is not None and args.direction != inferred:
+        raise UsageError(f"--fail {fail:g} is on the wrong side of the nominal value {nominal:g} of "
+                         f"{args.candidate!r} for --direction {args.direction} (a failure value "
+                         f"{'above' if args.direction == 'up' else 'below'} it is needed)")
+    if args.degradation == "exponential" and fail * nominal <= 0:
+        raise UsageError(f"--fail {fail:g}: an exponential degradation keeps the sign of {args.candidate!r} "
+                         f"(nominal {nominal:g}); the failure value must have the same sign")
+    return inferred
+
+
+def _rate_band(args, nominal: float, duration: float) -> tuple[float, float]:
+    """Prior interval of the degradation rate gamma: --rate, or from reaching the failure value."""
+    if args.rate is not None:
+        lo, hi = args.rate
+        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
+            raise UsageError(f"--rate {lo:g} {hi:g}: need two finite numbers with lo < hi")
+        return (lo, hi)
+    # fast enough to reach the failure value within a tenth of the record, at the most
+    if args.degradation == "exponential":
+        fastest = abs(math.log(args.fail / nominal)) / (0.1 * duration)
+    else:
+        fastest = abs(args.fail - nominal) / (0.1 * duration)
+    return (0.0, fastest) if args.fail > nominal else (-fastest, 0.0)
+
+
+def _prognosis_summary(args, arr, result, nominal, direction, band, dt, residual_std) -> dict:
+    rows = []
+    percentiles = result.rul_percentiles((5, 50, 95)) if result.rul else np.empty((0, 3))
+    for k, t in enumerate(result.rul_t):
+        rows.append({"t": float(t), "rul_mean": _finite(result.rul_mean[k]), "rul_p5": _finite(percentiles[k, 0]),
+                     "rul_median": _finite(percentiles[k, 1]), "rul_p95": _finite(percentiles[k, 2]),
+                     "censored": float(result.rul[k].censored_weight[0])})
+    last = rows[-1] if rows else {"t": float(result.t[-1]), "rul_mean": None, "rul_p5": None, "rul_median": None,
+                                  "rul_p95": None, "censored": None}
+    last = {**last, "theta_mean": float(result.theta["mean"][-1]), "gamma_mean": float(result.gamma["mean"][-1])}
+    final = result.rul[-1] if result.rul else None
+    return {"candidate": args.candidate, "arr": arr.name, "degradation": args.degradation,
+            "nominal": nominal, "failure_value": args.fail, "direction": direction,
+            "detection_time": result.detection_time, "filter_step": dt, "particles": args.particles,
+            "rate_band": list(band), "residual_noise_std": residual_std, "seed": args.seed,
+            "last": last, "predictions": rows,
+            "rul_samples_last": None if final is None else [_finite(v) for v in final.samples[0]],
+            "rul_weights_last": None if final is None else final.weights[0].tolist(),
+            "degenerate_steps": list(map(float, result.degenerate_steps))}
+
+
+def _plots(kind: str, out: Path, payload, progress: Progress) -> list[Path]:
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")  # files only: no window, no display needed
+        import matplotlib.pyplot as plt
+
+        from bgphm import plotting
+    except ImportError:
+        progress("matplotlib is not installed: no plots (pip install 'bondgraph-phm[plot]')")
+        return []
+
+    paths = []
+    if kind == "detection":
+        for e in payload:
+            fig, ax = plt.subplots(figsize=(8, 3.5))
+            plotting.plot_evaluation(e, ax=ax, title=e.name)
+            paths.append(plotting.save_figure(fig, out / f"residual_{e.name}.png"))
+    else:
+        evaluation, result = payload
+        fig, ax = plt.subplots(figsize=(8, 3.5))
+        plotting.plot_evaluation(evaluation, ax=ax, title=evaluation.name)
+        paths.append(plotting.save_figure(fig, out / f"residual_{evaluation.name}.png"))
+        if result.t.size:
+            fig, ax = plt.subplots(figsize=(8, 3.5))
+            plotting.plot_estimate(result, ax=ax)
+            paths.append(plotting.save_figure(fig, out / "estimate.png"))
+            fig, ax = plt.subplots(figsize=(8, 3.5))
+            plotting.plot_rul(result, ax=ax)
+            paths.append(plotting.save_figure(fig, out / "rul.png"))
+            if result.rul:
+                fig, ax = plt.subplots(figsize=(6, 3.5))
+                plotting.plot_rul_distribution(result.rul[-1], ax=ax)
+                paths.append(plotting.save_figure(fig, out / "rul_distribution.png"))
+    return paths
+
+
+def _assignments(items: Sequence[str] | None, parameters: dict, option: str) -> dict:
+    out = {}
+    for item in items or ():
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep:
+            raise UsageError(f"{option} {item!r}: expected PARAM=VALUE")
+        if name not in parameters:
+            raise UsageError(f"{option} {item!r}: the model has no parameter {name!r} "
+                             f"(parameters: {', '.join(parameters)})")
+        try:
+            number = float(value)
+        except ValueError:
+            raise UsageError(f"{option} {item!r}: {value!r} is not a number") from None
+        if not math.isfinite(number):
+            raise UsageError(f"{option} {item!r}: the value must be finite")
+        out[name] = number
+    return out
+
+
+def _has_value(model, signal: str) -> bool:
+    return any(e.signal == signal and e.value is not None for e in model.elements.values())
+
+
+def _robust_std(values: np.ndarray) -> float:
+    finite = values[np.isfinite(values)]
+    if finite.size < 2:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(finite - np.median(finite))))
+
+
+def _csv_text(columns: dict) -> str:
+    names = list(columns)
+    data = np.column_stack([np.asarray(columns[n], float) for n in names])
+    lines = [",".join(names)]
+    lines += [",".join("" if not np.isfinite(v) else repr(float(v)) for v in row) for row in data]
+    return "\n".join(lines) + "\n"
+
+
+def _emit(text: str, out: str | None, progress: Progress) -> None:
+    if out in (None, "-"):
+        sys.stdout.write(text)
+        return
+    path = Path(out)
+    if path.parent and not path.parent.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(text, encoding="utf-8")
+    print(f"wrote {path}")
+
+
+def _directory(out) -> Path:
+    path = Path(out)
+    if path.exists() and not path.is_dir():
+        raise UsageError(f"--out {path}: exists and is not a directory")
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def _finite(value) -> float | None:
+    value = float(value)
+    return value if math.isfinite(value) else None
+
+
+def _fmt(value) -> str:
+    return "n/a" if value is None else f"{value:.4g}"
+
+
+def _json_value(value):
+    if isinstance(value, (np.floating, np.integer)):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f"not JSON serializable: {type(value).__name__}")
+
+
+# ------------------------------------------------------------------------------------------- parser
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="bgphm", description="Bond-graph modelling, robust fault diagnosis and "
+                                     "prognosis: ARR reports, simulation, detection and RUL prediction.")
+    parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    parser.add_argument("--debug", action="store_true", help="show the traceback of an unexpected error")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    model_help = "JSON (node-link) or Python model file, or a built-in example (dc-motor, rlc, three-tank, torsion-bar)"
+
+    p = sub.add_parser("arr", help="ARR report: elements, drawing, ARRs, fault signatures")
+    p.add_argument("model", metavar="MODEL", help=model_help)
+    p.add_argument("--format", choices=("md", "html", "tex"), default="md", help="report format (default md)")
+    p.add_argument("--out", help="output file (default: stdout)")
+    p.set_defaults(run=cmd_arr)
+
+    p = sub.add_parser("simulate", help="simulate the model and write its signals as CSV")
+    p.add_argument("model", metavar="MODEL", help=model_help)
+    p.add_argument("--t-end", type=float, help="horizon in s (default: the model file's t_end, else 1)")
+    p.add_argument("--samples", type=int, default=501, help="output samples (default 501)")
+    p.add_argument("--set", action="append", metavar="PARAM=VALUE", help="override a parameter (repeatable)")
+    p.add_argument("--out", help="CSV file (default: stdout)")
+    p.set_defaults(run=cmd_simulate)
+
+    for name, helptext in (("detect", "residuals, robust thresholds and alarms on recorded data"),
+                           ("prognose", "estimate a degrading parameter and predict the RUL from recorded data")):
+        p = sub.add_parser(name, help=helptext)
+        p.add_argument("model", metavar="MODEL", help=model_help)
+        p.add_argument("data", metavar="DATA.csv", help="CSV with a column t and one per signal")
+        p.add_argument("--arr", help="use only this ARR (default: all; for prognose the first sensitive one)")
+        p.add_argument("--margin", type=float, help="noise margin added to the thresholds (default: calibrated)")
+        p.add_argument("--calibrate", type=float, metavar="T",
+                       help="calibrate the margin on t <= T, assumed fault-free (default: the first 20 %%)")
+        p.add_argument("--k", type=float, default=4.0, help="margin = k robust std of the residual (default 4)")
+        p.add_argument("--persistence", type=int, default=5, help="consecutive violations for an alarm (default 5)")
+        p.add_argument("--window", type=int, help="Savitzky-Golay window for derivatives (odd; default 11)")
+        p.add_argument("--out", help="output directory")
+        p.set_defaults(run=cmd_detect if name == "detect" else cmd_prognose)
+    p.add_argument("--candidate", required=True, help="the degrading parameter (a model parameter)")
+    p.add_argument("--degradation", required=True, choices=("exponential", "linear"), help="degradation model")
+    p.add_argument("--fail", type=float, required=True, help="failure value of the candidate")
+    p.add_argument("--direction", choices=("up", "down"), help="check that --fail lies on this side of nominal")
+    p.add_argument("--rate", type=float, nargs=2, metavar=("LO", "HI"),
+                   help="prior interval of the degradation rate (default: from --fail and the record length)")
+    p.add_argument("--particles", type=int, default=500, help="particles (default 500)")
+    p.add_argument("--dt", type=float, help="filter step in s, a multiple of the record's (default: ~2000 steps)")
+    p.add_argument("--rul-every", type=int, default=10, help="predict the RUL every N filter steps (default 10)")
+    p.add_argument("--horizon", type=float, help="RUL horizon cap in s (default 10 x the record length)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+
+    p = sub.add_parser("demo", help="run the whole chain on a built-in example and write every output")
+    p.add_argument("name", nargs="?", default="dc-motor", choices=("dc-motor", "rlc", "three-tank", "torsion-bar"))
+    p.add_argument("--out", default="results/demo", help="output directory (default results/demo)")
+    p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
+    p.set_defaults(run=cmd_demo)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``bgphm`` console script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)  # exits with 2 on bad usage
+    progress = Progress(args.quiet)
+    try:
+        if getattr(args, "persistence", 1) < 1:
+            raise UsageError(f"--persistence must be at least 1, got {args.persistence}")
+        if getattr(args, "margin", None) is not None and not (math.isfinite(args.margin) and args.margin >= 0):
+            raise UsageError(f"--margin must be a finite non-negative number, got {args.margin}")
+        if getattr(args, "particles", 2) < 2:
+            raise UsageError(f"--particles must be at least 2, got {args.particles}")
+        return args.run(args, progress)
+    except (UsageError, *BAD_INPUT) as exc:
+        print(f"bgphm: error: {_one_line(exc)}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("bgphm: interrupted", file=sys.stderr)
+        return EXIT_FAILURE
+    except Exception as exc:  # anything else is a bug or an environment problem: exit 1
+        if args.debug:
+            raise
+        print(f"bgphm: {type(exc).__name__}: {_one_line(exc)} (run with --debug for the traceback)", file=sys.stderr)
+        return EXIT_FAILURE
+
+
+def _one_line(exc: BaseException) -> str:
+    return " ".join(str(exc).split())
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

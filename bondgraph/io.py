@@ -1,0 +1,377 @@
+"""Model files: a bond graph from a Python file, a JSON file in networkx node-link form, or the library.
+
+``load_model(source)`` accepts
+
+* a JSON file (``*.json``) in networkx node-link form: ``nodes`` with an ``id`` and the node attributes
+  of the model contract (``kind``, ``value``, ``uncertainty``, ``law``, ...), ``links`` (or ``edges``)
+  with ``source`` and ``target`` (the power direction) and an optional ``label``, and ``graph`` with
+  an optional ``name`` and the run settings ``inputs`` (signal -> number), ``t_end`` and ``x0``;
+* a Python file (``*.py``) that defines ``model`` (a :class:`~bondgraph.model.BondGraph` or a function
+  returning one), or exactly one bond graph or one such function, and optionally ``inputs``,
+  ``t_end`` and ``x0``; ``file.py:name`` picks the object ``name``;
+* the name of a built-in example (:func:`bondgraph.library.example`): ``rlc``, ``dc-motor``,
+  ``torsion-bar``, ``three-tank``.
+
+A JSON file is data: laws and moduli are strings parsed by :func:`bondgraph.laws.parse_expression`
+(arithmetic, known names and a few functions, never ``eval``), numbers must be finite JSON numbers, and
+every error names the file and the node, link or field at fault.  A Python file is code and runs as
+such: load only files you trust.
+
+Example
+-------
+>>> import json
+>>> text = json.dumps({"graph": {"name": "RL", "inputs": {"V": 1.0}, "t_end": 0.1},
+...     "nodes": [{"id": "V", "kind": "Se"}, {"id": "J", "kind": "1"},
+...               {"id": "R", "kind": "R", "value": 10.0, "uncertainty": [-0.05, 0.05]},
+...               {"id": "L", "kind": "I", "value": 0.1}, {"id": "i", "kind": "Df"}],
+...     "links": [{"source": "V", "target": "J"}, {"source": "J", "target": "R"},
+...               {"source": "J", "target": "L"}, {"source": "J", "target": "i"}]})
+>>> spec = model_from_json(text)
+>>> spec.model.parameters, spec.inputs, spec.t_end
+({'R': 10.0, 'L': 0.1}, {'V': 1.0}, 0.1)
+>>> model_from_json(to_json(spec.model, inputs=spec.inputs)).model.parameters == spec.model.parameters
+True
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import runpy
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import networkx as nx
+import sympy as sp
+
+from .errors import ModelError
+from .model import BondGraph
+
+__all__ = ["ModelFileError", "ModelSpec", "load_model", "model_from_json", "to_json"]
+
+#: Node attributes a JSON node may carry (anything else is refused, so a typo is not silently ignored).
+NODE_FIELDS = frozenset({"id", "kind", "param", "value", "uncertainty", "law", "modulus", "signal", "params",
+                         "uncertainties", "label", "description"})
+LINK_FIELDS = frozenset({"source", "target", "label", "description"})
+GRAPH_FIELDS = frozenset({"name", "inputs", "t_end", "x0", "description"})
+
+
+class ModelFileError(ModelError):
+    """A model file that cannot be read: the message names the file and the node, link or field."""
+
+
+@dataclass
+class ModelSpec:
+    """A loaded model with the settings of its default run.
+
+    Attributes
+    ----------
+    model : BondGraph
+    inputs : dict
+        Input signal -> constant value or callable ``u(t)`` (used by ``bgphm simulate``).
+    t_end : float or None
+        Default simulation horizon.
+    x0 : dict
+        Initial state by storage element name.
+    source : str
+        Where the model came from (path or ``library:<name>``).
+    """
+
+    model: BondGraph
+    inputs: dict = field(default_factory=dict)
+    t_end: float | None = None
+    x0: dict = field(default_factory=dict)
+    source: str = ""
+
+
+def load_model(source: str | Path) -> ModelSpec:
+    """Load a model from a JSON or Python file, or a built-in example by name (see the module docstring).
+
+    Raises :class:`ModelFileError` (a ``ModelError``) naming the file and what is wrong.
+
+    >>> load_model("dc-motor").model.outputs
+    ['i', 'omega']
+    """
+    text = str(source)
+    path_part, attribute = (text.rsplit(":", 1) if ".py:" in text else (text, ""))
+    path = Path(path_part)
+    if not path.exists():
+        from .library import example
+
+        try:
+            ex = example(text)
+        except KeyError:
+            raise ModelFileError(f"{text}: no such file (and not a built-in example: dc-motor, rlc, three-tank, "
+                                 f"torsion-bar)") from None
+        return ModelSpec(ex.model, dict(ex.inputs), ex.t_end, dict(ex.x0), f"library:{text}")
+    if path.is_dir():
+        raise ModelFileError(f"{path}: is a directory, not a model file")
+    if path.suffix.lower() == ".json":
+        try:
+            content = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ModelFileError(f"{path}: cannot be read ({exc})") from None
+        return model_from_json(content, where=str(path))
+    if path.suffix.lower() == ".py":
+        return _from_python(path, attribute or None)
+    raise ModelFileError(f"{path}: unknown model file type {path.suffix!r} (expected .json or .py)")
+
+
+def model_from_json(text: str, *, where: str = "JSON model") -> ModelSpec:
+    """Parse a node-link JSON document into a :class:`ModelSpec` (no ``eval``; see the module docstring)."""
+    try:
+        data = json.loads(text, parse_constant=_no_constant(where), parse_float=_finite_float(where))
+    except json.JSONDecodeError as exc:
+        raise ModelFileError(f"{where} line {exc.lineno} column {exc.colno}: not valid JSON ({exc.msg})") from None
+    except RecursionError:
+        raise ModelFileError(f"{where}: JSON nested too deeply") from None
+    if not isinstance(data, dict):
+        raise ModelFileError(f"{where}: expected a JSON object with 'nodes' and 'links', got {type(data).__name__}")
+    unknown = set(data) - {"directed", "multigraph", "graph", "nodes", "links", "edges"}
+    if unknown:
+        raise ModelFileError(f"{where}: unknown top-level field(s) {sorted(unknown)}")
+    if data.get("multigraph"):
+        raise ModelFileError(f"{where}: 'multigraph' must be false (a bond graph has at most one bond per pair)")
+    if data.get("directed") is False:
+        raise ModelFileError(f"{where}: 'directed' must be true (a bond's direction is its power half-arrow)")
+    settings = data.get("graph", {})
+    if not isinstance(settings, dict):
+        raise ModelFileError(f"{where}: 'graph' must be an object")
+    bad = set(settings) - GRAPH_FIELDS
+    if bad:
+        raise ModelFileError(f"{where}: unknown field(s) {sorted(bad)} in 'graph' (allowed: {sorted(GRAPH_FIELDS)})")
+    if "links" in data and "edges" in data:
+        raise ModelFileError(f"{where}: give the bonds as 'links' or 'edges', not both")
+    graph = nx.DiGraph(name=str(settings.get("name", Path(where).stem if where.endswith(".json") else "bond graph")))
+    for index, node in enumerate(_list(data, "nodes", where)):
+        _add_node(graph, node, f"{where}: nodes[{index}]")
+    for index, link in enumerate(_list(data, "links" if "links" in data else "edges", where)):
+        _add_link(graph, link, f"{where}: links[{index}]")
+    try:
+        model = BondGraph(graph)
+    except ModelError as exc:  # keep the kind (LawError for a law) and add the file
+        raise type(exc)(f"{where}: {exc}") from None
+    inputs = _numbers(settings.get("inputs", {}), f"{where}: graph.inputs")
+    unknown_inputs = sorted(set(inputs) - set(model.inputs))
+    if unknown_inputs:
+        raise ModelFileError(f"{where}: graph.inputs names {unknown_inputs}, which are not input signals of the "
+                             f"model ({model.inputs})")
+    t_end = settings.get("t_end")
+    if t_end is not None:
+        t_end = _positive(t_end, f"{where}: graph.t_end")
+    x0 = _numbers(settings.get("x0", {}), f"{where}: graph.x0")
+    return ModelSpec(model, inputs, t_end, x0, where)
+
+
+def to_json(bg: BondGraph, *, inputs: Mapping | None = None, t_end: float | None = None, x0: Mapping | None = None,
+            indent: int | None = 1) -> str:
+    """The node-link JSON of a bond graph that :func:`model_from_json` reads back.
+
+    Laws and moduli are written as strings; only constant ``inputs`` can be stored.
+    """
+    graph_settings: dict = {"name": bg.name}
+    for key, value in (("inputs", inputs), ("x0", x0)):
+        if value:
+            bad = [k for k, v in value.items() if callable(v)]
+            if bad:
+                raise ModelError(f"to_json: {key} {bad} are functions; only numbers can be stored in JSON")
+            graph_settings[key] = {str(k): float(v) for k, v in value.items()}
+    if t_end is not None:
+        graph_settings["t_end"] = float(t_end)
+    nodes = []
+    for name, data in bg.graph.nodes(data=True):
+        node = {"id": name}
+        for key, value in data.items():
+            if key not in NODE_FIELDS:
+                continue
+            if isinstance(value, sp.Basic):
+                value = str(value)
+            elif isinstance(value, tuple):
+                value = list(value)
+            node[key] = value
+        nodes.append(node)
+    links = []
+    for tail, head, data in bg.graph.edges(data=True):
+        link = {"source": tail, "target": head}
+        if data.get("label") is not None:
+            link["label"] = data["label"]
+        links.append(link)
+    return json.dumps({"directed": True, "multigraph": False, "graph": graph_settings, "nodes": nodes,
+                       "links": links}, indent=indent, allow_nan=False)
+
+
+# ------------------------------------------------------------------------------------------- helpers
+
+def _list(data: dict, key: str, where: str) -> list:
+    value = data.get(key)
+    if not isinstance(value, list):
+        raise ModelFileError(f"{where}: '{key}' must be a list" + ("" if key in data else " (missing)"))
+    return value
+
+
+def _node_id(value, where: str):
+    if isinstance(value, bool) or not isinstance(value, (str, int)):
+        raise ModelFileError(f"{where}: 'id' must be a string or an integer, got {value!r}")
+    if isinstance(value, str) and not value.strip():
+        raise ModelFileError(f"{where}: 'id' is empty")
+    return value
+
+
+def _add_node(graph: nx.DiGraph, node, where: str) -> None:
+    if not isinstance(node, dict):
+        raise ModelFileError(f"{where}: expected an object, got {type(node).__name__}")
+    if "id" not in node:
+        raise ModelFileError(f"{where}: missing 'id'")
+    name = _node_id(node["id"], where)
+    where = f"{where} ({name!r})"
+    bad = set(node) - NODE_FIELDS
+    if bad:
+        raise ModelFileError(f"{where}: unknown field(s) {sorted(bad)} (allowed: {sorted(NODE_FIELDS - {'id'})})")
+    if name in graph:
+        raise ModelFileError(f"{where}: duplicate node id {name!r}")
+    attributes = {k: v for k, v in node.items() if k != "id"}
+    for key in ("law", "modulus"):  # strings only: parsed safely by the model, never evaluated
+        if key in attributes and not isinstance(attributes[key], str):
+            raise ModelFileError(f"{where}: '{key}' must be a string expression, got {type(attributes[key]).__name__}")
+    for key in ("param", "signal"):
+        if key in attributes and not isinstance(attributes[key], str):
+            raise ModelFileError(f"{where}: '{key}' must be a string, got {attributes[key]!r}")
+    if "value" in attributes and (isinstance(attributes["value"], bool)
+                                  or not isinstance(attributes["value"], (int, float))):
+        raise ModelFileError(f"{where}: 'value' must be a number, got {attributes['value']!r}")
+    if "uncertainty" in attributes:
+        attributes["uncertainty"] = _pair(attributes["uncertainty"], f"{where}: 'uncertainty'")
+    if "params" in attributes:
+        attributes["params"] = _numbers(attributes["params"], f"{where}: 'params'")
+    if "uncertainties" in attributes:
+        raw = attributes["uncertainties"]
+        if not isinstance(raw, dict):
+            raise ModelFileError(f"{where}: 'uncertainties' must map law constants to [lo, hi]")
+        attributes["uncertainties"] = {k: _pair(v, f"{where}: 'uncertainties' of {k!r}") for k, v in raw.items()}
+    graph.add_node(name, **attributes)
+
+
+def _add_link(graph: nx.DiGraph, link, where: str) -> None:
+    if not isinstance(link, dict):
+        raise ModelFileError(f"{where}: expected an object with 'source' and 'target', got {type(link).__name__}")
+    bad = set(link) - LINK_FIELDS
+    if bad:
+        raise ModelFileError(f"{where}: unknown field(s) {sorted(bad)} (allowed: {sorted(LINK_FIELDS)})")
+    for key in ("source", "target"):
+        if key not in link:
+            raise ModelFileError(f"{where}: missing '{key}'")
+    tail, head = _node_id(link["source"], where), _node_id(link["target"], where)
+    where = f"{where} ({tail!r} -> {head!r})"
+    for node in (tail, head):
+        if node not in graph:
+            raise ModelFileError(f"{where}: node {node!r} is not in 'nodes'")
+    if graph.has_edge(tail, head):
+        raise ModelFileError(f"{where}: duplicate bond")
+    attributes = {}
+    if link.get("label") is not None:
+        label = link["label"]
+        if isinstance(label, bool) or not isinstance(label, (str, int)):
+            raise ModelFileError(f"{where}: 'label' must be a string or an integer, got {label!r}")
+        attributes["label"] = label
+    graph.add_edge(tail, head, **attributes)
+
+
+def _number(value, where: str) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ModelFileError(f"{where}: expected a number, got {value!r}")
+    number = float(value)
+    if not math.isfinite(number):
+        raise ModelFileError(f"{where}: {value!r} is not finite")
+    return number
+
+
+def _positive(value, where: str) -> float:
+    number = _number(value, where)
+    if number <= 0:
+        raise ModelFileError(f"{where}: must be positive, got {value!r}")
+    return number
+
+
+def _numbers(value, where: str) -> dict:
+    if not isinstance(value, dict):
+        raise ModelFileError(f"{where}: expected an object of name -> number, got {type(value).__name__}")
+    return {str(k): _number(v, f"{where}[{k!r}]") for k, v in value.items()}
+
+
+def _pair(value, where: str) -> tuple[float, float]:
+    if not isinstance(value, list) or len(value) != 2:
+        raise ModelFileError(f"{where}: expected [lo, hi], got {value!r}")
+    return (_number(value[0], where), _number(value[1], where))
+
+
+def _no_constant(where: str) -> Callable:
+    def refuse(name: str):
+        raise ModelFileError(f"{where}: {name} is not a finite number (JSON has no NaN or Infinity)")
+    return refuse
+
+
+def _finite_float(where: str) -> Callable:
+    def parse(text: str) -> float:
+        number = float(text)
+        if not math.isfinite(number):
+            raise ModelFileError(f"{where}: number {text[:40]} overflows")
+        return number
+    return parse
+
+
+def _from_python(path: Path, attribute: str | None) -> ModelSpec:
+    try:
+        namespace = runpy.run_path(str(path), run_name="__bgphm_model__")
+    except SyntaxError as exc:
+        raise ModelFileError(f"{path} line {exc.lineno}: {exc.msg}") from None
+    except ModelError as exc:
+        raise ModelFileError(f"{path}: {exc}") from None
+    except ImportError as exc:
+        raise ModelFileError(f"{path}: {exc}") from None
+    candidate = _pick(namespace, path, attribute)
+    if not isinstance(candidate, BondGraph):
+        try:
+            candidate = candidate()
+        except ModelError as exc:
+            raise ModelFileError(f"{path}: {exc}") from None
+        if not isinstance(candidate, BondGraph):
+            raise ModelFileError(f"{path}: {attribute or 'model'}() returned {type(candidate).__name__}, "
+                                 f"not a BondGraph")
+    inputs = namespace.get("inputs", {})
+    if not isinstance(inputs, Mapping):
+        raise ModelFileError(f"{path}: 'inputs' must be a dict of input signal -> value or function")
+    unknown = sorted(set(inputs) - set(candidate.inputs))
+    if unknown:
+        raise ModelFileError(f"{path}: 'inputs' names {unknown}, which are not input signals of the model "
+                             f"({candidate.inputs})")
+    t_end = namespace.get("t_end")
+    if t_end is not None:
+        t_end = _positive(t_end, f"{path}: t_end")
+    x0 = namespace.get("x0", {})
+    return ModelSpec(candidate, dict(inputs), t_end, dict(x0), str(path))
+
+
+def _pick(namespace: dict, path: Path, attribute: str | None):
+    if attribute:
+        if attribute not in namespace:
+            raise ModelFileError(f"{path}: defines no {attribute!r}")
+        found = namespace[attribute]
+        if not (isinstance(found, BondGraph) or callable(found)):
+            raise ModelFileError(f"{path}: {attribute!r} is a {type(found).__name__}, not a bond graph or a function")
+        return found
+    if "model" in namespace:
+        found = namespace["model"]
+        if isinstance(found, BondGraph) or callable(found):
+            return found
+        raise ModelFileError(f"{path}: 'model' is a {type(found).__name__}, not a BondGraph or a function")
+    graphs = [k for k, v in namespace.items() if isinstance(v, BondGraph) and not k.startswith("_")]
+    if len(graphs) == 1:
+        return namespace[graphs[0]]
+    functions = [k for k, v in namespace.items() if callable(v) and getattr(v, "__module__", None) == "__bgphm_model__"
+                 and not k.startswith("_") and not isinstance(v, type)]
+    if not graphs and len(functions) == 1:
+        return namespace[functions[0]]
+    found = graphs or functions
+    raise ModelFileError(f"{path}: define 'model' (a BondGraph or a function returning one)"
+                         + (f"; found several candidates {sorted(found)}: pick one with {path}:NAME" if found else ""))
