@@ -53,7 +53,7 @@ DEMOS = {
 
 def run_demo(name: str, out: Path, progress, *, seed: int = 0) -> int:
     """Run the demo ``name`` into ``out``; returns the exit code of the last command."""
-    from bgphm.cli import main
+    from bgphm.cli import _csv_text, main
 
     if name not in DEMOS:
         from bgphm.cli import UsageError
@@ -74,10 +74,7 @@ def run_demo(name: str, out: Path, progress, *, seed: int = 0) -> int:
     model_path, data_path = out / "model.json", out / "data.csv"
     constant = {k: v for k, v in inputs.items() if not callable(v)}
     model_path.write_text(to_json(model, inputs=constant, t_end=demo.t_end))
-    columns = ["t", *record.signals]
-    rows = np.column_stack([record.t, *[record[s] for s in record.signals]])
-    data_path.write_text(",".join(columns) + "\n" + "\n".join(",".join(repr(float(v)) for v in row) for row in rows)
-                         + "\n")
+    data_path.write_text(_csv_text({"t": record.t, **record.columns}))
     fail = nominal * demo.fail_factor
     truth = {"candidate": demo.candidate, "nominal": nominal, "degradation": "exponential", "rate": demo.rate,
              "onset": demo.onset, "failure_value": fail, "eol": demo.eol(nominal), "noise_std": demo.noise,

@@ -153,15 +153,8 @@ def model_from_json(text: str, *, where: str = "JSON model") -> ModelSpec:
     except ModelError as exc:  # keep the kind (LawError for a law) and add the file
         raise type(exc)(f"{where}: {exc}") from None
     inputs = _numbers(settings.get("inputs", {}), f"{where}: graph.inputs")
-    unknown_inputs = sorted(set(inputs) - set(model.inputs))
-    if unknown_inputs:
-        raise ModelFileError(f"{where}: graph.inputs names {unknown_inputs}, which are not input signals of the "
-                             f"model ({model.inputs})")
-    t_end = settings.get("t_end")
-    if t_end is not None:
-        t_end = _positive(t_end, f"{where}: graph.t_end")
     x0 = _numbers(settings.get("x0", {}), f"{where}: graph.x0")
-    return ModelSpec(model, inputs, t_end, x0, where)
+    return _spec(model, inputs, settings.get("t_end"), x0, where, "graph.")
 
 
 def to_json(bg: BondGraph, *, inputs: Mapping | None = None, t_end: float | None = None, x0: Mapping | None = None,
@@ -341,15 +334,18 @@ def _from_python(path: Path, attribute: str | None) -> ModelSpec:
     inputs = namespace.get("inputs", {})
     if not isinstance(inputs, Mapping):
         raise ModelFileError(f"{path}: 'inputs' must be a dict of input signal -> value or function")
-    unknown = sorted(set(inputs) - set(candidate.inputs))
+    return _spec(candidate, inputs, namespace.get("t_end"), namespace.get("x0", {}), str(path), "")
+
+
+def _spec(model: BondGraph, inputs: Mapping, t_end, x0: Mapping, source: str, prefix: str) -> ModelSpec:
+    """The run settings checked against the model (``prefix`` locates them in the file: ``graph.`` in JSON)."""
+    unknown = sorted(set(inputs) - set(model.inputs))
     if unknown:
-        raise ModelFileError(f"{path}: 'inputs' names {unknown}, which are not input signals of the model "
-                             f"({candidate.inputs})")
-    t_end = namespace.get("t_end")
+        raise ModelFileError(f"{source}: {prefix}inputs names {unknown}, which are not input signals of the model "
+                             f"({model.inputs})")
     if t_end is not None:
-        t_end = _positive(t_end, f"{path}: t_end")
-    x0 = namespace.get("x0", {})
-    return ModelSpec(candidate, dict(inputs), t_end, dict(x0), str(path))
+        t_end = _positive(t_end, f"{source}: {prefix}t_end")
+    return ModelSpec(model, dict(inputs), t_end, dict(x0), source)
 
 
 def _pick(namespace: dict, path: Path, attribute: str | None):
