@@ -119,6 +119,7 @@ def cmd_detect(args, progress: Progress) -> int:
 
 
 def cmd_prognose(args, progress: Progress) -> int:
+    from diagnosis.detection import robust_std
     from diagnosis.signatures import signature_matrix
     from prognosis.degradation import degradation_model
     from prognosis.filter import VarianceAdaptation
@@ -140,7 +141,7 @@ def cmd_prognose(args, progress: Progress) -> int:
     direction = _direction(args, nominal)
     record = _record(args.data, [arr], progress)
     (evaluation,) = _detect([arr], record, args, progress)
-    residual_std = _robust_std(evaluation.residual[_calibration(record, args)])
+    residual_std = robust_std(evaluation.residual[_calibration(record, args)])
     step = float(np.median(np.diff(record.t)))
     dt = args.dt if args.dt is not None else step * max(1, round((record.t[-1] - record.t[0]) / 2000 / step))
     if args.dt is not None and abs(round(dt / step) * step - dt) > 1e-6 * dt:
@@ -389,13 +390,6 @@ def _assignments(items: Sequence[str] | None, parameters: dict, option: str) -> 
 
 def _has_value(model, signal: str) -> bool:
     return any(e.signal == signal and e.value is not None for e in model.elements.values())
-
-
-def _robust_std(values: np.ndarray) -> float:
-    finite = values[np.isfinite(values)]
-    if finite.size < 2:
-        return 0.0
-    return float(1.4826 * np.median(np.abs(finite - np.median(finite))))
 
 
 def _csv_text(columns: dict) -> str:

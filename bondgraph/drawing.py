@@ -565,8 +565,12 @@ _LATEX = {
 }
 
 
-def _latex(value: object) -> str:
-    """Text safe inside a LaTeX group: special characters escaped, control characters dropped."""
+def latex_escape(value: object) -> str:
+    r"""Text safe inside a LaTeX group: special characters escaped, control characters dropped.
+
+    >>> print(latex_escape("a_b$c"))
+    a\_b\$c
+    """
     text = re.sub(r"[\x00-\x1f\x7f]", " ", str(value))
     return "".join(_LATEX.get(ch, ch) for ch in text)
 
@@ -602,12 +606,12 @@ def to_tikz(bg: BondGraph, causality: str | Causality | None = "integral") -> st
         return f"({_num(p[0])},{_num(p[1])})"
 
     caption = f"{drawing.title}: bond graph, " + (f"{drawing.causality} causality" if drawing.causality else "acausal")
-    out = [r"\begin{tikzpicture}[x=0.75pt, y=-0.75pt, font=\ttfamily\small]", f"% {_latex(caption)}"]
+    out = [r"\begin{tikzpicture}[x=0.75pt, y=-0.75pt, font=\ttfamily\small]", f"% {latex_escape(caption)}"]
     for bond in drawing.bonds:
         color = "red" if bond.derivative else ("gray" if bond.signal else "black")
         style = f"draw={color}, line width=0.6pt" + (", dashed" if bond.signal else "")
-        what = "signal" if bond.signal else f"bond {_latex(bond.label)}"
-        out.append(f"% {what}: {_latex(bond.tail)} -> {_latex(bond.head)}")
+        what = "signal" if bond.signal else f"bond {latex_escape(bond.label)}"
+        out.append(f"% {what}: {latex_escape(bond.tail)} -> {latex_escape(bond.head)}")
         out.append(rf"\draw[{style}] {point(bond.start)} -- {point(bond.end)};")
         shapes = _decorations(bond)
         if "arrow" in shapes:
@@ -618,11 +622,11 @@ def to_tikz(bg: BondGraph, causality: str | Causality | None = "integral") -> st
             out.append(rf"\draw[draw={color}, line width=0.9pt] " + " -- ".join(map(point, shapes["stroke"])) + ";")
     for node, (x, y) in drawing.positions.items():
         sub = drawing.subscripts[node]
-        text = _latex(drawing.labels[node]) + (rf"\textsubscript{{{_latex(sub)}}}" if sub else "")
+        text = latex_escape(drawing.labels[node]) + (rf"\textsubscript{{{latex_escape(sub)}}}" if sub else "")
         out.append(rf"\node[inner sep=0pt] at {point((x, y))} {{{text}}};")
     for i, line in enumerate([f"{drawing.title}: bond graph", *drawing.notes]):
         y = drawing.height + (i + 0.5) * LEGEND_LINE
         out.append(rf"\node[anchor=west, inner sep=0pt, font=\ttfamily\scriptsize] at {point((MARGIN, y))} "
-                   f"{{{_latex(line)}}};")
+                   f"{{{latex_escape(line)}}};")
     out.append(r"\end{tikzpicture}")
     return "\n".join(out)

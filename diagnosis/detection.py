@@ -175,7 +175,18 @@ def noise_margin(arr, nominal_record, k: float = 3.0, **options) -> float:
     (:func:`evaluate`) deals with them instead.
     """
     result = evaluate(arr, nominal_record, **options)
-    finite = result.residual[np.isfinite(result.residual)]
-    if finite.size < 2:
+    if np.isfinite(result.residual).sum() < 2:
         raise ValueError(f"{arr.name}: the nominal record gives fewer than 2 finite residual values")
-    return float(k * 1.4826 * np.median(np.abs(finite - np.median(finite))))
+    return k * robust_std(result.residual)
+
+
+def robust_std(values: np.ndarray) -> float:
+    """``1.4826 * median(|x - median(x)|)`` over the finite values (0 with fewer than 2).
+
+    >>> robust_std(np.array([1.0, 2.0, 3.0, np.nan, 100.0]))
+    1.4826
+    """
+    finite = values[np.isfinite(values)]
+    if finite.size < 2:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(finite - np.median(finite))))

@@ -217,7 +217,7 @@ def _html_table(header, rows) -> str:
 # ------------------------------------------------------------------------------------------- latex
 
 def _latex(bg: BondGraph, c: _Content) -> str:
-    t = _tex
+    t = drawing.latex_escape
     parts = [r"\documentclass{article}", r"\usepackage[margin=2cm]{geometry}", r"\usepackage{amsmath}",
              r"\usepackage{tikz}", r"\usepackage{longtable}", r"\begin{document}",
              rf"\section*{{ARR report: {t(c.title)}}}", r"\subsection*{Elements}", _tex_table(ELEMENT_HEADER, c.elements),
@@ -239,17 +239,9 @@ def _latex(bg: BondGraph, c: _Content) -> str:
     return "\n".join(parts) + "\n"
 
 
-_TEX_ESCAPES = {"\\": r"\textbackslash{}", "{": r"\{", "}": r"\}", "$": r"\$", "&": r"\&", "#": r"\#",
-                "^": r"\^{}", "_": r"\_", "%": r"\%", "~": r"\~{}"}
-
-
-def _tex(text: str) -> str:
-    return "".join(_TEX_ESCAPES.get(ch, ch) for ch in str(text))
-
-
 def _tex_table(header, rows) -> str:
     spec = "l" * len(header)
-    lines = [rf"\begin{{longtable}}{{{spec}}}", " & ".join(_tex(h) for h in header) + r" \\ \hline"]
-    lines += [" & ".join(_tex(v) for v in row) + r" \\" for row in rows]
+    lines = [rf"\begin{{longtable}}{{{spec}}}", " & ".join(drawing.latex_escape(h) for h in header) + r" \\ \hline"]
+    lines += [" & ".join(drawing.latex_escape(v) for v in row) + r" \\" for row in rows]
     lines.append(r"\end{longtable}")
     return "\n".join(lines)
