@@ -6,7 +6,7 @@
     bgphm simulate MODEL [--t-end T] [--samples N] [--set PARAM=VALUE ...] [--out CSV]
     bgphm detect MODEL DATA.csv [--margin M | --calibrate T] [--persistence N] [--out DIR]
     bgphm prognose MODEL DATA.csv --candidate PARAM --degradation exponential|linear --fail VALUE [--out DIR]
-    bgphm demo [dc-motor|rlc|three-tank|torsion-bar] [--out DIR]
+    bgphm demo [dc-motor|torsion-bar|three-tank] [--out DIR] [--seed N]
 
 MODEL is a JSON file (networkx node-link form), a Python file defining ``model``, or a built-in example
 name (see :func:`bondgraph.io.load_model`).  DATA.csv has a header row with a time column ``t`` and one
@@ -160,7 +160,7 @@ def cmd_prognose(args, progress: Progress) -> int:
                             horizon=args.horizon or 10.0 * duration, detection=detection, seed=args.seed)
     progress(f"particle filter on {arr.name} for {args.candidate} ({args.degradation}, {args.particles} particles, "
              f"dt = {dt:g} s)")
-    result = monitor.run(record)
+    result = monitor.run(record, progress=_filter_progress(progress))
     if result.detection_time is None:
         print(f"{arr.name}: no alarm, so no prognosis (the filter starts at the first alarm)")
         summary = {"candidate": args.candidate, "arr": arr.name, "detection_time": None}
@@ -275,6 +275,28 @@ def _evaluation_summary(e) -> dict:
             "violations": int(e.violation.sum()), "alarm_samples": int(e.alarm.sum()),
             "undecided_samples": int((~finite).sum()),
             "alarm_onsets": e.false_alarms(float("inf"))}
+
+
+def _filter_progress(progress: Progress, every: float = 2.0):
+    """The ``progress`` callback of :meth:`~prognosis.monitor.HealthMonitor.run` for a command.
+
+    It prints a line at the first report, then at most every ``every`` seconds, and at the last step;
+    None with ``--quiet``, so that the monitor makes no calls at all.
+    """
+    if progress.quiet:
+        return None
+    start = time.perf_counter()
+    printed = -math.inf
+
+    def report(done: int, total: int, t: float) -> None:
+        nonlocal printed
+        now = time.perf_counter()
+        if done == total or now - printed >= every:
+            printed = now
+            progress(f"filter: {100 * done / total:.0f} % of {total} steps (t = {t:.4g} s), "
+                     f"{now - start:.1f} s elapsed")
+
+    return report
 
 
 def _direction(args, nominal: float) -> str:
@@ -487,8 +509,16 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--horizon", type=float, help="RUL horizon cap in s (default 10 x the record length)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
 
-    p = sub.add_parser("demo", help="run the whole chain on a built-in example and write every output")
-    p.add_argument("name", nargs="?", default="dc-motor", choices=("dc-motor", "rlc", "three-tank", "torsion-bar"))
+    from bgphm.demo import DEMOS
+
+    listing = "\n".join(f"  {name:<13} {demo.description}" for name, demo in DEMOS.items())
+    p = sub.add_parser("demo", help="run the whole chain on a built-in example and write every output",
+                       formatter_class=argparse.RawDescriptionHelpFormatter,
+                       description="Simulate an example with a degrading parameter, write the model, the record and "
+                       "truth.json,\nthen run arr, detect and prognose on those files (each command is printed so "
+                       f"it can be\nrerun by hand with the same results).\n\ndemos:\n{listing}")
+    p.add_argument("name", nargs="?", default="dc-motor", metavar="NAME",
+                   help=f"demo to run: {', '.join(DEMOS)} (default dc-motor)")
     p.add_argument("--out", default="results/demo", help="output directory (default results/demo)")
     p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
     p.set_defaults(run=cmd_demo)

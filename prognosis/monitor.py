@@ -12,7 +12,7 @@ the newest sample by that half window.  Results are deterministic for a seed.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -232,22 +232,35 @@ class HealthMonitor:
         self._pool = None
 
     # -- whole record -------------------------------------------------------
-    def run(self, record, *, workers: int = 1) -> MonitorResult:
+    def run(self, record, *, workers: int = 1,
+            progress: Callable[[int, int, float], None] | None = None) -> MonitorResult:
         """Process a whole record (mapping or DataFrame with ``t`` and the ARR's signals).
 
         ``workers > 1`` computes the RUL predictions in that many processes while the filter goes
         on; the results are the same as with one process (predictions are keyed by filter step).
+
+        ``progress(done, total, t)`` is called with the filter steps done, the steps the record
+        holds from the alarm on and the time of the last step done, after every 1 % of the steps
+        and after the last one (never without an alarm).  An exception it raises, such as
+        ``KeyboardInterrupt``, stops the run and propagates; pending predictions are cancelled.
         """
         self._reset()
         if workers > 1:
             with ParallelRUL(self.model, workers=workers, dt=self.dt, theta_fail=self.theta_fail,
                              direction=self.direction, horizon=self.horizon, seed=self.predictor.seed) as pool:
                 self._pool = pool
-                self._advance(record, last=None)
-                self.result.rul = [f.result() for f in self.result.rul]
-            self._pool = None
+                try:
+                    self._advance(record, last=None, progress=progress)
+                    self.result.rul = [f.result() for f in self.result.rul]
+                except BaseException:
+                    # the pool's shutdown waits for queued predictions: drop them so an interrupt is prompt
+                    for future in self.result.rul:
+                        future.cancel()
+                    raise
+                finally:
+                    self._pool = None
         else:
-            self._advance(record, last=None)
+            self._advance(record, last=None, progress=progress)
         return self._finish()
 
     # -- one sample at a time ------------------------------------------------
@@ -269,7 +282,7 @@ class HealthMonitor:
         return window // 2
 
     # -- shared ----------------------------------------------------------------
-    def _advance(self, record, last: int | None) -> None:
+    def _advance(self, record, last: int | None, progress: Callable | None = None) -> None:
         evaluation = self.arr.evaluate(record, **self.detection)
         self.result.evaluation = evaluation
         t = evaluation.t
@@ -285,10 +298,16 @@ class HealthMonitor:
             self._next_index = start
         stride = self._stride(t)
         points = evaluation.points  # the observation equation uses the same signals, derivatives, integrals
+        first = self._next_index
+        total = len(range(first, last + 1, stride))
+        every = -(-total // 100)  # a report per 1 % of the steps (at most 100): negligible beside a step
         while self._next_index is not None and self._next_index <= last:
             k = self._next_index
             self._filter_step(t[k], -evaluation.residual[k], [p[k:k + 1] for p in points])
             self._next_index = k + stride
+            done = int(k - first) // stride + 1
+            if progress is not None and (done % every == 0 or done == total):
+                progress(done, total, float(t[k]))
 
     def _start_bounds(self, evaluation, k: int) -> tuple[float, float]:
         """Initial theta interval at detection (see ``start``)."""
