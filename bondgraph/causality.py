@@ -75,6 +75,21 @@ class Causality:
     dualized : dict
         Detector -> ``"SSe"`` or ``"SSf"`` when detectors were dualized.
     issues : list of CausalIssue
+
+    Examples
+    --------
+    Derivative causality with the detectors dualized, as for diagnosis:
+
+    >>> from bondgraph.library import dc_motor
+    >>> causality = dc_motor().assign_causality("derivative")
+    >>> causality.storage, causality.dualized
+    ({'L_a': 'derivative', 'J': 'derivative'}, {'i': 'SSf', 'omega': 'SSf'})
+    >>> causality.effort_from[("1_e", "L_a")], causality.stroke(("1_e", "L_a"))
+    ('L_a', '1_e')
+    >>> causality.is_valid, causality.issues
+    (True, [])
+    >>> print(causality.summary())
+    causality (derivative preferred): 0 integral, 2 derivative storage
     """
 
     preferred: str
@@ -141,6 +156,32 @@ def assign_causality(bg: BondGraph, preferred: str = INTEGRAL, *, dualize_detect
     Returns
     -------
     Causality
+
+    Examples
+    --------
+    Two inertias on one 1-junction share their velocity: the second one is
+    dependent storage, forced into derivative causality by the first.
+
+    >>> bg = BondGraph(name="two inertias")
+    >>> bg.add("F", "Se"), bg.add("J", "1")
+    ('F', 'J')
+    >>> bg.add("I1", "I", value=1.0), bg.add("I2", "I", value=2.0), bg.add("R1", "R", value=0.5)
+    ('I1', 'I2', 'R1')
+    >>> for tail, head in [("F", "J"), ("J", "I1"), ("J", "I2"), ("J", "R1")]:
+    ...     _ = bg.bond(tail, head)
+    >>> causality = assign_causality(bg)
+    >>> causality.storage, causality.dependent_storage, causality.is_valid
+    ({'I1': 'integral', 'I2': 'derivative'}, ['I2'], True)
+    >>> print(causality.issues[0])
+    dependent storage: I 'I2' is in derivative causality, forced by I 'I1'
+
+    Preferred derivative causality dualizes every detector by default:
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> assign_causality(rlc_circuit(), "derivative").dualized
+    {'i': 'SSf', 'v_C': 'SSe'}
+    >>> assign_causality(rlc_circuit(), "derivative", dualize_detectors=["i"]).dualized
+    {'i': 'SSf'}
     """
     if preferred not in (INTEGRAL, DERIVATIVE):
         raise ValueError(f"preferred causality must be 'integral' or 'derivative', got {preferred!r}")

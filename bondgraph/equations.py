@@ -207,6 +207,24 @@ def causal_equations(bg: BondGraph, causality: Causality, structure=None, *,
     ------
     CausalityError
         if the assignment has conflicts or unassigned bonds.
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit
+    >>> bg = rlc_circuit()
+    >>> oriented = causal_equations(bg, assign_causality(bg))
+    >>> oriented.states, oriented.derivatives
+    ({'L': p_L(t), 'C': q_C(t)}, {'L': e_3, 'C': f_5})
+    >>> oriented.express(oriented.derivatives["L"])   # dp_L/dt in known quantities
+    V(t) - R*p_L(t)/L - q_C(t)/C
+    >>> oriented.outputs
+    {'i': f_3, 'v_C': e_5}
+
+    In derivative causality with dualized detectors each junction gives a balance (a candidate ARR):
+
+    >>> diagnosis = causal_equations(bg, assign_causality(bg, "derivative"))
+    >>> diagnosis.express(diagnosis.balances["J0"])
+    -C*Derivative(v_C(t), t) + i(t)
     """
     if causality.conflicts or not causality.is_valid:
         problems = "; ".join(str(i) for i in causality.conflicts) or "some bonds have no causality"
@@ -472,6 +490,25 @@ class StateEquations:
     causality : Causality
     algebraic_loops : list
         Tuples of bond variables of the algebraic loops solved symbolically.
+
+    Examples
+    --------
+    Obtained from :meth:`BondGraph.state_equations <bondgraph.model.BondGraph.state_equations>`
+    or :func:`state_equations`:
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> eqs = rlc_circuit().state_equations()
+    >>> print(eqs)
+    dp_L/dt = V(t) - R*p_L/L - q_C/C
+    dq_C/dt = p_L/L
+    i = p_L/L
+    v_C = q_C/C
+    >>> eqs.states, eqs.elements, eqs.inputs, eqs.parameters
+    ([p_L, q_C], ['L', 'C'], ['V'], {'R': 10.0, 'L': 0.1, 'C': 0.001})
+    >>> eqs.efforts[2], eqs.flows[2]   # bond 2 is J1 -> R
+    (R*p_L/L, p_L/L)
+    >>> eqs.dependent_storage, eqs.algebraic_loops
+    ([], [])
     """
 
     states: list

@@ -65,6 +65,19 @@ class Element:
 
     ``law`` is in the port symbols ``e, f, q, p`` and parameter symbols;
     ``modulus`` (two-ports) is in parameter symbols and signal functions.
+    Elements are read from the graph by :attr:`BondGraph.elements`.
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit, torsion_bar_monitorable
+    >>> r = rlc_circuit().elements["R"]
+    >>> str(r), r.kind, r.param, r.value, r.uncertainty
+    ("R 'R'", 'R', 'R', 10.0, (-0.05, 0.05))
+    >>> r.law is None, r.uncertainties   # default linear law e = R f
+    (True, {'R': (-0.05, 0.05)})
+    >>> spring = torsion_bar_monitorable().elements["k_s"]
+    >>> spring.law, spring.value
+    (e - k_s*q, 1.786)
     """
 
     name: Hashable
@@ -90,7 +103,25 @@ class Element:
 
 @dataclass(frozen=True)
 class Bond:
-    """A bond ``tail -> head`` (power direction); signal bonds end at a detector."""
+    """A bond ``tail -> head`` (power direction); signal bonds end at a detector.
+
+    Power bonds carry a ``label`` (numbered in edge order unless given), which
+    names their effort and flow symbols ``e_<label>``, ``f_<label>``; signal
+    bonds have none.
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit
+    >>> bonds = rlc_circuit().bonds
+    >>> first = bonds[0]
+    >>> str(first), first.key, first.label
+    ("bond 1 ('V' -> 'J1')", ('V', 'J1'), 1)
+    >>> first.other("V"), first.sign_into("J1"), first.sign_into("V")
+    ('J1', 1, -1)
+    >>> sensor = bonds[-1]   # signal bonds come after the power bonds
+    >>> str(sensor), sensor.is_signal
+    ("signal bond ('J0' -> 'v_C')", True)
+    """
 
     tail: Hashable
     head: Hashable
@@ -146,6 +177,36 @@ class BondGraph:
         and :meth:`bond`.
     name : str, optional
         A name for reports.
+
+    Examples
+    --------
+    A graph built with networkx is validated and wrapped as it is:
+
+    >>> import networkx as nx
+    >>> g = nx.DiGraph()
+    >>> g.add_node("F", kind="Sf", signal="u")
+    >>> g.add_node("J", kind="0")
+    >>> g.add_node("C1", kind="C", value=1e-3)
+    >>> g.add_node("R1", kind="R", value=100.0)
+    >>> g.add_edges_from([("F", "J"), ("J", "C1"), ("J", "R1")])
+    >>> bg = BondGraph(g, name="RC tank")
+    >>> bg
+    <BondGraph 'RC tank': 3 bonds; 1 0, 1 C, 1 R, 1 Sf>
+    >>> bg.graph is g, bg.inputs, bg.parameters
+    (True, ['u'], {'C1': 0.001, 'R1': 100.0})
+    >>> print(bg.state_equations())
+    dq_C1/dt = u(t) - q_C1/(C1*R1)
+
+    Mistakes are reported at once, naming the node or bond:
+
+    >>> bg.add("X", "Q")  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    bondgraph.errors.ModelError: node 'X': unknown kind 'Q' (expected one of 0, 1, C, De, Df, ...)
+    >>> bg.bond("J", "Y")
+    Traceback (most recent call last):
+    ...
+    bondgraph.errors.ModelError: bond ('J' -> 'Y'): node 'Y' does not exist; add it first
     """
 
     def __init__(self, graph: nx.DiGraph | None = None, *, name: str | None = None):

@@ -45,6 +45,23 @@ class SimulationResult:
         Input name -> array (n, n_states) of controller states.
     solver : object
         The ``solve_ivp`` result (``nfev``, ``message``...).
+
+    Examples
+    --------
+    Returned by :func:`simulate`:
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> result = simulate(rlc_circuit(), (0.0, 0.1), {"V": 1.0}, t_eval=np.linspace(0.0, 0.1, 6))
+    >>> np.round(result.t, 3).tolist()
+    [0.0, 0.02, 0.04, 0.06, 0.08, 0.1]
+    >>> list(result.signals), list(result.states), list(result.efforts)
+    (['V', 'i', 'v_C'], ['p_L', 'q_C'], [1, 2, 3, 4, 5])
+    >>> np.round(result["v_C"], 3).tolist()   # underdamped: overshoots, settles at the source voltage
+    [0.0, 0.849, 1.153, 1.002, 0.979, 1.002]
+    >>> bool(np.allclose(result.flows[5], result["i"])), result.solver.success
+    (True, True)
+    >>> sorted(result.record())
+    ['V', 'i', 't', 'v_C']
     """
 
     t: np.ndarray

@@ -51,7 +51,31 @@ class ARRWarning(UserWarning):
 
 
 def delta(parameter: str) -> sp.Symbol:
-    """The multiplicative uncertainty symbol of a parameter: ``delta_<param>``."""
+    """The multiplicative uncertainty symbol of a parameter: ``delta_<param>``.
+
+    The true value of an uncertain parameter is ``value * (1 + delta)``, with
+    ``delta`` in the element's ``uncertainty`` interval.
+
+    Parameters
+    ----------
+    parameter : str
+        A parameter name.
+
+    Returns
+    -------
+    sympy.Symbol
+
+    Examples
+    --------
+    >>> from bondgraph.library import dc_motor
+    >>> delta("R_a")
+    delta_R_a
+    >>> arr = derive_arrs(dc_motor())[0]
+    >>> arr.uncertain.has(delta("R_a")), arr.uncertain.has(delta("J"))
+    (True, False)
+    >>> arr.terms["R_a"]
+    -R_a*delta_R_a*i(t)
+    """
     return sp.Symbol(f"delta_{parameter}")
 
 
@@ -82,6 +106,22 @@ class ARR:
     implicit : bool
         True when an element law could not be inverted and the relation keeps
         that law in implicit form; ``blocked_by`` names the elements.
+
+    Examples
+    --------
+    Obtained from :func:`derive_arrs`; the capacitor junction of the RLC circuit:
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> arr = derive_arrs(rlc_circuit())[1]
+    >>> print(arr)
+    ARR_J0: r_n = -C*Derivative(v_C(t), t) + i(t)
+      Psi_2 = -C*delta_C*Derivative(v_C(t), t)
+    >>> arr.name, arr.junction, arr.detector, arr.signals
+    ('ARR_J0', 'J0', None, ['i', 'v_C'])
+    >>> sorted(arr.parameters), arr.values, arr.uncertainties
+    (['C'], {'C': 0.001}, {'C': (-0.1, 0.1)})
+    >>> arr.terms["C"] == arr.uncertain, arr.implicit
+    (True, False)
     """
 
     name: str
@@ -135,6 +175,17 @@ def derive_arrs(bg: BondGraph) -> list[ARR]:
         One per junction carrying a dualized detector, then one per detector
         that had to stay a measurement.  Candidates that cannot be expressed
         in known variables are left out with an :class:`ARRWarning`.
+
+    Examples
+    --------
+    >>> from bondgraph.library import dc_motor
+    >>> arrs = derive_arrs(dc_motor())
+    >>> [(arr.name, arr.signals) for arr in arrs]
+    [('ARR_1_e', ['U', 'i', 'omega']), ('ARR_1_m', ['i', 'omega'])]
+    >>> arrs[0].nominal   # electrical balance: U = R_a i + L_a di/dt + k_m omega
+    -L_a*Derivative(i(t), t) - R_a*i(t) - k_m*omega(t) + U(t)
+    >>> arrs[1].nominal   # mechanical balance: k_m i = J domega/dt + b omega
+    -J*Derivative(omega(t), t) - b*omega(t) + k_m*i(t)
     """
     structure = bg.structure()
     causality = diagnosis_causality(bg)

@@ -28,7 +28,31 @@ import numpy as np
 
 @dataclass(frozen=True)
 class SignatureMatrix:
-    """Fault signature matrix with detectability and isolability per row."""
+    """Fault signature matrix with detectability and isolability per row.
+
+    Attributes
+    ----------
+    rows : tuple of str
+        Fault candidates (parameters).
+    columns : tuple of str
+        ARR names.
+    matrix : ndarray of int (rows, columns)
+        1 where the ARR's nominal part depends on the parameter.
+
+    Examples
+    --------
+    Returned by :func:`signature_matrix`:
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> signatures = signature_matrix(derive_arrs(rlc_circuit()))
+    >>> signatures.rows, signatures.columns, signatures.matrix.tolist()
+    (('R', 'L', 'C'), ('ARR_J1', 'ARR_J0'), [[1, 0], [1, 0], [0, 1]])
+    >>> signatures.detectable.tolist(), signatures.isolable.tolist()   # R and L share a signature
+    ([1, 1, 1], [0, 0, 1])
+    >>> signatures.row("C")
+    {'ARR_J1': 0, 'ARR_J0': 1}
+    """
 
     rows: tuple
     columns: tuple
@@ -70,13 +94,26 @@ def signature_matrix(arrs: Sequence, rows: Sequence[str] | None = None) -> Signa
     ----------
     arrs : sequence of ARR
     rows : sequence of str, optional
-        Parameters to list; default: every element parameter of the model
-        that has an uncertainty or appears in some ARR, in model order.
+        Parameters to list; default: every element parameter of the model, in
+        model order, so that a fault no ARR can see shows as ``Mb = 0``.
+
+    Returns
+    -------
+    SignatureMatrix
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> arrs = derive_arrs(rlc_circuit())
+    >>> print(signature_matrix(arrs, rows=["C", "R"]))   # without L, R is isolable
+       ARR_J1  ARR_J0  Mb  Ib
+    C       0       1   1   1
+    R       1       0   1   1
+    >>> signature_matrix(arrs[:1], rows=["R", "C"]).to_dict()["Mb"]   # the loop ARR alone cannot see C
+    [1, 0]
     """
     if rows is None:
-        candidates = list(dict.fromkeys(p for arr in arrs for p in arr.candidates))
-        involved = {p for arr in arrs for p in arr.parameters}
-        uncertain = {p for arr in arrs for p in arr.uncertainties}
-        rows = [p for p in candidates if p in involved or p in uncertain]
+        rows = list(dict.fromkeys(p for arr in arrs for p in arr.candidates))
     matrix = np.array([[int(p in arr.parameters) for arr in arrs] for p in rows], dtype=int).reshape(len(rows), len(arrs))
     return SignatureMatrix(tuple(rows), tuple(arr.name for arr in arrs), matrix)

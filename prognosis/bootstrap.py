@@ -59,6 +59,27 @@ class BootstrapParticleFilter:
     resample_below : float
         Resample when ESS < resample_below * N (1.0: every step).
     seed : int
+
+    Examples
+    --------
+    Estimate the rate ``a`` of ``dx/dt = -a x`` (true 0.1, prior N(0.2, 0.1^2)):
+
+    >>> import sympy as sp
+    >>> from types import SimpleNamespace
+    >>> from prognosis.statespace import discretize
+    >>> x, a = sp.symbols("x a")
+    >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
+    >>> model = discretize(decay, dt=1.0, augment=["a"])
+    >>> pf = BootstrapParticleFilter(model, [1.0, 0.2], np.diag([1e-4, 1e-2]), np.diag([1e-8, 1e-6]), [[1e-6]],
+    ...                              n_particles=500, seed=1)
+    >>> pf.particles.shape, pf.n_particles
+    ((2, 500), 500)
+    >>> for k in range(1, 31):
+    ...     innovation = pf.step([0.9 ** k])
+    >>> round(float(pf.mean[1]), 2), bool(np.isclose(pf.weights.sum(), 1.0)), pf.degenerate_steps
+    (0.1, True, 0)
+    >>> pf.update([np.nan]).nis   # a missing measurement leaves the weights alone
+    nan
     """
 
     def __init__(self, model, mean, covariance, process_noise, measurement_noise, *, n_particles: int = 1000,

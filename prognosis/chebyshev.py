@@ -41,7 +41,26 @@ __all__ = ["chebyshev_bounds", "chebyshev_intervals", "chebyshev_level", "chebys
 
 
 def chebyshev_level(n: int, c: float) -> float:
-    """Lower bound ``1 - n / c^2`` (clipped at 0) on the probability that the state lies in the box."""
+    """Lower bound ``1 - n / c^2`` (clipped at 0) on the probability that the state lies in the box.
+
+    Parameters
+    ----------
+    n : int
+        Dimension of the state.
+    c : float
+        Scale of the box ``|x~_i| <= c sqrt(P_ii)``.
+
+    Returns
+    -------
+    float
+
+    Examples
+    --------
+    >>> chebyshev_level(5, 10.0), chebyshev_level(1, 2.0)
+    (0.95, 0.75)
+    >>> chebyshev_level(5, 2.0)   # a box this small guarantees nothing
+    0.0
+    """
     if n < 1 or not c > 0:
         raise ValueError(f"need n >= 1 and c > 0, got n={n!r}, c={c!r}")
     return max(0.0, 1.0 - n / c ** 2)
@@ -59,7 +78,26 @@ def chebyshev_scale(n: int, level: float) -> float:
 
 
 def chebyshev_bounds(covariance, c: float) -> np.ndarray:
-    """Half-widths ``xbar = c sqrt(diag P)`` (eq. 38), for one ``P`` (n, n) or a stack (..., n, n)."""
+    """Half-widths ``xbar = c sqrt(diag P)`` (eq. 38), for one ``P`` (n, n) or a stack (..., n, n).
+
+    Parameters
+    ----------
+    covariance : array (n, n) or (..., n, n)
+    c : float
+        Positive scale (see :func:`chebyshev_level` for the probability it gives).
+
+    Returns
+    -------
+    ndarray (n,) or (..., n)
+
+    Examples
+    --------
+    >>> p = np.diag([4.0, 0.25])
+    >>> chebyshev_bounds(p, 3.0).tolist()
+    [6.0, 1.5]
+    >>> chebyshev_bounds(np.stack([p, 4 * p]), 2.0).tolist()   # one row per estimate
+    [[4.0, 1.0], [8.0, 2.0]]
+    """
     p = np.asarray(covariance, float)
     if p.ndim < 2 or p.shape[-1] != p.shape[-2]:
         raise ValueError(f"covariance: expected (n, n) or (..., n, n), got shape {p.shape}")
@@ -72,7 +110,26 @@ def chebyshev_bounds(covariance, c: float) -> np.ndarray:
 
 
 def chebyshev_intervals(mean, covariance, c: float) -> tuple[np.ndarray, np.ndarray]:
-    """``(x^ - xbar, x^ + xbar)`` (eqs. 39-43), broadcast over a stack of estimates."""
+    """``(x^ - xbar, x^ + xbar)`` (eqs. 39-43), broadcast over a stack of estimates.
+
+    Parameters
+    ----------
+    mean : array (n,) or (..., n)
+        Estimates ``x^``.
+    covariance : array (n, n) or (..., n, n)
+        Their covariances ``P``.
+    c : float
+
+    Returns
+    -------
+    lower, upper : ndarray, the shape of ``mean``
+
+    Examples
+    --------
+    >>> lower, upper = chebyshev_intervals([1.0, 0.0], np.diag([4.0, 0.25]), 3.0)
+    >>> lower.tolist(), upper.tolist()
+    ([-5.0, -1.5], [7.0, 1.5])
+    """
     half = chebyshev_bounds(covariance, c)
     mean = np.asarray(mean, float)
     if mean.shape != half.shape:
@@ -81,7 +138,26 @@ def chebyshev_intervals(mean, covariance, c: float) -> tuple[np.ndarray, np.ndar
 
 
 def covariance_from_bounds(bounds, c: float) -> np.ndarray:
-    """Diagonal ``P_0`` whose Chebyshev box (eq. 38) is ``bounds``: ``P_0 = diag((xbar_0 / c)^2)`` (eq. 44)."""
+    """Diagonal ``P_0`` whose Chebyshev box (eq. 38) is ``bounds``: ``P_0 = diag((xbar_0 / c)^2)`` (eq. 44).
+
+    Parameters
+    ----------
+    bounds : array (n,)
+        Half-widths ``xbar_0`` (finite, non-negative).
+    c : float
+
+    Returns
+    -------
+    ndarray (n, n)
+
+    Examples
+    --------
+    >>> p0 = covariance_from_bounds([6.0, 1.5], 3.0)
+    >>> p0.tolist()
+    [[4.0, 0.0], [0.0, 0.25]]
+    >>> chebyshev_bounds(p0, 3.0).tolist()   # the inverse of chebyshev_bounds
+    [6.0, 1.5]
+    """
     bounds = np.asarray(bounds, float).reshape(-1)
     if not c > 0:
         raise ValueError(f"c must be positive, got {c!r}")

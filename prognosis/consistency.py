@@ -46,6 +46,18 @@ def whiten(residuals, covariances) -> np.ndarray:
     ----------
     residuals : array (K, m)
     covariances : array (K, m, m)
+
+    Returns
+    -------
+    ndarray (K, m)
+
+    Examples
+    --------
+    ``S = [[4, 2], [2, 2]] = L L^T`` with ``L = [[2, 0], [1, 1]]``:
+
+    >>> s = [[4.0, 2.0], [2.0, 2.0]]
+    >>> whiten([[2.0, 3.0], [np.nan, 1.0]], [s, s]).tolist()
+    [[1.0, 2.0], [nan, nan]]
     """
     e = np.asarray(residuals, float)
     s = np.asarray(covariances, float)
@@ -83,6 +95,20 @@ class ConsistencyReport:
     white_bound : float
         ``z_{(1+level)/2} / sqrt(K)``.
     level : float
+
+    Examples
+    --------
+    Returned by :func:`innovation_consistency`; unit-variance innovations
+    checked against ``S = 1``:
+
+    >>> e = np.random.default_rng(0).standard_normal(500)
+    >>> report = innovation_consistency(e, np.ones((500, 1, 1)))
+    >>> report.samples, np.round(report.variance_ratio, 2).tolist(), round(report.nis_mean, 2)
+    (500, [1.03], 1.03)
+    >>> [round(v, 2) for v in report.nis_interval], report.autocorrelation.shape, round(report.white_bound, 3)
+    ([0.88, 1.13], (10, 1), 0.088)
+    >>> report.variance_consistent, report.unbiased, report.nis_consistent, report.white, report.consistent
+    (True, True, True, True, True)
     """
 
     samples: int
@@ -135,6 +161,22 @@ def innovation_consistency(residuals, covariances, *, level: float = 0.95, lags:
         Confidence level of every test.
     lags : int
         Autocorrelation lags for the whiteness test.
+
+    Returns
+    -------
+    ConsistencyReport
+
+    Examples
+    --------
+    Innovations twice as large as the filter believes fail the variance and NIS
+    tests (the filter's ``Q`` or ``R`` is too small), yet remain unbiased and white:
+
+    >>> e = 2.0 * np.random.default_rng(0).standard_normal(500)
+    >>> report = innovation_consistency(e, np.ones((500, 1, 1)))
+    >>> report.variance_consistent, report.nis_consistent, report.unbiased, report.white
+    (False, False, True, True)
+    >>> round(report.nis_mean, 1)
+    4.1
     """
     e = np.asarray(residuals, float)
     e = e[:, None] if e.ndim == 1 else e

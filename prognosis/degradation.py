@@ -151,7 +151,29 @@ MODELS = {"linear": Linear, "exponential": Exponential}
 
 
 def degradation_model(name: str, process_noise: float = 0.0):
-    """A built-in model by name: ``"linear"`` or ``"exponential"``."""
+    """A built-in model by name: ``"linear"`` or ``"exponential"``.
+
+    Parameters
+    ----------
+    name : {"linear", "exponential"}
+    process_noise : float
+        Standard deviation of the additive process noise ``v``.
+
+    Returns
+    -------
+    Linear or Exponential
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> model = degradation_model("exponential", process_noise=0.01)
+    >>> model
+    Exponential(process_noise=0.01, n_gamma=1)
+    >>> round(float(model.step(np.array([1.0]), np.array([[np.log(2.0)]]), dt=1.0)[0]), 9)   # doubles in a step
+    2.0
+    >>> degradation_model("linear").step(np.array([1.0]), np.array([[0.5]]), dt=2.0).tolist()
+    [2.0]
+    """
     if name not in MODELS:
         raise ValueError(f"unknown degradation model {name!r}; choose from {sorted(MODELS)} or use Custom(g)")
     return MODELS[name](process_noise=process_noise)

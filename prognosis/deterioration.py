@@ -60,6 +60,26 @@ class DeteriorationEquations:
         Names of the decaying coefficient, its rate ``m`` and the dissipated energy ``D``.
     nominal : dict
         Nominal values of ``coefficient`` and ``rate`` (initial estimates).
+
+    Examples
+    --------
+    Returned by :func:`energy_deterioration`; a resistor whose resistance
+    decays with the energy it dissipates:
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> model = energy_deterioration(rlc_circuit().state_equations(), "R", rate_value=0.01)
+    >>> print(model)
+    dp_L/dt = V(t) - R*p_L/L - q_C/C
+    dq_C/dt = p_L/L
+    dR/dt = -R*m*p_L**2/L**2
+    dm/dt = 0
+    dD/dt = R*p_L**2/L**2
+    i = p_L/L
+    v_C = q_C/C
+    >>> model.element, model.power, (model.coefficient, model.rate, model.energy)
+    ('R', R*p_L**2/L**2, ('R', 'm', 'D'))
+    >>> model.nominal, model.parameters, model.inputs
+    ({'R': 10.0, 'm': 0.01}, {'L': 0.1, 'C': 0.001}, ['V'])
     """
 
     states: list
@@ -101,6 +121,22 @@ def energy_deterioration(equations, element: Hashable, *, coefficient: str | Non
     -------
     DeteriorationEquations
         ``d alpha/dt = -m P``, ``dm/dt = 0``, ``dD/dt = P`` appended (seed 000 eqs. 17-19).
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit
+    >>> model = energy_deterioration(rlc_circuit().state_equations(), "R", rate="k", energy="E")
+    >>> model.states, model.rhs[2:]
+    ([p_L, q_C, R, k, E], [-R*k*p_L**2/L**2, 0, R*p_L**2/L**2])
+    >>> model.nominal   # rate_value defaults to 0
+    {'R': 10.0, 'k': 0.0}
+
+    The coefficient and the rate are states now, so a discrete model for an
+    estimator needs no augmentation:
+
+    >>> from prognosis.statespace import discretize
+    >>> discretize(model, dt=1e-3).states
+    ('p_L', 'q_C', 'R', 'k', 'E')
     """
     power = equations.power(element)
     parameters = {str(k): v for k, v in equations.parameters.items()}

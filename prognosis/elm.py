@@ -289,6 +289,21 @@ class SeriesForecaster:
     -----
     A 1-D history (one variable) makes :meth:`forecast` return ``(steps,)`` and lets
     :meth:`update` take a scalar.
+
+    Examples
+    --------
+    One variable, a slow linear decay: initialize on 30 samples, learn 5 more online,
+    forecast 3 steps by iterating the one-step prediction.
+
+    >>> z = 1.0 - 0.01 * np.arange(40.0)
+    >>> forecaster = SeriesForecaster(embedding=3, seed=0).fit(z[:30])
+    >>> for value in z[30:35]:
+    ...     _ = forecaster.update(value)
+    >>> forecast = forecaster.forecast(3)
+    >>> forecast.shape, forecaster.n_variables, forecaster.history.shape
+    ((3,), 1, (35, 1))
+    >>> bool(np.abs(forecast - z[35:38]).max() < 1e-3)
+    True
     """
 
     def __init__(self, embedding: int = 3, n_hidden: int = 50, regularization: float = 1e-8,

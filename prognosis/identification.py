@@ -268,6 +268,21 @@ class SmootherResult:
         ``log p(y_1..y_T)`` (eq. 10) over the observed rows.
     observed : (T,) bool
         False where the row of ``y`` contained NaN (missing: no measurement update).
+
+    Examples
+    --------
+    Returned by :func:`kalman_smoother`.  A constant seen at times 1 and 3 (time 2 missing):
+
+    >>> m = LinearGaussianModel(A=[[1.0]], B=None, C=[[1.0]], D=None, Q=[[0.0]], R=[[1.0]], P1=[[1e6]])
+    >>> res = kalman_smoother(m, [1.0, np.nan, 3.0])
+    >>> res.observed.tolist(), res.smoothed_means.shape, res.lag_one_covariances.shape
+    ([True, False, True], (3, 1), (2, 1, 1))
+    >>> np.round(res.filtered_means[:, 0], 4).tolist(), np.round(res.smoothed_means[:, 0], 4).tolist()
+    ([1.0, 1.0, 2.0], [2.0, 2.0, 2.0])
+    >>> round(float(res.next_mean[0]), 4), round(float(res.next_covariance[0, 0]), 4)
+    (2.0, 0.5)
+    >>> bool(np.isclose(res.log_likelihood, log_likelihood(m, [1.0, np.nan, 3.0])))
+    True
     """
 
     predicted_means: np.ndarray
@@ -749,6 +764,24 @@ class WindowIdentification:
         ``log p(window | theta)`` for the model *before* the last EM step of this identification (the
         E-step computes it for free); EM guarantees the returned model's is at least as large.
     model : LinearGaussianModel
+
+    Examples
+    --------
+    One entry per identification of an :class:`OnlineEM`:
+
+    >>> truth = LinearGaussianModel(A=[[0.8]], B=[[1.0]], C=[[1.0]], D=[[0.0]], Q=[[0.01]], R=[[0.01]])
+    >>> u = np.random.default_rng(1).standard_normal((60, 1))
+    >>> _, y = truth.simulate(u, rng=1)
+    >>> online = OnlineEM(n_states=1, window=40, every=10, initial_iterations=20)
+    >>> for t in range(60):
+    ...     _ = online.update(y[t], u[t])
+    >>> [entry.time for entry in online.history]
+    [39, 49, 59]
+    >>> entry = online.history[-1]
+    >>> entry.model is online.model, entry.spectral_radius == entry.model.spectral_radius
+    (True, True)
+    >>> bool(abs(entry.eigenvalues[0] - 0.8) < 0.05), bool(np.isfinite(entry.log_likelihood))
+    (True, True)
     """
 
     time: int
@@ -957,6 +990,19 @@ class FeaturePrediction:
     mean, std, lower, upper : ndarray (H, m)
     level : float
     state_means, state_covariances : ndarray (H, n), (H, n, n)
+
+    Examples
+    --------
+    Returned by :func:`predict_feature`; a decaying state without load, 90 % intervals:
+
+    >>> m = LinearGaussianModel(A=[[0.9]], B=[[1.0]], C=[[1.0]], D=[[0.0]], Q=[[0.01]], R=[[0.04]])
+    >>> p = predict_feature(m, [1.0], [[0.0]], np.zeros((3, 1)), level=0.9)
+    >>> np.round(p.mean[:, 0], 4).tolist(), np.round(p.std[:, 0], 4).tolist()
+    ([1.0, 0.9, 0.81], [0.2, 0.2236, 0.241])
+    >>> np.round(p.lower[:, 0], 3).tolist(), np.round(p.upper[:, 0], 3).tolist(), p.level
+    ([0.671, 0.532, 0.414], [1.329, 1.268, 1.206], 0.9)
+    >>> p.state_means.shape, p.state_covariances.shape
+    ((3, 1), (3, 1, 1))
     """
 
     mean: np.ndarray

@@ -96,6 +96,22 @@ class Innovation:
         many degrees of freedom as measured entries when the filter is consistent).
     fading : float
         Strong-tracking factor ``lambda_k`` applied (1 without strong tracking).
+
+    Examples
+    --------
+    Returned by ``update`` and ``step`` of every filter:
+
+    >>> import sympy as sp
+    >>> from types import SimpleNamespace
+    >>> from prognosis.statespace import discretize
+    >>> x = sp.Symbol("x")
+    >>> level = SimpleNamespace(states=[x], rhs=[0 * x], inputs=[], outputs={"y": x}, parameters={})
+    >>> ekf = ExtendedKalmanFilter(discretize(level, dt=1.0), [0.0], [[1.0]], [[0.0]], [[1.0]])
+    >>> innovation = ekf.update([2.0])   # residual 2, covariance P + R = 2
+    >>> innovation.residual.tolist(), innovation.covariance.tolist(), innovation.nis, innovation.fading
+    ([2.0], [[2.0]], 2.0, 1.0)
+    >>> ekf.update([np.nan]).nis   # a missing measurement: no update
+    nan
     """
 
     residual: np.ndarray
@@ -118,6 +134,34 @@ class StrongTracking:
         makes the filter fade less on measurement noise.
     max_factor : float
         Upper bound on ``lambda_k`` (no bound by default).
+
+    Examples
+    --------
+    A sudden change of the decay rate ``a`` from 0.1 to 0.2: a filter with a small
+    process noise on ``a`` follows slowly, with strong tracking it follows at once.
+
+    >>> import sympy as sp
+    >>> from types import SimpleNamespace
+    >>> from prognosis.statespace import discretize
+    >>> x, a = sp.symbols("x a")
+    >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
+    >>> model = discretize(decay, dt=1.0, augment=["a"])
+    >>> def run(fading):
+    ...     ekf = ExtendedKalmanFilter(model, [1.0, 0.1], np.diag([1e-6, 1e-6]), np.diag([1e-8, 1e-8]), [[1e-6]],
+    ...                                fading=fading)
+    ...     truth, factors = 1.0, []
+    ...     for k in range(40):
+    ...         truth *= 0.9 if k < 20 else 0.8
+    ...         factors.append(ekf.step([truth]).fading)
+    ...     return round(float(ekf.mean[1]), 2), max(factors) > 1.0
+    >>> run(None), run(StrongTracking())
+    ((0.12, False), (0.2, True))
+
+    The factor itself, for an innovation of 3 whose predicted variance is 2 (``H = 1``, ``Q = 0``, ``R = 1``):
+    ``lambda = (9 - 1) / (2 - 1)``.
+
+    >>> StrongTracking().factor(np.array([3.0]), np.eye(1), np.eye(1), np.array([[2.0]]), np.zeros((1, 1)), np.eye(1))
+    8.0
     """
 
     forgetting: float = 0.95
@@ -230,6 +274,27 @@ class ExtendedKalmanFilter(_GaussianFilter):
     process_noise, measurement_noise : Q (n, n) and R (m, m)
     fading : StrongTracking, optional
         Strong tracking EKF (Zhou et al. 1990; seed 001 eqs. 7-12).
+
+    Examples
+    --------
+    Estimate the resistance of the RLC circuit (true 12 ohm, nominal 10) from its
+    current and capacitor voltage, the bond graph's state equations discretized
+    with ``R`` augmented as a state:
+
+    >>> from bondgraph import simulate
+    >>> from bondgraph.library import rlc_circuit
+    >>> from prognosis.statespace import discretize
+    >>> bg = rlc_circuit()
+    >>> model = discretize(bg.state_equations(), dt=1e-3, augment=["R"], method="rk4")
+    >>> model.states, model.outputs
+    (('p_L', 'q_C', 'R'), ('i', 'v_C'))
+    >>> data = simulate(bg, (0.0, 0.1), {"V": 1.0}, parameters={"R": 12.0}, t_eval=np.linspace(0.0, 0.1, 101))
+    >>> ekf = ExtendedKalmanFilter(model, [0.0, 0.0, 10.0], np.diag([0.0, 0.0, 4.0]),
+    ...                            np.diag([1e-10, 1e-12, 1e-6]), np.diag([1e-6, 1e-6]))
+    >>> for k in range(1, 101):
+    ...     _ = ekf.step([data["i"][k], data["v_C"][k]], {"V": 1.0})
+    >>> round(float(ekf.mean[2]), 1), bool(np.sqrt(ekf.covariance[2, 2]) < 0.1)
+    (12.0, True)
     """
 
     def __init__(self, model, mean, covariance, process_noise, measurement_noise, *,
@@ -268,6 +333,31 @@ class UnscentedKalmanFilter(_GaussianFilter):
     ``alpha = 1e-3, beta = 2, kappa = 0``.  The covariance is carried in full form: when
     rounding leaves it indefinite, it is repaired by clipping its eigenvalues and a
     :class:`FilterWarning` says so.
+
+    Parameters
+    ----------
+    model : DiscreteModel
+    mean, covariance : initial estimate ``x_0|0`` (n,) and ``P_0|0`` (n, n)
+    process_noise, measurement_noise : Q (n, n) and R (m, m)
+    alpha, beta, kappa : float
+        Parameters of the scaled unscented transform.
+    fading : StrongTracking, optional
+
+    Examples
+    --------
+    Estimate the rate ``a`` of ``dx/dt = -a x`` (true 0.1, initial guess 0.2):
+
+    >>> import sympy as sp
+    >>> from types import SimpleNamespace
+    >>> from prognosis.statespace import discretize
+    >>> x, a = sp.symbols("x a")
+    >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
+    >>> model = discretize(decay, dt=1.0, augment=["a"])
+    >>> ukf = UnscentedKalmanFilter(model, [1.0, 0.2], np.diag([1e-4, 1e-2]), np.diag([1e-8, 1e-6]), [[1e-6]])
+    >>> for k in range(1, 31):
+    ...     innovation = ukf.step([0.9 ** k])
+    >>> round(float(ukf.mean[1]), 3), ukf.covariance.shape, bool(innovation.nis < 9.0)
+    (0.1, (2, 2), True)
     """
 
     def __init__(self, model, mean, covariance, process_noise, measurement_noise, *,
@@ -334,6 +424,33 @@ class CubatureKalmanFilter(_GaussianFilter):
     The estimate's covariance is held as ``S`` (lower triangular, non-negative
     diagonal, ``P = S S^T``) and only ever rebuilt by :func:`tria`, so it stays
     symmetric positive semi-definite whatever the rounding.
+
+    Parameters
+    ----------
+    model : DiscreteModel
+    mean, covariance : initial estimate ``x_0|0`` (n,) and ``P_0|0`` (n, n)
+    process_noise, measurement_noise : Q (n, n) and R (m, m)
+    fading : StrongTracking, optional
+        Strong tracking SCKF (STSCKF, seed 001).
+
+    Examples
+    --------
+    Estimate the rate ``a`` of ``dx/dt = -a x`` (true 0.1, initial guess 0.2):
+
+    >>> import sympy as sp
+    >>> from types import SimpleNamespace
+    >>> from prognosis.statespace import discretize
+    >>> x, a = sp.symbols("x a")
+    >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
+    >>> model = discretize(decay, dt=1.0, augment=["a"])
+    >>> ckf = CubatureKalmanFilter(model, [1.0, 0.2], np.diag([1e-4, 1e-2]), np.diag([1e-8, 1e-6]), [[1e-6]])
+    >>> for k in range(1, 31):
+    ...     _ = ckf.step([0.9 ** k])
+    >>> round(float(ckf.mean[1]), 3)
+    0.1
+    >>> s = ckf.sqrt_covariance   # lower triangular, P = S S^T
+    >>> bool(np.allclose(s @ s.T, ckf.covariance)), bool(s[0, 1] == 0.0), bool(np.all(np.diag(s) >= 0))
+    (True, True, True)
     """
 
     def __init__(self, model, mean, covariance, process_noise, measurement_noise, *,

@@ -47,6 +47,34 @@ def look_ahead(estimator, forecasts, inputs=None) -> np.ndarray:
 
     ``inputs`` is None or a mapping (signal -> value) for all steps, or a sequence of ``n`` inputs
     (future inputs are assumed known).
+
+    Parameters
+    ----------
+    estimator : filter with ``step``, ``mean`` and ``copy``
+        Left untouched: a copy steps through the forecasts.
+    forecasts : array (n, m)
+        Forecast measurements for the next ``n`` steps.
+    inputs : None, mapping or sequence of ``n``
+
+    Returns
+    -------
+    ndarray (n, n_states)
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> from types import SimpleNamespace
+    >>> from prognosis.kalman import CubatureKalmanFilter
+    >>> from prognosis.statespace import discretize
+    >>> x, a = sp.symbols("x a")
+    >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
+    >>> model = discretize(decay, dt=1.0, augment=["a"])
+    >>> ckf = CubatureKalmanFilter(model, [1.0, 0.1], np.diag([1e-6, 1e-4]), np.diag([1e-10, 1e-8]), [[1e-8]])
+    >>> means = look_ahead(ckf, [[0.9], [0.81], [0.729]])
+    >>> np.round(means, 4).tolist()
+    [[0.9, 0.1], [0.81, 0.1], [0.729, 0.1]]
+    >>> ckf.mean.tolist()   # the filter itself has not moved
+    [1.0, 0.1]
     """
     forecasts = np.atleast_2d(np.asarray(forecasts, float))
     copy = estimator.copy()
@@ -75,6 +103,27 @@ class LookAhead:
         Mean of the look-ahead copy at ``target``.
     seconds : float
         Wall time of the filter and its look-aheads (forecasting not included).
+
+    Examples
+    --------
+    Returned by :func:`predict_ahead`; 20 measurements, 2-step-ahead predictions from time 15:
+
+    >>> import sympy as sp
+    >>> from types import SimpleNamespace
+    >>> from prognosis.kalman import CubatureKalmanFilter
+    >>> from prognosis.statespace import discretize
+    >>> x, a = sp.symbols("x a")
+    >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
+    >>> ckf = CubatureKalmanFilter(discretize(decay, dt=1.0, augment=["a"]), [1.0, 0.1], np.diag([1e-6, 1e-4]),
+    ...                            np.diag([1e-10, 1e-8]), [[1e-8]])
+    >>> z = 0.88 ** np.arange(1, 21)[:, None]
+    >>> run = predict_ahead(ckf, z, horizon=2, start=15, forecasts=lambda k: z[k:k + 2])
+    >>> run.filtered.shape, run.nis.shape, run.fading.tolist() == [1.0] * 20
+    ((20, 2), (20,), True)
+    >>> run.origin.tolist(), run.target.tolist(), run.predicted.shape
+    ([15, 16, 17, 18], [17, 18, 19, 20], (4, 2))
+    >>> bool(np.allclose(run.predicted[:, 0], z[16:, 0], rtol=1e-4)), run.seconds > 0
+    (True, True)
     """
 
     filtered: np.ndarray
@@ -104,6 +153,30 @@ def predict_ahead(estimator, measurements, *, horizon: int, start: int, forecast
         ``forecasts(k)`` -> array (horizon, m) of the measurements forecast at time ``k`` for ``k+1..k+n``.
         The forecaster is expected to have learned ``z_1..z_k`` when it is called.
     inputs : None or a mapping (signal -> value) for every step, or a sequence of K, one per time step
+
+    Returns
+    -------
+    LookAhead
+
+    Examples
+    --------
+    The rate of ``dx/dt = -a x`` is 0.12 (the filter starts at 0.1); forecasts
+    here are the true future measurements, a perfect forecaster:
+
+    >>> import sympy as sp
+    >>> from types import SimpleNamespace
+    >>> from prognosis.kalman import ExtendedKalmanFilter
+    >>> from prognosis.statespace import discretize
+    >>> x, a = sp.symbols("x a")
+    >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
+    >>> ekf = ExtendedKalmanFilter(discretize(decay, dt=1.0, augment=["a"]), [1.0, 0.1], np.diag([1e-6, 1e-4]),
+    ...                            np.diag([1e-10, 1e-8]), [[1e-8]])
+    >>> z = 0.88 ** np.arange(1, 31)[:, None]
+    >>> run = predict_ahead(ekf, z, horizon=5, start=10, forecasts=lambda k: z[k:k + 5])
+    >>> int(run.origin[0]), int(run.target[0]), round(float(run.predicted[0, 0] / z[14, 0]), 4)
+    (10, 15, 1.0)
+    >>> round(float(ekf.mean[1]), 3)   # the filter itself has seen every real measurement
+    0.12
     """
     z = np.asarray(measurements, float)
     if z.ndim != 2:

@@ -46,6 +46,16 @@ class RULDistribution:
     times : ndarray (T,)
         Times of the kept trajectories (empty unless ``keep > 0``).
     trajectories : ndarray (T, d, keep)
+
+    Examples
+    --------
+    Returned by :func:`monte_carlo_rul`; built by hand here, one draw surviving the horizon:
+
+    >>> rul = RULDistribution(origin=10.0, rul=np.array([1.0, 2.0, 3.0, np.inf]), initial=np.zeros((1, 4)))
+    >>> rul.eol.tolist(), rul.median, rul.mean
+    ([11.0, 12.0, 13.0, inf], 2.5, inf)
+    >>> rul.quantile(0.5), rul.quantile(0.9), rul.probability_before(2.0)
+    (2.0, inf, 0.5)
     """
 
     origin: float
@@ -69,7 +79,8 @@ class RULDistribution:
 
     @property
     def std(self) -> float:
-        return float(np.std(self.rul))
+        """Standard deviation of the draws; ``inf`` when some draws survive the horizon (as ``mean``)."""
+        return float(np.std(self.rul)) if np.all(np.isfinite(self.rul)) else float("inf")
 
     def quantile(self, q: float) -> float:
         """The ``q`` quantile of the RUL (``inf`` if more than ``1 - q`` survive the horizon)."""
@@ -85,6 +96,28 @@ def sample_gaussian(mean, covariance, n: int, rng: np.random.Generator, lower=No
     """``n`` draws (d, n) of ``N(mean, covariance)`` kept inside ``[lower, upper]`` by redrawing.
 
     A zero-variance direction is allowed (the factor comes from ``eigh``).
+
+    Parameters
+    ----------
+    mean : array (d,)
+    covariance : array (d, d), symmetric positive semi-definite
+    n : int
+        Number of draws.
+    rng : numpy.random.Generator
+    lower, upper : array (d,), optional
+        Bounds every draw must respect (``-inf``/``inf`` for none); the mean must lie inside.
+    max_rounds : int
+        Redraw rounds before giving up with a ``RuntimeError``.
+
+    Returns
+    -------
+    ndarray (d, n)
+
+    Examples
+    --------
+    >>> x = sample_gaussian([0.0, 1.0], np.diag([1.0, 0.0]), 1000, np.random.default_rng(0), lower=[0.0, -np.inf])
+    >>> x.shape, bool(x[0].min() >= 0.0), bool(np.all(x[1] == 1.0))
+    ((2, 1000), True, True)
     """
     mean = np.asarray(mean, float).reshape(-1)
     d = mean.size
@@ -137,6 +170,25 @@ def monte_carlo_rul(rates: Callable, mean, covariance, margin: Callable, *, hori
         The same seed gives the same draws (common random numbers across decisions).
     keep : int
         Number of trajectories to return (for plots).
+
+    Returns
+    -------
+    RULDistribution
+
+    Examples
+    --------
+    ``da/dt = -m`` from ``a = 1`` with ``m ~ N(0.1, 0.01^2)`` kept positive;
+    failure at ``a = 0.5``, that is after ``0.5 / m``:
+
+    >>> rul = monte_carlo_rul(lambda x, t: np.vstack([-x[1], 0 * x[1]]), [1.0, 0.1], np.diag([0.0, 1e-4]),
+    ...                       lambda x: x[0] - 0.5, horizon=20.0, dt=0.1, n_samples=200, seed=1,
+    ...                       lower=[-np.inf, 0.0], keep=3)
+    >>> rul.rul.shape, rul.initial.shape, rul.trajectories.shape[1:]
+    ((200,), (2, 200), (2, 3))
+    >>> bool(4.5 < rul.median < 5.5), bool(np.all(np.isfinite(rul.rul)))
+    (True, True)
+    >>> bool(np.allclose(rul.rul, 0.5 / rul.initial[1]))   # exact but for the interpolated crossing
+    True
     """
     if not dt > 0 or not horizon > 0:
         raise ValueError(f"dt and horizon must be positive, got dt={dt!r}, horizon={horizon!r}")

@@ -40,6 +40,29 @@ class ObservationModel:
         ``h`` in the ARR's signals and the symbol of the candidate.
     coefficient : sympy.Expr or None
         ``a_1 = d r_n / d theta`` when ``h`` is linear in theta, else None.
+
+    Examples
+    --------
+    Returned by :func:`observation_model`.  The loop ARR of the RLC circuit with
+    the resistance as candidate: ``y = -(R - R_n) i``.
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> from diagnosis.residuals import compile_arr
+    >>> arr = derive_arrs(rlc_circuit())[0]
+    >>> h = observation_model(arr, "R")
+    >>> h.candidate, h.nominal, h.expression, h.coefficient
+    ('R', 10.0, -(R - 10.0)*i(t), -i(t))
+    >>> compile_arr(arr).points   # the order of the point values
+    [V, i, v_C, d1_i]
+
+    Called on particles (here three values of R, with i = 0.5 A), and inverted:
+
+    >>> h(np.array([9.0, 11.0, 12.0]), [1.0, 0.5, 0.0, 0.0]).tolist()
+    [0.5, -0.5, -1.0]
+    >>> points = [np.ones(2), np.full(2, 0.5), np.zeros(2), np.zeros(2)]   # two samples
+    >>> h.invert(np.array([-0.5, -1.0]), points, bracket=(5.0, 20.0)).tolist()
+    [11.0, 12.0]
     """
 
     arr: object

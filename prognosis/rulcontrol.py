@@ -61,6 +61,19 @@ class RULDecision:
         False when even ``lower`` cannot meet the constraint (``theta = lower`` then).
     history : tuple of (theta, quantile)
         Every evaluated candidate, in order.
+
+    Examples
+    --------
+    Returned by :meth:`RULController.decide`.  Life ``10 / (1 + theta)``: even
+    ``theta = -0.4`` gives only 16.7 h, short of the 20 h asked for:
+
+    >>> from prognosis.montecarlo import RULDistribution
+    >>> life = lambda theta: RULDistribution(0.0, np.full(100, 10.0 / (1.0 + theta)), np.zeros((1, 100)))
+    >>> decision = RULController(rul_ref=20.0, eta=0.05, lower=-0.4).decide(life)
+    >>> decision.theta, round(decision.quantile, 2), decision.probability, decision.feasible
+    (-0.4, 16.67, 1.0, False)
+    >>> [(theta, round(q, 2)) for theta, q in decision.history]   # theta = 0 first, then the lower bound
+    [(0.0, 10.0), (-0.4, 16.67)]
     """
 
     theta: float
@@ -88,6 +101,22 @@ class RULController:
         Stop when ``|q_eta - rul_ref|`` is below it (time units), or when the
         bracket is narrower than ``1e-6 (1 + |theta|)``.
     max_iterations : int
+
+    Examples
+    --------
+    Life ``10 / (1 + theta)`` hours on 100 identical draws; requiring 12 h
+    needs ``theta <= 10 / 12 - 1 = -1/6``:
+
+    >>> from prognosis.montecarlo import RULDistribution
+    >>> life = lambda theta: RULDistribution(0.0, np.full(100, 10.0 / (1.0 + theta)), np.zeros((1, 100)))
+    >>> controller = RULController(rul_ref=12.0, eta=0.05, gain=0.1, lower=-0.9)
+    >>> decision = controller.decide(life)
+    >>> round(decision.theta, 3), round(decision.quantile, 2), decision.probability, decision.feasible
+    (-0.167, 12.0, 0.0, True)
+    >>> decision.quantile > controller.rul_ref   # the constraint holds on the draws
+    True
+    >>> RULController(rul_ref=0.5).decide(life).theta   # already long enough: no change
+    0.0
     """
 
     rul_ref: float

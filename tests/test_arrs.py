@@ -138,3 +138,20 @@ def test_two_sensors_on_one_junction_give_a_measurement_arr():
     redundant = [arr for arr in arrs if arr.detector is not None]
     assert [arr.name for arr in redundant] == ["ARR_omega2"]  # the first sensor is dualized, the second measured
     assert sp.simplify(redundant[0].nominal - (fn("omega2") - fn("omega"))) == 0
+
+
+def test_signature_matrix_lists_parameters_no_arr_can_see():
+    """Default rows are every element parameter, so an unmonitorable fault shows as Mb = 0 (seed 003 table 2)."""
+    import warnings
+
+    from bondgraph.library import torsion_bar
+    from diagnosis import signature_matrix
+
+    bg = torsion_bar()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # ARR_1_1 cannot be expressed without the current sensor
+        sm = signature_matrix(derive_arrs(bg))
+    assert set(bg.uncertainties) <= set(sm.rows)
+    mb = dict(zip(sm.rows, sm.detectable.tolist()))
+    assert mb["J_m"] == 0 and mb["f_m"] == 0 and mb["b_Md"] == 0
+    assert mb["b_Ld"] == 1 and mb["k_s"] == 1

@@ -698,3 +698,15 @@ def test_example_scenario_2_predicts_after_the_restart(example_run):
     _, data = example_run
     seed = data["seeds"][0]
     assert seed["restart_h"] and 4.0 < seed["restart_h"][0] < seed["scenario_2"]["origin_h"] == pytest.approx(5.0)
+
+
+def test_rul_distribution_std_is_infinite_with_censored_draws():
+    import warnings
+
+    from prognosis import RULDistribution
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no 'invalid value' RuntimeWarning from inf - inf
+        censored = RULDistribution(0.0, np.array([1.0, np.inf]), np.zeros((1, 2)))
+        assert censored.std == np.inf and censored.mean == np.inf
+    assert RULDistribution(0.0, np.array([1.0, 3.0]), np.zeros((1, 2))).std == 1.0
