@@ -526,7 +526,25 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``bgphm`` console script; returns the exit code."""
+    """Entry point of the ``bgphm`` console script; returns the exit code.
+
+    Commands: ``arr`` (the ARR report), ``simulate``, ``detect``, ``prognose`` and ``demo``; ``bgphm
+    COMMAND --help`` lists each one's options.  Exit codes: 0 success, 2 bad usage or bad input (one
+    line on stderr naming the file, line, column, node or parameter), 1 anything else, including an
+    interrupted run.  Progress goes to stderr unless ``--quiet``.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> out = pathlib.Path(tempfile.mkdtemp()) / "rlc.csv"
+    >>> main(["--quiet", "simulate", "rlc", "--t-end", "0.1", "--samples", "11", "--out", str(out)])  # doctest: +ELLIPSIS
+    wrote ...rlc.csv
+    0
+    >>> out.read_text().splitlines()[0]
+    't,V,i,v_C'
+    >>> main(["--quiet", "simulate", "no-such-model.json"])   # exit code 2, message on stderr
+    2
+    """
     parser = build_parser()
     args = parser.parse_args(argv)  # exits with 2 on bad usage
     progress = Progress(args.quiet)

@@ -12,10 +12,12 @@ from .equations import AlgebraicLoopError, StateEquations, causal_equations, mod
 from .errors import CausalityError, EquationError, LawError, ModelError, SimulationError
 from .model import BondGraph, Bond, Element, signal_function
 from .simulation import SimulationResult, simulate
+from .drawing import to_svg, to_tikz
+from .io import load_model, to_json
 
 __all__ = [
     "BondGraph", "Bond", "Element", "Causality", "CausalIssue", "PIController", "StateEquations",
     "SimulationResult", "assign_causality", "causal_equations", "model_equations", "state_equations",
     "simulate", "signal_function", "ModelError", "LawError", "CausalityError", "EquationError",
-    "SimulationError", "AlgebraicLoopError",
+    "SimulationError", "AlgebraicLoopError", "load_model", "to_json", "to_svg", "to_tikz",
 ]

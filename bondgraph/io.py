@@ -162,6 +162,17 @@ def to_json(bg: BondGraph, *, inputs: Mapping | None = None, t_end: float | None
     """The node-link JSON of a bond graph that :func:`model_from_json` reads back.
 
     Laws and moduli are written as strings; only constant ``inputs`` can be stored.
+
+    Examples
+    --------
+    >>> import json
+    >>> from bondgraph.library import rlc_circuit
+    >>> text = to_json(rlc_circuit(), inputs={"V": 1.0}, t_end=0.5)
+    >>> json.loads(text)["graph"]["inputs"]
+    {'V': 1.0}
+    >>> back = model_from_json(text)
+    >>> back.model.parameters == rlc_circuit().parameters, back.inputs, back.t_end
+    (True, {'V': 1.0}, 0.5)
     """
     graph_settings: dict = {"name": bg.name}
     for key, value in (("inputs", inputs), ("x0", x0)):

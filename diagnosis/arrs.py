@@ -136,7 +136,7 @@ class ARR:
     detector: Hashable | None = None
     implicit: bool = False
     blocked_by: tuple = ()
-    _compiled: object = field(default=None, repr=False, compare=False)
+    _compiled: object = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def signals(self) -> list[str]:

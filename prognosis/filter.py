@@ -73,7 +73,7 @@ class VarianceAdaptation:
     gain: float = 0.001
     window: int = 10
     floor: float = 1e-6
-    _means: deque = field(default=None, repr=False)
+    _means: deque = field(default=None, init=False, repr=False)
 
     def reset(self) -> None:
         self._means = deque(maxlen=self.window + 1)

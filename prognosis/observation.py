@@ -70,7 +70,7 @@ class ObservationModel:
     nominal: float
     expression: sp.Expr
     coefficient: sp.Expr | None
-    _function: object = field(default=None, repr=False)
+    _function: object = field(default=None, init=False, repr=False)
 
     @property
     def symbol(self) -> sp.Symbol:
