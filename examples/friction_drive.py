@@ -37,7 +37,6 @@ import json
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
@@ -50,6 +49,7 @@ import numpy as np  # noqa: E402
 import sympy as sp  # noqa: E402
 
 from bgphm.plotting import band, pyplot, save_figure, write_figures  # noqa: E402
+from bgphm.runs import over_seeds, run_main  # noqa: E402
 from bondgraph.library import friction_drive  # noqa: E402
 from prognosis import (ExtendedKalmanFilter, InnovationMonitor, RULController, chebyshev_intervals,  # noqa: E402
                        covariance_from_bounds, discretize, energy_deterioration, innovation_consistency,
@@ -531,17 +531,8 @@ def main(argv=None) -> dict:
     print(f"Seed 000 on the friction drive: omega2_ref = {OMEGA2_REF} rad/s, m {scenario.m_initial:g} -> "
           f"{scenario.m_after:g} at 4 h, D_max = {scenario.d_max:g} J, {len(seeds)} seeds"
           + (f", {args.speedup:g}x faster" if args.speedup != 1.0 else ""))
-    results = []
-    if len(seeds) == 1 or args.workers <= 1:
-        for i, seed in enumerate(seeds, start=1):
-            results.append(run_seed(seed, scenario, keep=i == 1))
-            _progress(args.quiet, i, len(seeds))
-    else:
-        with ProcessPoolExecutor(max_workers=args.workers) as pool:
-            jobs = [pool.submit(run_seed, seed, scenario, i == 0) for i, seed in enumerate(seeds)]
-            for i, job in enumerate(jobs, start=1):
-                results.append(job.result())
-                _progress(args.quiet, i, len(seeds))
+    results = over_seeds(run_seed, [(seed, scenario, i == 0) for i, seed in enumerate(seeds)],
+                         workers=max(1, args.workers), progress=lambda done, total: _progress(args.quiet, done, total))
     first = results[0]
     summary = summarize(results)
     print(report(summary))
@@ -552,4 +543,4 @@ def main(argv=None) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -35,6 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from bgphm.plotting import band, pyplot, save_figure, write_figures
+from bgphm.runs import run_main
 from prognosis.identification import (FeaturePrediction, IdentificationWarning, LinearGaussianModel, OnlineEM,
                                       detect_trend, fault_trend, predict_feature)
 
@@ -447,4 +448,4 @@ def _report(summary: dict) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

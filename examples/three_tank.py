@@ -38,7 +38,6 @@ import json
 import os
 import sys
 import time
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -51,6 +50,7 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 from bgphm.plotting import pyplot, save_figure, write_figures
+from bgphm.runs import over_seeds, run_main
 from bondgraph.library import THREE_TANK, three_tank
 from diagnosis import derive_arrs, noise_margin, signature_matrix
 from prognosis import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter, SeriesForecaster,
@@ -369,11 +369,9 @@ def main(argv=None) -> dict:
     results = [{k: v for k, v in first.items() if k not in ("scenario", "runs", "forecasts")}]
     _progress(args.quiet, 1, len(seeds))
     if len(seeds) > 1:
-        with ProcessPoolExecutor(max_workers=max(1, args.workers)) as pool:
-            jobs = [pool.submit(run_seed, seed, args.methods, args.parameter_std) for seed in seeds[1:]]
-            for i, job in enumerate(jobs, start=2):
-                results.append(job.result())
-                _progress(args.quiet, i, len(seeds))
+        results += over_seeds(run_seed, [(seed, args.methods, args.parameter_std) for seed in seeds[1:]],
+                              workers=max(1, args.workers),
+                              progress=lambda done, _: _progress(args.quiet, done + 1, len(seeds)))
     summary = summarize(results)
     for name, d in summary["detection"].items():
         when = "never" if d["detection_time_s"] is None else f"k = {d['detection_time_s']:.1f} +- {d['detection_time_s_std']:.1f}"
@@ -394,4 +392,4 @@ def _progress(quiet: bool, done: int, total: int) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

@@ -47,6 +47,7 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
 from bgphm.plotting import band, pyplot, save_figure, write_figures
+from bgphm.runs import run_main
 from bondgraph import simulate
 from bondgraph.library import (MASS_LOAD, OMEGA_M_REF, TORSION_BAR, U_MAX, torsion_bar, torsion_bar_controller,
                                torsion_bar_monitorable, with_suspended_load)
@@ -494,4 +495,4 @@ def main(argv=None) -> dict:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

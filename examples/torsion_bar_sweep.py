@@ -33,6 +33,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import torsion_bar as example  # noqa: E402  (the sibling example script)
 
 from bgphm.plotting import pyplot, save_figure, write_figures  # noqa: E402
+from bgphm.runs import run_main  # noqa: E402
 from prognosis import VarianceAdaptation  # noqa: E402
 
 FIGURES = ("rmse_theta", "rmse_gamma", "rmad_gamma", "ra", "rmad_rul", "alpha_lambda_pass_rate",
@@ -177,4 +178,4 @@ def main(argv=None) -> list[dict]:
 
 
 if __name__ == "__main__":
-    main()
+    run_main(main)

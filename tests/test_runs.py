@@ -1,0 +1,81 @@
+"""bgphm.runs: ordered results over worker processes, progress, and a prompt, clean Ctrl-C."""
+
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+import pytest
+
+from bgphm.runs import over_seeds, progress_line, run_main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def square_after(x, pause):
+    time.sleep(pause)
+    return x * x
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_results_come_back_in_order_with_progress(workers):
+    calls = []
+    # later seeds finish first in parallel: the order must still be the arguments'
+    out = over_seeds(square_after, [(1, 0.3), (2, 0.0), (3, 0.1)], workers=workers,
+                     progress=lambda done, total: calls.append((done, total)))
+    assert out == [1, 4, 9]
+    assert calls == [(1, 3), (2, 3), (3, 3)]
+
+
+def test_bad_workers_and_job_errors():
+    with pytest.raises(ValueError, match="workers"):
+        over_seeds(square_after, [(1, 0.0)], workers=0)
+    with pytest.raises(ZeroDivisionError):
+        over_seeds(divmod, [(1, 1), (1, 0)], workers=2)
+
+
+def test_progress_line_prints_on_stderr_unless_quiet(capsys):
+    assert progress_line(True) is None
+    progress_line(False, "case")(2, 5)
+    assert capsys.readouterr().err == "  case 2/5 done\n"
+
+
+def test_run_main_turns_an_interrupt_into_exit_code_1(capsys):
+    def main():
+        raise KeyboardInterrupt
+
+    with pytest.raises(SystemExit) as stop:
+        run_main(main)
+    assert stop.value.code == 1
+    assert capsys.readouterr().err == "interrupted\n"
+
+
+def test_ctrl_c_stops_every_worker_at_once(tmp_path):
+    script = tmp_path / "long_run.py"
+    script.write_text(textwrap.dedent(f"""
+        import signal, sys, time
+        sys.path.insert(0, {str(ROOT)!r})
+        signal.signal(signal.SIGINT, signal.default_int_handler)  # a background shell may have ignored it
+        from bgphm.runs import over_seeds, progress_line, run_main
+
+        def job(seed):
+            time.sleep(0.2 if seed == 0 else 60.0)
+            return seed
+
+        if __name__ == "__main__":
+            run_main(lambda: over_seeds(job, [(s,) for s in range(6)], workers=2, progress=progress_line(False)))
+    """))
+    run = subprocess.Popen([sys.executable, str(script)], start_new_session=True, stdout=subprocess.PIPE,
+                           stderr=subprocess.PIPE, text=True)
+    time.sleep(3.0)  # the first job is done, two 60 s jobs are running
+    os.killpg(run.pid, signal.SIGINT)  # what Ctrl-C does: the whole foreground process group
+    start = time.perf_counter()
+    _, err = run.communicate(timeout=30)
+    assert time.perf_counter() - start < 10.0
+    assert run.returncode == 1
+    assert err.splitlines()[-1] == "interrupted"
+    assert "Traceback" not in err
+    assert "seed 1/6 done" in err
