@@ -141,7 +141,7 @@ def cmd_prognose(args, progress: Progress) -> int:
     direction = _direction(args, nominal)
     record = _record(args.data, [arr], progress)
     (evaluation,) = _detect([arr], record, args, progress)
-    residual_std = robust_std(evaluation.residual[_calibration(record, args)])
+    residual_std = robust_std(evaluation.residual[record.t <= _calibration_end(record, args)])
     step = float(np.median(np.diff(record.t)))
     dt = args.dt if args.dt is not None else step * max(1, round((record.t[-1] - record.t[0]) / 2000 / step))
     if args.dt is not None and abs(round(dt / step) * step - dt) > 1e-6 * dt:
@@ -235,15 +235,15 @@ def _record(path, arrs: list, progress: Progress) -> Record:
     return record
 
 
-def _calibration(record: Record, args) -> np.ndarray:
-    """Samples used to calibrate the noise margin: t <= --calibrate (default: the first 20 % of the record)."""
+def _calibration_end(record: Record, args) -> float:
+    """End of the stretch that calibrates the noise margin: --calibrate (default: the first 20 % of the record)."""
     t0, t1 = float(record.t[0]), float(record.t[-1])
     until = args.calibrate if args.calibrate is not None else t0 + 0.2 * (t1 - t0)
-    mask = record.t <= until
-    if mask.sum() < 20:
-        raise UsageError(f"--calibrate {until:g}: only {int(mask.sum())} samples before it; at least 20 are needed "
+    count = int(np.count_nonzero(record.t <= until))
+    if count < 20:
+        raise UsageError(f"--calibrate {until:g}: only {count} samples before it; at least 20 are needed "
                          "to estimate the residual noise (or give --margin)")
-    return mask
+    return until
 
 
 def _detect(arrs: list, record: Record, args, progress: Progress) -> list:
@@ -257,10 +257,9 @@ def _detect(arrs: list, record: Record, args, progress: Progress) -> list:
             if args.margin is not None:
                 margin = args.margin
             else:
-                mask = _calibration(record, args)
-                nominal = {"t": record.t[mask], **{s: record[s][mask] for s in arr.signals}}
                 from diagnosis.detection import noise_margin
 
+                nominal = record.between(end=_calibration_end(record, args))
                 margin = noise_margin(arr, nominal, k=args.k, **options)
             evaluations.append(arr.evaluate(record, margin=margin, **options))
         for w in caught:

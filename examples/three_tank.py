@@ -36,7 +36,6 @@ import argparse
 import csv
 import json
 import os
-import sys
 import time
 from dataclasses import dataclass
 from functools import lru_cache
@@ -50,7 +49,7 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 import numpy as np  # noqa: E402
 
 from bgphm.plotting import pyplot, save_figure, write_figures
-from bgphm.runs import over_seeds, run_main
+from bgphm.runs import over_seeds, progress_line, run_main
 from bondgraph.library import THREE_TANK, three_tank
 from diagnosis import derive_arrs, noise_margin, signature_matrix
 from prognosis import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter, SeriesForecaster,
@@ -367,11 +366,13 @@ def main(argv=None) -> dict:
           f"{HORIZON}-step-ahead prediction from k = {TRAIN}, {len(seeds)} seeds")
     first = run_seed(seeds[0], args.methods, args.parameter_std, keep=True)
     results = [{k: v for k, v in first.items() if k not in ("scenario", "runs", "forecasts")}]
-    _progress(args.quiet, 1, len(seeds))
-    if len(seeds) > 1:
+    report = progress_line(args.quiet)
+    if report:
+        report(1, len(seeds))
+    if len(seeds) > 1:  # the first seed ran here, to keep its arrays for the figures
         results += over_seeds(run_seed, [(seed, args.methods, args.parameter_std) for seed in seeds[1:]],
                               workers=max(1, args.workers),
-                              progress=lambda done, _: _progress(args.quiet, done + 1, len(seeds)))
+                              progress=report and (lambda done, _: report(done + 1, len(seeds))))
     summary = summarize(results)
     for name, d in summary["detection"].items():
         when = "never" if d["detection_time_s"] is None else f"k = {d['detection_time_s']:.1f} +- {d['detection_time_s_std']:.1f}"
@@ -384,11 +385,6 @@ def main(argv=None) -> dict:
         for path in write(args.out, summary, results, first):
             print(f"  wrote {path}")
     return summary
-
-
-def _progress(quiet: bool, done: int, total: int) -> None:
-    if not quiet:
-        print(f"  seed {done}/{total} done", file=sys.stderr, flush=True)
 
 
 if __name__ == "__main__":
