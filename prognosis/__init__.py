@@ -22,6 +22,7 @@ from .lookahead import LookAhead, look_ahead, predict_ahead
 from .monitor import HealthMonitor, MonitorResult
 from .montecarlo import RULDistribution, monte_carlo_rul, sample_gaussian
 from .observation import ObservationModel, observation_model
+from .predictive import PosteriorPrediction, SamplerWarning, WindowPosterior, sample_posterior, window_log_posterior
 from .rul import RULPrediction, RULPredictor, predict_rul
 from .rulcontrol import RULController, RULDecision
 from .statespace import DiscreteModel, discretize
@@ -33,6 +34,7 @@ __all__ = [
     "whiten", "EMResult", "FeaturePrediction", "IdentificationWarning", "LinearGaussianModel", "OnlineEM",
     "SmootherResult", "WindowIdentification", "detect_trend", "em_step", "fault_trend", "fit_em", "initial_model",
     "kalman_smoother", "log_likelihood", "predict_feature",
+    "PosteriorPrediction", "SamplerWarning", "WindowPosterior", "sample_posterior", "window_log_posterior",
     "BootstrapParticleFilter", "CubatureKalmanFilter", "Custom", "DiscreteModel", "Exponential",
     "ExtendedKalmanFilter", "FilterWarning", "HealthMonitor", "Innovation", "Linear", "LookAhead", "MonitorResult",
     "ObservationModel", "ParticleFilter", "ROSELM", "RULPrediction", "RULPredictor", "SeriesForecaster",
