@@ -513,8 +513,16 @@ def test_gearbox_example_smoke(tmp_path):
     for p in (before, after):
         assert 0.0 <= p["coverage"] <= 1.0
         assert p["oracle_coverage"] > 0.8  # the true model's interval is calibrated (nominal 95 %)
-        assert p["coverage_by_lead"]["0-1h"] >= 0.5  # the identified model is fine one hour ahead
+        assert p["posterior"]["coverage_by_lead"]["0-1h"] >= 0.5  # fine one hour ahead
+    assert before["coverage_by_lead"]["0-1h"] >= 0.5  # the identified model too, before the fault
     assert before["coverage_before_onset"] > 0.5
+    # the posterior predictive over the window's parameters: stable before the fault, calibrated before the onset
+    for p in (before["posterior"], after["posterior"]):
+        assert 0.0 <= p["coverage"] <= 1.0 and 0.0 <= p["probability_unstable"] <= 1.0
+        low, median, high = p["spectral_radius_quantiles"]
+        assert low <= median <= high and p["interval_half_width_end"] > 0
+    assert before["posterior"]["probability_unstable"] < 0.05 and before["posterior"]["coverage_before_onset"] > 0.8
+    assert after["posterior"]["spectral_radius_quantiles"][2] > before["posterior"]["spectral_radius_quantiles"][2]
     assert summary["of"] == 1 and summary["alarms_before_onset"] == 0
     if (tmp_path / "fig00_record.png").exists():  # matplotlib is optional
         assert {p.name for p in tmp_path.glob("fig*.png")} == {
