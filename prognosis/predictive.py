@@ -57,6 +57,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
+from math import comb
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -350,7 +351,6 @@ def _mixture_quantile(q: float, loc: np.ndarray, scale: np.ndarray, nu: int, tol
 def _prior_draws(rng: np.random.Generator, count: int, n: int, max_radius: float) -> np.ndarray:
     """Uniform draws of ``(a, f)`` over the prior's support, by rejection from the bounding box."""
     # |c_i| <= binom(n, i) rho^i for a polynomial with roots inside radius rho
-    from math import comb
     box_a = np.array([comb(n, i) * max_radius ** i for i in range(1, n + 1)])
     box_f = np.array([comb(n, i) for i in range(1, n + 1)], dtype=float)
     kept, total = [], 0
