@@ -18,6 +18,8 @@ Given the two polynomials ``theta = (a, f)`` the predictor output is *linear* in
     y_t = g_t(theta) + phi_t(theta)^T beta + e_t,
 
 so ``beta`` and ``sigma`` are integrated out in closed form and only ``2 n`` parameters are sampled.
+An input declared *direct* (``direct_inputs``) has no column in ``B``: it acts on the output through ``D``
+only, which shortens ``beta`` by ``n`` entries per such input.
 
 Prior
     ``p(sigma) ~ 1/sigma``; for ``beta`` given ``theta``, Jeffreys' ``|Phi^T Phi|^(1/2)`` (``Phi`` stacks the
@@ -56,6 +58,7 @@ True
 from __future__ import annotations
 
 import warnings
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from math import comb
 
@@ -97,9 +100,24 @@ def _companion_radius(c: np.ndarray) -> np.ndarray:
         return np.abs(np.linalg.eigvals(np.nan_to_num(comp, nan=np.inf))).max(axis=1) if m else np.zeros(0)
 
 
-def _columns(n: int, r: int) -> tuple[np.ndarray, np.ndarray]:
-    """Column indices (in the ``1 + p`` layout, column 0 the known part) of ``B`` (n, r) and ``D`` (r,)."""
-    return 1 + n + np.arange(n * r).reshape(n, r), 1 + n + n * r + np.arange(r)
+def _columns(n: int, r: int, dynamic: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Column indices (in the ``1 + p`` layout, column 0 the known part) of ``B`` and ``D``.
+
+    ``B`` is (n, len(dynamic)): only the inputs in ``dynamic`` drive the state; ``D`` is (r,).
+    """
+    rd = dynamic.size
+    return 1 + n + np.arange(n * rd).reshape(n, rd), 1 + n + n * rd + np.arange(r)
+
+
+def _dynamic_inputs(r: int, direct_inputs: Sequence[int]) -> np.ndarray:
+    """Indices of the inputs that drive the state: all but ``direct_inputs`` (checked, named when bad)."""
+    direct = [int(j) for j in direct_inputs]
+    for j in direct:
+        if not 0 <= j < r:
+            raise ValueError(f"direct_inputs names input column {j}, but u has {r} columns")
+    if len(set(direct)) != len(direct):
+        raise ValueError(f"direct_inputs repeats an input column: {list(direct_inputs)}")
+    return np.array([j for j in range(r) if j not in direct], dtype=int)
 
 
 def _shift(poly: np.ndarray, state: np.ndarray) -> np.ndarray:
@@ -110,20 +128,21 @@ def _shift(poly: np.ndarray, state: np.ndarray) -> np.ndarray:
     return out
 
 
-def _regression(theta: np.ndarray, y: np.ndarray, u: np.ndarray, max_radius: float) -> _Regression:
+def _regression(theta: np.ndarray, y: np.ndarray, u: np.ndarray, max_radius: float,
+                dynamic: np.ndarray) -> _Regression:
     """Run the predictor of every particle over the window and solve its regression."""
     m, n2 = theta.shape
     n, r, N = n2 // 2, u.shape[1], y.size
-    p = n + n * r + r
+    p = n + n * dynamic.size + r
     a, f = theta[:, :n], theta[:, n:]
     k = a - f
-    cB, cD = _columns(n, r)
+    cB, cD = _columns(n, r, dynamic)
     # per-step inputs of the recursion x_{t+1} = F x_t + (B - K D) u_t + K y_t, in the 1 + p layout
     known = np.zeros((N, 1 + p))  # multiplied by K: [y_t, 0 (x_1, B), -u_t (D)]
     known[:, 0], known[:, cD] = y, -u
-    direct = np.zeros((N, n, 1 + p))  # B u_t: row i gets u_t in the columns of B[i]
+    drive = np.zeros((N, n, 1 + p))  # B u_t: row i gets u_t in the columns of B[i]
     for i in range(n):
-        direct[:, i, cB[i]] = u
+        drive[:, i, cB[i]] = u[:, dynamic]
     output = np.zeros((N, 1 + p))  # y_hat_t = x_t[0] + D u_t
     output[:, cD] = u
 
@@ -133,7 +152,7 @@ def _regression(theta: np.ndarray, y: np.ndarray, u: np.ndarray, max_radius: flo
     with np.errstate(all="ignore"):
         for t in range(N):
             rows[:, t] = state[:, 0] + output[t]
-            state = _shift(f, state) + k[:, :, None] * known[t] + direct[t]
+            state = _shift(f, state) + k[:, :, None] * known[t] + drive[t]
         z = y - rows[:, :, 0]
         phi = rows[:, :, 1:]
         finite = np.isfinite(phi).all(axis=(1, 2)) & np.isfinite(z).all(axis=1)
@@ -151,13 +170,14 @@ def _regression(theta: np.ndarray, y: np.ndarray, u: np.ndarray, max_radius: flo
     return _Regression(np.where(ok, log_post, -np.inf), R, qz, rss, state, N - p)
 
 
-def window_log_posterior(theta: ArrayLike, y: ArrayLike, u: ArrayLike | None, *, max_radius: float = 1.05
-                         ) -> np.ndarray:
+def window_log_posterior(theta: ArrayLike, y: ArrayLike, u: ArrayLike | None, *, max_radius: float = 1.05,
+                         direct_inputs: Sequence[int] = ()) -> np.ndarray:
     """Log posterior density (up to a constant) of ``theta = (a, f)`` for a population of particles.
 
     ``theta`` is (M, 2 n): the coefficients of the characteristic polynomials of ``A`` and of the
     predictor ``F = A - K C`` (``z^n - c_1 z^(n-1) - ... - c_n``).  The value is ``-nu/2 log RSS(theta)``
-    inside the prior's support and ``-inf`` outside it (see the module docstring).
+    inside the prior's support and ``-inf`` outside it (see the module docstring).  The input columns in
+    ``direct_inputs`` act on the output through ``D`` only (their column of ``B`` is zero).
 
     Example
     -------
@@ -173,7 +193,8 @@ def window_log_posterior(theta: ArrayLike, y: ArrayLike, u: ArrayLike | None, *,
         raise ValueError(f"the window posterior handles one output; y has {y.shape[1]} columns")
     if theta.shape[1] % 2 or theta.shape[1] == 0:
         raise ValueError(f"theta must have 2 n columns (a and f), got {theta.shape[1]}")
-    return _regression(theta, y[:, 0], u, max_radius).log_posterior
+    dynamic = _dynamic_inputs(u.shape[1], direct_inputs)
+    return _regression(theta, y[:, 0], u, max_radius, dynamic).log_posterior
 
 
 # -------------------------------------------------------------------------------------- the sampler
@@ -224,6 +245,8 @@ class WindowPosterior:
     stages : int
     acceptance : ndarray
         Acceptance rate of every Metropolis move.
+    direct_inputs : tuple of int
+        Input columns that act on the output only through ``D``.
 
     Example
     -------
@@ -245,6 +268,7 @@ class WindowPosterior:
     y: np.ndarray = field(repr=False)
     u: np.ndarray = field(repr=False)
     scale: np.ndarray = field(repr=False)  # the inputs are divided by it (per column)
+    direct_inputs: tuple[int, ...] = ()
 
     @property
     def n_states(self) -> int:
@@ -286,19 +310,21 @@ class WindowPosterior:
         theta = self.theta
         if draws is not None and draws < theta.shape[0]:
             theta = theta[np.random.default_rng(seed).choice(theta.shape[0], draws, replace=False)]
-        reg = _regression(theta, self.y, self.u, self.max_radius)
-        loc, scale = _future(theta, reg, uf)
+        dynamic = _dynamic_inputs(r, self.direct_inputs)
+        reg = _regression(theta, self.y, self.u, self.max_radius, dynamic)
+        loc, scale = _future(theta, reg, uf, dynamic)
         lower, median, upper = (_mixture_quantile(q, loc, scale, reg.nu) for q in
                                 (0.5 * (1.0 - level), 0.5, 0.5 * (1.0 + level)))
         return PosteriorPrediction(loc.mean(axis=1), median, lower, upper, level)
 
 
-def _future(theta: np.ndarray, reg: _Regression, uf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _future(theta: np.ndarray, reg: _Regression, uf: np.ndarray, dynamic: np.ndarray
+            ) -> tuple[np.ndarray, np.ndarray]:
     """Student t location and scale (H, M) of ``y_{T+h}`` for each particle."""
     n = theta.shape[1] // 2
     r = uf.shape[1]
     a, k = theta[:, :n], theta[:, :n] - theta[:, n:]
-    cB, cD = _columns(n, r)
+    cB, cD = _columns(n, r, dynamic)
     beta = np.linalg.solve(reg.R, reg.qz[..., None])[..., 0]
     s2 = reg.rss / reg.nu
     R_inv = np.linalg.inv(reg.R)  # (Phi^T Phi)^-1 = R^-1 R^-T
@@ -316,7 +342,7 @@ def _future(theta: np.ndarray, reg: _Regression, uf: np.ndarray) -> tuple[np.nda
         impulse = _shift(a, impulse[..., None])[..., 0]
         state = _shift(a, state)
         for i in range(n):
-            state[:, i, cB[i]] += uf[h]
+            state[:, i, cB[i]] += uf[h, dynamic]
     return loc, np.sqrt(var)
 
 
@@ -367,7 +393,7 @@ def _prior_draws(rng: np.random.Generator, count: int, n: int, max_radius: float
 
 def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, particles: int = 2000,
                      moves: int = 5, target_ess: float = 0.7, max_radius: float = 1.05,
-                     seed: int | None = 0) -> WindowPosterior:
+                     direct_inputs: Sequence[int] = (), seed: int | None = 0) -> WindowPosterior:
     """Sample the posterior of the window's model by tempering sequential Monte Carlo.
 
     Parameters
@@ -383,6 +409,12 @@ def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, partic
         Effective sample size, as a fraction of ``particles``, kept at each tempering step.
     max_radius : float
         Prior bound on ``rho(A)``.
+    direct_inputs : sequence of int
+        Input columns known to act on the output only through the feedthrough ``D`` (their column of ``B``
+        is fixed at zero), e.g. a temperature that changes a vibration feature's gain but not the wear.
+        Declare them when it is true: a slowly varying input allowed into the state of a mode near the
+        unit circle acts as a free drift and biases the mode's growth rate low (as a trend term does in a
+        unit-root regression), which is what a long-term prediction depends on.
 
     Returns
     -------
@@ -413,7 +445,8 @@ def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, partic
         raise ValueError(f"target_ess must be in (0, 1), got {target_ess}")
     if moves < 1 or particles < 10:
         raise ValueError(f"need at least 1 move and 10 particles, got moves={moves}, particles={particles}")
-    p = n_states + n_states * u.shape[1] + u.shape[1]
+    dynamic = _dynamic_inputs(u.shape[1], direct_inputs)
+    p = n_states + n_states * dynamic.size + u.shape[1]
     if y.shape[0] <= p + 2:
         raise ValueError(f"a window of {y.shape[0]} samples is too short for {p} linear parameters")
     scale = np.sqrt(np.mean(u ** 2, axis=0)) if u.shape[1] else np.ones(0)
@@ -421,7 +454,7 @@ def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, partic
     y, u = y[:, 0], u / scale
     rng = np.random.default_rng(seed)
     theta = _prior_draws(rng, particles, n_states, max_radius)
-    log_lik = _regression(theta, y, u, max_radius).log_posterior
+    log_lik = _regression(theta, y, u, max_radius, dynamic).log_posterior
     if not np.any(np.isfinite(log_lik)):
         raise ValueError("the window regression is rank deficient for every prior draw: the inputs do not excite "
                          f"the {p} linear parameters (a constant input column duplicates the initial state?)")
@@ -438,7 +471,7 @@ def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, partic
         chol = np.linalg.cholesky(np.cov(theta.T) + 1e-14 * np.eye(theta.shape[1]))
         for _ in range(moves):
             proposal = theta + step * rng.standard_normal(theta.shape) @ chol.T
-            log_lik_p = _regression(proposal, y, u, max_radius).log_posterior
+            log_lik_p = _regression(proposal, y, u, max_radius, dynamic).log_posterior
             with np.errstate(invalid="ignore"):
                 accept = np.log(rng.random(theta.shape[0])) < exponent * (log_lik_p - log_lik)
             theta[accept], log_lik[accept] = proposal[accept], log_lik_p[accept]
@@ -449,7 +482,8 @@ def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, partic
     if distinct < 0.2 * particles or acceptance[-moves:].mean() < 0.02:
         warnings.warn(f"the window posterior sampler degenerated: {distinct} distinct particles of {particles}, "
                       f"last acceptance {acceptance[-moves:].mean():.3f}", SamplerWarning, stacklevel=2)
-    return WindowPosterior(theta, log_lik, float(log_evidence), stages, acceptance, max_radius, y, u, scale)
+    return WindowPosterior(theta, log_lik, float(log_evidence), stages, acceptance, max_radius, y, u, scale,
+                          tuple(int(j) for j in direct_inputs))
 
 
 def _tempered(log_lik: np.ndarray, delta: float) -> np.ndarray:

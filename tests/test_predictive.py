@@ -28,12 +28,15 @@ def _residuals(a, f, beta, y, u):
     return e
 
 
-def _window(seed=0, N=120):
-    """Two states, two inputs: a slow and a fast mode, y = x_0 + D u + e in innovations form."""
+def _window(seed=0, N=120, direct=False):
+    """Two states, two inputs: a slow and a fast mode, y = x_0 + D u + e in innovations form.
+
+    ``direct``: the second input acts through D only (its column of B is zero).
+    """
     rng = np.random.default_rng(seed)
     u = np.column_stack([rng.uniform(0.5, 1.5, N), np.sin(np.arange(N) / 7.0) + 2.0])
     a, f = np.array([1.3, -0.4]), np.array([0.9, -0.2])   # poles 0.8 and 0.5
-    beta = np.array([0.3, -0.1, 0.2, 0.05, -0.1, 0.02, 0.4, -0.3])
+    beta = np.array([0.3, -0.1, 0.2, 0.0 if direct else 0.05, -0.1, 0.0 if direct else 0.02, 0.4, -0.3])
     A, K = _companion(a), a - f
     B, D = beta[2:6].reshape(2, 2), beta[6:]
     x, y = beta[:2].copy(), np.empty(N)
@@ -55,6 +58,35 @@ def test_log_posterior_is_the_profiled_regression_of_the_explicit_predictor():
         _, rss, *_ = np.linalg.lstsq(design, e0, rcond=None)
         expected = -0.5 * (y.size - p) * np.log(rss[0])
         assert window_log_posterior(th[None], y, u)[0] == pytest.approx(expected, rel=1e-9)
+
+
+def test_a_direct_input_drops_its_column_of_B_from_the_regression():
+    y, u, a, f = _window(direct=True)
+    keep = [0, 1, 2, 4, 6, 7]  # beta = (x_1, B[0, 0], B[0, 1], B[1, 0], B[1, 1], D): no B[:, 1]
+    th = np.r_[a, f]
+    e0 = _residuals(a, f, np.zeros(8), y, u)
+    design = np.column_stack([e0 - _residuals(a, f, np.eye(8)[j], y, u) for j in keep])
+    _, rss, *_ = np.linalg.lstsq(design, e0, rcond=None)
+    expected = -0.5 * (y.size - len(keep)) * np.log(rss[0])
+    assert window_log_posterior(th[None], y, u, direct_inputs=[1])[0] == pytest.approx(expected, rel=1e-9)
+    # the full model fits at least as well but pays two more degrees of freedom
+    assert window_log_posterior(th[None], y, u)[0] != pytest.approx(expected, rel=1e-6)
+
+
+def test_a_direct_input_moves_the_prediction_at_once_and_only_through_D():
+    y, u, *_ = _window(direct=True, N=200)
+    post = sample_posterior(y, u, 2, particles=400, direct_inputs=(1,), seed=0)
+    assert post.direct_inputs == (1,)
+    base = np.column_stack([np.ones(30), np.full(30, 2.0)])
+    stepped = base.copy()
+    stepped[10:, 1] += 1.0
+    change = post.predict(stepped).mean - post.predict(base).mean
+    assert np.all(np.abs(change[:10]) < 1e-12)
+    assert np.allclose(change[10:], change[10], atol=1e-12)   # no transient: the state does not see it
+    assert change[10] == pytest.approx(-0.3, abs=0.1)         # the window's D for that input
+    full = sample_posterior(y, u, 2, particles=400, seed=0)
+    free = full.predict(stepped).mean - full.predict(base).mean
+    assert not np.allclose(free[10:], free[10], atol=1e-6)     # with a column of B it has dynamics
 
 
 def test_log_posterior_is_minus_inf_outside_the_prior():
@@ -153,6 +185,18 @@ def test_bad_window_is_named(kwargs, message):
         args["u"] = np.ones((np.shape(args["y"])[0], 1))
     with pytest.raises(ValueError, match=message):
         sample_posterior(args.pop("y"), args.pop("u"), args.pop("n_states"), particles=50, **args)
+
+
+@pytest.mark.parametrize("direct, message", [
+    ((2,), "names input column 2, but u has 2 columns"),
+    ((1, 1), "repeats an input column"),
+])
+def test_bad_direct_inputs_are_named(direct, message):
+    y, u, *_ = _window()
+    with pytest.raises(ValueError, match=message):
+        sample_posterior(y, u, 2, particles=50, direct_inputs=direct)
+    with pytest.raises(ValueError, match=message):
+        window_log_posterior([[1.3, -0.4, 0.9, -0.2]], y, u, direct_inputs=direct)
 
 
 def test_bad_future_inputs_are_named():
