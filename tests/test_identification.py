@@ -502,6 +502,7 @@ def test_gearbox_example_smoke(tmp_path):
     summary = gearbox.main(["--hours", "90", "--seeds", "1", "--out", str(tmp_path), "--quiet"])
     payload = json.loads((tmp_path / "results.json").read_text())
     assert {"setting", "true_models", "summary", "per_seed", "run_seconds"} <= set(payload)
+    assert payload["setting"]["posterior"]["direct_inputs"] == [1]  # the temperature acts through D only
     seed = payload["per_seed"][0]
     assert {"detection_time_h", "detection_delay_h", "alarm_before_onset", "max_radius_before_onset",
             "predictions", "seconds"} <= set(seed)
@@ -521,6 +522,7 @@ def test_gearbox_example_smoke(tmp_path):
         assert 0.0 <= p["coverage"] <= 1.0 and 0.0 <= p["probability_unstable"] <= 1.0
         low, median, high = p["spectral_radius_quantiles"]
         assert low <= median <= high and p["interval_half_width_end"] > 0
+        assert 0.0 <= p["true_radius_rank"] <= 1.0
     assert before["posterior"]["probability_unstable"] < 0.05 and before["posterior"]["coverage_before_onset"] > 0.8
     assert after["posterior"]["spectral_radius_quantiles"][2] > before["posterior"]["spectral_radius_quantiles"][2]
     assert summary["of"] == 1 and summary["alarms_before_onset"] == 0
