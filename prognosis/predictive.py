@@ -100,24 +100,32 @@ def _companion_radius(c: np.ndarray) -> np.ndarray:
         return np.abs(np.linalg.eigvals(np.nan_to_num(comp, nan=np.inf))).max(axis=1) if m else np.zeros(0)
 
 
-def _columns(n: int, r: int, dynamic: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Column indices (in the ``1 + p`` layout, column 0 the known part) of ``B`` and ``D``.
+@dataclass(frozen=True)
+class _Layout:
+    """Where ``beta = (x_1, B, D)`` sits in the ``1 + p`` columns of a regression row (column 0 the known part).
 
-    ``B`` is (n, len(dynamic)): only the inputs in ``dynamic`` drive the state; ``D`` is (r,).
+    Only the inputs in ``dynamic`` drive the state: ``B`` is (n, len(dynamic)), ``D`` is (r,).
     """
-    rd = dynamic.size
-    return 1 + n + np.arange(n * rd).reshape(n, rd), 1 + n + n * rd + np.arange(r)
+
+    direct: tuple[int, ...]  # the inputs that act through D only
+    dynamic: np.ndarray
+    cB: np.ndarray  # (n, len(dynamic)) column of each entry of B
+    cD: np.ndarray  # (r,) column of each entry of D
+    p: int  # n + n len(dynamic) + r entries of beta
 
 
-def _dynamic_inputs(r: int, direct_inputs: Sequence[int]) -> np.ndarray:
-    """Indices of the inputs that drive the state: all but ``direct_inputs`` (checked, named when bad)."""
-    direct = [int(j) for j in direct_inputs]
+def _layout(n: int, r: int, direct_inputs: Sequence[int]) -> _Layout:
+    """The regression's layout for ``n`` states and ``r`` inputs, ``direct_inputs`` checked (named when bad)."""
+    direct = tuple(int(j) for j in direct_inputs)
     for j in direct:
         if not 0 <= j < r:
             raise ValueError(f"direct_inputs names input column {j}, but u has {r} columns")
     if len(set(direct)) != len(direct):
         raise ValueError(f"direct_inputs repeats an input column: {list(direct_inputs)}")
-    return np.array([j for j in range(r) if j not in direct], dtype=int)
+    dynamic = np.array([j for j in range(r) if j not in direct], dtype=int)
+    rd = dynamic.size
+    return _Layout(direct, dynamic, 1 + n + np.arange(n * rd).reshape(n, rd), 1 + n + n * rd + np.arange(r),
+                   n + n * rd + r)
 
 
 def _shift(poly: np.ndarray, state: np.ndarray) -> np.ndarray:
@@ -129,20 +137,19 @@ def _shift(poly: np.ndarray, state: np.ndarray) -> np.ndarray:
 
 
 def _regression(theta: np.ndarray, y: np.ndarray, u: np.ndarray, max_radius: float,
-                dynamic: np.ndarray) -> _Regression:
+                layout: _Layout) -> _Regression:
     """Run the predictor of every particle over the window and solve its regression."""
     m, n2 = theta.shape
-    n, r, N = n2 // 2, u.shape[1], y.size
-    p = n + n * dynamic.size + r
+    n, N, p = n2 // 2, y.size, layout.p
     a, f = theta[:, :n], theta[:, n:]
     k = a - f
-    cB, cD = _columns(n, r, dynamic)
+    cB, cD = layout.cB, layout.cD
     # per-step inputs of the recursion x_{t+1} = F x_t + (B - K D) u_t + K y_t, in the 1 + p layout
     known = np.zeros((N, 1 + p))  # multiplied by K: [y_t, 0 (x_1, B), -u_t (D)]
     known[:, 0], known[:, cD] = y, -u
     drive = np.zeros((N, n, 1 + p))  # B u_t: row i gets u_t in the columns of B[i]
     for i in range(n):
-        drive[:, i, cB[i]] = u[:, dynamic]
+        drive[:, i, cB[i]] = u[:, layout.dynamic]
     output = np.zeros((N, 1 + p))  # y_hat_t = x_t[0] + D u_t
     output[:, cD] = u
 
@@ -193,8 +200,8 @@ def window_log_posterior(theta: ArrayLike, y: ArrayLike, u: ArrayLike | None, *,
         raise ValueError(f"the window posterior handles one output; y has {y.shape[1]} columns")
     if theta.shape[1] % 2 or theta.shape[1] == 0:
         raise ValueError(f"theta must have 2 n columns (a and f), got {theta.shape[1]}")
-    dynamic = _dynamic_inputs(u.shape[1], direct_inputs)
-    return _regression(theta, y[:, 0], u, max_radius, dynamic).log_posterior
+    layout = _layout(theta.shape[1] // 2, u.shape[1], direct_inputs)
+    return _regression(theta, y[:, 0], u, max_radius, layout).log_posterior
 
 
 # -------------------------------------------------------------------------------------- the sampler
@@ -310,21 +317,20 @@ class WindowPosterior:
         theta = self.theta
         if draws is not None and draws < theta.shape[0]:
             theta = theta[np.random.default_rng(seed).choice(theta.shape[0], draws, replace=False)]
-        dynamic = _dynamic_inputs(r, self.direct_inputs)
-        reg = _regression(theta, self.y, self.u, self.max_radius, dynamic)
-        loc, scale = _future(theta, reg, uf, dynamic)
+        layout = _layout(self.n_states, r, self.direct_inputs)
+        reg = _regression(theta, self.y, self.u, self.max_radius, layout)
+        loc, scale = _future(theta, reg, uf, layout)
         lower, median, upper = (_mixture_quantile(q, loc, scale, reg.nu) for q in
                                 (0.5 * (1.0 - level), 0.5, 0.5 * (1.0 + level)))
         return PosteriorPrediction(loc.mean(axis=1), median, lower, upper, level)
 
 
-def _future(theta: np.ndarray, reg: _Regression, uf: np.ndarray, dynamic: np.ndarray
+def _future(theta: np.ndarray, reg: _Regression, uf: np.ndarray, layout: _Layout
             ) -> tuple[np.ndarray, np.ndarray]:
     """Student t location and scale (H, M) of ``y_{T+h}`` for each particle."""
     n = theta.shape[1] // 2
-    r = uf.shape[1]
     a, k = theta[:, :n], theta[:, :n] - theta[:, n:]
-    cB, cD = _columns(n, r, dynamic)
+    cB, cD = layout.cB, layout.cD
     beta = np.linalg.solve(reg.R, reg.qz[..., None])[..., 0]
     s2 = reg.rss / reg.nu
     R_inv = np.linalg.inv(reg.R)  # (Phi^T Phi)^-1 = R^-1 R^-T
@@ -342,7 +348,7 @@ def _future(theta: np.ndarray, reg: _Regression, uf: np.ndarray, dynamic: np.nda
         impulse = _shift(a, impulse[..., None])[..., 0]
         state = _shift(a, state)
         for i in range(n):
-            state[:, i, cB[i]] += uf[h, dynamic]
+            state[:, i, cB[i]] += uf[h, layout.dynamic]
     return loc, np.sqrt(var)
 
 
@@ -445,8 +451,8 @@ def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, partic
         raise ValueError(f"target_ess must be in (0, 1), got {target_ess}")
     if moves < 1 or particles < 10:
         raise ValueError(f"need at least 1 move and 10 particles, got moves={moves}, particles={particles}")
-    dynamic = _dynamic_inputs(u.shape[1], direct_inputs)
-    p = n_states + n_states * dynamic.size + u.shape[1]
+    layout = _layout(n_states, u.shape[1], direct_inputs)
+    p = layout.p
     if y.shape[0] <= p + 2:
         raise ValueError(f"a window of {y.shape[0]} samples is too short for {p} linear parameters")
     scale = np.sqrt(np.mean(u ** 2, axis=0)) if u.shape[1] else np.ones(0)
@@ -454,7 +460,7 @@ def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, partic
     y, u = y[:, 0], u / scale
     rng = np.random.default_rng(seed)
     theta = _prior_draws(rng, particles, n_states, max_radius)
-    log_lik = _regression(theta, y, u, max_radius, dynamic).log_posterior
+    log_lik = _regression(theta, y, u, max_radius, layout).log_posterior
     if not np.any(np.isfinite(log_lik)):
         raise ValueError("the window regression is rank deficient for every prior draw: the inputs do not excite "
                          f"the {p} linear parameters (a constant input column duplicates the initial state?)")
@@ -471,7 +477,7 @@ def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, partic
         chol = np.linalg.cholesky(np.cov(theta.T) + 1e-14 * np.eye(theta.shape[1]))
         for _ in range(moves):
             proposal = theta + step * rng.standard_normal(theta.shape) @ chol.T
-            log_lik_p = _regression(proposal, y, u, max_radius, dynamic).log_posterior
+            log_lik_p = _regression(proposal, y, u, max_radius, layout).log_posterior
             with np.errstate(invalid="ignore"):
                 accept = np.log(rng.random(theta.shape[0])) < exponent * (log_lik_p - log_lik)
             theta[accept], log_lik[accept] = proposal[accept], log_lik_p[accept]
@@ -483,7 +489,7 @@ def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, partic
         warnings.warn(f"the window posterior sampler degenerated: {distinct} distinct particles of {particles}, "
                       f"last acceptance {acceptance[-moves:].mean():.3f}", SamplerWarning, stacklevel=2)
     return WindowPosterior(theta, log_lik, float(log_evidence), stages, acceptance, max_radius, y, u, scale,
-                          tuple(int(j) for j in direct_inputs))
+                          layout.direct)
 
 
 def _tempered(log_lik: np.ndarray, delta: float) -> np.ndarray:
