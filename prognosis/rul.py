@@ -15,6 +15,7 @@ particles as ``+inf``.
 
 from __future__ import annotations
 
+import signal
 from dataclasses import dataclass
 
 import numpy as np
@@ -245,7 +246,8 @@ class ParallelRUL:
 
     Predictions at different filter steps are independent given the particles, so they can run in
     parallel; each is keyed by its step (:meth:`RULPredictor.predict`), so the results do not depend
-    on which worker computes them or when.  Use as a context manager.
+    on which worker computes them or when.  Use as a context manager.  The workers ignore SIGINT, so a
+    Ctrl-C interrupts only the calling process, not every worker with a traceback of its own.
 
     >>> import numpy as np
     >>> from prognosis.degradation import Linear
@@ -277,6 +279,7 @@ _WORKER_PREDICTOR = None
 
 def _start_worker(model, predictor) -> None:
     global _WORKER_PREDICTOR
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
     _WORKER_PREDICTOR = RULPredictor(model, **predictor)
 
 

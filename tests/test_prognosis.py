@@ -1,5 +1,10 @@
 """Prognosis: degradation models, observation equation, particle filter, variance adaptation, RUL."""
 
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
 import numpy as np
 import pytest
 import sympy as sp
@@ -12,6 +17,7 @@ from prognosis.filter import ParticleFilter, VarianceAdaptation
 from prognosis.observation import observation_model
 from prognosis.rul import RULPredictor, predict_rul
 
+ROOT = Path(__file__).resolve().parents[1]
 t = sp.Symbol("t")
 B_N, K_BELT, OMEGA = 5.025e-3, 3.75, 112.5
 
@@ -290,6 +296,29 @@ def test_successive_predictions_differ_but_are_reproducible():
     again = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, seed=7).predict(theta, gamma, weights, 0.01)
     assert not np.array_equal(first.samples, second.samples)
     assert np.array_equal(first.samples, again.samples)
+
+
+def test_ctrl_c_during_parallel_predictions_reaches_only_the_caller(tmp_path):
+    """Ctrl-C signals the whole process group; the prediction workers must leave it to the caller."""
+    script = tmp_path / "interrupted.py"
+    script.write_text(textwrap.dedent(f"""
+        import os, signal, sys, time
+        sys.path.insert(0, {str(ROOT)!r})
+        signal.signal(signal.SIGINT, signal.default_int_handler)  # a background shell may have ignored it
+        import numpy as np
+        from prognosis.degradation import Linear
+        from prognosis.rul import ParallelRUL
+        try:
+            with ParallelRUL(Linear(), dt=0.1, theta_fail=2.0, workers=2) as pool:
+                pool.submit(np.zeros((1, 3)), np.ones((1, 3, 1)), np.full((1, 3), 1 / 3), 0.0, key=0).result()
+                os.killpg(os.getpgid(0), signal.SIGINT)
+                time.sleep(30.0)
+        except KeyboardInterrupt:
+            print("interrupted", file=sys.stderr)
+    """))
+    run = subprocess.run([sys.executable, str(script)], start_new_session=True, capture_output=True, text=True,
+                         timeout=60)
+    assert run.stderr.splitlines() == ["interrupted"]  # no KeyboardInterrupt traceback from a worker
 
 
 def test_filter_and_rul_on_the_seed_b_md_problem(torsion_arr):
