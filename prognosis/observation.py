@@ -61,7 +61,7 @@ class ObservationModel:
     >>> h(np.array([9.0, 11.0, 12.0]), [1.0, 0.5, 0.0, 0.0]).tolist()
     [0.5, -0.5, -1.0]
     >>> points = [np.ones(2), np.full(2, 0.5), np.zeros(2), np.zeros(2)]   # two samples
-    >>> h.invert(np.array([-0.5, -1.0]), points, bracket=(5.0, 20.0)).tolist()
+    >>> h.invert(np.array([-0.5, -1.0]), points).tolist()   # linear in R: no bracket needed
     [11.0, 12.0]
     """
 
@@ -91,14 +91,17 @@ class ObservationModel:
         return np.broadcast_to(np.asarray(self.function()(theta, *values), float), np.shape(theta))
 
 
-    def invert(self, y: np.ndarray, points, bracket: tuple[float, float]) -> np.ndarray:
+    def invert(self, y: np.ndarray, points, bracket: tuple[float, float] | None = None) -> np.ndarray:
         """The theta that explains each measurement ``y`` (K,) at its point values (K,) each.
 
-        Linear ``h``: ``theta = theta_n + y / a_1``.  Otherwise a bracketed root search per sample
-        (:func:`scipy.optimize.brentq` on ``h(theta) - y`` over ``bracket``); NaN where ``h - y``
-        does not change sign on the bracket.
+        Linear ``h``: ``theta = theta_n + y / a_1``, exact, and ``bracket`` is not needed.  Otherwise a
+        bracketed root search per sample (:func:`scipy.optimize.brentq` on ``h(theta) - y`` over
+        ``bracket``, then required); NaN where ``h - y`` does not change sign on the bracket.
         """
         y = np.asarray(y, float)
+        if self.coefficient is None and bracket is None:
+            raise ValueError(f"the observation equation of {self.candidate!r} is not linear in it: "
+                             f"invert needs a bracket (lo, hi) for the root search")
         values = [np.asarray(p, float)[:, None] for p in points]
         if self.coefficient is not None:
             slope = np.asarray(self.function()(np.full((y.size, 1), self.nominal + 1.0), *values), float)

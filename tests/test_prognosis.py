@@ -86,7 +86,7 @@ def test_invert_recovers_theta_for_linear_and_nonlinear_observations(torsion_arr
     points = [omega if str(p) == "omega_m" else np.zeros(2) for p in compile_arr(torsion_arr).points]
     theta = np.array([0.01, 0.2])
     y = (theta - B_N) * (-omega / K_BELT**2)  # eq. 52
-    assert np.allclose(linear.invert(y, points, (0.0, 1.0)), theta)
+    assert np.allclose(linear.invert(y, points), theta)  # exact: no bracket needed
     # e = f / k: y = R(k) - R(k_n) = i (1/k_n - 1/k) is not linear in k; a bracketed root search inverts it
     bg = BondGraph()
     bg.add("u", "MSe")
@@ -105,6 +105,8 @@ def test_invert_recovers_theta_for_linear_and_nonlinear_observations(torsion_arr
     assert np.allclose(model(k_true[:, None], values)[:, 0], y)
     found = model.invert(y, values, (2.0, 10.0))
     assert np.allclose(found[:2], k_true[:2]) and np.isnan(found[2])  # k = 50 lies outside the bracket
+    with pytest.raises(ValueError, match="'k' is not linear in it: invert needs a bracket"):
+        model.invert(y, values)
 
 
 def test_candidate_the_arr_is_not_sensitive_to(torsion_arr):
