@@ -1062,11 +1062,7 @@ def predict_feature(model: LinearGaussianModel, mean: ArrayLike, covariance: Arr
         raise ValueError(f"mean must be a finite vector of {n} entries, got shape {np.shape(mean)}")
     if p.shape != (n, n) or not np.all(np.isfinite(p)):
         raise ValueError(f"covariance must be a finite ({n}, {n}) matrix, got shape {p.shape}")
-    if u_future is None:
-        if steps is None:
-            raise ValueError("predict_feature needs u_future (H, r) or, for a model without inputs, steps")
-        u_future = np.zeros((int(steps), 0))
-    u = _inputs(u_future, None, model.n_inputs, name="u_future")
+    u = _future_inputs(u_future, steps, model.n_inputs, "predict_feature")
     horizon = u.shape[0]
     xs = np.empty((horizon, n))
     ps = np.empty((horizon, n, n))
@@ -1151,6 +1147,15 @@ def _inputs(u, steps: int | None, width: int | None, name: str = "u") -> np.ndar
     if not np.all(np.isfinite(u)):
         raise ValueError(f"{name} has non-finite entries (inputs must be known)")
     return u
+
+
+def _future_inputs(u_future, steps: int | None, width: int, caller: str) -> np.ndarray:
+    """The known future inputs as (H, r); without inputs, ``steps`` gives the horizon H."""
+    if u_future is None:
+        if steps is None:
+            raise ValueError(f"{caller} needs u_future (H, r) or, for a model without inputs, steps")
+        u_future = np.zeros((int(steps), 0))
+    return _inputs(u_future, None, width, name="u_future")
 
 
 def _data(model: LinearGaussianModel, y, u) -> tuple[np.ndarray, np.ndarray]:

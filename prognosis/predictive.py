@@ -66,7 +66,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import special
 
-from .identification import _raw_data
+from .identification import _future_inputs, _raw_data
 from .resampling import systematic
 
 __all__ = ["PosteriorPrediction", "SamplerWarning", "WindowPosterior", "sample_posterior", "window_log_posterior"]
@@ -305,15 +305,7 @@ class WindowPosterior:
         if not 0.0 < level < 1.0:
             raise ValueError(f"level must be in (0, 1), got {level}")
         r = self.u.shape[1]
-        if u_future is None:
-            if steps is None:
-                raise ValueError("predict needs u_future (H, r) or, for a window without inputs, steps")
-            u_future = np.zeros((int(steps), 0))
-        uf = np.asarray(u_future, dtype=float)
-        uf = uf.reshape(-1, 1) if uf.ndim == 1 and r == 1 else uf
-        if uf.ndim != 2 or uf.shape[1] != r or not np.all(np.isfinite(uf)):
-            raise ValueError(f"u_future must be a finite (H, {r}) array, got shape {np.shape(u_future)}")
-        uf = uf / self.scale
+        uf = _future_inputs(u_future, steps, r, "predict") / self.scale
         theta = self.theta
         if draws is not None and draws < theta.shape[0]:
             theta = theta[np.random.default_rng(seed).choice(theta.shape[0], draws, replace=False)]

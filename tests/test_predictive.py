@@ -202,7 +202,11 @@ def test_bad_direct_inputs_are_named(direct, message):
 def test_bad_future_inputs_are_named():
     y, u, *_ = _window()
     post = sample_posterior(y, u, 2, particles=100, seed=0)
-    with pytest.raises(ValueError, match=r"u_future must be a finite \(H, 2\)"):
+    with pytest.raises(ValueError, match="u_future has 3 columns but the model has 2 inputs"):
         post.predict(np.ones((5, 3)))
+    with pytest.raises(ValueError, match=r"u_future has non-finite entries"):
+        post.predict(np.full((5, 2), np.nan))
+    with pytest.raises(ValueError, match="predict needs u_future"):
+        post.predict(None)
     with pytest.raises(ValueError, match="level"):
         post.predict(np.ones((5, 2)), level=1.2)
