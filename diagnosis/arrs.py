@@ -79,6 +79,22 @@ def delta(parameter: str) -> sp.Symbol:
     return sp.Symbol(f"delta_{parameter}")
 
 
+def latex(expression: sp.Expr) -> str:
+    r"""LaTeX of an ARR expression, each ``delta_<param>`` typeset as delta with the parameter's own subscript.
+
+    sympy alone reads ``delta_L_a`` as two subscripts and prints ``\delta_{L a}``.
+
+    Examples
+    --------
+    >>> from bondgraph.library import dc_motor
+    >>> print(latex(derive_arrs(dc_motor())[0].terms["L_a"]))
+    - L_{a} \delta_{L_{a}} \frac{d}{d t} i{\left(t \right)}
+    """
+    names = {s: f"\\delta_{{{sp.latex(sp.Symbol(s.name[len('delta_'):]))}}}"
+             for s in expression.free_symbols if s.name.startswith("delta_")}
+    return sp.latex(expression, symbol_names=names)
+
+
 @dataclass
 class ARR:
     """An interval-valued analytical redundancy relation ``r_n + Psi_2 = 0``.
@@ -147,9 +163,8 @@ class ARR:
         return f"{self.name}: r_n = {self.nominal}\n  Psi_2 = {self.uncertain}"
 
     def latex(self) -> str:
-        """LaTeX of ``r_n`` and Psi_2."""
-        return (f"r_{{n}} = {sp.latex(self.nominal)}, \\quad "
-                f"\\Psi_2 = {sp.latex(self.uncertain)}")
+        """LaTeX of ``r_n`` and Psi_2, each delta with its parameter as subscript (:func:`diagnosis.arrs.latex`)."""
+        return f"r_{{n}} = {latex(self.nominal)}, \\quad \\Psi_2 = {latex(self.uncertain)}"
 
     def _repr_latex_(self) -> str:
         return f"$\\displaystyle {self.latex()}$"

@@ -30,12 +30,12 @@ import warnings
 from dataclasses import dataclass
 
 import sympy as sp
-from sympy.printing.mathml import mathml
+from sympy.printing.mathml import MathMLPresentationPrinter
 
 from bondgraph import BondGraph
 from bondgraph import drawing
 
-from .arrs import ARR, ARRWarning, derive_arrs
+from .arrs import ARR, ARRWarning, derive_arrs, latex
 from .signatures import SignatureMatrix, signature_matrix
 
 __all__ = ["arr_report", "FORMATS"]
@@ -149,7 +149,7 @@ def _markdown(bg: BondGraph, c: _Content) -> str:
     for arr in c.arrs:
         lines += [f"### {_md(arr.name)}", "", f"Junction {_md(str(arr.junction))}; signals: "
                   f"{', '.join(arr.signals)}" + ("; implicit (non-invertible law)" if arr.implicit else ""), "",
-                  "$$r_n = " + sp.latex(arr.nominal) + "$$", "", "$$\\Psi_2 = " + sp.latex(arr.uncertain) + "$$", ""]
+                  "$$r_n = " + latex(arr.nominal) + "$$", "", "$$\\Psi_2 = " + latex(arr.uncertain) + "$$", ""]
     lines += ["## Fault signatures", ""]
     header, rows = _signature_rows(c.signatures)
     lines += [_md_table(header, rows), ""]
@@ -201,8 +201,34 @@ def _html(bg: BondGraph, c: _Content) -> str:
     return "\n".join(parts)
 
 
+class _Presentation(MathMLPresentationPrinter):
+    """Presentation MathML typeset as :func:`diagnosis.arrs.latex` does: ``omega_m(t)`` as a subscripted
+    omega of t (sympy writes the function's raw name), ``delta_L_a`` as delta with subscript L_a."""
+
+    def _print_Symbol(self, sym, style="plain"):
+        if sym.name.startswith("delta_"):
+            return self._print(sp.IndexedBase("delta")[sp.Symbol(sym.name[len("delta_"):])])
+        return super()._print_Symbol(sym, style)
+
+    def _print_AppliedUndef(self, signal):
+        row = self.dom.createElement("mrow")
+        row.appendChild(self._print(sp.Symbol(signal.func.__name__)))
+        row.appendChild(self._operator("("))
+        for i, argument in enumerate(signal.args):
+            if i:
+                row.appendChild(self._operator(","))
+            row.appendChild(self._print(argument))
+        row.appendChild(self._operator(")"))
+        return row
+
+    def _operator(self, text: str):
+        mark = self.dom.createElement("mo")
+        mark.appendChild(self.dom.createTextNode(text))
+        return mark
+
+
 def _math(label: str, expression: sp.Expr) -> str:
-    body = mathml(expression, printer="presentation")
+    body = _Presentation({}).doprint(expression)
     return (f"<p><math display=\"block\" xmlns=\"http://www.w3.org/1998/Math/MathML\"><mrow><mi>{html.escape(label)}"
             f"</mi><mo>=</mo>{body}</mrow></math></p>")
 
@@ -229,8 +255,8 @@ def _latex(bg: BondGraph, c: _Content) -> str:
     parts.append(r"\subsection*{Analytical redundancy relations}")
     for arr in c.arrs:
         parts += [rf"\paragraph{{{t(arr.name)}}} Junction {t(str(arr.junction))}; signals: {t(', '.join(arr.signals))}.",
-                  r"\begin{align*}", "r_n &= " + sp.latex(arr.nominal) + r" \\",
-                  r"\Psi_2 &= " + sp.latex(arr.uncertain), r"\end{align*}"]
+                  r"\begin{align*}", "r_n &= " + latex(arr.nominal) + r" \\",
+                  r"\Psi_2 &= " + latex(arr.uncertain), r"\end{align*}"]
     header, rows = _signature_rows(c.signatures)
     parts += [r"\subsection*{Fault signatures}", _tex_table(header, rows)]
     if c.notes:

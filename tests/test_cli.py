@@ -97,6 +97,19 @@ def test_arr_report_formats(tmp_path, capsys):
     assert "\\begin{tikzpicture}" in (tmp_path / "report.tex").read_text()
 
 
+def test_reports_typeset_deltas_and_signals_with_their_own_subscripts():
+    """delta_L_a is delta sub L_a (sympy alone prints delta_{L a}); omega(t) is a Greek omega, not 'omega'."""
+    from diagnosis.report import arr_report
+
+    tex, md, html = (arr_report(dc_motor(), fmt) for fmt in ("tex", "md", "html"))
+    for text in (tex, md):
+        assert "\\delta_{L_{a}}" in text and "\\delta_{k_{m}}" in text and "\\omega{\\left(t \\right)}" in text
+        assert "\\delta_{L a}" not in text
+    assert ("<msub><mi>&#948;</mi><msub><mi>L</mi><mi>a</mi></msub></msub>" in html
+            and "<mi>&#969;</mi><mo>(</mo><mi>t</mi><mo>)</mo>" in html)
+    assert "<mi>omega</mi>" not in html and "delta" not in html.split("<math", 1)[1]
+
+
 def test_python_model_file(tmp_path, capsys):
     path = tmp_path / "circuit.py"
     path.write_text("from bondgraph.library import rlc_circuit\n\ndef build():\n    return rlc_circuit(R=5.0)\n\n"
