@@ -143,7 +143,8 @@ def cmd_prognose(args, progress: Progress) -> int:
     (evaluation,) = _detect([arr], record, args, progress)
     residual_std = robust_std(evaluation.residual[record.t <= _calibration_end(record, args)])
     step = float(np.median(np.diff(record.t)))
-    dt = args.dt if args.dt is not None else step * max(1, round((record.t[-1] - record.t[0]) / 2000 / step))
+    per_step = max(1, round((record.t[-1] - record.t[0]) / 2000 / step))  # about 2000 filter steps
+    dt = args.dt if args.dt is not None else float(f"{step * per_step:.12g}")  # 0.01, not 0.010000000000000009
     if args.dt is not None and abs(round(dt / step) * step - dt) > 1e-6 * dt:
         raise UsageError(f"--dt {dt:g}: the filter step must be a multiple of the record's step {step:g} s")
     duration = float(record.t[-1] - record.t[0])

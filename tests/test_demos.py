@@ -50,6 +50,7 @@ def test_demo_detects_after_the_onset_and_predicts_the_end_of_life(demos, name):
     summary = json.loads((path / "prognose" / "prognosis.json").read_text())
     assert truth["onset"] < detection["detection_time"] < truth["eol"]
     assert summary["detection_time"] > truth["onset"]
+    assert summary["filter_step"] == round(summary["filter_step"], 9)  # a whole number of steps, no float dust
     last = summary["last"]
     true_rul = truth["eol"] - last["t"]
     assert last["rul_p5"] <= true_rul <= last["rul_p95"]
