@@ -59,6 +59,11 @@ class Progress:
 # ------------------------------------------------------------------------------------------- commands
 
 def cmd_arr(args, progress: Progress) -> int:
+    """``bgphm arr``: the ARR report of ``args.model`` in ``args.format``, to stdout or ``args.out``; returns 0.
+
+    ``args`` is the parsed command line (:func:`build_parser`); ``progress`` prints progress lines on
+    stderr.
+    """
     from diagnosis.report import arr_report
 
     spec = load_model(args.model)
@@ -69,6 +74,12 @@ def cmd_arr(args, progress: Progress) -> int:
 
 
 def cmd_simulate(args, progress: Progress) -> int:
+    """``bgphm simulate``: simulate ``args.model`` over ``[0, t_end]`` and write its record as CSV; returns 0.
+
+    ``args.samples`` evenly spaced times, parameters overridden by ``--set``, inputs from the model file;
+    the CSV goes to stdout or ``args.out``.  Raises :class:`UsageError` for a bad ``--t-end``,
+    ``--samples`` or ``--set``, or an input signal without a value.
+    """
     from bondgraph.simulation import simulate
 
     spec = load_model(args.model)
@@ -92,6 +103,11 @@ def cmd_simulate(args, progress: Progress) -> int:
 
 
 def cmd_detect(args, progress: Progress) -> int:
+    """``bgphm detect``: evaluate the ARRs (or ``--arr``) on the record ``args.data``, print each alarm; returns 0.
+
+    The noise margin is ``--margin`` or ``--k`` robust standard deviations of the residual on the start of
+    the record (``--calibrate``).  With ``--out``: ``detection.json``, ``residuals.csv`` and residual plots.
+    """
     spec = load_model(args.model)
     arrs = _arrs(spec, progress, args.arr)
     record = _record(args.data, arrs, progress)
@@ -119,6 +135,12 @@ def cmd_detect(args, progress: Progress) -> int:
 
 
 def cmd_prognose(args, progress: Progress) -> int:
+    """``bgphm prognose``: detect, then estimate ``--candidate`` with a particle filter and predict its RUL.
+
+    Uses the first ARR sensitive to the candidate (or ``--arr``); the filter starts at the first alarm and
+    the RUL is the time until the candidate reaches ``--fail``.  Prints the last estimate; with ``--out``
+    writes ``prognosis.json``, ``estimates.csv``, ``rul.csv`` and plots.  Returns 0.
+    """
     from diagnosis.detection import robust_std
     from diagnosis.signatures import signature_matrix
     from prognosis.degradation import degradation_model
@@ -189,6 +211,10 @@ def cmd_prognose(args, progress: Progress) -> int:
 
 
 def cmd_demo(args, progress: Progress) -> int:
+    """``bgphm demo``: run the demo ``args.name`` into ``args.out`` (:func:`bgphm.demo.run_demo`).
+
+    Returns 0, or the exit code of the first of its commands that fails.
+    """
     from bgphm.demo import run_demo
 
     return run_demo(args.name, Path(args.out), progress, seed=args.seed)
@@ -461,6 +487,10 @@ def _json_value(value):
 # ------------------------------------------------------------------------------------------- parser
 
 def build_parser() -> argparse.ArgumentParser:
+    """The ``bgphm`` argument parser: ``--quiet``, ``--debug`` and the commands arr, simulate, detect, prognose, demo.
+
+    Each command's parser sets ``run`` to its ``cmd_*`` function, which :func:`main` calls.
+    """
     parser = argparse.ArgumentParser(prog="bgphm", description="Bond-graph modelling, robust fault diagnosis and "
                                      "prognosis: ARR reports, simulation, detection and RUL prediction.")
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")

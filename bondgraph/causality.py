@@ -109,14 +109,17 @@ class Causality:
 
     @property
     def conflicts(self) -> list[CausalIssue]:
+        """The ``"conflict"`` issues: bonds where the source, storage, junction or two-port rules clash."""
         return self._of("conflict")
 
     @property
     def dependent_storage(self) -> list[Hashable]:
+        """Storage elements (C, I) not in the preferred causality (the ``"dependent storage"`` issues)."""
         return [issue.elements[0] for issue in self._of("dependent storage")]
 
     @property
     def algebraic_loops(self) -> list[CausalIssue]:
+        """The ``"algebraic loop"`` issues: R elements or bonds whose causality was an arbitrary choice."""
         return self._of("algebraic loop")
 
     @property

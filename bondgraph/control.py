@@ -50,9 +50,14 @@ class PIController:
     n_states: int = 1
 
     def initial_state(self) -> np.ndarray:
+        """Initial controller state: the integral ``z = 0``, shape (1,)."""
         return np.zeros(1)
 
     def error(self, t: float, y: dict) -> float:
+        """Control error ``err = setpoint(t) - y[measured]`` at time ``t`` (a constant ``setpoint`` is used as is).
+
+        ``y`` maps measured signal names (detector outputs) to their values.
+        """
         reference = self.setpoint(t) if callable(self.setpoint) else self.setpoint
         return reference - y[self.measured]
 
@@ -67,6 +72,12 @@ class PIController:
         return float(u) if np.ndim(u) == 0 else np.asarray(u, float)
 
     def derivative(self, t: float, z, y: dict) -> np.ndarray:
+        """State derivative ``dz/dt``, shape (1,), at time ``t`` from the controller state ``z`` and measurements ``y``.
+
+        ``err`` without ``limits``; with them, ``err + (u - v) / (ki * tracking_time)`` (back-calculation
+        anti-windup, ``v`` the unsaturated and ``u`` the clipped output).  With ``limits`` it takes one sample
+        only: unlike :meth:`output`, it is not vectorized.
+        """
         err = self.error(t, y)
         if self.limits is None:
             return np.array([err])

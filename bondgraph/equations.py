@@ -525,6 +525,7 @@ class StateEquations:
 
     @property
     def dependent_storage(self) -> list:
+        """Storage elements in derivative causality, forced by others, so without a state (from ``causality``)."""
         return self.causality.dependent_storage
 
     def power(self, element: Hashable) -> sp.Expr:

@@ -130,9 +130,14 @@ class Bond:
 
     @property
     def key(self) -> tuple[Hashable, Hashable]:
+        """The edge ``(tail, head)`` that identifies the bond, e.g. in ``Causality.effort_from``."""
         return (self.tail, self.head)
 
     def other(self, node: Hashable) -> Hashable:
+        """The node at the other end of the bond from ``node``, one of its two ends.
+
+        ``head`` for the tail, ``tail`` for any other node (``node`` is not checked to be on the bond).
+        """
         return self.head if node == self.tail else self.tail
 
     def sign_into(self, node: Hashable) -> int:
@@ -158,11 +163,13 @@ class Structure:
 
     @property
     def inputs(self) -> list[str]:
+        """Input signal names, without repeats, in element order: of the sources and the modulating ones of MTF/MGY."""
         names = [e.signal for e in self.elements.values() if e.kind in el.SOURCES | el.MODULATED_TWO_PORTS]
         return list(dict.fromkeys(names))
 
     @property
     def outputs(self) -> list[str]:
+        """Measured signal names, one per detector (De, Df), in element order."""
         return [e.signal for e in self.elements.values() if e.kind in el.DETECTORS]
 
 

@@ -95,6 +95,7 @@ class Evaluation:
 
     @property
     def detection_time(self) -> float | None:
+        """Time of the first sample in alarm (the end of the first run of ``persistence`` violations), or None."""
         index = np.flatnonzero(self.alarm)
         return float(self.t[index[0]]) if index.size else None
 

@@ -733,6 +733,7 @@ class IntervalArray(_Arithmetic):
 
     @property
     def shape(self) -> tuple[int, ...]:
+        """Shape of the array of intervals, that of ``lo`` and ``hi``."""
         return self.lo.shape
 
     def __len__(self) -> int:

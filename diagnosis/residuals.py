@@ -65,6 +65,17 @@ class CompiledARR:
 
     @classmethod
     def from_arr(cls, arr) -> "CompiledARR":
+        """Compile an :class:`~diagnosis.arrs.ARR`: its signals, derivatives and integrals become point symbols.
+
+        A signal ``x(t)`` becomes the symbol ``x``, its ``n``-th time derivative ``dn_x`` and the ``k``-th integral
+        (in sorted order) ``int<k>``; nominal parameter values are substituted, the ``delta_*`` symbols of the
+        uncertain part are kept.
+
+        Raises
+        ------
+        ValueError
+            For a derivative that is not a time derivative of a signal.
+        """
         replace: dict = {}
         signals = sorted({f.func.__name__ for f in (arr.nominal + arr.uncertain).atoms(AppliedUndef)})
         signal_symbols = {name: sp.Symbol(name) for name in signals}

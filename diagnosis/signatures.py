@@ -74,6 +74,7 @@ class SignatureMatrix:
         return dict(zip(self.columns, self.matrix[self.rows.index(name)].tolist()))
 
     def to_dict(self) -> dict:
+        """The matrix as plain lists for JSON: ``rows``, ``columns``, ``matrix`` and the ``Mb`` and ``Ib`` columns."""
         return {"rows": list(self.rows), "columns": list(self.columns), "matrix": self.matrix.tolist(),
                 "Mb": self.detectable.tolist(), "Ib": self.isolable.tolist()}
 

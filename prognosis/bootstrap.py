@@ -100,26 +100,48 @@ class BootstrapParticleFilter:
 
     @property
     def n_particles(self) -> int:
+        """Number of particles ``N``, the columns of ``particles``."""
         return self.particles.shape[1]
 
     @property
     def weights(self) -> np.ndarray:
+        """Normalised particle weights, shape (N,)."""
         return normalize_log_weights(self.log_weights)[0]
 
     @property
     def mean(self) -> np.ndarray:
+        """Weighted particle mean, the state estimate, shape (n,)."""
         return self.particles @ self.weights
 
     @property
     def covariance(self) -> np.ndarray:
+        """Weighted particle covariance ``sum_i w_i (x_i - mean)(x_i - mean)^T``, shape (n, n)."""
         deviation = self.particles - self.mean[:, None]
         return (deviation * self.weights) @ deviation.T
 
     def predict(self, u=None) -> None:
+        """Move every particle through the model: ``x_i = f(x_i, u) + w_i``, ``w_i ~ N(0, Q)``.
+
+        ``u`` holds the inputs over the step: a mapping by input name, a sequence in the order of the model's
+        ``inputs``, or None for a model without inputs.
+        """
         noise = self._sqrt_q @ self.rng.standard_normal(self.particles.shape)
         self.particles = self.model.transition(self.particles, u) + noise
 
     def update(self, z, u=None) -> Innovation:
+        """Weight the particles by the likelihood of the measurement ``z`` (m,), then resample if needed.
+
+        ``log w_i += -(z - h(x_i))^T R^-1 (z - h(x_i)) / 2`` over the finite entries of ``z`` (NaN entries are
+        skipped; an all-NaN ``z`` leaves the weights alone).  The particles are resampled when the effective
+        sample size falls below ``resample_below * N`` or when no particle has a non-zero likelihood.  ``u`` are
+        the inputs at the measurement, as in :meth:`predict`.
+
+        Returns
+        -------
+        Innovation
+            ``z`` minus the weighted mean of ``h(x_i)`` (weights before this update), with covariance the
+            weighted spread of ``h(x_i)`` plus ``R``.
+        """
         z, rows = measured_rows(z, self.model)
         if not rows.any():
             return innovation(rows)

@@ -131,10 +131,12 @@ class ConsistencyReport:
 
     @property
     def unbiased(self) -> bool:
+        """Zero-mean test: every channel's ``|bias_z|`` is at most ``z_{(1+level)/2}`` (two-sided, at ``level``)."""
         return bool(np.all(np.abs(self.bias_z) <= stats.norm.ppf(0.5 + self.level / 2)))
 
     @property
     def nis_consistent(self) -> bool:
+        """NIS test: ``nis_mean`` lies in ``nis_interval`` (chi-square(m K) / K at ``level``)."""
         return bool(self.nis_interval[0] <= self.nis_mean <= self.nis_interval[1])
 
     @property
@@ -145,6 +147,7 @@ class ConsistencyReport:
 
     @property
     def consistent(self) -> bool:
+        """``variance_consistent``, ``unbiased`` and ``white`` together (``nis_consistent`` is not part of it)."""
         return self.variance_consistent and self.unbiased and self.white
 
 

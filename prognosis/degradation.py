@@ -38,6 +38,10 @@ class Linear:
     n_gamma: int = 1
 
     def step(self, theta: np.ndarray, gamma: np.ndarray, dt: float) -> np.ndarray:
+        """Deterministic step ``theta_k = theta_{k-1} + gamma_{k-1} dt``: ``theta`` (..., N), ``gamma`` (..., N, G).
+
+        Uses ``gamma[..., 0]``; the caller (the particle filter) adds the process noise ``v``.
+        """
         return theta + gamma[..., 0] * dt
 
     def path(self, theta: np.ndarray, gamma: np.ndarray, noise: np.ndarray, dt: float) -> np.ndarray:
@@ -63,9 +67,18 @@ class Exponential:
     n_gamma: int = 1
 
     def step(self, theta: np.ndarray, gamma: np.ndarray, dt: float) -> np.ndarray:
+        """Deterministic step ``theta_{k+1} = theta_k exp(gamma_k dt)``: ``theta`` (..., N), ``gamma`` (..., N, G).
+
+        Uses ``gamma[..., 0]``; the caller (the particle filter) adds the process noise ``v``.
+        """
         return theta * np.exp(gamma[..., 0] * dt)
 
     def path(self, theta: np.ndarray, gamma: np.ndarray, noise: np.ndarray, dt: float) -> np.ndarray:
+        """theta over a horizon: ``gamma`` (..., N, H, G) used at each step, ``noise`` (..., N, H); returns (..., N, H).
+
+        ``theta_{k+l} = E_l (theta_k + sum_{j<=l} v_j / E_j)`` with ``E_l = exp(dt sum_{m<l} gamma_{k+m})``, from
+        cumulative sums (no loop over steps).
+        """
         growth = np.exp(dt * np.cumsum(gamma[..., 0], axis=-1))  # E_l
         return growth * (theta[..., None] + np.cumsum(noise / growth, axis=-1))
 
@@ -110,9 +123,18 @@ class Custom:
     process_noise: float = 0.0
 
     def step(self, theta: np.ndarray, gamma: np.ndarray, dt: float) -> np.ndarray:
+        """Deterministic step ``theta_k = g(theta_{k-1}, gamma_{k-1}, dt)`` as a float array, ``theta`` (..., N).
+
+        ``gamma`` is (..., N, G); the caller (the particle filter) adds the process noise ``v``.
+        """
         return np.asarray(self.g(theta, gamma, dt), dtype=float)
 
     def path(self, theta: np.ndarray, gamma: np.ndarray, noise: np.ndarray, dt: float) -> np.ndarray:
+        """theta over a horizon, one step at a time: ``theta_{k+l} = g(theta_{k+l-1}, gamma_{k+l-1}, dt) + v_l``.
+
+        ``gamma`` (..., N, H, G) holds the gamma used at each step, ``noise`` (..., N, H) the ``v_l``; returns
+        (..., N, H).
+        """
         out = np.empty(noise.shape)
         current = theta
         for step in range(noise.shape[-1]):

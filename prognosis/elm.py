@@ -342,6 +342,7 @@ class SeriesForecaster:
 
     @property
     def n_variables(self) -> int:
+        """Number of measured variables ``m``, one ROS-ELM each (0 before :meth:`fit`)."""
         return len(self.models)
 
     def fit(self, history: ArrayLike) -> SeriesForecaster:

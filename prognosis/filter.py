@@ -76,6 +76,7 @@ class VarianceAdaptation:
     _means: deque = field(default=None, init=False, repr=False)
 
     def reset(self) -> None:
+        """Forget the stored means of gamma, so that the moving average (eq. 36) starts afresh."""
         self._means = deque(maxlen=self.window + 1)
 
     def __call__(self, gamma: np.ndarray, weights: np.ndarray, variance: np.ndarray,
@@ -223,10 +224,12 @@ class ParticleFilter:
 
     @property
     def assets(self) -> int:
+        """Number of assets ``A``, the first axis of ``theta`` (after :meth:`initialize`)."""
         return self.theta.shape[0]
 
     @property
     def weights(self) -> np.ndarray:
+        """Normalised particle weights, shape (assets, particles)."""
         return normalize_log_weights(self.log_weights)[0]
 
     def step(self, y, points=()) -> StepDiagnostics:

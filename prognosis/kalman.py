@@ -178,6 +178,7 @@ class StrongTracking:
             raise ValueError(f"max_factor must be >= 1, got {self.max_factor}")
 
     def reset(self) -> None:
+        """Forget ``V_k`` (eq. 10); the filters call this at their start and in ``reinitialize``."""
         self._v = None
 
     def factor(self, residual: np.ndarray, predicted: np.ndarray, cross: np.ndarray, innovation: np.ndarray,
@@ -302,6 +303,11 @@ class ExtendedKalmanFilter(_GaussianFilter):
         super().__init__(model, mean, covariance, process_noise, measurement_noise, fading)
 
     def predict(self, u=None) -> None:
+        """Time update: ``x = f(x, u)`` and ``P = F P F^T + Q``, ``F = df/dx`` at the previous estimate.
+
+        ``u`` holds the inputs over the step: a mapping by input name, a sequence in the order of the model's
+        ``inputs``, or None for a model without inputs.
+        """
         self._x, f = self.model.transition_with_jacobian(self._x, u)
         self._spread = _symmetric(f @ self._p @ f.T)
         self._p = self._spread + self.process_noise
@@ -387,6 +393,13 @@ class UnscentedKalmanFilter(_GaussianFilter):
         return mean, deviation
 
     def predict(self, u=None) -> None:
+        """Time update: the ``2n + 1`` sigma points of the estimate go through ``f``.
+
+        ``x`` becomes their weighted mean and ``P`` their weighted spread plus ``Q``.
+
+        ``u`` holds the inputs over the step: a mapping by input name, a sequence in the order of the model's
+        ``inputs``, or None for a model without inputs.
+        """
         propagated = self.model.transition(self._sigma_points(self._p), u)
         self._x, deviation = self._moments(propagated)
         self._spread = _symmetric((deviation * self._wc) @ deviation.T)
@@ -462,6 +475,7 @@ class CubatureKalmanFilter(_GaussianFilter):
 
     @property
     def covariance(self) -> np.ndarray:
+        """Estimate covariance ``P = S S^T``, shape (n, n), from the square-root factor ``S``."""
         return self._s @ self._s.T
 
     @property
@@ -476,6 +490,14 @@ class CubatureKalmanFilter(_GaussianFilter):
         return self._x[:, None] + s @ self._xi  # eq. 21, 27, 37
 
     def predict(self, u=None) -> None:
+        """Time update (eqs. 23-26): the ``2n`` cubature points ``x + S xi_i`` go through ``f``.
+
+        ``x`` becomes their mean and ``S = tria([chi, sqrt(Q)])``, with ``chi`` their deviations from that mean
+        divided by ``sqrt(2n)``.
+
+        ``u`` holds the inputs over the step: a mapping by input name, a sequence in the order of the model's
+        ``inputs``, or None for a model without inputs.
+        """
         propagated = self.model.transition(self._points(self._s), u)  # eq. 23
         self._x = propagated.mean(axis=1)  # eq. 24
         self._chi = (propagated - self._x[:, None]) / np.sqrt(propagated.shape[1])  # eq. 26

@@ -41,13 +41,19 @@ class MonitorResult:
 
     @property
     def rul_mean(self) -> np.ndarray:
+        """Weighted mean RUL (s) of the crossing particles per prediction time ``rul_t``; NaN where all are censored."""
         return np.array([p.mean[0] for p in self.rul])
 
     @property
     def rul_median(self) -> np.ndarray:
+        """Weighted median RUL (s) per prediction time ``rul_t``, censored particles counted as ``+inf``."""
         return np.array([p.median[0] for p in self.rul])
 
     def rul_percentiles(self, q=(5, 95)) -> np.ndarray:
+        """Weighted RUL percentiles (s), ``q`` in [0, 100], shape (len(rul), len(q)); censored particles as ``+inf``.
+
+        Without any prediction the result is an empty array of shape (0,).
+        """
         return np.array([p.percentile(q)[0] for p in self.rul])
 
     def to_frame(self):

@@ -71,10 +71,12 @@ class RULDistribution:
 
     @property
     def mean(self) -> float:
+        """Mean RUL of the draws; ``inf`` when some draws survive the horizon."""
         return float(np.mean(self.rul))
 
     @property
     def median(self) -> float:
+        """Median RUL of the draws by :func:`numpy.median` (the midpoint of the two middle draws for an even count)."""
         return float(np.median(self.rul))
 
     @property

@@ -74,6 +74,7 @@ class ObservationModel:
 
     @property
     def symbol(self) -> sp.Symbol:
+        """The sympy symbol of the candidate, the variable theta of ``expression``."""
         return sp.Symbol(self.candidate)
 
     def function(self):

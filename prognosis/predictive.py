@@ -279,6 +279,7 @@ class WindowPosterior:
 
     @property
     def n_states(self) -> int:
+        """Model order ``n``: half the columns of ``theta = (a, f)``."""
         return self.theta.shape[1] // 2
 
     @property

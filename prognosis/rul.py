@@ -57,10 +57,12 @@ class RULPrediction:
 
     @property
     def censored(self) -> np.ndarray:
+        """Particles with no crossing within the horizon (non-finite RUL), shape (A, N)."""
         return ~np.isfinite(self.samples)
 
     @property
     def censored_weight(self) -> np.ndarray:
+        """Total weight of the censored particles per asset, shape (A,)."""
         return np.sum(np.where(self.censored, self.weights, 0.0), axis=-1)
 
     @property
@@ -77,6 +79,10 @@ class RULPrediction:
 
     @property
     def median(self) -> np.ndarray:
+        """Weighted median RUL per asset, shape (A,): the smallest sample whose cumulative weight reaches 1/2.
+
+        Censored particles count as ``+inf``.
+        """
         return self.percentile(50.0)[..., 0]
 
 
@@ -265,6 +271,11 @@ class ParallelRUL:
                                          initializer=_start_worker, initargs=(model, predictor))
 
     def submit(self, theta, gamma, weights, gamma_std, *, key: int):
+        """Start ``RULPredictor.predict(theta, gamma, weights, gamma_std, key=key)`` in a worker; returns its Future.
+
+        ``key`` (e.g. the filter step) is required: it fixes the prediction's random numbers, so the result does
+        not depend on the worker.  ``future.result()`` is the :class:`RULPrediction`.
+        """
         return self._pool.submit(_predict_in_worker, theta, gamma, weights, gamma_std, key)
 
     def __enter__(self) -> "ParallelRUL":

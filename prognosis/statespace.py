@@ -115,10 +115,12 @@ class DiscreteModel:
 
     @property
     def n_states(self) -> int:
+        """Length ``n`` of the state vector, augmented parameters included."""
         return len(self.states)
 
     @property
     def n_outputs(self) -> int:
+        """Number ``m`` of measured outputs, the rows of ``z``."""
         return len(self.outputs)
 
     def index(self, name: str) -> int:
