@@ -125,8 +125,9 @@ def cmd_detect(args, progress: Progress) -> int:
         (out / "detection.json").write_text(json.dumps(summary, indent=2))
         columns = {"t": record.t}
         for e in evaluations:
-            columns.update({f"{e.name}.residual": e.residual, f"{e.name}.lower": e.lower - e.margin,
-                            f"{e.name}.upper": e.upper + e.margin, f"{e.name}.alarm": e.alarm.astype(float)})
+            # the threshold holds -r_n in [lower - margin, upper + margin]; written as the band on r_n itself
+            columns.update({f"{e.name}.residual": e.residual, f"{e.name}.lower": -(e.upper + e.margin),
+                            f"{e.name}.upper": -(e.lower - e.margin), f"{e.name}.alarm": e.alarm.astype(float)})
         (out / "residuals.csv").write_text(_csv_text(columns))
         written = [out / "detection.json", out / "residuals.csv"] + _plots("detection", out, evaluations, progress)
         for path in written:

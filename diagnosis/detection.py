@@ -104,8 +104,9 @@ class Evaluation:
 
         Columns ``t, residual, lower, upper, bglft, violation, alarm``, one row per sample, with
         the default integer index: ``t`` is a column, as in the records that
-        :func:`evaluate` reads.  ``lower`` and ``upper`` are the band without the margin
-        (``self.margin``), as on the object.
+        :func:`evaluate` reads.  ``lower`` and ``upper`` are the band on ``-residual`` (seed 003:
+        ``-r_n`` in ``[B_lo, B_hi]``) without the margin (``self.margin``), as on the object; the
+        ``residuals.csv`` of ``bgphm detect`` writes the band on ``r_n`` itself, margin included.
 
         >>> flags = np.array([False, False, True])
         >>> result = Evaluation("ARR_demo", np.array([0.0, 0.1, 0.2]), residual=np.array([0.0, -0.1, -0.5]),

@@ -73,9 +73,18 @@ def test_detect_finds_a_friction_fault(tmp_path, capsys):
     data = tmp_path / "faulty.csv"
     assert main(["--quiet", "simulate", "dc-motor", "--t-end", "1", "--samples", "1001", "--set", "b=5e-4",
                  "--out", str(data)]) == 0
-    code, out, _ = run(capsys, "--quiet", "detect", "dc-motor", str(data), "--margin", "1e-3", "--arr", "ARR_1_m")
+    code, out, _ = run(capsys, "--quiet", "detect", "dc-motor", str(data), "--margin", "1e-3", "--arr", "ARR_1_m",
+                       "--out", str(tmp_path / "detect"))
     assert code == 0
     assert "ARR_1_m: alarm at t =" in out and "ARR_1_e" not in out
+    # residuals.csv: the band is on the residual it sits next to, so every sample in alarm lies outside it
+    table = np.genfromtxt(tmp_path / "detect" / "residuals.csv", delimiter=",", names=True)
+    residual, lower, upper, alarm = (table[f"ARR_1_m{c}"] for c in ("residual", "lower", "upper", "alarm"))
+    assert np.all(lower < upper) and alarm.any() and not np.allclose(lower, -upper)  # a one-sided band
+    outside = (residual < lower) | (residual > upper)
+    assert np.all(outside | (alarm == 0))
+    summary = json.loads((tmp_path / "detect" / "detection.json").read_text())
+    assert outside.sum() == summary["arrs"]["ARR_1_m"]["violations"]
 
 
 def test_quiet_silences_progress(motor_csv, capsys):
