@@ -74,14 +74,26 @@ class PIController:
     def derivative(self, t: float, z, y: dict) -> np.ndarray:
         """State derivative ``dz/dt``, shape (1,), at time ``t`` from the controller state ``z`` and measurements ``y``.
 
-        ``err`` without ``limits``; with them, ``err + (u - v) / (ki * tracking_time)`` (back-calculation
-        anti-windup, ``v`` the unsaturated and ``u`` the clipped output).  With ``limits`` it takes one sample
-        only: unlike :meth:`output`, it is not vectorized.
+        ``err`` without ``limits`` or without integral action (``ki = 0``: nothing to bleed); otherwise
+        ``err + (u - v) / (ki * tracking_time)`` (back-calculation anti-windup, ``v`` the unsaturated and ``u``
+        the clipped output).  Vectorized over samples as :meth:`output` (then shape (1, n)).
+
+        >>> pi = PIController("omega", setpoint=10.0, kp=0.5, ki=2.0, limits=(-1.0, 1.0))
+        >>> pi.derivative(0.0, np.zeros((1, 2)), {"omega": np.array([9.5, 0.0])}).tolist()   # 2nd saturated
+        [[0.5, 2.0]]
         """
         err = self.error(t, y)
-        if self.limits is None:
-            return np.array([err])
+        if self.limits is None or self.ki == 0:
+            return np.array([err], dtype=float)
         v = self._unsaturated(t, z, y)
-        u = min(max(v, self.limits[0]), self.limits[1])
+        u = np.clip(v, self.limits[0], self.limits[1])
         tracking = self.tracking_time if self.tracking_time is not None else self.kp / self.ki
-        return np.array([err + (u - v) / (self.ki * tracking)])
+        return np.array([err + (u - v) / (self.ki * tracking)], dtype=float)
+
+    def __post_init__(self) -> None:
+        if self.limits is not None and not self.limits[0] < self.limits[1]:
+            raise ValueError(f"PIController on {self.measured!r}: limits must be (lo, hi) with lo < hi, "
+                             f"got {self.limits}")
+        if self.tracking_time is not None and not self.tracking_time > 0:
+            raise ValueError(f"PIController on {self.measured!r}: tracking_time must be positive, "
+                             f"got {self.tracking_time}")

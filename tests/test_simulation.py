@@ -44,6 +44,22 @@ def test_pi_controller_tracks_the_set_point_and_saturates():
     assert heavy.controller_states["U"].shape == (heavy.t.size, 1)
 
 
+def test_pi_controller_derivative_is_vectorized_and_safe_without_integral_action():
+    pi = PIController("omega", setpoint=10.0, kp=0.5, ki=2.0, limits=(-1.0, 1.0))
+    omega, z = np.array([9.5, 0.0, 30.0]), np.array([[0.1, 0.0, -0.2]])
+    together = pi.derivative(0.0, z, {"omega": omega})
+    one_by_one = [pi.derivative(0.0, z[:, k], {"omega": omega[k]})[0] for k in range(3)]
+    assert together.shape == (1, 3) and np.allclose(together[0], one_by_one)
+    assert one_by_one[0] == pytest.approx(0.5)  # unsaturated: dz/dt = err
+    assert one_by_one[1] == pytest.approx(10.0 + (1.0 - 5.0) / (2.0 * 0.25))  # saturated: bled by (u - v)/(ki T_t)
+    proportional = PIController("omega", setpoint=10.0, kp=0.5, ki=0.0, limits=(-1.0, 1.0))
+    assert proportional.derivative(0.0, np.zeros(1), {"omega": 0.0}).tolist() == [10.0]  # no 0/0
+    with pytest.raises(ValueError, match="'omega': limits must be"):
+        PIController("omega", setpoint=1.0, kp=1.0, ki=1.0, limits=(1.0, -1.0))
+    with pytest.raises(ValueError, match="'omega': tracking_time must be positive"):
+        PIController("omega", setpoint=1.0, kp=1.0, ki=1.0, limits=(-1.0, 1.0), tracking_time=0.0)
+
+
 def test_time_varying_parameter():
     ramp = simulate(dc_motor(), (0.0, 2.0), {"U": 12.0}, parameters={"b": lambda t: 1e-4 * (1 + 4 * t)})
     fixed = simulate(dc_motor(), (0.0, 2.0), {"U": 12.0})
