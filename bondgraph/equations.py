@@ -33,7 +33,7 @@ import networkx as nx
 import sympy as sp
 
 from . import elements as el
-from .causality import DERIVATIVE, INTEGRAL, Causality, assign_causality
+from .causality import INTEGRAL, Causality, assign_causality
 from .errors import CausalityError, EquationError, LawError
 from .laws import solve_for
 from .model import PORT_SYMBOLS, T, BondGraph, Element, signal_function

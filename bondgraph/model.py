@@ -118,6 +118,10 @@ class Bond:
     ("bond 1 ('V' -> 'J1')", ('V', 'J1'), 1)
     >>> first.other("V"), first.sign_into("J1"), first.sign_into("V")
     ('J1', 1, -1)
+    >>> first.other("R")
+    Traceback (most recent call last):
+    ...
+    ValueError: 'R' is not an end of bond 1 ('V' -> 'J1')
     >>> sensor = bonds[-1]   # signal bonds come after the power bonds
     >>> str(sensor), sensor.is_signal
     ("signal bond ('J0' -> 'v_C')", True)
@@ -134,15 +138,20 @@ class Bond:
         return (self.tail, self.head)
 
     def other(self, node: Hashable) -> Hashable:
-        """The node at the other end of the bond from ``node``, one of its two ends.
-
-        ``head`` for the tail, ``tail`` for any other node (``node`` is not checked to be on the bond).
-        """
-        return self.head if node == self.tail else self.tail
+        """The node at the other end of the bond from ``node``, one of its two ends (else ValueError)."""
+        if node == self.tail:
+            return self.head
+        if node == self.head:
+            return self.tail
+        raise ValueError(f"{node!r} is not an end of {self}")
 
     def sign_into(self, node: Hashable) -> int:
-        """+1 if power flows into ``node`` along this bond, -1 if out of it."""
-        return 1 if node == self.head else -1
+        """+1 if power flows into ``node`` along this bond, -1 if out of it (``node`` one of its ends)."""
+        if node == self.head:
+            return 1
+        if node == self.tail:
+            return -1
+        raise ValueError(f"{node!r} is not an end of {self}")
 
     def __str__(self) -> str:
         name = f"bond {self.label} " if self.label is not None else "signal bond "

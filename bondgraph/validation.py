@@ -8,14 +8,18 @@ are connected and that names are used consistently across the model.
 from __future__ import annotations
 
 from collections.abc import Hashable, Mapping
+from typing import TYPE_CHECKING
 
 import sympy as sp
 
 from . import elements as el
 from .errors import ModelError
 
+if TYPE_CHECKING:  # model imports this module
+    from .model import Bond, Element
 
-def check_model(elements: Mapping[Hashable, "Element"], bonds: list["Bond"]) -> dict[str, float]:
+
+def check_model(elements: Mapping[Hashable, Element], bonds: list[Bond]) -> dict[str, float]:
     """Check connectivity and names; return the nominal value of every parameter.
 
     Raises

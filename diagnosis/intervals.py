@@ -752,8 +752,10 @@ class IntervalArray(_Arithmetic):
 
     @property
     def mid(self) -> np.ndarray:
-        """Midpoints ``lo/2 + hi/2``."""
-        return 0.5 * self.lo + 0.5 * self.hi
+        """Midpoints ``lo/2 + hi/2``; 0 for ``[-inf, inf]``, as :meth:`Interval.mid`."""
+        with np.errstate(invalid="ignore"):
+            mid = 0.5 * self.lo + 0.5 * self.hi
+        return np.where((self.lo == -_INF) & (self.hi == _INF), 0.0, mid)
 
     def contains(self, x) -> np.ndarray:
         """Elementwise whether ``x`` (numbers, an array or intervals) lies inside."""

@@ -6,7 +6,7 @@ downwards).  The horizon is processed in chunks of steps: inside a chunk the
 path of every particle comes from cumulative sums (:meth:`path` of the
 degradation model), so there is no per-particle and no per-step loop for the
 linear and exponential models; only particles that have not failed yet are
-carried into the next chunk, and chunks grow from 32 steps.  Particles that have not crossed when the
+carried into the next chunk, and chunks grow from 64 steps.  Particles that have not crossed when the
 horizon cap is reached are *censored*: their RUL is ``+inf`` and they are
 counted, not dropped.  The mean is over crossed particles (renormalized) and
 reported with the censored weight; median and percentiles treat censored
@@ -113,7 +113,7 @@ class RULPredictor:
         Cap (s); particles that have not failed by then are censored.
     seed : int
     chunk : int
-        Most steps propagated at once (chunks start at 32 steps and double).
+        Most steps propagated at once (chunks start at ``min(chunk, 64)`` steps and double up to it).
 
     Examples
     --------

@@ -554,6 +554,12 @@ def test_interval_array_indexing():
     assert [Z.lo for Z in X] == [0.0, 1.0, 2.0]
 
 
+def test_midpoints_of_unbounded_intervals_agree_between_scalar_and_array():
+    ends = [(-math.inf, math.inf), (-math.inf, 1.0), (1.0, math.inf), (-1e308, 1e308), (1.0, 3.0)]
+    X = IntervalArray(*zip(*ends))
+    assert X.mid.tolist() == [Interval(lo, hi).mid for lo, hi in ends] == [0.0, -math.inf, math.inf, 0.0, 2.0]
+
+
 # --------------------------------------------------------------------------
 # Speed
 # --------------------------------------------------------------------------
