@@ -164,7 +164,8 @@ def cmd_prognose(args, progress: Progress) -> int:
     direction = _direction(args, nominal)
     record = _record(args.data, [arr], progress)
     (evaluation,) = _detect([arr], record, args, progress)
-    residual_std = robust_std(evaluation.residual[record.t <= _calibration_end(record, args)])
+    # the filter's measurement noise comes from the healthy stretch even when --margin is given
+    residual_std = robust_std(evaluation.residual[record.t <= _calibration_end(record, args, "")])
     step = float(np.median(np.diff(record.t)))
     per_step = max(1, round((record.t[-1] - record.t[0]) / 2000 / step))  # about 2000 filter steps
     dt = args.dt if args.dt is not None else float(f"{step * per_step:.12g}")  # 0.01, not 0.010000000000000009
@@ -181,7 +182,8 @@ def cmd_prognose(args, progress: Progress) -> int:
                             gamma_std=0.2 * max(abs(band[0]), abs(band[1])),
                             adaptation=VarianceAdaptation(band=band, reference=0.02, gain=0.01, floor=1e-3),
                             gamma_bounds=band, start="residual", prediction_walk=0.0, rul_every=args.rul_every,
-                            horizon=args.horizon or 10.0 * duration, detection=detection, seed=args.seed)
+                            horizon=10.0 * duration if args.horizon is None else args.horizon, detection=detection,
+                            seed=args.seed)
     progress(f"particle filter on {arr.name} for {args.candidate} ({args.degradation}, {args.particles} particles, "
              f"dt = {dt:g} s)")
     result = monitor.run(record, progress=_filter_progress(progress))
@@ -263,14 +265,14 @@ def _record(path, arrs: list, progress: Progress) -> Record:
     return record
 
 
-def _calibration_end(record: Record, args) -> float:
-    """End of the stretch that calibrates the noise margin: --calibrate (default: the first 20 % of the record)."""
+def _calibration_end(record: Record, args, otherwise: str = " (or give --margin)") -> float:
+    """End of the healthy stretch that calibrates the residual noise: --calibrate (default: the first 20 %)."""
     t0, t1 = float(record.t[0]), float(record.t[-1])
     until = args.calibrate if args.calibrate is not None else t0 + 0.2 * (t1 - t0)
     count = int(np.count_nonzero(record.t <= until))
     if count < 20:
         raise UsageError(f"--calibrate {until:g}: only {count} samples before it; at least 20 are needed "
-                         "to estimate the residual noise (or give --margin)")
+                         f"to estimate the residual noise{otherwise}")
     return until
 
 
@@ -361,7 +363,7 @@ def _rate_band(args, nominal: float, duration: float) -> tuple[float, float]:
 
 def _prognosis_summary(args, arr, result, nominal, direction, band, dt, residual_std) -> dict:
     rows = []
-    percentiles = result.rul_percentiles((5, 50, 95)) if result.rul else np.empty((0, 3))
+    percentiles = result.rul_percentiles((5, 50, 95))
     for k, t in enumerate(result.rul_t):
         rows.append({"t": float(t), "rul_mean": _finite(result.rul_mean[k]), "rul_p5": _finite(percentiles[k, 0]),
                      "rul_median": _finite(percentiles[k, 1]), "rul_p95": _finite(percentiles[k, 2]),
@@ -586,6 +588,12 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise UsageError(f"--margin must be a finite non-negative number, got {args.margin}")
         if getattr(args, "particles", 2) < 2:
             raise UsageError(f"--particles must be at least 2, got {args.particles}")
+        if getattr(args, "rul_every", 1) < 1:
+            raise UsageError(f"--rul-every must be at least 1 filter step, got {args.rul_every}")
+        for option in ("horizon", "dt"):
+            value = getattr(args, option, None)
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise UsageError(f"--{option} must be a positive number of seconds, got {value}")
         return args.run(args, progress)
     except (UsageError, *BAD_INPUT) as exc:
         print(f"bgphm: error: {_one_line(exc)}", file=sys.stderr)

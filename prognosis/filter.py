@@ -225,17 +225,22 @@ class ParticleFilter:
     @property
     def assets(self) -> int:
         """Number of assets ``A``, the first axis of ``theta`` (after :meth:`initialize`)."""
-        return self.theta.shape[0]
+        return self._initialized().shape[0]
 
     @property
     def weights(self) -> np.ndarray:
         """Normalised particle weights, shape (assets, particles)."""
+        self._initialized()
         return normalize_log_weights(self.log_weights)[0]
+
+    def _initialized(self) -> np.ndarray:
+        if self.theta is None:
+            raise RuntimeError("the particle filter has no particles yet: call initialize() first (at detection time)")
+        return self.theta
 
     def step(self, y, points=()) -> StepDiagnostics:
         """One predict-update-resample-adapt cycle with measurement ``y`` (A,) and point values."""
-        if self.theta is None:
-            raise RuntimeError("call initialize() first (at detection time)")
+        self._initialized()
         y = np.broadcast_to(np.asarray(y, float), (self.assets,))
         self._predict()
         updated = np.isfinite(y)

@@ -50,11 +50,9 @@ class MonitorResult:
         return np.array([p.median[0] for p in self.rul])
 
     def rul_percentiles(self, q=(5, 95)) -> np.ndarray:
-        """Weighted RUL percentiles (s), ``q`` in [0, 100], shape (len(rul), len(q)); censored particles as ``+inf``.
-
-        Without any prediction the result is an empty array of shape (0,).
-        """
-        return np.array([p.percentile(q)[0] for p in self.rul])
+        """Weighted RUL percentiles (s), ``q`` in [0, 100], shape (len(rul), len(q)); censored particles as ``+inf``."""
+        q = np.atleast_1d(np.asarray(q, float))
+        return np.array([p.percentile(q)[0] for p in self.rul]).reshape(len(self.rul), q.size)
 
     def to_frame(self):
         """The estimates at every filter step as a pandas DataFrame (pandas imported on demand).
@@ -220,6 +218,8 @@ class HealthMonitor:
                                      resampling=resampling, resample_below=resample_below, seed=seed)
         if prediction_walk < 0:
             raise ValueError(f"prediction_walk must be >= 0, got {prediction_walk}")
+        if isinstance(rul_every, bool) or int(rul_every) != rul_every or rul_every < 1:
+            raise ValueError(f"rul_every must be a positive whole number of filter steps, got {rul_every!r}")
         self.gamma0, self.rul_every, self.horizon = gamma0, rul_every, horizon
         self.prediction_walk = float(prediction_walk)
         self.detection = dict(detection or {})

@@ -248,6 +248,21 @@ def test_failure_value_on_the_wrong_side(motor_csv, capsys, extra, message):
     assert code == 2 and message in err
 
 
+@pytest.mark.parametrize("extra, message", [
+    (["--horizon", "0"], "--horizon must be a positive number of seconds, got 0.0"),  # was silently the default
+    (["--horizon=-5"], "--horizon must be a positive number of seconds, got -5.0"),
+    (["--dt", "0"], "--dt must be a positive number of seconds, got 0.0"),
+    (["--rul-every", "0"], "--rul-every must be at least 1 filter step, got 0"),
+    (["--margin", "1e-3", "--calibrate", "0.001"], "only 2 samples before it; at least 20 are needed to "
+                                                   "estimate the residual noise"),
+])
+def test_bad_prognosis_settings_exit_2_naming_the_option(motor_csv, capsys, extra, message):
+    code, _, err = run(capsys, "--quiet", "prognose", "dc-motor", str(motor_csv), "--candidate", "b",
+                       "--degradation", "exponential", "--fail", "2e-3", *extra)
+    assert code == 2 and message in err
+    assert "or give --margin" not in err  # the filter needs the noise level even with a margin
+
+
 def test_bad_usage_exits_2(capsys):
     with pytest.raises(SystemExit) as exc:
         main(["detect", "dc-motor"])  # DATA.csv missing

@@ -70,6 +70,9 @@ def test_gamma_prior_over_an_interval_and_prediction_walk(scenario):
     assert 0.03 <= result.gamma["quantiles"][0, 0] and result.gamma["quantiles"][0, 2] <= 0.07
     with pytest.raises(ValueError, match="prediction_walk"):
         monitor(arr, prediction_walk=-1.0)
+    for every in (0, 2.5, True):
+        with pytest.raises(ValueError, match="rul_every must be a positive whole number"):
+            monitor(arr, rul_every=every)
 
 
 def test_sample_by_sample_equals_the_whole_record(scenario):

@@ -201,6 +201,19 @@ def test_bad_filter_settings():
         ParticleFilter(Linear(), linear_observation, inflation=0.0)
     with pytest.raises(ValueError, match="systematic"):
         ParticleFilter(Linear(), linear_observation, resampling="best")
+    fresh = ParticleFilter(Linear(), linear_observation)
+    for use in (lambda: fresh.step(np.array([0.0])), lambda: fresh.weights, lambda: fresh.assets):
+        with pytest.raises(RuntimeError, match="call initialize"):
+            use()
+
+
+def test_rul_percentiles_keep_their_columns_without_any_prediction():
+    from prognosis.monitor import MonitorResult
+
+    assert MonitorResult(detection_time=None).rul_percentiles((5, 50, 95)).shape == (0, 3)
+    one = RULPredictor(Linear(), dt=0.1, theta_fail=2.0, seed=0).predict(
+        np.zeros((1, 4)), np.ones((1, 4, 1)), np.full((1, 4), 0.25), 0.0)
+    assert MonitorResult(detection_time=0.0, rul=[one, one]).rul_percentiles(50).shape == (2, 1)
 
 
 # -- variance adaptation (Table III with the DESIGN.md sign) ---------------------------------------
