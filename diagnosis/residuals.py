@@ -68,8 +68,8 @@ class CompiledARR:
         """Compile an :class:`~diagnosis.arrs.ARR`: its signals, derivatives and integrals become point symbols.
 
         A signal ``x(t)`` becomes the symbol ``x``, its ``n``-th time derivative ``dn_x`` and the ``k``-th integral
-        (in sorted order) ``int<k>``; nominal parameter values are substituted, the ``delta_*`` symbols of the
-        uncertain part are kept.
+        (in sorted order) ``int<k>`` (with ``_`` appended while the name is a signal's or another symbol's);
+        nominal parameter values are substituted, the ``delta_*`` symbols of the uncertain part are kept.
 
         Raises
         ------
@@ -82,15 +82,24 @@ class CompiledARR:
         for name in signals:
             replace[sp.Function(name)(sp.Symbol("t"))] = signal_symbols[name]
         derivatives, integrals = {}, {}
+        # a signal may be called d1_x or int0 too: point names must not merge two different quantities
+        taken = set(signals) | {str(s) for s in (arr.nominal + arr.uncertain).free_symbols}
+
+        def fresh(name: str) -> sp.Symbol:
+            while name in taken:
+                name += "_"
+            taken.add(name)
+            return sp.Symbol(name)
+
         for d in sorted((arr.nominal + arr.uncertain).atoms(sp.Derivative), key=str):
             (variable, order), = d.variable_count
             if not isinstance(d.expr, AppliedUndef) or str(variable) != "t":
                 raise ValueError(f"{arr.name}: cannot evaluate {d} (only time derivatives of signals)")
-            symbol = sp.Symbol(f"d{order}_{d.expr.func.__name__}")
+            symbol = fresh(f"d{order}_{d.expr.func.__name__}")
             derivatives[symbol] = (d.expr.func.__name__, int(order))
             replace[d] = symbol
         for k, integral in enumerate(sorted((arr.nominal + arr.uncertain).atoms(sp.Integral), key=str)):
-            symbol = sp.Symbol(f"int{k}")
+            symbol = fresh(f"int{k}")
             integrals[symbol] = integral.function.xreplace(replace)
             replace[integral] = symbol
         values = {sp.Symbol(p): v for p, v in arr.values.items()}

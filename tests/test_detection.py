@@ -124,3 +124,22 @@ def test_a_pandas_dataframe_record_gives_the_same_evaluation(rlc):
     from_frame = arrs[0].evaluate(pd.DataFrame(record), margin=1e-5)
     assert np.array_equal(from_dict.residual, from_frame.residual)
     assert np.array_equal(from_dict.lower, from_frame.lower)
+
+
+def test_a_signal_named_like_a_derivative_point_keeps_its_own_value():
+    """A voltage sensor called d1_i next to di/dt: compiling must not merge the two into one point."""
+    from bondgraph import BondGraph
+
+    bg = BondGraph()
+    for name, kind in [("U", "Se"), ("J", "1"), ("i", "Df"), ("d1_i", "De"), ("J0", "0"), ("J2", "1")]:
+        bg.add(name, kind)
+    for name, kind, value in [("L", "I", 2.0), ("R", "R", 1.0), ("C", "C", 0.5), ("R2", "R", 3.0)]:
+        bg.add(name, kind, value=value)
+    for tail, head in [("U", "J"), ("J", "L"), ("J", "R"), ("J", "J0"), ("J0", "C"), ("J0", "J2"), ("J2", "R2"),
+                       ("J", "i"), ("J0", "d1_i")]:
+        bg.bond(tail, head)
+    t = np.linspace(0.0, 5.0, 5001)
+    record = simulate(bg, (0.0, 5.0), {"U": lambda t: np.sin(2 * t)}, t_eval=t).record()
+    for arr in derive_arrs(bg):
+        residual = arr.evaluate(record, margin=1e-3).residual
+        assert np.abs(residual[50:-50]).max() < 1e-6, arr.name  # consistent healthy data: r_n = 0
