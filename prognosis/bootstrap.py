@@ -12,8 +12,10 @@ compared on the same data (Gordon, Salmond and Smith 1993):
 3. resample (systematic by default) when the effective sample size falls
    below ``resample_below * N``.
 
-Weights stay in the log domain; a step whose likelihoods all underflow resets
-the weights to uniform and is counted in ``degenerate_steps``.
+Weights stay in the log domain, so likelihoods far below the float range
+still rank the particles; a step where no particle has a finite
+log-likelihood (NaN or -inf measurement model) resets the weights to
+uniform and is counted in ``degenerate_steps``.
 
 Example
 -------
@@ -122,8 +124,7 @@ class BootstrapParticleFilter:
     def predict(self, u=None) -> None:
         """Move every particle through the model: ``x_i = f(x_i, u) + w_i``, ``w_i ~ N(0, Q)``.
 
-        ``u`` holds the inputs over the step: a mapping by input name, a sequence in the order of the model's
-        ``inputs``, or None for a model without inputs.
+        ``u``: the inputs over the step (see :meth:`~prognosis.statespace.DiscreteModel.input_vector`).
         """
         noise = self._sqrt_q @ self.rng.standard_normal(self.particles.shape)
         self.particles = self.model.transition(self.particles, u) + noise

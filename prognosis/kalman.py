@@ -305,8 +305,7 @@ class ExtendedKalmanFilter(_GaussianFilter):
     def predict(self, u=None) -> None:
         """Time update: ``x = f(x, u)`` and ``P = F P F^T + Q``, ``F = df/dx`` at the previous estimate.
 
-        ``u`` holds the inputs over the step: a mapping by input name, a sequence in the order of the model's
-        ``inputs``, or None for a model without inputs.
+        ``u``: the inputs over the step (see :meth:`~prognosis.statespace.DiscreteModel.input_vector`).
         """
         self._x, f = self.model.transition_with_jacobian(self._x, u)
         self._spread = _symmetric(f @ self._p @ f.T)
@@ -397,8 +396,7 @@ class UnscentedKalmanFilter(_GaussianFilter):
 
         ``x`` becomes their weighted mean and ``P`` their weighted spread plus ``Q``.
 
-        ``u`` holds the inputs over the step: a mapping by input name, a sequence in the order of the model's
-        ``inputs``, or None for a model without inputs.
+        ``u``: the inputs over the step (see :meth:`~prognosis.statespace.DiscreteModel.input_vector`).
         """
         propagated = self.model.transition(self._sigma_points(self._p), u)
         self._x, deviation = self._moments(propagated)
@@ -495,8 +493,7 @@ class CubatureKalmanFilter(_GaussianFilter):
         ``x`` becomes their mean and ``S = tria([chi, sqrt(Q)])``, with ``chi`` their deviations from that mean
         divided by ``sqrt(2n)``.
 
-        ``u`` holds the inputs over the step: a mapping by input name, a sequence in the order of the model's
-        ``inputs``, or None for a model without inputs.
+        ``u``: the inputs over the step (see :meth:`~prognosis.statespace.DiscreteModel.input_vector`).
         """
         propagated = self.model.transition(self._points(self._s), u)  # eq. 23
         self._x = propagated.mean(axis=1)  # eq. 24
