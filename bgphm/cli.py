@@ -165,7 +165,7 @@ def cmd_prognose(args, progress: Progress) -> int:
     record = _record(args.data, [arr], progress)
     (evaluation,) = _detect([arr], record, args, progress)
     # the filter's measurement noise comes from the healthy stretch even when --margin is given
-    residual_std = robust_std(evaluation.residual[record.t <= _calibration_end(record, args, "")])
+    residual_std = robust_std(evaluation.residual[record.t <= _calibration_end(record, args, otherwise="")])
     step = float(np.median(np.diff(record.t)))
     per_step = max(1, round((record.t[-1] - record.t[0]) / 2000 / step))  # about 2000 filter steps
     dt = args.dt if args.dt is not None else float(f"{step * per_step:.12g}")  # 0.01, not 0.010000000000000009
@@ -265,7 +265,7 @@ def _record(path, arrs: list, progress: Progress) -> Record:
     return record
 
 
-def _calibration_end(record: Record, args, otherwise: str = " (or give --margin)") -> float:
+def _calibration_end(record: Record, args, *, otherwise: str = " (or give --margin)") -> float:
     """End of the healthy stretch that calibrates the residual noise: --calibrate (default: the first 20 %)."""
     t0, t1 = float(record.t[0]), float(record.t[-1])
     until = args.calibrate if args.calibrate is not None else t0 + 0.2 * (t1 - t0)
