@@ -79,6 +79,15 @@ def delta(parameter: str) -> sp.Symbol:
     return sp.Symbol(f"delta_{parameter}")
 
 
+def delta_parameter(symbol: sp.Symbol) -> str | None:
+    """The parameter whose uncertainty :func:`delta` names with ``symbol``, or None for any other symbol.
+
+    >>> delta_parameter(delta("L_a")), delta_parameter(sp.Symbol("L_a"))
+    ('L_a', None)
+    """
+    return symbol.name[len("delta_"):] if symbol.name.startswith("delta_") else None
+
+
 def latex(expression: sp.Expr) -> str:
     r"""LaTeX of an ARR expression, each ``delta_<param>`` typeset as delta with the parameter's own subscript.
 
@@ -90,8 +99,8 @@ def latex(expression: sp.Expr) -> str:
     >>> print(latex(derive_arrs(dc_motor())[0].terms["L_a"]))
     - L_{a} \delta_{L_{a}} \frac{d}{d t} i{\left(t \right)}
     """
-    names = {s: f"\\delta_{{{sp.latex(sp.Symbol(s.name[len('delta_'):]))}}}"
-             for s in expression.free_symbols if s.name.startswith("delta_")}
+    names = {s: f"\\delta_{{{sp.latex(sp.Symbol(delta_parameter(s)))}}}"
+             for s in expression.free_symbols if delta_parameter(s) is not None}
     return sp.latex(expression, symbol_names=names)
 
 
@@ -292,12 +301,12 @@ def _integrals(equations) -> dict:
 
 
 def _split(name, junction, detector, r_n, r_true, blocked_by, structure, candidates) -> ARR:
-    deltas = sorted((s for s in r_true.free_symbols if s.name.startswith("delta_")), key=str)
+    deltas = sorted((s for s in r_true.free_symbols if delta_parameter(s) is not None), key=str)
     parameters = _uncertainties(structure)
     terms = {}
     for d in deltas:
         others = {o: 0 for o in deltas if o is not d}
-        terms[d.name[len("delta_"):]] = _tidy(r_true.xreplace(others) - r_n)
+        terms[delta_parameter(d)] = _tidy(r_true.xreplace(others) - r_n)
     uncertain = sp.Add(*terms.values())
     cross = _tidy(r_true - r_n - uncertain)
     if cross != 0:  # an uncertain element driven through another one: keep the product terms too

@@ -35,7 +35,7 @@ from sympy.printing.mathml import MathMLPresentationPrinter
 from bondgraph import BondGraph
 from bondgraph import drawing
 
-from .arrs import ARR, ARRWarning, derive_arrs, latex
+from .arrs import ARR, ARRWarning, delta_parameter, derive_arrs, latex
 from .signatures import SignatureMatrix, signature_matrix
 
 __all__ = ["arr_report", "FORMATS"]
@@ -206,8 +206,9 @@ class _Presentation(MathMLPresentationPrinter):
     omega of t (sympy writes the function's raw name), ``delta_L_a`` as delta with subscript L_a."""
 
     def _print_Symbol(self, sym, style="plain"):
-        if sym.name.startswith("delta_"):
-            return self._print(sp.IndexedBase("delta")[sp.Symbol(sym.name[len("delta_"):])])
+        parameter = delta_parameter(sym)
+        if parameter is not None:
+            return self._print(sp.IndexedBase("delta")[sp.Symbol(parameter)])
         return super()._print_Symbol(sym, style)
 
     def _print_AppliedUndef(self, signal):

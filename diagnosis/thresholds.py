@@ -17,8 +17,8 @@ linear form ``w_i = delta_i g_i`` the interval band has width
 from __future__ import annotations
 
 import numpy as np
-import sympy as sp
 
+from .arrs import delta
 from .intervals import compile_interval, range_linear
 from .residuals import CompiledARR
 
@@ -27,7 +27,7 @@ def interval_threshold(compiled: CompiledARR, points: list[np.ndarray]) -> tuple
     """``(B_lo, B_hi)`` of Psi_2 at every sample; ``-r_n`` is normal inside it."""
     evaluator = compiled._functions.get("interval")
     if evaluator is None:
-        boxes = {sp.Symbol(f"delta_{p}"): tuple(map(float, box)) for p, box in compiled.arr.uncertainties.items()}
+        boxes = {delta(p): tuple(map(float, box)) for p, box in compiled.arr.uncertainties.items()}
         try:
             evaluator = range_linear(compiled.uncertain, compiled.points, boxes)
         except ValueError:  # not of the BG-LFT linear form: natural extension (sound, may overestimate)
@@ -47,7 +47,7 @@ def bglft_threshold(compiled: CompiledARR, points: list[np.ndarray]) -> np.ndarr
     shape = points[0].shape if points else ()
     total = np.zeros(shape)
     for parameter, term in compiled.terms.items():
-        d = sp.Symbol(f"delta_{parameter}")
+        d = delta(parameter)
         function = compiled.function(f"term {parameter}", term, (d,))
         lo, hi = compiled.arr.uncertainties[parameter]
         ends = [np.abs(np.broadcast_to(np.asarray(function(*points, value), float), shape)) for value in (lo, hi)]
