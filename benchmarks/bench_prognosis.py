@@ -32,8 +32,8 @@ import numpy as np
 from bondgraph.library import torsion_bar_monitorable
 from diagnosis import derive_arrs
 from diagnosis.residuals import compile_arr
-from prognosis.degradation import Exponential
-from prognosis.filter import ParticleFilter, VarianceAdaptation
+from prognosis.degradation import ExponentialDegradation
+from prognosis.particle_filter import ParticleFilter, VarianceAdaptation
 from prognosis.observation import observation_model
 from prognosis.rul import ParallelRUL, RULPredictor
 
@@ -52,7 +52,7 @@ def ours(steps: int, particles: int, dt: float, seed: int, workers: int = 1) -> 
     observation = observation_model(arr, "b_Md")
     compiled = compile_arr(arr)
     points = [np.array([OMEGA_M if str(p) == "omega_m" else 0.0]) for p in compiled.points]
-    model = Exponential(process_noise=1e-5)
+    model = ExponentialDegradation(process_noise=1e-5)
     pf = ParticleFilter(model, observation, n_particles=particles, dt=dt, noise_std=SIGMA_W, inflation=4.0,
                         gamma_std=0.02, adaptation=VarianceAdaptation(band=(0.03, 0.07), reference=0.10, gain=0.001),
                         seed=seed)

@@ -145,7 +145,7 @@ def cmd_prognose(args, progress: Progress) -> int:
     from diagnosis.detection import robust_std
     from diagnosis.signatures import signature_matrix
     from prognosis.degradation import degradation_model
-    from prognosis.filter import VarianceAdaptation
+    from prognosis.particle_filter import VarianceAdaptation
     from prognosis.monitor import HealthMonitor
 
     spec = load_model(args.model)

@@ -40,7 +40,7 @@ if TYPE_CHECKING:  # annotations only: matplotlib stays optional
     from bondgraph.simulation import SimulationResult
     from diagnosis.detection import Evaluation
     from prognosis.monitor import MonitorResult
-    from prognosis.rul import RULPrediction
+    from prognosis.rul import RULDistribution
 
 MATPLOTLIB_MISSING = "matplotlib is needed for plots: pip install 'bondgraph-phm[plot]'"
 
@@ -293,7 +293,7 @@ def plot_rul(result: MonitorResult, eol: float | None = None, alpha: float = 0.1
     return ax
 
 
-def plot_rul_distribution(prediction: RULPrediction, ax: Axes | None = None, bins: int = 40) -> Axes:
+def plot_rul_distribution(prediction: RULDistribution, ax: Axes | None = None, bins: int = 40) -> Axes:
     """Weighted histogram of one RUL prediction (the first asset).
 
     Bars hold probability mass (the particle weights normalized over all particles), so
@@ -302,7 +302,7 @@ def plot_rul_distribution(prediction: RULPrediction, ax: Axes | None = None, bin
 
     Parameters
     ----------
-    prediction : prognosis.rul.RULPrediction
+    prediction : prognosis.rul.RULDistribution
     ax : matplotlib.axes.Axes, optional
     bins : int or sequence
         As :meth:`~matplotlib.axes.Axes.hist` takes them.

@@ -5,7 +5,8 @@
     python docs/build_api.py            # write docs/api.md
     python docs/build_api.py --check    # exit 1 if docs/api.md is out of date
 
-The reference covers every name in ``__all__`` of ``bondgraph``, ``diagnosis`` and ``prognosis``,
+The reference covers every name in ``__all__`` of ``bondgraph``, ``diagnosis``, ``prognosis`` and its
+subpackages,
 the modules the tutorials use beside them (``bondgraph.library``, ``bondgraph.io``, ``bondgraph.drawing``,
 ``diagnosis.signals``, ``prognosis.metrics``), ``bgphm.cli.main`` and the public functions of
 ``bgphm.plotting``.  Names are grouped by the module that defines them, in source order; a class is
@@ -35,14 +36,18 @@ PACKAGES = [
     ("bondgraph", "model, causality, equations, simulation",
      ["bondgraph.library", "bondgraph.io", "bondgraph.drawing"]),
     ("diagnosis", "ARRs, intervals, thresholds, signatures, detection", ["diagnosis.signals"]),
-    ("prognosis", "fault model, filters, RUL, metrics, health monitoring", ["prognosis.metrics"]),
+    ("prognosis", "degradation laws, observation model, particle filter, RUL, metrics, health monitoring",
+     ["prognosis.metrics"]),
+    ("prognosis.statespace", "discrete models, Kalman filters, bootstrap filter, consistency, look-ahead, ROS-ELM", []),
+    ("prognosis.identification", "linear Gaussian models by EM, fault trend, posterior predictive", []),
+    ("prognosis.lifecontrol", "energy-driven deterioration, Chebyshev bounds, Monte Carlo RUL, RUL control", []),
     ("bgphm", "command line, plots and long runs", ["bgphm.plotting", "bgphm.runs"]),
 ]
 #: Modules first in this order within each package (the rest follow alphabetically).
 MODULE_ORDER = ["bondgraph.model", "bondgraph.causality", "bondgraph.equations", "bondgraph.simulation",
                 "bondgraph.control", "bondgraph.errors", "bondgraph.library", "bondgraph.io", "bondgraph.drawing",
                 "diagnosis.arrs", "diagnosis.signatures", "diagnosis.detection", "diagnosis.signals",
-                "diagnosis.intervals", "prognosis.observation", "prognosis.degradation", "prognosis.filter",
+                "diagnosis.intervals", "prognosis.observation", "prognosis.degradation", "prognosis.particle_filter",
                 "prognosis.rul", "prognosis.monitor", "prognosis.metrics", "bgphm.cli", "bgphm.plotting", "bgphm.runs"]
 #: Names documented for a package that has no useful ``__all__``.
 EXPLICIT = {"bgphm": ["bgphm.cli.main"]}

@@ -51,9 +51,10 @@ import sympy as sp  # noqa: E402
 from bgphm.plotting import band, pyplot, save_figure, write_figures  # noqa: E402
 from bgphm.runs import over_seeds, run_main  # noqa: E402
 from bondgraph.library import friction_drive  # noqa: E402
-from prognosis import (ExtendedKalmanFilter, InnovationMonitor, RULController, chebyshev_intervals,  # noqa: E402
-                       covariance_from_bounds, discretize, energy_deterioration, innovation_consistency,
-                       monte_carlo_rul)
+from prognosis.lifecontrol import (RULController, chebyshev_intervals, covariance_from_bounds,  # noqa: E402
+                                   energy_deterioration, monte_carlo_rul)
+from prognosis.statespace import (ExtendedKalmanFilter, InnovationMonitor, discretize,  # noqa: E402
+                                  innovation_consistency)
 
 HOUR = 3600.0
 DT = 1.0                      # s, sampling period (not given in the seed)

@@ -41,7 +41,7 @@ from bgphm.plotting import band, pyplot, save_figure, write_figures
 from bgphm.runs import over_seeds, progress_line, run_main
 from prognosis.identification import (FeaturePrediction, IdentificationWarning, LinearGaussianModel, OnlineEM,
                                       detect_trend, fault_trend, predict_feature)
-from prognosis.predictive import PosteriorPrediction, sample_posterior
+from prognosis.identification.predictive import PosteriorPrediction, sample_posterior
 
 # Seed 004 section 4: one acquisition every 5 min, about 180 h, fault around 55 h
 STEP_H = 5.0 / 60.0
@@ -74,7 +74,7 @@ TRUTH = {
 IDENTIFICATION = {"n_states": 2, "window": 200, "every": 12, "iterations": 5, "initial_iterations": 200}
 DETECTION = {"threshold": 1.0, "persistence": 3}
 PREDICT_AT_H = (44.0, 78.0)  # the seed's Figs. 5-7
-# The posterior predictive over the window's parameters (prognosis.predictive, our addition to the seed).
+# The posterior predictive over the window's parameters (prognosis.identification.predictive, our addition to the seed).
 # The oil temperature (input 1) changes the feature's level directly (D), it does not drive the damage:
 # declared so, it cannot act as a free drift of the growing mode, which biased its growth rate low
 # (--temperature-in-state gives the seed's general B back, for comparison).

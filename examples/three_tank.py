@@ -52,8 +52,8 @@ from bgphm.plotting import pyplot, save_figure, write_figures
 from bgphm.runs import over_seeds, progress_line, run_main
 from bondgraph.library import THREE_TANK, three_tank
 from diagnosis import derive_arrs, noise_margin, signature_matrix
-from prognosis import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter, SeriesForecaster,
-                       StrongTracking, UnscentedKalmanFilter, discretize, predict_ahead)
+from prognosis.statespace import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter, SeriesForecaster,
+                                  StrongTracking, UnscentedKalmanFilter, discretize, predict_ahead)
 
 # Seed 001 section 6
 STEPS = 200

@@ -59,7 +59,7 @@ def seed_study(case) -> list[tuple[str, str, dict]]:
 
 def ladder(case, residual_std: float) -> list[tuple[str, str, dict]]:
     """From the seed preset to the default preset, one change at a time (cumulative)."""
-    seed, default = example.tuning(case, "seed", residual_std), example.tuning(case, "default", residual_std)
+    seed, default = example.tuning(case, "paper", residual_std), example.tuning(case, "default", residual_std)
     steps = [("seed preset", {}),
              ("+ calibrated residual noise", {"noise_std": default["noise_std"]}),
              ("+ start from the alarm's residual", {"start": "residual"}),
@@ -88,7 +88,7 @@ def sweep(case_name: str = "b-md", seeds: int = 3, n_particles: int | None = Non
     scenario = example.simulate_case(case)
     detection = example.detection_setup(case, scenario, seed=0)[2]
     residual_std = detection["margin"] / example.MARGIN_SIGMAS
-    plan = [(p, v, {**example.tuning(case, "seed", residual_std), **o}) for p, v, o in seed_study(case)]
+    plan = [(p, v, {**example.tuning(case, "paper", residual_std), **o}) for p, v, o in seed_study(case)]
     plan += ladder(case, residual_std)
     if parameters is not None:
         unknown = set(parameters) - {p for p, _, _ in plan}
@@ -100,7 +100,7 @@ def sweep(case_name: str = "b-md", seeds: int = 3, n_particles: int | None = Non
     for i, (parameter, value, settings) in enumerate(plan):
         figures = []
         for seed in range(seeds):
-            figures.append(example.run(case, "seed", seed, scenario=scenario, n_particles=n_particles,
+            figures.append(example.run(case, "paper", seed, scenario=scenario, n_particles=n_particles,
                                        workers=workers, **settings).figures)
         row = {"parameter": parameter, "value": value}
         for key in FIGURES:

@@ -1,4 +1,21 @@
-"""prognosis: ARR-based fault model, particle and Kalman filters, RUL prediction, metrics, health monitoring.
+"""prognosis: from the nominal residual of an ARR to the remaining useful life (Jha et al. (2016)).
+
+The core chain lives at the top of the package: a degradation law of the prognostic candidate
+``theta`` (:mod:`.degradation`), the observation equation ``y = -r_n`` derived from the ARR
+(:mod:`.observation`), the SIR particle filter with its resampling schemes and variance adaptation
+(:mod:`.particle_filter`, :mod:`.resampling`), the RUL by propagating the particles to the failure
+value (:mod:`.rul`), the prognostic metrics (:mod:`.metrics`) and the health monitor that runs
+detection, estimation and RUL on a record (:mod:`.monitor`).
+
+Three method families sit beside it as subpackages:
+
+* :mod:`prognosis.statespace`: Kalman filters (EKF, UKF, square-root CKF, strong tracking), a
+  bootstrap particle filter, consistency tests, look-ahead and ROS-ELM forecasts on a discrete
+  model of the bond graph (Du et al.);
+* :mod:`prognosis.identification`: linear Gaussian models identified by EM on a sliding window,
+  fault trend and the posterior predictive (Gasperin et al. (2011));
+* :mod:`prognosis.lifecontrol`: energy-driven deterioration, Chebyshev bounds, Monte Carlo RUL and
+  RUL control (Rodriguez Obando et al. (2021)).
 
 >>> from bondgraph.library import torsion_bar_monitorable
 >>> from diagnosis import derive_arrs
@@ -7,37 +24,17 @@
 -omega_m(t)/k_belt**2
 """
 
-from .bootstrap import BootstrapParticleFilter
-from .chebyshev import chebyshev_bounds, chebyshev_intervals, chebyshev_level, chebyshev_scale, covariance_from_bounds
-from .consistency import ConsistencyReport, InnovationMonitor, innovation_consistency, whiten
-from .degradation import Custom, Exponential, Linear, degradation_model
-from .deterioration import DeteriorationEquations, energy_deterioration
-from .elm import ROSELM, SeriesForecaster
-from .filter import ParticleFilter, StepDiagnostics, VarianceAdaptation
-from .identification import (EMResult, FeaturePrediction, IdentificationWarning, LinearGaussianModel, OnlineEM,
-                             SmootherResult, WindowIdentification, detect_trend, em_step, fault_trend, fit_em,
-                             initial_model, kalman_smoother, log_likelihood, predict_feature)
-from .kalman import CubatureKalmanFilter, ExtendedKalmanFilter, FilterWarning, Innovation, StrongTracking, UnscentedKalmanFilter
-from .lookahead import LookAhead, look_ahead, predict_ahead
+from .degradation import CustomDegradation, ExponentialDegradation, LinearDegradation, degradation_model
+from .metrics import alpha_lambda, prognostic_horizon, relative_accuracy, relative_rmse, rmad
 from .monitor import HealthMonitor, MonitorResult
-from .montecarlo import RULDistribution, monte_carlo_rul, sample_gaussian
 from .observation import ObservationModel, observation_model
-from .predictive import PosteriorPrediction, SamplerWarning, WindowPosterior, sample_posterior, window_log_posterior
-from .rul import RULPrediction, RULPredictor, predict_rul
-from .rulcontrol import RULController, RULDecision
-from .statespace import DiscreteModel, discretize
+from .particle_filter import ParticleFilter, StepDiagnostics, VarianceAdaptation
+from .resampling import effective_sample_size
+from .rul import RULDistribution, RULPredictor, predict_rul
 
 __all__ = [
-    "ConsistencyReport", "DeteriorationEquations", "InnovationMonitor", "RULController", "RULDecision",
-    "RULDistribution", "chebyshev_bounds", "chebyshev_intervals", "chebyshev_level", "chebyshev_scale",
-    "covariance_from_bounds", "energy_deterioration", "innovation_consistency", "monte_carlo_rul", "sample_gaussian",
-    "whiten", "EMResult", "FeaturePrediction", "IdentificationWarning", "LinearGaussianModel", "OnlineEM",
-    "SmootherResult", "WindowIdentification", "detect_trend", "em_step", "fault_trend", "fit_em", "initial_model",
-    "kalman_smoother", "log_likelihood", "predict_feature",
-    "PosteriorPrediction", "SamplerWarning", "WindowPosterior", "sample_posterior", "window_log_posterior",
-    "BootstrapParticleFilter", "CubatureKalmanFilter", "Custom", "DiscreteModel", "Exponential",
-    "ExtendedKalmanFilter", "FilterWarning", "HealthMonitor", "Innovation", "Linear", "LookAhead", "MonitorResult",
-    "ObservationModel", "ParticleFilter", "ROSELM", "RULPrediction", "RULPredictor", "SeriesForecaster",
-    "StepDiagnostics", "StrongTracking", "UnscentedKalmanFilter", "VarianceAdaptation", "degradation_model",
-    "discretize", "look_ahead", "observation_model", "predict_ahead", "predict_rul",
+    "CustomDegradation", "ExponentialDegradation", "HealthMonitor", "LinearDegradation", "MonitorResult",
+    "ObservationModel", "ParticleFilter", "RULDistribution", "RULPredictor", "StepDiagnostics", "VarianceAdaptation",
+    "alpha_lambda", "degradation_model", "effective_sample_size", "observation_model", "predict_rul",
+    "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad",
 ]

@@ -3,9 +3,9 @@
 A model maps ``theta_{k-1}`` and the degradation progression parameters
 ``gamma_{k-1}`` to ``theta_k``, plus additive process noise ``v ~ N(0, s^2)``:
 
-* :class:`Linear`       ``theta_k = theta_{k-1} + gamma dt + v``           (seed 003 eq. 60)
-* :class:`Exponential`  ``theta_k = theta_{k-1} exp(gamma dt) + v``        (seed 003 eq. 53)
-* :class:`Custom`       ``theta_k = g(theta_{k-1}, gamma, dt) + v``
+* :class:`LinearDegradation` ``theta_k = theta_{k-1} + gamma dt + v``           (seed 003 eq. 60)
+* :class:`ExponentialDegradation` ``theta_k = theta_{k-1} exp(gamma dt) + v``        (seed 003 eq. 53)
+* :class:`CustomDegradation` ``theta_k = g(theta_{k-1}, gamma, dt) + v``
 
 Arrays are vectorized over assets and particles: ``theta`` has shape
 ``(..., N)`` and ``gamma`` shape ``(..., N, G)`` with ``G`` the number of
@@ -26,11 +26,11 @@ import numpy as np
 
 
 @dataclass(frozen=True)
-class Linear:
+class LinearDegradation:
     """``theta_k = theta_{k-1} + gamma_{k-1} dt + v``, ``v ~ N(0, process_noise^2)``.
 
     >>> import numpy as np
-    >>> Linear().step(np.array([1.0]), np.array([[0.5]]), dt=0.1)
+    >>> LinearDegradation().step(np.array([1.0]), np.array([[0.5]]), dt=0.1)
     array([1.05])
     """
 
@@ -55,11 +55,11 @@ class Linear:
 
 
 @dataclass(frozen=True)
-class Exponential:
+class ExponentialDegradation:
     """``theta_k = theta_{k-1} exp(gamma_{k-1} dt) + v``, ``v ~ N(0, process_noise^2)``.
 
     >>> import numpy as np
-    >>> float(Exponential().step(np.array([2.0]), np.array([[np.log(2) / 0.5]]), dt=0.5)[0])
+    >>> float(ExponentialDegradation().step(np.array([2.0]), np.array([[np.log(2) / 0.5]]), dt=0.5)[0])
     4.0
     """
 
@@ -105,7 +105,7 @@ class Exponential:
 
 
 @dataclass(frozen=True)
-class Custom:
+class CustomDegradation:
     """``theta_k = g(theta_{k-1}, gamma_{k-1}, dt) + v`` for a user function ``g``.
 
     ``g`` receives ``theta`` (..., N) and ``gamma`` (..., N, G) and must be
@@ -113,7 +113,7 @@ class Custom:
     (each step still vectorized over particles).
 
     >>> import numpy as np
-    >>> model = Custom(lambda theta, gamma, dt: theta * (1 + gamma[..., 0] * dt + gamma[..., 1] * dt**2), n_gamma=2)
+    >>> model = CustomDegradation(lambda theta, gamma, dt: theta * (1 + gamma[..., 0] * dt + gamma[..., 1] * dt**2), n_gamma=2)
     >>> model.step(np.array([1.0]), np.array([[1.0, 2.0]]), dt=0.5)
     array([2.])
     """
@@ -169,7 +169,7 @@ def prefix_sum(x: np.ndarray) -> np.ndarray:
     return blocks.reshape(rows, h)
 
 
-MODELS = {"linear": Linear, "exponential": Exponential}
+MODELS = {"linear": LinearDegradation, "exponential": ExponentialDegradation}
 
 
 def degradation_model(name: str, process_noise: float = 0.0):
@@ -183,19 +183,19 @@ def degradation_model(name: str, process_noise: float = 0.0):
 
     Returns
     -------
-    Linear or Exponential
+    LinearDegradation or ExponentialDegradation
 
     Examples
     --------
     >>> import numpy as np
     >>> model = degradation_model("exponential", process_noise=0.01)
     >>> model
-    Exponential(process_noise=0.01, n_gamma=1)
+    ExponentialDegradation(process_noise=0.01, n_gamma=1)
     >>> round(float(model.step(np.array([1.0]), np.array([[np.log(2.0)]]), dt=1.0)[0]), 9)   # doubles in a step
     2.0
     >>> degradation_model("linear").step(np.array([1.0]), np.array([[0.5]]), dt=2.0).tolist()
     [2.0]
     """
     if name not in MODELS:
-        raise ValueError(f"unknown degradation model {name!r}; choose from {sorted(MODELS)} or use Custom(g)")
+        raise ValueError(f"unknown degradation model {name!r}; choose from {sorted(MODELS)} or use CustomDegradation(g)")
     return MODELS[name](process_noise=process_noise)

@@ -21,7 +21,7 @@ from bondgraph._optional import pandas_for
 from diagnosis.signals import default_window
 
 from . import metrics
-from .filter import ParticleFilter, VarianceAdaptation
+from .particle_filter import ParticleFilter, VarianceAdaptation
 from .observation import observation_model
 from .rul import ParallelRUL, RULPredictor
 
@@ -62,10 +62,10 @@ class MonitorResult:
         No rows before detection.
 
         >>> import numpy as np
-        >>> from prognosis.rul import RULPrediction
+        >>> from prognosis.rul import RULDistribution
         >>> estimate = {"mean": np.array([1.0, 1.2]), "rmad": np.array([0.1, 0.05]),
         ...             "quantiles": np.array([[0.9, 1.0, 1.1], [1.1, 1.2, 1.3]])}
-        >>> rul = [RULPrediction(np.array([[10.0, 20.0, np.inf]]), np.array([[0.5, 0.25, 0.25]]), 100.0)]
+        >>> rul = [RULDistribution(np.array([[10.0, 20.0, np.inf]]), np.array([[0.5, 0.25, 0.25]]), 100.0)]
         >>> result = MonitorResult(0.5, t=np.array([0.5, 0.6]), theta=estimate, gamma=estimate,
         ...                        rul_t=np.array([0.5]), rul=rul)
         >>> frame = result.to_frame()
@@ -95,8 +95,8 @@ class MonitorResult:
         these may be ``inf``), with the default integer index.
 
         >>> import numpy as np
-        >>> from prognosis.rul import RULPrediction
-        >>> rul = [RULPrediction(np.array([[10.0, 20.0, np.inf]]), np.array([[0.5, 0.25, 0.25]]), 100.0)]
+        >>> from prognosis.rul import RULDistribution
+        >>> rul = [RULDistribution(np.array([[10.0, 20.0, np.inf]]), np.array([[0.5, 0.25, 0.25]]), 100.0)]
         >>> frame = MonitorResult(0.5, rul_t=np.array([0.5]), rul=rul).rul_frame()
         >>> list(frame.columns)
         ['rul_t', 'mean', 'median', 'p5', 'p95']
@@ -170,11 +170,11 @@ class HealthMonitor:
     dt : float
         Filter step (s); the record's sampling step must divide it.
     n_particles, noise_std, inflation, gamma_std, gamma0, resampling, resample_below
-        Particle filter settings (:class:`~prognosis.filter.ParticleFilter`).
+        Particle filter settings (:class:`~prognosis.particle_filter.ParticleFilter`).
     gamma_bounds : (lo, hi), optional
         Draw the initial gamma uniformly over this interval instead of ``gamma0``.
-    start : {"residual", "eq39"}
-        Initial theta interval.  ``"eq39"``: the candidate's uncertainty interval, as in the seed.
+    start : {"residual", "uncertainty_box"}
+        Initial theta interval.  ``"uncertainty_box"``: the candidate's uncertainty interval, as in Jha et al. (2016), eq. 39.
         ``"residual"``: that interval widened to contain the theta that explains the residual on
         the ``persistence`` samples that raised the alarm (inverting the observation equation);
         by the time a degradation is detected, theta has usually left the uncertainty interval.
@@ -207,8 +207,8 @@ class HealthMonitor:
         nominal = self.observation.nominal
         lo, hi = arr.uncertainties.get(candidate, (0.0, 0.0))
         self.theta_bounds = (nominal * (1 + lo), nominal * (1 + hi)) if theta_bounds is None else tuple(theta_bounds)
-        if start not in ("residual", "eq39"):
-            raise ValueError(f"start must be 'residual' or 'eq39', got {start!r}")
+        if start not in ("residual", "uncertainty_box"):
+            raise ValueError(f"start must be 'residual' or 'uncertainty_box', got {start!r}")
         self.start, self.gamma_bounds = start, gamma_bounds
         if (direction == "up") != (theta_fail > nominal):
             raise ValueError(f"failure value {theta_fail} of {candidate!r} is on the wrong side of its nominal "
@@ -318,7 +318,7 @@ class HealthMonitor:
     def _start_bounds(self, evaluation, k: int) -> tuple[float, float]:
         """Initial theta interval at detection (see ``start``)."""
         lo, hi = self.theta_bounds
-        if self.start == "eq39":
+        if self.start == "uncertainty_box":
             return lo, hi
         window = slice(max(0, k - evaluation.persistence + 1), k + 1)
         bracket = (min(lo, self.theta_fail), max(hi, self.theta_fail))

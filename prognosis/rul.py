@@ -20,70 +20,145 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .degradation import Linear
+from .degradation import LinearDegradation
 from .metrics import weighted_quantiles
 
 
-@dataclass
-class RULPrediction:
-    """RUL distribution per asset: ``samples`` (A, N) in seconds (inf if censored) with ``weights``.
+@dataclass(frozen=True)
+class RULDistribution:
+    """A predicted RUL distribution: weighted samples, ``inf`` where no failure came within the horizon.
+
+    The one result type of every RUL prediction: the particle filter's (:class:`RULPredictor`,
+    one row of particles per asset) and the Monte Carlo one from a Gaussian estimate
+    (:func:`prognosis.lifecontrol.monte_carlo_rul`, one row of draws).  Statistics reduce the
+    last axis, so they have the leading shape of ``samples``: ``(A,)`` for a batch of assets,
+    a float for a single row.
 
     Attributes
     ----------
-    samples : ndarray (A, N)
-        RUL of each particle; ``inf`` where it did not fail within ``horizon``.
-    weights : ndarray (A, N)
-        The particles' weights.
+    samples : ndarray (..., N)
+        RUL of each particle or draw (s); ``inf`` where it did not fail within ``horizon``.
+    weights : ndarray (..., N), optional
+        The samples' weights (normalized or not); equal weights when omitted.
     horizon : float
-        The cap of the prediction (s).
+        The cap of the prediction (s); ``inf`` when not known.
+    origin : float
+        The prediction time ``t_0``; :attr:`eol` is ``origin + samples``.
+    initial : ndarray (d, N), optional
+        The drawn initial states of a Monte Carlo prediction.
+    times, trajectories : ndarray (T,), (T, d, keep), optional
+        Trajectories kept for plots by a Monte Carlo prediction.
+
+    Conventions
+    -----------
+    - :attr:`mean` and :attr:`std` are over the samples that fail within the horizon (weights
+      renormalized), NaN if none does; :attr:`censored_weight` says how much is left out.
+    - Quantiles (:meth:`quantile`, :meth:`percentile`, :attr:`median`) count censored samples as
+      ``+inf`` and take the smallest sample whose cumulative weight reaches the level (the
+      inverted CDF, so an even number of equal weights gives the lower of the two middle samples).
 
     Examples
     --------
-    Returned by :meth:`RULPredictor.predict` and :func:`predict_rul`; built by hand here,
-    one of four equally weighted particles censored:
+    Four equally weighted particles of one asset, one censored:
 
-    >>> rul = RULPrediction(samples=np.array([[1.0, 2.0, 4.0, np.inf]]), weights=np.full((1, 4), 0.25), horizon=10.0)
+    >>> rul = RULDistribution(samples=np.array([[1.0, 2.0, 4.0, np.inf]]), weights=np.full((1, 4), 0.25), horizon=10.0)
     >>> rul.censored.tolist(), rul.censored_weight.tolist()
     ([[False, False, False, True]], [0.25])
     >>> np.round(rul.mean, 4).tolist(), rul.median.tolist()   # mean over the failed ones, median with inf
     ([2.3333], [2.0])
     >>> rul.percentile([10, 90]).tolist()
     [[1.0, inf]]
+
+    A single row of unweighted Monte Carlo draws from ``t_0 = 10``:
+
+    >>> draws = RULDistribution(samples=np.array([1.0, 2.0, 3.0, np.inf]), origin=10.0)
+    >>> draws.eol.tolist(), draws.median, draws.mean
+    ([11.0, 12.0, 13.0, inf], 2.0, 2.0)
+    >>> draws.quantile(0.9), draws.probability_before(2.0)
+    (inf, 0.5)
     """
 
     samples: np.ndarray
-    weights: np.ndarray
-    horizon: float
+    weights: np.ndarray | None = None
+    horizon: float = float("inf")
+    origin: float = 0.0
+    initial: np.ndarray | None = None
+    times: np.ndarray | None = None
+    trajectories: np.ndarray | None = None
+
+    @property
+    def _weights(self) -> np.ndarray:
+        samples = np.asarray(self.samples, float)
+        if self.weights is None:
+            return np.full(samples.shape, 1.0 / max(samples.shape[-1], 1))
+        return np.broadcast_to(np.asarray(self.weights, float), samples.shape)
+
+    @staticmethod
+    def _reduced(value: np.ndarray):
+        return float(value) if np.ndim(value) == 0 else value
 
     @property
     def censored(self) -> np.ndarray:
-        """Particles with no crossing within the horizon (non-finite RUL), shape (A, N)."""
+        """Samples with no failure within the horizon (non-finite RUL), the shape of ``samples``."""
         return ~np.isfinite(self.samples)
 
-    @property
-    def censored_weight(self) -> np.ndarray:
-        """Total weight of the censored particles per asset, shape (A,)."""
-        return np.sum(np.where(self.censored, self.weights, 0.0), axis=-1)
+    def _mass(self, mask: np.ndarray):
+        """The weight of the samples in ``mask`` per row (the fraction of them without weights)."""
+        if self.weights is None:
+            return self._reduced(np.mean(mask, axis=-1))
+        return self._reduced(np.sum(np.where(mask, self._weights, 0.0), axis=-1))
 
     @property
-    def mean(self) -> np.ndarray:
-        """Weighted mean over particles that cross within the horizon (NaN if none do)."""
-        w = np.where(self.censored, 0.0, self.weights)
+    def censored_weight(self):
+        """Total weight of the censored samples per row (their fraction without weights)."""
+        return self._mass(self.censored)
+
+    @property
+    def mean(self):
+        """Weighted mean over the samples that fail within the horizon (NaN if none do)."""
+        w = np.where(self.censored, 0.0, self._weights)
         total = w.sum(axis=-1)
         with np.errstate(invalid="ignore", divide="ignore"):
-            return np.where(total > 0, np.sum(w * np.where(self.censored, 0.0, self.samples), axis=-1) / total, np.nan)
-
-    def percentile(self, q) -> np.ndarray:
-        """Weighted percentiles (q in [0, 100]), censored samples as +inf; shape (A, len(q))."""
-        return weighted_quantiles(self.samples, self.weights, np.atleast_1d(np.asarray(q, float)) / 100.0)
+            mean = np.where(total > 0, np.sum(w * np.where(self.censored, 0.0, self.samples), axis=-1) / total, np.nan)
+        return self._reduced(mean)
 
     @property
-    def median(self) -> np.ndarray:
-        """Weighted median RUL per asset, shape (A,): the smallest sample whose cumulative weight reaches 1/2.
+    def std(self):
+        """Weighted standard deviation over the samples that fail within the horizon (NaN if none do)."""
+        w = np.where(self.censored, 0.0, self._weights)
+        total = w.sum(axis=-1, keepdims=True)
+        finite = np.where(self.censored, 0.0, self.samples)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            mean = np.sum(w * finite, axis=-1, keepdims=True) / total
+            variance = np.sum(w * (finite - mean) ** 2, axis=-1) / total[..., 0]
+        return self._reduced(np.sqrt(variance))
 
-        Censored particles count as ``+inf``.
+    def quantile(self, q):
+        """Weighted quantiles (``q`` in [0, 1], a number or a sequence); censored samples count as ``+inf``.
+
+        Shape: the leading shape of ``samples``, plus one axis of ``len(q)`` for a sequence.
         """
-        return self.percentile(50.0)[..., 0]
+        levels = np.atleast_1d(np.asarray(q, float))
+        values = weighted_quantiles(np.asarray(self.samples, float), self._weights, levels)
+        return self._reduced(values[..., 0]) if np.ndim(q) == 0 else values
+
+    def percentile(self, q) -> np.ndarray:
+        """Weighted percentiles (q in [0, 100]), censored samples as ``+inf``; shape (..., len(q))."""
+        return self.quantile(np.atleast_1d(np.asarray(q, float)) / 100.0)
+
+    @property
+    def median(self):
+        """Weighted median RUL: the smallest sample whose cumulative weight reaches 1/2 (censored as ``+inf``)."""
+        return self.quantile(0.5)
+
+    def probability_before(self, rul: float):
+        """``Pr(RUL <= rul)``: the weight of the samples failing within ``rul`` (Rodriguez Obando et al. (2021), eq. 51)."""
+        return self._mass(np.asarray(self.samples) <= rul)
+
+    @property
+    def eol(self) -> np.ndarray:
+        """End-of-life times ``origin + samples``."""
+        return self.origin + np.asarray(self.samples, float)
 
 
 class RULPredictor:
@@ -100,7 +175,7 @@ class RULPredictor:
     fresh random permutation, so successive predictions use the same noise in
     a different order (common random numbers: the RUL curve over time is not
     jittered by independent Monte-Carlo noise, while each prediction is still
-    an exact draw of Table IV).  Models without ``path_from_sums`` (Custom)
+    an exact draw of Table IV).  Models without ``path_from_sums`` (CustomDegradation)
     are propagated step by step within a chunk.
 
     Parameters
@@ -120,8 +195,8 @@ class RULPredictor:
     Linear degradation from 0 to the threshold 2 at rates 0.5, 1 and 4 per second,
     without noise; a rate of 0.1 would need 20 s, beyond the 10 s horizon:
 
-    >>> from prognosis.degradation import Linear
-    >>> predictor = RULPredictor(Linear(), dt=0.1, theta_fail=2.0, horizon=10.0, seed=0)
+    >>> from prognosis.degradation import LinearDegradation
+    >>> predictor = RULPredictor(LinearDegradation(), dt=0.1, theta_fail=2.0, horizon=10.0, seed=0)
     >>> weights = np.full((1, 3), 1 / 3)
     >>> predictor.predict(np.zeros((1, 3)), np.array([[[0.5], [1.0], [4.0]]]), weights, 0.0).samples.tolist()
     [[4.0, 2.0, 0.5]]
@@ -165,7 +240,7 @@ class RULPredictor:
         return self._bank
 
     def predict(self, theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray, gamma_std, *,
-                key: int | None = None) -> RULPrediction:
+                key: int | None = None) -> RULDistribution:
         """RUL distribution of particles ``theta`` (A, N), ``gamma`` (A, N, G) with their weights.
 
         ``key`` (e.g. the filter step) makes this prediction's randomness a function of the seed and
@@ -184,7 +259,7 @@ class RULPredictor:
             self._propagate_with_sums(theta_now, gamma_now[:, 0], std[:, 0], alive, rul)
         else:
             self._propagate_stepwise(theta_now, gamma_now, std, alive, rul)
-        return RULPrediction(rul.reshape(assets, n), weights, self.horizon)
+        return RULDistribution(rul.reshape(assets, n), weights, self.horizon)
 
     def _propagate_with_sums(self, theta, gamma, std, alive, rul) -> None:
         bank = self._bank_rows(theta.size)
@@ -201,7 +276,7 @@ class RULPredictor:
                 gamma_sum = (steps * gamma[alive, None].astype(np.float32)
                              + std[alive, None].astype(np.float32) * bank["CW"][r, window])
                 # the exponential model needs this chunk's noise, the linear one its running sum
-                uses_sum = isinstance(self.model, Linear)
+                uses_sum = isinstance(self.model, LinearDegradation)
                 noise = bank["V"][r, window] if sigma_v and not uses_sum else None
                 noise_sum = bank["CV"][r, window] if sigma_v and uses_sum else None
                 path, carry[alive] = self.model.path_from_sums(theta[alive], gamma_sum, noise, noise_sum,
@@ -256,8 +331,8 @@ class ParallelRUL:
     Ctrl-C interrupts only the calling process, not every worker with a traceback of its own.
 
     >>> import numpy as np
-    >>> from prognosis.degradation import Linear
-    >>> with ParallelRUL(Linear(), dt=0.1, theta_fail=2.0, workers=2) as pool:
+    >>> from prognosis.degradation import LinearDegradation
+    >>> with ParallelRUL(LinearDegradation(), dt=0.1, theta_fail=2.0, workers=2) as pool:
     ...     future = pool.submit(np.zeros((1, 3)), np.ones((1, 3, 1)), np.full((1, 3), 1 / 3), 0.0, key=0)
     ...     future.result().samples.tolist()
     [[2.0, 2.0, 2.0]]
@@ -274,7 +349,7 @@ class ParallelRUL:
         """Start ``RULPredictor.predict(theta, gamma, weights, gamma_std, key=key)`` in a worker; returns its Future.
 
         ``key`` (e.g. the filter step) is required: it fixes the prediction's random numbers, so the result does
-        not depend on the worker.  ``future.result()`` is the :class:`RULPrediction`.
+        not depend on the worker.  ``future.result()`` is the :class:`RULDistribution`.
         """
         return self._pool.submit(_predict_in_worker, theta, gamma, weights, gamma_std, key)
 
@@ -294,20 +369,20 @@ def _start_worker(model, predictor) -> None:
     _WORKER_PREDICTOR = RULPredictor(model, **predictor)
 
 
-def _predict_in_worker(theta, gamma, weights, gamma_std, key) -> RULPrediction:
+def _predict_in_worker(theta, gamma, weights, gamma_std, key) -> RULDistribution:
     return _WORKER_PREDICTOR.predict(theta, gamma, weights, gamma_std, key=key)
 
 
 def predict_rul(model, theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray, *, dt: float,
                 theta_fail: float, gamma_std, direction: str = "up", horizon: float = 200.0,
-                rng: np.random.Generator, chunk: int = 512) -> RULPrediction:
+                rng: np.random.Generator, chunk: int = 512) -> RULDistribution:
     """One-off RUL prediction (Table IV); see :class:`RULPredictor` for repeated predictions.
 
     Examples
     --------
     >>> import numpy as np
-    >>> from prognosis.degradation import Linear
-    >>> rul = predict_rul(Linear(), np.array([[0.0]]), np.array([[[1.0]]]), np.array([[1.0]]), dt=0.1,
+    >>> from prognosis.degradation import LinearDegradation
+    >>> rul = predict_rul(LinearDegradation(), np.array([[0.0]]), np.array([[[1.0]]]), np.array([[1.0]]), dt=0.1,
     ...                   theta_fail=2.0, gamma_std=0.0, rng=np.random.default_rng(0))
     >>> float(rul.samples[0, 0])
     2.0

@@ -14,7 +14,7 @@ from bondgraph.control import PIController
 from bondgraph.io import load_model
 from diagnosis import derive_arrs
 from diagnosis.signals import read_csv
-from prognosis.degradation import Exponential
+from prognosis.degradation import ExponentialDegradation
 from prognosis.monitor import HealthMonitor
 
 THETA_TOLERANCE = 0.05  # relative error of the candidate's estimate at the last filter step
@@ -79,7 +79,7 @@ def three_tank_monitor(demos, **options):
     *_, path = demos["three-tank"]
     arr = next(a for a in derive_arrs(load_model(path / "model.json").model) if a.name == "ARR_0_2")
     record = read_csv(path / "data.csv", arr.signals)
-    monitor = HealthMonitor(arr, "az2", Exponential(), theta_fail=1.2, dt=1.0, n_particles=50, noise_std=3e-6,
+    monitor = HealthMonitor(arr, "az2", ExponentialDegradation(), theta_fail=1.2, dt=1.0, n_particles=50, noise_std=3e-6,
                             gamma_bounds=(0.0, 0.01), rul_every=20, horizon=2000.0,
                             detection={"margin": 6e-6, "persistence": 5}, **options)
     return monitor, record

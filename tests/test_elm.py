@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from prognosis.elm import ROSELM, SeriesForecaster
+from prognosis.statespace.elm import ROSELM, SeriesForecaster
 
 
 def rel(a, b):

@@ -49,10 +49,10 @@ def test_b_md_prognosis_figures_on_a_short_run(example):
 
 def test_seed_preset_keeps_the_seeds_tuning(example):
     case = example.CASES["b-md"]
-    settings = example.tuning(case, "seed", residual_std=1e-3)
+    settings = example.tuning(case, "paper", residual_std=1e-3)
     assert settings["noise_std"] == 0.01 and settings["inflation"] == 4.0 and settings["gamma_std"] == 0.02
     assert settings["adaptation"].gain == 0.001 and settings["adaptation"].reference == 0.10
-    assert settings["adaptation"].band == (0.03, 0.07) and settings["start"] == "eq39"
+    assert settings["adaptation"].band == (0.03, 0.07) and settings["start"] == "uncertainty_box"
     assert settings["prediction_walk"] == 1.0  # Table IV keeps the random walk in the prediction
     with pytest.raises(ValueError, match="unknown preset 'tuned'"):
         example.tuning(case, "tuned", residual_std=1e-3)

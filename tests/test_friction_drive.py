@@ -12,10 +12,11 @@ import sympy as sp
 from scipy import stats
 
 from bondgraph.library import friction_drive, rlc_circuit
-from prognosis import (ExtendedKalmanFilter, InnovationMonitor, RULController, RULDistribution, StrongTracking,
-                       chebyshev_bounds, chebyshev_intervals, chebyshev_level, chebyshev_scale,
-                       covariance_from_bounds, discretize, energy_deterioration, innovation_consistency,
-                       monte_carlo_rul, sample_gaussian, whiten)
+from prognosis import RULDistribution
+from prognosis.lifecontrol import (RULController, chebyshev_bounds, chebyshev_intervals, chebyshev_level, chebyshev_scale,
+                                   covariance_from_bounds, energy_deterioration, monte_carlo_rul, sample_gaussian)
+from prognosis.statespace import (ExtendedKalmanFilter, InnovationMonitor, StrongTracking, discretize, innovation_consistency,
+                                  whiten)
 
 from conftest import load_example
 
@@ -466,13 +467,13 @@ def test_monte_carlo_rul_matches_the_closed_form():
     rul = monte_carlo_rul(_held_speed, [A0, M_RATE], np.zeros((2, 2)), lambda x: x[0] - A_F,
                           horizon=5000.0, dt=dt, origin=100.0, n_samples=7, seed=0)
     expected = _closed_form(A0, A_F, M_RATE)  # 1050
-    assert np.all(np.abs(rul.rul - expected) <= dt)
-    np.testing.assert_allclose(rul.eol, 100.0 + rul.rul)
+    assert np.all(np.abs(rul.samples - expected) <= dt)
+    np.testing.assert_allclose(rul.eol, 100.0 + rul.samples)
     np.testing.assert_array_equal(rul.initial, np.tile([[A0], [M_RATE]], 7))
     # already failed at the origin: RUL 0
     failed = monte_carlo_rul(_held_speed, [A0, M_RATE], np.zeros((2, 2)), lambda x: x[0] - 20.0,
                              horizon=10.0, dt=dt, n_samples=3, seed=0)
-    np.testing.assert_array_equal(failed.rul, 0.0)
+    np.testing.assert_array_equal(failed.samples, 0.0)
 
 
 def test_monte_carlo_rul_distribution_follows_the_rate():
@@ -483,7 +484,7 @@ def test_monte_carlo_rul_distribution_follows_the_rate():
     rates = rul.initial[1]
     assert np.all(rul.initial[0] == A0)  # zero variance: alpha0 is not drawn
     # every sample fails at its own closed form; RUL is decreasing in m, so the medians correspond
-    np.testing.assert_allclose(rul.rul, _closed_form(A0, A_F, rates), atol=dt, rtol=0)
+    np.testing.assert_allclose(rul.samples, _closed_form(A0, A_F, rates), atol=dt, rtol=0)
     assert abs(rul.median - _closed_form(A0, A_F, np.median(rates))) <= dt
     # and against the population median m = 0.01 (sample median of m: standard error 1.25 sigma / sqrt(n))
     tolerance = 4 * 1.2533 * sigma / np.sqrt(n) * _closed_form(A0, A_F, M_RATE) / M_RATE + dt
@@ -494,7 +495,7 @@ def test_monte_carlo_rul_summaries_are_those_of_the_samples():
     rul = monte_carlo_rul(_held_speed, [A0, M_RATE], np.diag([0.25, (0.15 * M_RATE) ** 2]),
                           lambda x: x[0] - A_F, horizon=1500.0, dt=2.0, origin=50.0, n_samples=500, seed=9,
                           lower=[A_F, 1e-4])
-    samples = rul.rul
+    samples = rul.samples
     assert np.any(np.isinf(samples)) and np.any(np.isfinite(samples))  # some outlive the horizon
     assert np.all(samples[np.isfinite(samples)] <= 1500.0 + 2.0)
     np.testing.assert_array_equal(rul.eol, 50.0 + samples)
@@ -505,13 +506,15 @@ def test_monte_carlo_rul_summaries_are_those_of_the_samples():
         assert value in samples  # an observed sample (inverted CDF)
         assert np.mean(samples <= value) >= q and np.mean(samples < value) < q
     assert rul.quantile(0.999) == np.inf
-    assert rul.mean == np.inf
+    finite = samples[np.isfinite(samples)]
+    assert rul.mean == pytest.approx(finite.mean()) and rul.std == pytest.approx(finite.std())  # over the failed ones
+    assert rul.censored_weight == np.count_nonzero(np.isinf(samples)) / samples.size
     # same seed, same draws and failure times; another seed, other draws
     again = monte_carlo_rul(_held_speed, [A0, M_RATE], np.diag([0.25, (0.15 * M_RATE) ** 2]),
                             lambda x: x[0] - A_F, horizon=1500.0, dt=2.0, origin=50.0, n_samples=500, seed=9,
                             lower=[A_F, 1e-4])
     np.testing.assert_array_equal(again.initial, rul.initial)
-    np.testing.assert_array_equal(again.rul, rul.rul)
+    np.testing.assert_array_equal(again.samples, rul.samples)
     other = monte_carlo_rul(_held_speed, [A0, M_RATE], np.diag([0.25, (0.15 * M_RATE) ** 2]),
                             lambda x: x[0] - A_F, horizon=1500.0, dt=2.0, n_samples=500, seed=10, lower=[A_F, 1e-4])
     assert not np.array_equal(other.initial, rul.initial)
@@ -520,7 +523,7 @@ def test_monte_carlo_rul_summaries_are_those_of_the_samples():
 def test_no_failure_within_the_horizon_gives_infinite_rul():
     rul = monte_carlo_rul(_held_speed, [A0, M_RATE], np.zeros((2, 2)), lambda x: x[0] - A_F,
                           horizon=500.0, dt=1.0, n_samples=4, seed=0)  # closed form: 1050 > 500
-    assert np.all(np.isinf(rul.rul)) and rul.probability_before(1e12) == 0.0
+    assert np.all(np.isinf(rul.samples)) and rul.probability_before(1e12) == 0.0
     assert rul.quantile(0.05) == np.inf
 
 
@@ -578,7 +581,7 @@ def _base_life(n=1000):
 
 def _synthetic(base):
     def predict(theta):
-        return RULDistribution(0.0, base / (1.0 + 0.1 * theta), np.zeros((1, base.size)))
+        return RULDistribution(base / (1.0 + 0.1 * theta))
     return predict
 
 
@@ -621,8 +624,8 @@ def test_friction_drive_predictor_matches_the_closed_form(fd):
     expected = (a0 ** 2 - alpha_fail ** 2) / (2 * rate * force2)
     rul = fd.predict_rul(mean, np.zeros((5, 5)), 100.0, omega, seed=0)
     assert alpha_fail == pytest.approx(6.0)
-    assert np.all(np.abs(rul.rul - expected) <= fd.MONTE_CARLO["dt"])
-    np.testing.assert_allclose(rul.eol, 100.0 + rul.rul)
+    assert np.all(np.abs(rul.samples - expected) <= fd.MONTE_CARLO["dt"])
+    np.testing.assert_allclose(rul.eol, 100.0 + rul.samples)
 
 
 @pytest.fixture(scope="module")
@@ -642,10 +645,10 @@ def test_friction_drive_predictor_is_monotone_in_the_speed(fd, estimate):
     assert q[20.0] < q[18.0] < q[16.0]
     # common random numbers: the same draws, and every draw lives longer at a lower speed
     np.testing.assert_array_equal(runs[20.0].initial, runs[16.0].initial)
-    assert np.all(runs[16.0].rul >= runs[18.0].rul) and np.all(runs[18.0].rul >= runs[20.0].rul)
+    assert np.all(runs[16.0].samples >= runs[18.0].samples) and np.all(runs[18.0].samples >= runs[20.0].samples)
     # the wear rate scales with omega2*^2, so lives scale with 1/omega2*^2 (up to the 30 s step)
-    finite = np.isfinite(runs[18.0].rul)
-    np.testing.assert_allclose(runs[18.0].rul[finite] * (18.0 / 20.0) ** 2, runs[20.0].rul[finite],
+    finite = np.isfinite(runs[18.0].samples)
+    np.testing.assert_allclose(runs[18.0].samples[finite] * (18.0 / 20.0) ** 2, runs[20.0].samples[finite],
                                atol=2 * fd.MONTE_CARLO["dt"])
     lo, hi = chebyshev_intervals(mean[2:], covariance[2:, 2:], fd.C)
     initial = runs[20.0].initial
@@ -700,13 +703,16 @@ def test_example_scenario_2_predicts_after_the_restart(example_run):
     assert seed["restart_h"] and 4.0 < seed["restart_h"][0] < seed["scenario_2"]["origin_h"] == pytest.approx(5.0)
 
 
-def test_rul_distribution_std_is_infinite_with_censored_draws():
+def test_rul_distribution_moments_are_over_the_failed_draws_with_the_censored_weight_beside():
     import warnings
 
     from prognosis import RULDistribution
 
     with warnings.catch_warnings():
-        warnings.simplefilter("error")  # no 'invalid value' RuntimeWarning from inf - inf
-        censored = RULDistribution(0.0, np.array([1.0, np.inf]), np.zeros((1, 2)))
-        assert censored.std == np.inf and censored.mean == np.inf
-    assert RULDistribution(0.0, np.array([1.0, 3.0]), np.zeros((1, 2))).std == 1.0
+        warnings.simplefilter("error")  # no 'invalid value' RuntimeWarning from inf - inf or 0 / 0
+        censored = RULDistribution(np.array([1.0, 3.0, np.inf, np.inf]))
+        assert censored.mean == 2.0 and censored.std == 1.0 and censored.censored_weight == 0.5
+        assert censored.median == 3.0 and censored.quantile(0.75) == np.inf
+        never = RULDistribution(np.array([np.inf, np.inf]))
+        assert np.isnan(never.mean) and np.isnan(never.std) and never.censored_weight == 1.0
+    assert RULDistribution(np.array([1.0, 3.0])).std == 1.0

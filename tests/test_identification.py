@@ -408,12 +408,12 @@ def test_a_change_of_state_basis_keeps_the_outputs_and_the_likelihood():
 
 def test_online_em_warm_start_is_in_a_whitened_state_basis():
     """EM leaves the basis free; the warm start puts the window's smoothed states at unit second moment."""
-    from prognosis.identification import _whitened
+    from prognosis.identification.online import whitened_model
 
     y, u, _ = drifting_record(3, steps=200, onset=1000)
     model = fit_em(y, u, 1, max_iter=20, cross_covariance=False).model.transformed([[1e4]])
     res = kalman_smoother(model, y, u)
-    white = _whitened(model, res, 50)
+    white = whitened_model(model, res, 50)
     again = kalman_smoother(white, y, u)
     second = np.mean(again.smoothed_means[50:] ** 2) + np.mean(again.smoothed_covariances[50:])
     assert second == pytest.approx(1.0, rel=1e-6)

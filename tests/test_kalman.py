@@ -1,4 +1,4 @@
-"""prognosis.kalman, prognosis.bootstrap and prognosis.lookahead on a linear-Gaussian model and the three-tank system."""
+"""prognosis.statespace.kalman, prognosis.statespace.bootstrap and prognosis.statespace.lookahead on a linear-Gaussian model and the three-tank system."""
 
 from types import SimpleNamespace
 
@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from prognosis.bootstrap import BootstrapParticleFilter
-from prognosis.kalman import (CubatureKalmanFilter, ExtendedKalmanFilter, FilterWarning, StrongTracking,
-                              UnscentedKalmanFilter, psd_sqrt, tria)
-from prognosis.lookahead import look_ahead, predict_ahead
+from prognosis.statespace.bootstrap import BootstrapParticleFilter
+from prognosis._linalg import psd_sqrt, tria
+from prognosis.statespace.kalman import (CubatureKalmanFilter, ExtendedKalmanFilter, FilterWarning, StrongTracking,
+                                         UnscentedKalmanFilter)
+from prognosis.statespace.lookahead import look_ahead, predict_ahead
 from prognosis.statespace import discretize
 
 from conftest import load_example

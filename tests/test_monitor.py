@@ -7,8 +7,8 @@ from bondgraph import simulate
 from bondgraph.library import torsion_bar, torsion_bar_controller, torsion_bar_monitorable
 from diagnosis import derive_arrs
 from diagnosis.signals import add_noise, as_record
-from prognosis.degradation import Exponential
-from prognosis.filter import VarianceAdaptation
+from prognosis.degradation import ExponentialDegradation
+from prognosis.particle_filter import VarianceAdaptation
 from prognosis.monitor import HealthMonitor
 
 ANTIDERIVATIVES = {"omega_m": "theta_m", "omega_Ld": "theta_Ld"}  # encoder angles
@@ -32,7 +32,7 @@ def monitor(arr, **options):
                     adaptation=VarianceAdaptation(band=(0.03, 0.07)), rul_every=10, horizon=200.0, seed=1,
                     detection={"margin": 1.7e-3, "persistence": 10, "antiderivatives": ANTIDERIVATIVES})
     settings.update(options)
-    return HealthMonitor(arr, "b_Md", Exponential(1e-5), **settings)
+    return HealthMonitor(arr, "b_Md", ExponentialDegradation(1e-5), **settings)
 
 
 def test_monitor_detects_then_estimates_and_predicts(scenario):
@@ -51,11 +51,11 @@ def test_monitor_detects_then_estimates_and_predicts(scenario):
     assert figures["rmse_theta"] < 0.5
 
 
-def test_residual_start_contains_theta_at_the_alarm_and_eq39_does_not(scenario):
+def test_residual_start_contains_theta_at_the_alarm_and_the_uncertainty_box_does_not(scenario):
     """At the alarm b_Md has left its [0, +20 %] box: the residual start finds it, the eq. 39 box cannot."""
     arr, record = scenario
     residual = monitor(arr, start="residual", noise_std=6e-4).run(record)
-    box = monitor(arr, start="eq39", noise_std=6e-4).run(record)
+    box = monitor(arr, start="uncertainty_box", noise_std=6e-4).run(record)
     truth = b_md_degrading(residual.t[0])
     assert truth > 1.2 * 5.025e-3
     assert residual.theta["mean"][0] == pytest.approx(truth, rel=0.05)

@@ -16,7 +16,7 @@ from bgphm import plotting  # noqa: E402
 from bondgraph import simulate  # noqa: E402
 from bondgraph.library import rlc_circuit  # noqa: E402
 from diagnosis import derive_arrs  # noqa: E402
-from prognosis.degradation import Linear  # noqa: E402
+from prognosis.degradation import LinearDegradation  # noqa: E402
 from prognosis.monitor import MonitorResult  # noqa: E402
 from prognosis.rul import RULPredictor  # noqa: E402
 
@@ -61,7 +61,7 @@ def healthy(arr):
 def _prediction(mean_rate: float, seed: int):
     """RUL of 200 particles at theta = 1 growing at ~mean_rate per second to theta_fail = 2 (horizon 20 s)."""
     rng = np.random.default_rng(seed)
-    predictor = RULPredictor(Linear(0.0), dt=0.1, theta_fail=2.0, horizon=20.0, seed=seed)
+    predictor = RULPredictor(LinearDegradation(0.0), dt=0.1, theta_fail=2.0, horizon=20.0, seed=seed)
     gamma = rng.normal(mean_rate, 0.05, (1, 200, 1))
     weights = rng.uniform(0.5, 1.5, (1, 200))
     return predictor.predict(np.ones((1, 200)), gamma, weights / weights.sum(), 0.01)

@@ -1,10 +1,10 @@
-"""Posterior predictive of an identified window (prognosis.predictive)."""
+"""Posterior predictive of an identified window (prognosis.identification.predictive)."""
 
 import numpy as np
 import pytest
 from scipy import special
 
-from prognosis.predictive import (PosteriorPrediction, _mixture_quantile, sample_posterior, window_log_posterior)
+from prognosis.identification.predictive import (PosteriorPrediction, _mixture_quantile, sample_posterior, window_log_posterior)
 
 
 def _companion(c):

@@ -12,8 +12,8 @@ import sympy as sp
 from bondgraph.library import torsion_bar_monitorable, torsion_bar_with_load
 from diagnosis import derive_arrs
 from diagnosis.residuals import compile_arr
-from prognosis.degradation import Custom, Exponential, Linear, degradation_model
-from prognosis.filter import ParticleFilter, VarianceAdaptation
+from prognosis.degradation import CustomDegradation, ExponentialDegradation, LinearDegradation, degradation_model
+from prognosis.particle_filter import ParticleFilter, VarianceAdaptation
 from prognosis.observation import observation_model
 from prognosis.rul import RULPredictor, predict_rul
 
@@ -29,8 +29,8 @@ def torsion_arr():
 
 # -- degradation ---------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("model", [Linear(process_noise=1e-3), Exponential(process_noise=1e-3),
-                                   Custom(lambda th, g, dt: th * np.exp(g[..., 0] * dt), process_noise=1e-3)])
+@pytest.mark.parametrize("model", [LinearDegradation(process_noise=1e-3), ExponentialDegradation(process_noise=1e-3),
+                                   CustomDegradation(lambda th, g, dt: th * np.exp(g[..., 0] * dt), process_noise=1e-3)])
 def test_horizon_path_equals_stepping(model):
     rng = np.random.default_rng(0)
     theta = rng.uniform(0.5, 1.0, (2, 4))
@@ -124,7 +124,7 @@ def linear_observation(theta, points):
 def make_filter(**options):
     defaults = dict(n_particles=400, dt=0.1, noise_std=0.05, inflation=4.0, gamma_std=0.01, seed=3)
     defaults.update(options)
-    return ParticleFilter(Linear(process_noise=1e-3), linear_observation, **defaults)
+    return ParticleFilter(LinearDegradation(process_noise=1e-3), linear_observation, **defaults)
 
 
 def test_initialisation_is_uniform_over_the_interval():
@@ -158,7 +158,7 @@ def test_log_weights_survive_hopeless_likelihoods():
 
 
 def test_degenerate_weights_are_reset_and_reported():
-    pf = ParticleFilter(Linear(), lambda theta, points: np.full(theta.shape, np.nan), n_particles=50, seed=0)
+    pf = ParticleFilter(LinearDegradation(), lambda theta, points: np.full(theta.shape, np.nan), n_particles=50, seed=0)
     pf.initialize((0.9, 1.1))
     diagnostics = pf.step(np.array([0.0]))
     assert diagnostics.degenerate.all()
@@ -196,12 +196,12 @@ def test_filter_is_deterministic_for_a_seed():
 
 def test_bad_filter_settings():
     with pytest.raises(ValueError, match="gamma_std"):
-        ParticleFilter(Linear(), linear_observation, gamma_std=[0.1, 0.2])
+        ParticleFilter(LinearDegradation(), linear_observation, gamma_std=[0.1, 0.2])
     with pytest.raises(ValueError, match="inflation"):
-        ParticleFilter(Linear(), linear_observation, inflation=0.0)
+        ParticleFilter(LinearDegradation(), linear_observation, inflation=0.0)
     with pytest.raises(ValueError, match="systematic"):
-        ParticleFilter(Linear(), linear_observation, resampling="best")
-    fresh = ParticleFilter(Linear(), linear_observation)
+        ParticleFilter(LinearDegradation(), linear_observation, resampling="best")
+    fresh = ParticleFilter(LinearDegradation(), linear_observation)
     for use in (lambda: fresh.step(np.array([0.0])), lambda: fresh.weights, lambda: fresh.assets):
         with pytest.raises(RuntimeError, match="call initialize"):
             use()
@@ -211,7 +211,7 @@ def test_rul_percentiles_keep_their_columns_without_any_prediction():
     from prognosis.monitor import MonitorResult
 
     assert MonitorResult(detection_time=None).rul_percentiles((5, 50, 95)).shape == (0, 3)
-    one = RULPredictor(Linear(), dt=0.1, theta_fail=2.0, seed=0).predict(
+    one = RULPredictor(LinearDegradation(), dt=0.1, theta_fail=2.0, seed=0).predict(
         np.zeros((1, 4)), np.ones((1, 4, 1)), np.full((1, 4), 0.25), 0.0)
     assert MonitorResult(detection_time=0.0, rul=[one, one]).rul_percentiles(50).shape == (2, 1)
 
@@ -243,15 +243,15 @@ def test_adaptation_resets_outside_the_band():
 
 def test_deterministic_linear_and_exponential_rul():
     theta, gamma, weights = np.array([[1.0, 2.0]]), np.array([[[0.5], [0.5]]]), np.array([[0.5, 0.5]])
-    linear = predict_rul(Linear(), theta, gamma, weights, dt=0.1, theta_fail=3.0, gamma_std=0.0,
+    linear = predict_rul(LinearDegradation(), theta, gamma, weights, dt=0.1, theta_fail=3.0, gamma_std=0.0,
                          rng=np.random.default_rng(0))
     assert np.allclose(linear.samples, [[4.0, 2.0]])  # (3 - theta) / 0.5
-    exponential = predict_rul(Exponential(), np.array([[0.005025]]), np.array([[[0.05]]]), np.array([[1.0]]),
+    exponential = predict_rul(ExponentialDegradation(), np.array([[0.005025]]), np.array([[[0.05]]]), np.array([[1.0]]),
                               dt=0.1, theta_fail=0.45, gamma_std=0.0, rng=np.random.default_rng(0))
     assert exponential.samples[0, 0] == pytest.approx(np.log(0.45 / 0.005025) / 0.05, abs=0.1)
 
 
-@pytest.mark.parametrize("model", [Linear(), Custom(lambda theta, gamma, dt: theta + gamma[..., 0] * dt)])
+@pytest.mark.parametrize("model", [LinearDegradation(), CustomDegradation(lambda theta, gamma, dt: theta + gamma[..., 0] * dt)])
 def test_crossing_time_is_interpolated_within_the_step(model):
     # theta = 1 + 0.5 t crosses 1.337 at t = 0.674, between the steps at 0.6 and 0.7; also in a later chunk
     for fail, expected in [(1.337, 0.674), (1.0 + 0.5 * 123.456, 123.456)]:
@@ -263,7 +263,7 @@ def test_crossing_time_is_interpolated_within_the_step(model):
 def test_downward_failure_and_censoring():
     theta, weights = np.array([[1.0, 1.0, 1.0]]), np.full((1, 3), 1 / 3)
     gamma = np.array([[[-0.5], [-0.25], [0.0]]])  # the last particle never degrades
-    rul = predict_rul(Linear(), theta, gamma, weights, dt=0.1, theta_fail=0.5, gamma_std=0.0, direction="down",
+    rul = predict_rul(LinearDegradation(), theta, gamma, weights, dt=0.1, theta_fail=0.5, gamma_std=0.0, direction="down",
                       horizon=10.0, rng=np.random.default_rng(0))
     assert np.allclose(rul.samples[0, :2], [1.0, 2.0]) and np.isinf(rul.samples[0, 2])
     assert rul.censored_weight[0] == pytest.approx(1 / 3)
@@ -276,8 +276,8 @@ def test_stepwise_and_closed_form_predictions_agree_in_distribution():
     theta = np.full((1, 4000), 0.05)
     gamma = rng.normal(0.05, 0.005, (1, 4000, 1))
     weights = np.full((1, 4000), 1 / 4000)
-    closed = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, seed=1).predict(theta, gamma, weights, 0.002)
-    custom = Custom(lambda th, g, dt: th * np.exp(g[..., 0] * dt), process_noise=1e-4)
+    closed = RULPredictor(ExponentialDegradation(1e-4), dt=0.1, theta_fail=0.45, seed=1).predict(theta, gamma, weights, 0.002)
+    custom = CustomDegradation(lambda th, g, dt: th * np.exp(g[..., 0] * dt), process_noise=1e-4)
     stepwise = RULPredictor(custom, dt=0.1, theta_fail=0.45, seed=2).predict(theta, gamma, weights, 0.002)
     a, b = closed.samples[np.isfinite(closed.samples)], stepwise.samples[np.isfinite(stepwise.samples)]
     standard_error = np.hypot(a.std() / np.sqrt(a.size), b.std() / np.sqrt(b.size))
@@ -289,15 +289,15 @@ def test_a_collapsing_path_is_never_counted_as_a_failure():
     # gamma far below zero: exp(dt * sum gamma) underflows in single precision without the clip
     theta, weights = np.full((1, 50), 0.05), np.full((1, 50), 0.02)
     gamma = np.full((1, 50, 1), -5.0)
-    rul = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, horizon=300.0, seed=0).predict(
+    rul = RULPredictor(ExponentialDegradation(1e-4), dt=0.1, theta_fail=0.45, horizon=300.0, seed=0).predict(
         theta, gamma, weights, 0.0)
     assert rul.censored.all()
 
 
 def test_keyed_predictions_do_not_depend_on_call_order():
     theta, gamma, weights = np.full((1, 200), 0.05), np.full((1, 200, 1), 0.05), np.full((1, 200), 1 / 200)
-    forward = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, seed=7)
-    backward = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, seed=7)
+    forward = RULPredictor(ExponentialDegradation(1e-4), dt=0.1, theta_fail=0.45, seed=7)
+    backward = RULPredictor(ExponentialDegradation(1e-4), dt=0.1, theta_fail=0.45, seed=7)
     a = [forward.predict(theta, gamma, weights, 0.01, key=k).samples for k in range(3)]
     b = [backward.predict(theta, gamma, weights, 0.01, key=k).samples for k in reversed(range(3))][::-1]
     assert all(np.array_equal(x, y) for x, y in zip(a, b))
@@ -306,9 +306,9 @@ def test_keyed_predictions_do_not_depend_on_call_order():
 
 def test_successive_predictions_differ_but_are_reproducible():
     theta, gamma, weights = np.full((1, 200), 0.05), np.full((1, 200, 1), 0.05), np.full((1, 200), 1 / 200)
-    predictor = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, seed=7)
+    predictor = RULPredictor(ExponentialDegradation(1e-4), dt=0.1, theta_fail=0.45, seed=7)
     first, second = predictor.predict(theta, gamma, weights, 0.01), predictor.predict(theta, gamma, weights, 0.01)
-    again = RULPredictor(Exponential(1e-4), dt=0.1, theta_fail=0.45, seed=7).predict(theta, gamma, weights, 0.01)
+    again = RULPredictor(ExponentialDegradation(1e-4), dt=0.1, theta_fail=0.45, seed=7).predict(theta, gamma, weights, 0.01)
     assert not np.array_equal(first.samples, second.samples)
     assert np.array_equal(first.samples, again.samples)
 
@@ -321,10 +321,10 @@ def test_ctrl_c_during_parallel_predictions_reaches_only_the_caller(tmp_path):
         sys.path.insert(0, {str(ROOT)!r})
         signal.signal(signal.SIGINT, signal.default_int_handler)  # a background shell may have ignored it
         import numpy as np
-        from prognosis.degradation import Linear
+        from prognosis.degradation import LinearDegradation
         from prognosis.rul import ParallelRUL
         try:
-            with ParallelRUL(Linear(), dt=0.1, theta_fail=2.0, workers=2) as pool:
+            with ParallelRUL(LinearDegradation(), dt=0.1, theta_fail=2.0, workers=2) as pool:
                 pool.submit(np.zeros((1, 3)), np.ones((1, 3, 1)), np.full((1, 3), 1 / 3), 0.0, key=0).result()
                 os.killpg(os.getpgid(0), signal.SIGINT)
                 time.sleep(30.0)
@@ -341,11 +341,11 @@ def test_filter_and_rul_on_the_seed_b_md_problem(torsion_arr):
     observation = observation_model(torsion_arr, "b_Md")
     compiled = compile_arr(torsion_arr)
     points = [np.array([OMEGA if str(p) == "omega_m" else 0.0]) for p in compiled.points]
-    pf = ParticleFilter(Exponential(1e-5), observation, n_particles=500, dt=0.1, noise_std=0.01, inflation=4.0,
+    pf = ParticleFilter(ExponentialDegradation(1e-5), observation, n_particles=500, dt=0.1, noise_std=0.01, inflation=4.0,
                         gamma_std=0.02, adaptation=VarianceAdaptation(band=(0.03, 0.07)), seed=0)
     pf.initialize((B_N, 1.2 * B_N))
     rng = np.random.default_rng(0)
-    predictor = RULPredictor(Exponential(1e-5), dt=0.1, theta_fail=0.45, seed=1)
+    predictor = RULPredictor(ExponentialDegradation(1e-5), dt=0.1, theta_fail=0.45, seed=1)
     for k in range(1, 701):  # t = 10.1 .. 80 s
         truth = B_N * np.exp(0.05 * 0.1 * k)
         pf.step(np.array([(truth - B_N) * (-OMEGA / K_BELT**2) + rng.normal(0, 0.01)]), points)
@@ -357,7 +357,7 @@ def test_filter_and_rul_on_the_seed_b_md_problem(torsion_arr):
 
 def test_two_progression_parameters_through_filter_and_rul():
     # theta_k = theta_{k-1} (1 + gamma_1 dt + gamma_2 dt^2): two random-walk progression parameters
-    model = Custom(lambda th, g, dt: th * (1 + g[..., 0] * dt + g[..., 1] * dt**2), n_gamma=2, process_noise=1e-4)
+    model = CustomDegradation(lambda th, g, dt: th * (1 + g[..., 0] * dt + g[..., 1] * dt**2), n_gamma=2, process_noise=1e-4)
     pf = ParticleFilter(model, linear_observation, n_particles=300, dt=0.1, noise_std=0.05, gamma_std=[0.01, 0.01],
                         seed=2)
     pf.initialize((1.0, 1.0))
@@ -374,7 +374,7 @@ def test_two_progression_parameters_through_filter_and_rul():
 
 
 def test_initial_gamma_drawn_over_bounds():
-    pf = ParticleFilter(Linear(), linear_observation, n_particles=400, seed=3)
+    pf = ParticleFilter(LinearDegradation(), linear_observation, n_particles=400, seed=3)
     pf.initialize((1.0, 1.2), gamma_bounds=(0.03, 0.07), assets=2)
     assert pf.gamma.shape == (2, 400, 1)
     assert pf.gamma.min() >= 0.03 and pf.gamma.max() <= 0.07 and pf.gamma.std() > 0.01

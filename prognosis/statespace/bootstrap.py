@@ -1,9 +1,9 @@
 """Bootstrap (SIR) particle filter on a discrete state-space model.
 
-The particle filter of seed 003 (:mod:`prognosis.filter`) runs on an ARR's
+The particle filter of seed 003 (:mod:`prognosis.particle_filter`) runs on an ARR's
 residual; this one runs on the augmented state-space model of
 :mod:`prognosis.statespace` (seed 001 eqs. 3-4, 62-63), with the interface of
-the Kalman filters in :mod:`prognosis.kalman` so that the two families can be
+the Kalman filters in :mod:`prognosis.statespace.kalman` so that the two families can be
 compared on the same data (Gordon, Salmond and Smith 1993):
 
 1. predict: every particle (a column of ``X``, shape ``(n, N)``) goes through
@@ -41,8 +41,9 @@ import copy as _copy
 
 import numpy as np
 
-from .kalman import Innovation, _block, _matrix, _solve_psd, _vector, innovation, measured_rows, noises, psd_sqrt
-from .resampling import effective_sample_size, get_scheme, normalize_log_weights
+from .. import _linalg as linalg
+from .kalman import Innovation, innovation, measured_rows, noises
+from ..resampling import effective_sample_size, get_scheme, normalize_log_weights
 
 __all__ = ["BootstrapParticleFilter"]
 
@@ -94,8 +95,8 @@ class BootstrapParticleFilter:
         self.resample = get_scheme(resampling)
         self.resample_below = resample_below
         self.rng = np.random.default_rng(seed)
-        x0 = _vector(mean, n, "mean", model.states)
-        root = psd_sqrt(_matrix(covariance, n, "covariance (P0)", model.states))
+        x0 = linalg.state_vector(mean, n, "mean", model.states)
+        root = linalg.psd_sqrt(linalg.covariance_matrix(covariance, n, "covariance (P0)", model.states))
         self.particles = x0[:, None] + root @ self.rng.standard_normal((n, n_particles))
         self.log_weights = np.full(n_particles, -np.log(n_particles))
         self.degenerate_steps = 0
@@ -146,14 +147,14 @@ class BootstrapParticleFilter:
         z, rows = measured_rows(z, self.model)
         if not rows.any():
             return innovation(rows)
-        r = _block(self.measurement_noise, rows)
+        r = linalg.block(self.measurement_noise, rows)
         predicted = self.model.measure(self.particles, u)[rows]  # (m', N)
         weights = self.weights
         z_mean = predicted @ weights
         deviation = predicted - z_mean[:, None]
         pzz = (deviation * weights) @ deviation.T + r
         error = z[rows][:, None] - predicted
-        log_likelihood = -0.5 * np.sum(error * _solve_psd(r, error), axis=0)
+        log_likelihood = -0.5 * np.sum(error * linalg.solve(r, error), axis=0)
         log_likelihood = np.where(np.isfinite(log_likelihood), log_likelihood, -np.inf)
         weights, _, degenerate = normalize_log_weights(self.log_weights + log_likelihood)
         if degenerate:

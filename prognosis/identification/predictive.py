@@ -66,8 +66,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import special
 
-from .identification import _future_inputs, _raw_data
-from .resampling import systematic
+from .data import check_data, check_future_inputs
+from ..resampling import systematic
 
 __all__ = ["PosteriorPrediction", "SamplerWarning", "WindowPosterior", "sample_posterior", "window_log_posterior"]
 
@@ -194,7 +194,7 @@ def window_log_posterior(theta: ArrayLike, y: ArrayLike, u: ArrayLike | None, *,
     >>> bool(lp[0] > lp[1]), float(lp[2])                   # rho(F) = 1 is outside the prior
     (True, -inf)
     """
-    y, u = _raw_data(y, u)
+    y, u = check_data(y, u)
     theta = np.atleast_2d(np.asarray(theta, dtype=float))
     if y.shape[1] != 1:
         raise ValueError(f"the window posterior handles one output; y has {y.shape[1]} columns")
@@ -306,7 +306,7 @@ class WindowPosterior:
         if not 0.0 < level < 1.0:
             raise ValueError(f"level must be in (0, 1), got {level}")
         r = self.u.shape[1]
-        uf = _future_inputs(u_future, steps, r, "predict") / self.scale
+        uf = check_future_inputs(u_future, steps, r, "predict") / self.scale
         theta = self.theta
         if draws is not None and draws < theta.shape[0]:
             theta = theta[np.random.default_rng(seed).choice(theta.shape[0], draws, replace=False)]
@@ -433,7 +433,7 @@ def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, partic
     >>> bool(abs(np.median(post.spectral_radii) - 0.8) < 0.05)
     True
     """
-    y, u = _raw_data(y, u)
+    y, u = check_data(y, u)
     if y.shape[1] != 1:
         raise ValueError(f"the window posterior handles one output; y has {y.shape[1]} columns")
     if not np.all(np.isfinite(y)) or not np.all(np.isfinite(u)):

@@ -4,7 +4,7 @@ A filter that estimates a drifting parameter as a state needs measurements to
 move; the future ones do not exist yet.  At each step ``k``:
 
 1. the filter assimilates the real measurement ``z_k``;
-2. a forecaster (e.g. :class:`prognosis.elm.SeriesForecaster`, one ROS-ELM
+2. a forecaster (e.g. :class:`prognosis.statespace.elm.SeriesForecaster`, one ROS-ELM
    per measured variable) learns ``z_k`` online and forecasts
    ``z_{k+1}, ..., z_{k+n}``;
 3. a *copy* of the filter steps through those pseudo-measurements; its
@@ -19,7 +19,7 @@ Example
 -------
 >>> import sympy as sp
 >>> from types import SimpleNamespace
->>> from prognosis.kalman import CubatureKalmanFilter
+>>> from prognosis.statespace.kalman import CubatureKalmanFilter
 >>> from prognosis.statespace import discretize
 >>> x, a = sp.symbols("x a")
 >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
@@ -64,7 +64,7 @@ def look_ahead(estimator, forecasts, inputs=None) -> np.ndarray:
     --------
     >>> import sympy as sp
     >>> from types import SimpleNamespace
-    >>> from prognosis.kalman import CubatureKalmanFilter
+    >>> from prognosis.statespace.kalman import CubatureKalmanFilter
     >>> from prognosis.statespace import discretize
     >>> x, a = sp.symbols("x a")
     >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
@@ -110,7 +110,7 @@ class LookAhead:
 
     >>> import sympy as sp
     >>> from types import SimpleNamespace
-    >>> from prognosis.kalman import CubatureKalmanFilter
+    >>> from prognosis.statespace.kalman import CubatureKalmanFilter
     >>> from prognosis.statespace import discretize
     >>> x, a = sp.symbols("x a")
     >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
@@ -141,7 +141,7 @@ def predict_ahead(estimator, measurements, *, horizon: int, start: int, forecast
 
     Parameters
     ----------
-    estimator : filter with ``step``, ``mean`` and ``copy`` (:mod:`prognosis.kalman`, :mod:`prognosis.bootstrap`)
+    estimator : filter with ``step``, ``mean`` and ``copy`` (:mod:`prognosis.statespace.kalman`, :mod:`prognosis.statespace.bootstrap`)
         Advanced in place over the real measurements.
     measurements : array (K, m)
         ``z_1..z_K``; row ``k - 1`` is time ``k``.
@@ -165,7 +165,7 @@ def predict_ahead(estimator, measurements, *, horizon: int, start: int, forecast
 
     >>> import sympy as sp
     >>> from types import SimpleNamespace
-    >>> from prognosis.kalman import ExtendedKalmanFilter
+    >>> from prognosis.statespace.kalman import ExtendedKalmanFilter
     >>> from prognosis.statespace import discretize
     >>> x, a = sp.symbols("x a")
     >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})

@@ -2,7 +2,7 @@
 
 At the prediction time ``t_0`` the deterioration states (e.g. ``alpha, m, D``)
 are drawn from the estimate ``N(x^, P)`` -- optionally kept inside bounds such
-as the Chebyshev box of :mod:`prognosis.chebyshev` -- and each draw is
+as the Chebyshev box of :mod:`prognosis.lifecontrol.chebyshev` -- and each draw is
 propagated with the deterioration dynamics under the planned operation (the
 decision ``theta``) until it fails.  A failure margin ``g(x)`` is positive while
 the system works; the failure time of a draw is the first zero of ``g`` along
@@ -25,72 +25,12 @@ fails at ``a = 0.5`` after ``0.5 / m``:
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
 
 import numpy as np
 
-__all__ = ["RULDistribution", "monte_carlo_rul", "sample_gaussian"]
+from ..rul import RULDistribution
 
-
-@dataclass(frozen=True)
-class RULDistribution:
-    """Predicted RUL samples from ``origin``; ``inf`` where no failure came before the horizon.
-
-    Attributes
-    ----------
-    origin : float
-        Prediction time ``t_0``.
-    rul : ndarray (N,)
-    initial : ndarray (d, N)
-        The drawn initial states.
-    times : ndarray (T,)
-        Times of the kept trajectories (empty unless ``keep > 0``).
-    trajectories : ndarray (T, d, keep)
-
-    Examples
-    --------
-    Returned by :func:`monte_carlo_rul`; built by hand here, one draw surviving the horizon:
-
-    >>> rul = RULDistribution(origin=10.0, rul=np.array([1.0, 2.0, 3.0, np.inf]), initial=np.zeros((1, 4)))
-    >>> rul.eol.tolist(), rul.median, rul.mean
-    ([11.0, 12.0, 13.0, inf], 2.5, inf)
-    >>> rul.quantile(0.5), rul.quantile(0.9), rul.probability_before(2.0)
-    (2.0, inf, 0.5)
-    """
-
-    origin: float
-    rul: np.ndarray
-    initial: np.ndarray
-    times: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    trajectories: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 0)))
-
-    @property
-    def eol(self) -> np.ndarray:
-        """End-of-life times ``t_0 + RUL``."""
-        return self.origin + self.rul
-
-    @property
-    def mean(self) -> float:
-        """Mean RUL of the draws; ``inf`` when some draws survive the horizon."""
-        return float(np.mean(self.rul))
-
-    @property
-    def median(self) -> float:
-        """Median RUL of the draws by :func:`numpy.median` (the midpoint of the two middle draws for an even count)."""
-        return float(np.median(self.rul))
-
-    @property
-    def std(self) -> float:
-        """Standard deviation of the draws; ``inf`` when some draws survive the horizon (as ``mean``)."""
-        return float(np.std(self.rul)) if np.all(np.isfinite(self.rul)) else float("inf")
-
-    def quantile(self, q: float) -> float:
-        """The ``q`` quantile of the RUL (``inf`` if more than ``1 - q`` survive the horizon)."""
-        return float(np.quantile(self.rul, q, method="inverted_cdf"))
-
-    def probability_before(self, rul: float) -> float:
-        """``Pr(RUL <= rul)`` (eq. 51)."""
-        return float(np.mean(self.rul <= rul))
+__all__ = ["monte_carlo_rul", "sample_gaussian"]
 
 
 def sample_gaussian(mean, covariance, n: int, rng: np.random.Generator, lower=None, upper=None,
@@ -185,11 +125,11 @@ def monte_carlo_rul(rates: Callable, mean, covariance, margin: Callable, *, hori
     >>> rul = monte_carlo_rul(lambda x, t: np.vstack([-x[1], 0 * x[1]]), [1.0, 0.1], np.diag([0.0, 1e-4]),
     ...                       lambda x: x[0] - 0.5, horizon=20.0, dt=0.1, n_samples=200, seed=1,
     ...                       lower=[-np.inf, 0.0], keep=3)
-    >>> rul.rul.shape, rul.initial.shape, rul.trajectories.shape[1:]
+    >>> rul.samples.shape, rul.initial.shape, rul.trajectories.shape[1:]
     ((200,), (2, 200), (2, 3))
-    >>> bool(4.5 < rul.median < 5.5), bool(np.all(np.isfinite(rul.rul)))
+    >>> bool(4.5 < rul.median < 5.5), bool(np.all(np.isfinite(rul.samples)))
     (True, True)
-    >>> bool(np.allclose(rul.rul, 0.5 / rul.initial[1]))   # exact but for the interpolated crossing
+    >>> bool(np.allclose(rul.samples, 0.5 / rul.initial[1]))   # exact but for the interpolated crossing
     True
     """
     if not dt > 0 or not horizon > 0:
@@ -219,7 +159,7 @@ def monte_carlo_rul(rates: Callable, mean, covariance, margin: Callable, *, hori
         if keep:
             times.append(t)
             kept.append(x[:, :keep].copy())
-    return RULDistribution(origin=float(origin), rul=rul, initial=initial,
+    return RULDistribution(samples=rul, horizon=float(horizon), origin=float(origin), initial=initial,
                            times=np.array(times) if keep else np.zeros(0),
                            trajectories=np.array(kept) if keep else np.zeros((0, 0, 0)))
 

@@ -1,6 +1,6 @@
 """Kalman filters for joint state-parameter estimation, with strong tracking.
 
-Every filter here, and :class:`prognosis.bootstrap.BootstrapParticleFilter`,
+Every filter here, and :class:`prognosis.statespace.bootstrap.BootstrapParticleFilter`,
 has one interface on a :class:`prognosis.statespace.DiscreteModel`:
 
 * ``predict(u)``: time update with the inputs of the step;
@@ -71,9 +71,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.linalg import cho_solve
 
+from .. import _linalg as linalg
+
 __all__ = [
     "CubatureKalmanFilter", "ExtendedKalmanFilter", "FilterWarning", "Innovation", "StrongTracking",
-    "UnscentedKalmanFilter", "psd_sqrt", "tria",
+    "UnscentedKalmanFilter",
 ]
 
 
@@ -187,7 +189,7 @@ class StrongTracking:
         outer = np.outer(residual, residual)
         rho = self.forgetting
         self._v = outer if self._v is None or self._v.shape != outer.shape else (rho * self._v + outer) / (1 + rho)
-        h = _solve_psd(predicted, cross).T  # eq. 17: H = P_xz^T P*^{-1}
+        h = linalg.solve(predicted, cross).T  # eq. 17: H = P_xz^T P*^{-1}
         hqh = h @ process @ h.T
         n = self._v - hqh - self.softening * noise
         m = innovation - noise - hqh  # eq. 20: M = H (P* - Q) H^T
@@ -203,13 +205,13 @@ class _GaussianFilter:
     def __init__(self, model, mean, covariance, process_noise, measurement_noise, fading: StrongTracking | None):
         n = model.n_states
         self.model = model
-        self._x = _vector(mean, n, "mean", model.states)
+        self._x = linalg.state_vector(mean, n, "mean", model.states)
         self.process_noise, self.measurement_noise, self._sqrt_q = noises(model, process_noise, measurement_noise)
         self.fading = _copy.deepcopy(fading)
         if self.fading is not None:
             self.fading.reset()
         self._predicted = False
-        self._set_covariance(_matrix(covariance, n, "covariance (P0)", model.states))
+        self._set_covariance(linalg.covariance_matrix(covariance, n, "covariance (P0)", model.states))
 
     @property
     def mean(self) -> np.ndarray:
@@ -221,7 +223,7 @@ class _GaussianFilter:
 
     def _set_covariance(self, p: np.ndarray) -> None:
         """Full-form covariance (EKF, UKF); the square-root CKF overrides both."""
-        self._p = _symmetric(p)
+        self._p = linalg.symmetric(p)
 
     def reinitialize(self, mean=None, covariance=None) -> None:
         """Restart from a new estimate and/or covariance ``P_0`` (e.g. wider bounds after a model change).
@@ -231,9 +233,9 @@ class _GaussianFilter:
         """
         n = self.model.n_states
         if mean is not None:
-            self._x = _vector(mean, n, "mean", self.model.states)
+            self._x = linalg.state_vector(mean, n, "mean", self.model.states)
         if covariance is not None:
-            self._set_covariance(_matrix(covariance, n, "covariance (P0)", self.model.states))
+            self._set_covariance(linalg.covariance_matrix(covariance, n, "covariance (P0)", self.model.states))
         if self.fading is not None:
             self.fading.reset()
         self._predicted = False
@@ -308,12 +310,12 @@ class ExtendedKalmanFilter(_GaussianFilter):
         ``u``: the inputs over the step (see :meth:`~prognosis.statespace.DiscreteModel.input_vector`).
         """
         self._x, f = self.model.transition_with_jacobian(self._x, u)
-        self._spread = _symmetric(f @ self._p @ f.T)
+        self._spread = linalg.symmetric(f @ self._p @ f.T)
         self._p = self._spread + self.process_noise
         self._predicted = True
 
     def _update(self, z, rows, u):
-        r = _block(self.measurement_noise, rows)
+        r = linalg.block(self.measurement_noise, rows)
         h = self.model.measurement_jacobian(self._x, u)[rows]
         predicted = self.model.measure(self._x, u)[rows]
         residual = z - predicted
@@ -321,11 +323,11 @@ class ExtendedKalmanFilter(_GaussianFilter):
         if self._predicted and self.fading is not None:
             fading = self._fade(residual, self._p, self._p @ h.T, h @ self._p @ h.T + r, r)
             self._p = fading * self._spread + self.process_noise
-        pzz = _symmetric(h @ self._p @ h.T + r)
-        gain = _solve_psd(pzz, h @ self._p).T
+        pzz = linalg.symmetric(h @ self._p @ h.T + r)
+        gain = linalg.solve(pzz, h @ self._p).T
         self._x = self._x + gain @ residual
         joseph = np.eye(self.model.n_states) - gain @ h
-        self._p = _symmetric(joseph @ self._p @ joseph.T + gain @ r @ gain.T)
+        self._p = linalg.symmetric(joseph @ self._p @ joseph.T + gain @ r @ gain.T)
         return residual, pzz, fading
 
 
@@ -400,7 +402,7 @@ class UnscentedKalmanFilter(_GaussianFilter):
         """
         propagated = self.model.transition(self._sigma_points(self._p), u)
         self._x, deviation = self._moments(propagated)
-        self._spread = _symmetric((deviation * self._wc) @ deviation.T)
+        self._spread = linalg.symmetric((deviation * self._wc) @ deviation.T)
         self._p = self._spread + self.process_noise
         self._predicted = True
 
@@ -409,12 +411,12 @@ class UnscentedKalmanFilter(_GaussianFilter):
         z_points = self._measure(points, rows, u)
         z_mean, z_dev = self._moments(z_points)
         x_dev = points - self._x[:, None]
-        pzz = _symmetric((z_dev * self._wc) @ z_dev.T + r)
+        pzz = linalg.symmetric((z_dev * self._wc) @ z_dev.T + r)
         pxz = (x_dev * self._wc) @ z_dev.T
         return z_mean, pzz, pxz
 
     def _update(self, z, rows, u):
-        r = _block(self.measurement_noise, rows)
+        r = linalg.block(self.measurement_noise, rows)
         z_mean, pzz, pxz = self._transform(rows, u, r)
         fading = 1.0
         if self._predicted and self.fading is not None:
@@ -423,9 +425,9 @@ class UnscentedKalmanFilter(_GaussianFilter):
                 self._p = fading * self._spread + self.process_noise
                 z_mean, pzz, pxz = self._transform(rows, u, r)
         residual = z - z_mean
-        gain = _solve_psd(pzz, pxz.T).T
+        gain = linalg.solve(pzz, pxz.T).T
         self._x = self._x + gain @ residual
-        self._p = _symmetric(self._p - gain @ pzz @ gain.T)
+        self._p = linalg.symmetric(self._p - gain @ pzz @ gain.T)
         return residual, pzz, fading
 
 
@@ -482,7 +484,7 @@ class CubatureKalmanFilter(_GaussianFilter):
         return self._s.copy()
 
     def _set_covariance(self, p: np.ndarray) -> None:
-        self._s = tria(psd_sqrt(p))
+        self._s = linalg.tria(linalg.psd_sqrt(p))
 
     def _points(self, s: np.ndarray) -> np.ndarray:
         return self._x[:, None] + s @ self._xi  # eq. 21, 27, 37
@@ -490,7 +492,7 @@ class CubatureKalmanFilter(_GaussianFilter):
     def predict(self, u=None) -> None:
         """Time update (eqs. 23-26): the ``2n`` cubature points ``x + S xi_i`` go through ``f``.
 
-        ``x`` becomes their mean and ``S = tria([chi, sqrt(Q)])``, with ``chi`` their deviations from that mean
+        ``x`` becomes their mean and ``S = linalg.tria([chi, sqrt(Q)])``, with ``chi`` their deviations from that mean
         divided by ``sqrt(2n)``.
 
         ``u``: the inputs over the step (see :meth:`~prognosis.statespace.DiscreteModel.input_vector`).
@@ -498,7 +500,7 @@ class CubatureKalmanFilter(_GaussianFilter):
         propagated = self.model.transition(self._points(self._s), u)  # eq. 23
         self._x = propagated.mean(axis=1)  # eq. 24
         self._chi = (propagated - self._x[:, None]) / np.sqrt(propagated.shape[1])  # eq. 26
-        self._s = tria(np.hstack([self._chi, self._sqrt_q]))  # eq. 25
+        self._s = linalg.tria(np.hstack([self._chi, self._sqrt_q]))  # eq. 25
         self._predicted = True
 
     def _transform(self, rows, u):
@@ -511,7 +513,7 @@ class CubatureKalmanFilter(_GaussianFilter):
         return z_mean, z_dev, x_dev
 
     def _update(self, z, rows, u):
-        sqrt_r = np.linalg.cholesky(_block(self.measurement_noise, rows)) if not rows.all() else self._sqrt_r
+        sqrt_r = np.linalg.cholesky(linalg.block(self.measurement_noise, rows)) if not rows.all() else self._sqrt_r
         z_mean, z_dev, x_dev = self._transform(rows, u)
         fading = 1.0
         if self._predicted and self.fading is not None:
@@ -519,26 +521,26 @@ class CubatureKalmanFilter(_GaussianFilter):
             p_star = self._s @ self._s.T  # eq. 30
             fading = self._fade(z - z_mean, p_star, x_dev @ z_dev.T, z_dev @ z_dev.T + r, r)  # eqs. 31-35
             if fading > 1.0:
-                self._s = tria(np.hstack([np.sqrt(fading) * self._chi, self._sqrt_q]))  # eq. 36
+                self._s = linalg.tria(np.hstack([np.sqrt(fading) * self._chi, self._sqrt_q]))  # eq. 36
                 z_mean, z_dev, x_dev = self._transform(rows, u)
-        s_zz = tria(np.hstack([z_dev, sqrt_r]))  # eq. 40
+        s_zz = linalg.tria(np.hstack([z_dev, sqrt_r]))  # eq. 40
         pxz = x_dev @ z_dev.T  # eq. 42
         # eq. 44: K = P_xz S_zz^-T S_zz^-1 by the two triangular solves of LAPACK potrs (scipy's solve_triangular
         # costs milliseconds per 3 x 3 call when other processes load the cores; this does not)
         gain = cho_solve((s_zz, True), pxz.T).T
         residual = z - z_mean
         self._x = self._x + gain @ residual  # eq. 45
-        self._s = tria(np.hstack([x_dev - gain @ z_dev, gain @ sqrt_r]))  # eq. 46
+        self._s = linalg.tria(np.hstack([x_dev - gain @ z_dev, gain @ sqrt_r]))  # eq. 46
         return residual, s_zz @ s_zz.T, fading
 
 
 def noises(model, process_noise, measurement_noise) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Validated ``Q`` (n, n) and ``R`` (m, m) of ``model`` (R positive definite), and a square root of Q."""
-    q = _matrix(process_noise, model.n_states, "process_noise (Q)", model.states)
-    r = _matrix(measurement_noise, model.n_outputs, "measurement_noise (R)", model.outputs)
+    q = linalg.covariance_matrix(process_noise, model.n_states, "process_noise (Q)", model.states)
+    r = linalg.covariance_matrix(measurement_noise, model.n_outputs, "measurement_noise (R)", model.outputs)
     if np.any(np.linalg.eigvalsh(r) <= 0):
         raise ValueError("measurement_noise (R) must be positive definite")
-    return q, r, psd_sqrt(q)
+    return q, r, linalg.psd_sqrt(q)
 
 
 def measured_rows(z, model) -> tuple[np.ndarray, np.ndarray]:
@@ -561,38 +563,7 @@ def innovation(rows: np.ndarray, residual=None, covariance=None, fading: float =
     else:
         full_p = np.full((m, m), np.nan)
         full_p[np.ix_(rows, rows)] = covariance
-    return Innovation(full_r, full_p, float(residual @ _solve_psd(covariance, residual)), fading)
-
-
-def tria(matrix: np.ndarray) -> np.ndarray:
-    """Lower-triangular ``S`` with ``S S^T = C C^T`` from the QR decomposition of ``C^T`` (seed 001 eq. 25).
-
-    The diagonal is made non-negative (column signs are free).
-
-    >>> c = np.array([[1.0, 2.0, 0.5], [0.0, 1.0, 3.0]])
-    >>> s = tria(c)
-    >>> bool(np.allclose(s @ s.T, c @ c.T)), bool(s[0, 1] == 0), bool(np.all(np.diag(s) >= 0))
-    (True, True, True)
-    """
-    matrix = np.asarray(matrix, float)
-    r = np.linalg.qr(matrix.T, mode="r")
-    n = matrix.shape[0]
-    s = r[:n, :n].T if r.shape[0] >= n else np.vstack([r, np.zeros((n - r.shape[0], r.shape[1]))]).T[:, :n]
-    signs = np.where(np.diag(s) < 0, -1.0, 1.0)
-    return np.tril(s * signs)
-
-
-def psd_sqrt(matrix: np.ndarray) -> np.ndarray:
-    """A square root ``S`` with ``S S^T = P`` of a symmetric positive semi-definite ``P``.
-
-    Cholesky when ``P`` is definite, else the symmetric root from ``eigh`` (a zero
-    process noise on a state is allowed).
-    """
-    try:
-        return np.linalg.cholesky(matrix)
-    except np.linalg.LinAlgError:
-        values, vectors = np.linalg.eigh(matrix)
-        return vectors * np.sqrt(np.clip(values, 0.0, None))
+    return Innovation(full_r, full_p, float(residual @ linalg.solve(covariance, residual)), fading)
 
 
 def _cholesky_or_repair(p: np.ndarray, what: str) -> np.ndarray:
@@ -606,50 +577,3 @@ def _cholesky_or_repair(p: np.ndarray, what: str) -> np.ndarray:
         return np.linalg.cholesky((vectors * np.maximum(values, floor)) @ vectors.T)
 
 
-def _solve_psd(matrix: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-    """``matrix^{-1} rhs`` for a symmetric positive definite matrix (least squares if singular).
-
-    LAPACK ``gesv`` through numpy: on the few-by-few matrices of a filter step the
-    call overhead dominates, and numpy's is a fraction of scipy's ``cho_solve``.
-    """
-    try:
-        return np.linalg.solve(matrix, rhs)
-    except np.linalg.LinAlgError:
-        return np.linalg.lstsq(matrix, rhs, rcond=None)[0]
-
-
-def _block(matrix: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """``matrix[rows][:, rows]`` (the whole matrix when every row is measured)."""
-    return matrix if rows.all() else matrix[np.ix_(rows, rows)]
-
-
-def _symmetric(p: np.ndarray) -> np.ndarray:
-    return 0.5 * (p + p.T)
-
-
-def _vector(value, n: int, name: str, labels) -> np.ndarray:
-    vector = np.asarray(value, float).reshape(-1)
-    if vector.shape != (n,):
-        raise ValueError(f"{name}: expected {n} values for {list(labels)}, got shape {vector.shape}")
-    if not np.all(np.isfinite(vector)):
-        raise ValueError(f"{name}: non-finite value for {[labels[i] for i in np.nonzero(~np.isfinite(vector))[0]]}")
-    return vector
-
-
-def _matrix(value, n: int, name: str, labels) -> np.ndarray:
-    matrix = np.asarray(value, float)
-    if matrix.ndim == 1 and matrix.shape == (n,):
-        matrix = np.diag(matrix)
-    if matrix.shape != (n, n):
-        raise ValueError(f"{name}: expected a ({n}, {n}) matrix or {n} variances for {list(labels)}, "
-                         f"got shape {matrix.shape}")
-    if not np.all(np.isfinite(matrix)):
-        raise ValueError(f"{name}: non-finite entries")
-    if not np.allclose(matrix, matrix.T, rtol=1e-10, atol=0.0):
-        raise ValueError(f"{name}: not symmetric")
-    diagonal = np.diag(matrix)
-    if np.any(diagonal < 0):
-        raise ValueError(f"{name}: negative variance for {[labels[i] for i in np.nonzero(diagonal < 0)[0]]}")
-    if np.linalg.eigvalsh(_symmetric(matrix)).min() < -1e-12 * max(float(diagonal.max()), 1e-300):
-        raise ValueError(f"{name}: not positive semi-definite")
-    return _symmetric(matrix)

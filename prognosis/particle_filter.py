@@ -121,8 +121,8 @@ class StepDiagnostics:
     --------
     Returned by :meth:`ParticleFilter.step`; two assets, the second one unmeasured at this step:
 
-    >>> from prognosis.degradation import Linear
-    >>> pf = ParticleFilter(Linear(), lambda theta, points: theta, n_particles=200, dt=1.0, noise_std=0.05,
+    >>> from prognosis.degradation import LinearDegradation
+    >>> pf = ParticleFilter(LinearDegradation(), lambda theta, points: theta, n_particles=200, dt=1.0, noise_std=0.05,
     ...                     resample_below=0.5, seed=0)
     >>> pf.initialize((0.0, 2.0), assets=2)
     >>> step = pf.step([1.0, np.nan])
@@ -166,8 +166,8 @@ class ParticleFilter:
     A quantity growing by 0.1 per step, measured directly: the filter estimates
     its level theta and its rate gamma.
 
-    >>> from prognosis.degradation import Linear
-    >>> pf = ParticleFilter(Linear(), lambda theta, points: theta, n_particles=500, dt=1.0, noise_std=0.05,
+    >>> from prognosis.degradation import LinearDegradation
+    >>> pf = ParticleFilter(LinearDegradation(), lambda theta, points: theta, n_particles=500, dt=1.0, noise_std=0.05,
     ...                     inflation=1.0, gamma_std=0.01, seed=0)
     >>> pf.initialize((0.0, 2.0), gamma0=0.0)   # theta ~ U(0, 2), gamma = 0 at detection
     >>> for k in range(1, 31):

@@ -6,7 +6,7 @@ solves the chance-constrained problem (eqs. 50-52)::
 
     theta* = argmin theta^2 / 2   subject to   Pr(RUL(x^, P, theta) <= RUL_ref) <= eta,
 
-where the RUL distribution comes from :func:`prognosis.montecarlo.monte_carlo_rul`
+where the RUL distribution comes from :func:`prognosis.lifecontrol.montecarlo.monte_carlo_rul`
 run with the same draws for every candidate ``theta`` (common random numbers,
 so the predicted quantile is a deterministic, monotone function of ``theta``).
 On ``N`` draws the constraint holds exactly when ``q_eta``, the
@@ -27,8 +27,8 @@ Example
 -------
 Life ``10 / (1 + theta)`` hours: keeping ``Pr(RUL <= 8) <= 5 %`` needs ``theta <= 0.25``; 0 is feasible:
 
->>> from prognosis.montecarlo import RULDistribution
->>> life = lambda theta: RULDistribution(0.0, np.full(100, 10.0 / (1.0 + theta)), np.zeros((1, 100)))
+>>> from prognosis import RULDistribution
+>>> life = lambda theta: RULDistribution(np.full(100, 10.0 / (1.0 + theta)))
 >>> RULController(rul_ref=8.0, eta=0.05, gain=0.1).decide(life).theta
 0.0
 >>> round(RULController(rul_ref=12.0, eta=0.05, gain=0.1, lower=-0.9).decide(life).theta, 4)
@@ -67,8 +67,8 @@ class RULDecision:
     Returned by :meth:`RULController.decide`.  Life ``10 / (1 + theta)``: even
     ``theta = -0.4`` gives only 16.7 h, short of the 20 h asked for:
 
-    >>> from prognosis.montecarlo import RULDistribution
-    >>> life = lambda theta: RULDistribution(0.0, np.full(100, 10.0 / (1.0 + theta)), np.zeros((1, 100)))
+    >>> from prognosis import RULDistribution
+    >>> life = lambda theta: RULDistribution(np.full(100, 10.0 / (1.0 + theta)))
     >>> decision = RULController(rul_ref=20.0, eta=0.05, lower=-0.4).decide(life)
     >>> decision.theta, round(decision.quantile, 2), decision.probability, decision.feasible
     (-0.4, 16.67, 1.0, False)
@@ -107,8 +107,8 @@ class RULController:
     Life ``10 / (1 + theta)`` hours on 100 identical draws; requiring 12 h
     needs ``theta <= 10 / 12 - 1 = -1/6``:
 
-    >>> from prognosis.montecarlo import RULDistribution
-    >>> life = lambda theta: RULDistribution(0.0, np.full(100, 10.0 / (1.0 + theta)), np.zeros((1, 100)))
+    >>> from prognosis import RULDistribution
+    >>> life = lambda theta: RULDistribution(np.full(100, 10.0 / (1.0 + theta)))
     >>> controller = RULController(rul_ref=12.0, eta=0.05, gain=0.1, lower=-0.9)
     >>> decision = controller.decide(life)
     >>> round(decision.theta, 3), round(decision.quantile, 2), decision.probability, decision.feasible
@@ -141,7 +141,7 @@ class RULController:
         history = []
 
         def evaluate(theta):
-            rul = np.asarray(predict(float(theta)).rul, float)
+            rul = np.asarray(predict(float(theta)).samples, float)
             # the (floor(eta N) + 1)-th smallest RUL: Pr(RUL <= ref) <= eta on the N draws iff it exceeds ref
             q = float(np.partition(rul, int(np.floor(self.eta * rul.size)))[int(np.floor(self.eta * rul.size))])
             history.append((float(theta), q))

@@ -1,0 +1,41 @@
+"""State-space estimation on a discrete model made from the bond graph's state equations.
+
+The degrading parameter becomes an extra state of a :class:`DiscreteModel` (:mod:`.model`, with
+sympy Jacobians), which every estimator here tracks through one interface (``predict``,
+``update``, ``step``, ``mean``, ``covariance``, ``copy``):
+
+* :mod:`.kalman`: extended, unscented and square-root cubature Kalman filters, each with the
+  strong-tracking fading factor of Du et al. (section 3);
+* :mod:`.bootstrap`: a bootstrap (SIR) particle filter with the same interface;
+* :mod:`.consistency`: innovation consistency tests and an online supervisor of the innovations;
+* :mod:`.lookahead`: n-step-ahead prediction by filtering forecast measurements;
+* :mod:`.elm`: the regularized online sequential extreme learning machine (ROS-ELM) that forecasts them.
+
+Examples
+--------
+>>> import numpy as np, sympy as sp
+>>> from types import SimpleNamespace
+>>> x, a = sp.symbols("x a")
+>>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
+>>> model = discretize(decay, dt=1.0, augment=["a"])
+>>> ekf = ExtendedKalmanFilter(model, [1.0, 0.2], np.diag([1e-4, 1e-2]), np.diag([1e-8, 1e-6]), [[1e-6]])
+>>> truth = 1.0
+>>> for k in range(60):
+...     truth *= 0.9
+...     _ = ekf.step([truth])
+>>> round(float(ekf.mean[1]), 2)
+0.1
+"""
+
+from .bootstrap import BootstrapParticleFilter
+from .consistency import ConsistencyReport, InnovationMonitor, innovation_consistency, whiten
+from .elm import ROSELM, SeriesForecaster
+from .kalman import CubatureKalmanFilter, ExtendedKalmanFilter, FilterWarning, Innovation, StrongTracking, UnscentedKalmanFilter
+from .lookahead import LookAhead, look_ahead, predict_ahead
+from .model import DiscreteModel, discretize
+
+__all__ = [
+    "BootstrapParticleFilter", "ConsistencyReport", "CubatureKalmanFilter", "DiscreteModel", "ExtendedKalmanFilter",
+    "FilterWarning", "Innovation", "InnovationMonitor", "LookAhead", "ROSELM", "SeriesForecaster", "StrongTracking",
+    "UnscentedKalmanFilter", "discretize", "innovation_consistency", "look_ahead", "predict_ahead", "whiten",
+]
