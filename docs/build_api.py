@@ -42,8 +42,10 @@ PACKAGES = [
 MODULE_ORDER = ["bondgraph.model", "bondgraph.causality", "bondgraph.equations", "bondgraph.simulation",
                 "bondgraph.control", "bondgraph.errors", "bondgraph.library", "bondgraph.io", "bondgraph.drawing",
                 "diagnosis.arrs", "diagnosis.signatures", "diagnosis.detection", "diagnosis.signals",
-                "diagnosis.intervals", "prognosis.observation", "prognosis.degradation", "prognosis.filter",
-                "prognosis.rul", "prognosis.monitor", "prognosis.metrics", "bgphm.cli", "bgphm.plotting", "bgphm.runs"]
+                "diagnosis.intervals.rounding", "diagnosis.intervals.kernels", "diagnosis.intervals.interval",
+                "diagnosis.intervals.functions", "diagnosis.intervals.compiler", "prognosis.observation",
+                "prognosis.degradation", "prognosis.filter", "prognosis.rul", "prognosis.monitor", "prognosis.metrics",
+                "bgphm.cli", "bgphm.plotting", "bgphm.runs"]
 #: Names documented for a package that has no useful ``__all__``.
 EXPLICIT = {"bgphm": ["bgphm.cli.main"]}
 
