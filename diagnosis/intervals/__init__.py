@@ -23,7 +23,7 @@ than once (the *dependency problem*): every occurrence is treated as an
 independent variable, so :math:`\delta - \delta` over :math:`[-1, 1]` gives
 :math:`[-2, 2]` instead of :math:`[0, 0]`. For the BG-LFT form
 :math:`g_0 + \sum_i \delta_i g_i` each :math:`\delta_i` occurs once after
-:func:`sympy.collect`; :func:`range_linear` evaluates that collected form,
+:func:`sympy.collect`; :func:`affine_range` evaluates that collected form,
 whose natural extension is the exact range up to rounding.
 
 Outward rounding
@@ -65,7 +65,7 @@ Interval(-2.0000000000000004, 2.0000000000000004)
 Interval(0.3, 0.3000000000000001)
 """
 
-from .compiler import compile_interval, enclose, range_linear
+from .compiler import affine_range, compile_interval, enclose
 from .functions import abs_, cos, exp, iabs, log, maximum, minimum, power, sign, sin, sqrt, tanh
 from .interval import Interval, IntervalArray
 from .rounding import TRANSCENDENTAL_ULPS, IntervalWarning
@@ -76,6 +76,7 @@ __all__ = [
     "IntervalArray",
     "IntervalWarning",
     "abs_",
+    "affine_range",
     "compile_interval",
     "cos",
     "enclose",
@@ -85,7 +86,6 @@ __all__ = [
     "maximum",
     "minimum",
     "power",
-    "range_linear",
     "sign",
     "sin",
     "sqrt",

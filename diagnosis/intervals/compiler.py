@@ -1,8 +1,8 @@
 """Compilation of sympy expressions into vectorized interval evaluators, and enclosure of exact constants.
 
 :func:`compile_interval` builds the natural interval extension of an
-expression; :func:`range_linear` the exact range of an expression affine in its
-interval symbols; :func:`enclose` the tightest interval around a number.
+expression; :func:`affine_range` the exact range of an affine form of
+independent intervals; :func:`enclose` the tightest interval around a number.
 The sympy tree is walked once, into closures that run the pair kernels of
 :mod:`~diagnosis.intervals.kernels` on numpy arrays.
 """
@@ -286,7 +286,7 @@ def compile_interval(
     ([-2.0000000000000004, -3.000000000000001], [2.0000000000000004, 3.000000000000001])
 
     The two occurrences of ``delta`` are treated as independent (dependency
-    problem); :func:`range_linear` gives the exact range instead.
+    problem); :func:`affine_range` gives the exact range instead.
     """
     expr = sp.sympify(expr)
     node = rounding.guarded(lambda: _compile(expr, _Env(points, intervals)), 2)
@@ -306,16 +306,18 @@ def _coefficient(expr: sp.Expr, delta: sp.Symbol, deltas: set) -> sp.Expr:
     return g
 
 
-def range_linear(
+def affine_range(
     expr: sp.Expr,
     points: Sequence[sp.Symbol],
     intervals: Mapping[sp.Symbol, tuple[float, float]],
 ) -> Callable[..., IntervalArray]:
-    r"""Compile the exact range of an expression affine in its interval symbols.
+    r"""Compile the exact range of an affine form of independent intervals.
 
-    For :math:`f = g_0 + \sum_i \delta_i g_i` with :math:`g_i` free of interval
-    symbols (the BG-LFT form), each :math:`\delta_i` appears once in the
-    collected form, so its natural extension
+    The expression must be an affine form :math:`f = g_0 + \sum_i \delta_i g_i`
+    of its interval symbols: each :math:`\delta_i` ranges over its interval
+    independently of the others, and :math:`g_0` and the coefficients
+    :math:`g_i` depend on the point symbols only (the BG-LFT form). Collected
+    that way, each :math:`\delta_i` occurs once, so the natural extension
     :math:`[g_0] + \sum_i [\delta_i][g_i]` is the exact range up to rounding:
 
     .. math:: \sum_i \min(\underline\delta_i g_i, \overline\delta_i g_i) + g_0
@@ -334,7 +336,7 @@ def range_linear(
     --------
     >>> import sympy as sp
     >>> d, x1, x2 = sp.symbols("delta x1 x2")
-    >>> f = range_linear(d * x1 - d * x2, [x1, x2], {d: (-1.0, 1.0)})
+    >>> f = affine_range(d * x1 - d * x2, [x1, x2], {d: (-1.0, 1.0)})
     >>> f.collected
     delta*(x1 - x2)
     >>> b = f([1.0, 2.0], 1.0)
