@@ -25,13 +25,12 @@ from diagnosis.intervals import (
     Interval,
     IntervalArray,
     IntervalWarning,
-    abs_,
+    absolute,
     affine_range,
     compile_interval,
     cos,
     enclose,
     exp,
-    iabs,
     log,
     maximum,
     minimum,
@@ -165,7 +164,7 @@ UNARY = {
     "sqrt": (sqrt, iv.sqrt, dict(positive=True)),
     "exp": (exp, iv.exp, dict(centre=1.8)),
     "log": (log, iv.log, dict(positive=True)),
-    "abs": (abs_, abs, {}),
+    "abs": (absolute, abs, {}),
     "sign": (sign, iv_sign, {}),
     "tanh": (tanh, iv_tanh, dict(centre=1.5)),
     "sin": (sin, iv.sin, dict(centre=4, width=(-12, 0.5))),
@@ -418,7 +417,7 @@ def test_bounds_move_exactly_one_ulp_for_correctly_rounded_operations():
 
 def test_exact_operations_are_not_widened():
     X = Interval(-3.0, 2.0)
-    assert abs_(X) == Interval(0.0, 3.0) and iabs(X) == abs_(X)
+    assert absolute(X) == Interval(0.0, 3.0) and abs(X) == absolute(X)
     assert -X == Interval(-2.0, 3.0)
     assert sign(X) == Interval(-1.0, 1.0)
     assert minimum(X, 1.0) == Interval(-3.0, 1.0) and maximum(X, 1.0) == Interval(1.0, 2.0)

@@ -66,7 +66,7 @@ Interval(0.3, 0.3000000000000001)
 """
 
 from .compiler import affine_range, compile_interval, enclose
-from .functions import abs_, cos, exp, iabs, log, maximum, minimum, power, sign, sin, sqrt, tanh
+from .functions import absolute, cos, exp, log, maximum, minimum, power, sign, sin, sqrt, tanh
 from .interval import Interval, IntervalArray
 from .rounding import TRANSCENDENTAL_ULPS, IntervalWarning
 
@@ -75,13 +75,12 @@ __all__ = [
     "Interval",
     "IntervalArray",
     "IntervalWarning",
-    "abs_",
+    "absolute",
     "affine_range",
     "compile_interval",
     "cos",
     "enclose",
     "exp",
-    "iabs",
     "log",
     "maximum",
     "minimum",

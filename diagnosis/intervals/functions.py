@@ -55,18 +55,17 @@ def log(x: Operand) -> Interval | IntervalArray:
     return interval.apply(kernels.log, x)
 
 
-def abs_(x: Operand) -> Interval | IntervalArray:
-    """Absolute value ``[max(lo, -hi, 0), max(-lo, hi)]`` (exact).
+def absolute(x: Operand) -> Interval | IntervalArray:
+    """Absolute value ``[max(lo, -hi, 0), max(-lo, hi)]`` (exact); ``abs(x)`` for an interval operand.
 
     Examples
     --------
-    >>> abs_(Interval(-3.0, 2.0))
+    >>> absolute(Interval(-3.0, 2.0))
+    Interval(0.0, 3.0)
+    >>> abs(Interval(-3.0, 2.0))
     Interval(0.0, 3.0)
     """
     return interval.apply(kernels.absolute, x)
-
-
-iabs = abs_
 
 
 def sign(x: Operand) -> Interval | IntervalArray:
