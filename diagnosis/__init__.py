@@ -8,12 +8,12 @@
 
 from .arrs import ARR, ARRWarning, delta, derive_arrs
 from .detection import Evaluation, evaluate, noise_margin, robust_std
-from .intervals import Interval, IntervalArray, IntervalWarning, compile_interval, range_linear
+from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, compile_interval
 from .signals import Record, RecordError, RecordWarning, add_noise, as_record, read_csv
 from .signatures import SignatureMatrix, signature_matrix
 
 __all__ = [
     "ARR", "ARRWarning", "Evaluation", "Interval", "IntervalArray", "IntervalWarning", "Record", "RecordError",
-    "RecordWarning", "SignatureMatrix", "add_noise", "as_record", "compile_interval", "delta", "derive_arrs",
-    "evaluate", "noise_margin", "range_linear", "read_csv", "robust_std", "signature_matrix",
+    "RecordWarning", "SignatureMatrix", "add_noise", "affine_range", "as_record", "compile_interval", "delta",
+    "derive_arrs", "evaluate", "noise_margin", "read_csv", "robust_std", "signature_matrix",
 ]

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .arrs import delta
-from .intervals import compile_interval, range_linear
+from .intervals import affine_range, compile_interval
 from .residuals import CompiledARR
 
 
@@ -29,7 +29,7 @@ def interval_threshold(compiled: CompiledARR, points: list[np.ndarray]) -> tuple
     if evaluator is None:
         boxes = {delta(p): tuple(map(float, box)) for p, box in compiled.arr.uncertainties.items()}
         try:
-            evaluator = range_linear(compiled.uncertain, compiled.points, boxes)
+            evaluator = affine_range(compiled.uncertain, compiled.points, boxes)
         except ValueError:  # not of the BG-LFT linear form: natural extension (sound, may overestimate)
             evaluator = compile_interval(compiled.uncertain, compiled.points, boxes)
         compiled._functions["interval"] = evaluator

@@ -36,6 +36,7 @@ PACKAGES = [
     ("bondgraph", "model, causality, equations, simulation",
      ["bondgraph.library", "bondgraph.io", "bondgraph.drawing"]),
     ("diagnosis", "ARRs, intervals, thresholds, signatures, detection", ["diagnosis.signals"]),
+    ("diagnosis.intervals", "outward-rounded interval arithmetic and the sympy-to-interval compiler", []),
     ("prognosis", "degradation laws, observation model, particle filter, RUL, metrics, health monitoring",
      ["prognosis.metrics"]),
     ("prognosis.statespace", "discrete models, Kalman filters, bootstrap filter, consistency, look-ahead, ROS-ELM", []),
@@ -47,8 +48,10 @@ PACKAGES = [
 MODULE_ORDER = ["bondgraph.model", "bondgraph.causality", "bondgraph.equations", "bondgraph.simulation",
                 "bondgraph.control", "bondgraph.errors", "bondgraph.library", "bondgraph.io", "bondgraph.drawing",
                 "diagnosis.arrs", "diagnosis.signatures", "diagnosis.detection", "diagnosis.signals",
-                "diagnosis.intervals", "prognosis.observation", "prognosis.degradation", "prognosis.particle_filter",
-                "prognosis.rul", "prognosis.monitor", "prognosis.metrics", "bgphm.cli", "bgphm.plotting", "bgphm.runs"]
+                "diagnosis.intervals.rounding", "diagnosis.intervals.kernels", "diagnosis.intervals.interval",
+                "diagnosis.intervals.functions", "diagnosis.intervals.compiler", "prognosis.observation",
+                "prognosis.degradation", "prognosis.particle_filter", "prognosis.rul", "prognosis.monitor", "prognosis.metrics",
+                "bgphm.cli", "bgphm.plotting", "bgphm.runs"]
 #: Names documented for a package that has no useful ``__all__``.
 EXPLICIT = {"bgphm": ["bgphm.cli.main"]}
 
