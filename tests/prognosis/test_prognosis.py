@@ -17,7 +17,7 @@ from prognosis.particle_filter import ParticleFilter, VarianceAdaptation
 from prognosis.observation import observation_model
 from prognosis.rul import RULPredictor, predict_rul
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 t = sp.Symbol("t")
 B_N, K_BELT, OMEGA = 5.025e-3, 3.75, 112.5
 

@@ -12,7 +12,7 @@ import pytest
 
 from bgphm.runs import over_seeds, progress_line, run_main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def square_after(x, pause):

@@ -13,7 +13,7 @@ from prognosis.statespace.kalman import (CubatureKalmanFilter, ExtendedKalmanFil
 from prognosis.statespace.lookahead import look_ahead, predict_ahead
 from prognosis.statespace import discretize
 
-from conftest import load_example
+from tests.conftest import load_example
 
 # A damped oscillator (m p'' = -k p - c p' + F) with a force bias b estimated as a state.  The bias
 # enters additively, so the Euler step is exactly linear in (p, v, b):

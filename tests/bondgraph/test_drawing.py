@@ -15,7 +15,7 @@ from bondgraph.library import (dc_motor, friction_drive, mass_spring_chain, rlc_
                                torsion_bar_monitorable)
 
 SVG = "{http://www.w3.org/2000/svg}"
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 MODELS = {
     "rlc_circuit": rlc_circuit,
     "dc_motor": dc_motor,

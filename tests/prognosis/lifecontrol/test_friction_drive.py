@@ -4,8 +4,6 @@ innovation consistency, Monte Carlo RUL, RUL control) and examples/friction_driv
 Expected values come from the seed's equations written by hand, closed forms or brute force.
 """
 
-import json
-
 import numpy as np
 import pytest
 import sympy as sp
@@ -18,7 +16,7 @@ from prognosis.lifecontrol import (RULController, chebyshev_bounds, chebyshev_in
 from prognosis.statespace import (ExtendedKalmanFilter, InnovationMonitor, StrongTracking, discretize, innovation_consistency,
                                   whiten)
 
-from conftest import load_example
+from tests.conftest import load_example
 
 J1, B1, r1, alpha, r2, J2, B2 = sp.symbols("J1 B1 r1 alpha r2 J2 B2")
 w1, w2, m, D = sp.symbols("omega1 omega2 m D")
@@ -669,38 +667,6 @@ def test_rul_controller_on_the_friction_drive(fd, estimate):
     assert predict(decision.theta).probability_before(ref) <= 0.05
     # lives scale as 1/omega^2: the required speed is about 20 / sqrt(1.2)
     assert 20.0 + decision.theta == pytest.approx(20.0 / np.sqrt(1.2), abs=0.05)
-
-
-# -- 8. the example ----------------------------------------------------------------------------------------
-
-
-@pytest.fixture(scope="module")
-def example_run(fd, tmp_path_factory):
-    out = tmp_path_factory.mktemp("friction_drive")
-    summary = fd.main(["--seeds", "1", "--speedup", "10", "--out", str(out), "--quiet"])
-    return summary, json.loads((out / "results.json").read_text())
-
-
-def test_example_runs_the_three_scenarios(example_run):
-    summary, data = example_run
-    assert "summary" in data and data["summary"]["seeds"] == 1
-    assert data["summary"]["restarts_before_change"] == summary["restarts_before_change"] == 0
-    seed = data["seeds"][0]
-    assert seed["restart_h"] and seed["restart_h"][0] > 4.0  # restarted after the change of m at 4 h
-    assert seed["box_coverage"]["before_change"] >= 0.95  # eqs. 37-43 with c = 10
-    true_eol = seed["true_eol_h"]
-    assert true_eol is not None
-    assert seed["scenario_1"]["eol_mean_h"] > true_eol  # without restart the m change is missed: too late
-    assert seed["controlled_true_eol_h"] is not None and seed["controlled_true_eol_h"] > true_eol
-    assert seed["scenario_3"]["p_eol_before_8h"] <= 0.05 + 1e-9
-    assert seed["scenario_3"]["omega2_star"] < 20.0
-
-
-def test_example_scenario_2_predicts_after_the_restart(example_run):
-    """Scenario 2 (section 6.2) is the prediction at 5.0 h *with* the EKF restarted after the m change."""
-    _, data = example_run
-    seed = data["seeds"][0]
-    assert seed["restart_h"] and 4.0 < seed["restart_h"][0] < seed["scenario_2"]["origin_h"] == pytest.approx(5.0)
 
 
 def test_rul_distribution_moments_are_over_the_failed_draws_with_the_censored_weight_beside():

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 TUTORIALS = ROOT / "docs" / "tutorial"
 FLAGS = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
 
@@ -58,7 +58,7 @@ def run_tutorial(path: Path) -> tuple[doctest.DocTest, doctest.DocTestRunner, st
 
 def test_every_tutorial_is_listed():
     names = {path.name for path in TUTORIALS.glob("*.md") if path.name != "README.md"}
-    assert names == set(MIN_EXAMPLES), "add the new tutorial to MIN_EXAMPLES in tests/test_docs.py"
+    assert names == set(MIN_EXAMPLES), "add the new tutorial to MIN_EXAMPLES in tests/cases/test_docs.py"
     index = (TUTORIALS / "README.md").read_text(encoding="utf-8")
     for name in sorted(names):
         assert f"({name})" in index, f"docs/tutorial/README.md does not link {name}"
