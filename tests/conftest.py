@@ -1,15 +1,8 @@
-"""Shared fixtures: the example scripts loaded as modules; a guard for doctest's linecache sweep."""
+"""A guard for doctest's linecache sweep (scenarios for the unit tests: tests/scenarios.py)."""
 
 import functools
 import gc
-import importlib.util
 import linecache
-import sys
-from pathlib import Path
-
-import pytest
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def _without_cyclic_gc(checkcache):
@@ -34,20 +27,3 @@ def _without_cyclic_gc(checkcache):
 
 
 linecache.checkcache = _without_cyclic_gc(linecache.checkcache)
-
-
-def load_example(name: str):
-    """Import ``examples/<name>.py`` (registered in sys.modules: dataclasses look their module up)."""
-    if name in sys.modules:
-        return sys.modules[name]
-    spec = importlib.util.spec_from_file_location(name, ROOT / "examples" / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[name] = module
-    spec.loader.exec_module(module)
-    return module
-
-
-@pytest.fixture(scope="session")
-def example():
-    """examples/torsion_bar.py, the main job."""
-    return load_example("torsion_bar")

@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from tests.conftest import load_example
+from tests.cases.conftest import load_example
 
 
 @pytest.fixture(scope="module")

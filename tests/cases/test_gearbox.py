@@ -4,7 +4,7 @@ import json
 
 import pytest
 
-from tests.conftest import load_example
+from tests.cases.conftest import load_example
 
 
 def test_gearbox_example_smoke(tmp_path):

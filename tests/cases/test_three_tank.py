@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from tests.conftest import load_example
+from tests.cases.conftest import load_example
 
 
 @pytest.fixture(scope="module")

@@ -104,7 +104,7 @@ def test_readme_python_blocks_run(capsys):
 
 
 def test_sweep_ladder_ends_at_the_default_preset_and_runs_a_group(example):
-    from tests.conftest import load_example
+    from tests.cases.conftest import load_example
 
     sweep = load_example("torsion_bar_sweep")
     case = example.CASES["mass-linear"]

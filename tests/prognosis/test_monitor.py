@@ -10,6 +10,7 @@ from diagnosis.signals import add_noise, as_record
 from prognosis.degradation import ExponentialDegradation
 from prognosis.particle_filter import VarianceAdaptation
 from prognosis.monitor import HealthMonitor
+from tests.scenarios import torsion_bar_b_md, torsion_bar_sensors
 
 ANTIDERIVATIVES = {"omega_m": "theta_m", "omega_Ld": "theta_Ld"}  # encoder angles
 
@@ -20,8 +21,8 @@ def b_md_degrading(t):
 
 
 @pytest.fixture(scope="module")
-def scenario(example):
-    clean = example.simulate_case(example.CASES["b-md"], t_end=30.0).clean_degraded
+def scenario():
+    clean = torsion_bar_b_md(t_end=30.0)
     record = add_noise(as_record(clean), {"omega_m": 0.01, "omega_Ld": 0.01}, seed=5)
     arr = next(a for a in derive_arrs(torsion_bar_monitorable()) if a.junction == "1_1")
     return arr, record
@@ -103,11 +104,11 @@ def test_failure_value_on_the_wrong_side_is_refused(scenario):
         monitor(arr, theta_fail=0.001)
 
 
-def test_a_record_without_degradation_starts_no_filter(scenario, example):
+def test_a_record_without_degradation_starts_no_filter(scenario):
     arr, _ = scenario
     bg = torsion_bar()
     t = np.arange(0.0, 20.0 + 1e-9, 0.01)
     nominal = simulate(bg, (0, 20), {"U": torsion_bar_controller()}, t_eval=t)
-    record = add_noise(as_record(example.measured(nominal, bg)), {"omega_m": 0.01, "omega_Ld": 0.01}, seed=6)
+    record = add_noise(as_record(torsion_bar_sensors(nominal, bg)), {"omega_m": 0.01, "omega_Ld": 0.01}, seed=6)
     result = monitor(arr).run(record)
     assert result.detection_time is None and result.t.size == 0 and not result.rul

@@ -1,5 +1,5 @@
 """Seed 000: the friction drive (bond graph, energy deterioration, EKF pieces, Chebyshev bounds,
-innovation consistency, Monte Carlo RUL, RUL control) and examples/friction_drive.py.
+innovation consistency, Monte Carlo RUL, RUL control); examples/friction_drive.py runs in tests/cases.
 
 Expected values come from the seed's equations written by hand, closed forms or brute force.
 """
@@ -15,8 +15,7 @@ from prognosis.lifecontrol import (RULController, chebyshev_bounds, chebyshev_in
                                    covariance_from_bounds, energy_deterioration, monte_carlo_rul, sample_gaussian)
 from prognosis.statespace import (ExtendedKalmanFilter, InnovationMonitor, StrongTracking, discretize, innovation_consistency,
                                   whiten)
-
-from tests.conftest import load_example
+from tests.scenarios import FrictionDriveRUL
 
 J1, B1, r1, alpha, r2, J2, B2 = sp.symbols("J1 B1 r1 alpha r2 J2 B2")
 w1, w2, m, D = sp.symbols("omega1 omega2 m D")
@@ -42,7 +41,7 @@ def augmented(speeds):
 
 @pytest.fixture(scope="module")
 def fd():
-    return load_example("friction_drive")
+    return FrictionDriveRUL
 
 
 # -- 1. bond graph ----------------------------------------------------------------------------------------

@@ -12,8 +12,7 @@ from prognosis.statespace.kalman import (CubatureKalmanFilter, ExtendedKalmanFil
                                          UnscentedKalmanFilter)
 from prognosis.statespace.lookahead import look_ahead, predict_ahead
 from prognosis.statespace import discretize
-
-from tests.conftest import load_example
+from tests.scenarios import ThreeTanks
 
 # A damped oscillator (m p'' = -k p - c p' + F) with a force bias b estimated as a state.  The bias
 # enters additively, so the Euler step is exactly linear in (p, v, b):
@@ -231,7 +230,7 @@ def test_strong_tracking_follows_a_drift_the_plain_filter_lags(model):
 
 @pytest.fixture(scope="module")
 def tank():
-    return load_example("three_tank")
+    return ThreeTanks
 
 
 def test_stsckf_tracks_the_az2_ramp_of_eq61_better_than_sckf(tank):
