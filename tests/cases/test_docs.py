@@ -64,7 +64,12 @@ def test_every_tutorial_is_listed():
         assert f"({name})" in index, f"docs/tutorial/README.md does not link {name}"
 
 
-@pytest.mark.parametrize("name", sorted(MIN_EXAMPLES))
+#: Tutorials that run a ``bgphm demo`` (marked slow).
+DEMOS = {"4-command-line.md"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in DEMOS else n
+                                  for n in sorted(MIN_EXAMPLES)])
 def test_tutorial_runs(name):
     for package in NEEDS.get(name, ()):
         pytest.importorskip(package)

@@ -6,6 +6,8 @@ import pytest
 
 from tests.cases.conftest import load_example
 
+pytestmark = pytest.mark.slow  # runs of an example script
+
 
 def test_gearbox_example_smoke(tmp_path):
     """examples/gearbox.py on a 90 h record (one seed): results.json figures in sensible bands."""

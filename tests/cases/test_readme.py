@@ -1,10 +1,12 @@
-"""The README's tour runs as printed and gives the figures its comments quote."""
+"""The README's python blocks run as printed: the tour (once) gives the figures its comments quote."""
 
 import contextlib
 import io
 import math
 import re
 from pathlib import Path
+
+import pytest
 
 README = Path(__file__).resolve().parents[2] / "README.md"
 
@@ -15,6 +17,7 @@ def tour_source() -> str:
     return re.search(r"```python\n(.*?)```", section, re.S).group(1)
 
 
+@pytest.mark.slow
 def test_readme_tour_runs_and_its_comments_are_true():
     namespace: dict = {}
     out = io.StringIO()
@@ -34,6 +37,21 @@ def test_readme_tour_runs_and_its_comments_are_true():
 
 def source_comment() -> str:
     return tour_source().splitlines()[-1]
+
+
+def test_readme_other_python_blocks_run(capsys):
+    """Every python block but the tour, which the test above runs."""
+    blocks = re.findall(r"```python\n(.*?)```", README.read_text(), re.S)
+    tour = tour_source()
+    assert tour in blocks and len(blocks) > 1
+    for block in blocks:
+        if block != tour:
+            exec(compile(block, "README.md", "exec"), {})
+    printed = capsys.readouterr().out
+    assert "{'L': 'integral'}" in printed and "dp_L/dt = V(t) - R*p_L/L" in printed
+    assert "r_n = -J*Derivative(omega(t), t) - b*omega(t) + k_m*i(t)" in printed
+    detection = float(printed.strip().splitlines()[-1])  # the tripled friction is detected early in the run
+    assert 0.0 <= detection < 0.5
 
 
 def test_readme_set_up_is_two_commands():

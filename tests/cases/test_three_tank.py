@@ -7,6 +7,8 @@ import pytest
 
 from tests.cases.conftest import load_example
 
+pytestmark = pytest.mark.slow  # runs of an example script
+
 
 @pytest.fixture(scope="module")
 def tank():

@@ -7,6 +7,8 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 
+pytestmark = pytest.mark.slow  # runs of an example script
+
 
 @pytest.fixture(scope="module")
 def b_md(example):
@@ -87,20 +89,6 @@ def test_main_writes_results_csv_and_plots_over_runs(example, tmp_path, capsys):
         assert (tmp_path / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     printed = capsys.readouterr().out
     assert "RMSE theta (%)" in printed and "seed 003" in printed
-
-
-def test_readme_python_blocks_run(capsys):
-    import re
-
-    blocks = re.findall(r"```python\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
-    assert blocks
-    for block in blocks:
-        exec(compile(block, "README.md", "exec"), {})
-    printed = capsys.readouterr().out
-    assert "{'L': 'integral'}" in printed and "dp_L/dt = V(t) - R*p_L/L" in printed
-    assert "r_n = -J*Derivative(omega(t), t) - b*omega(t) + k_m*i(t)" in printed
-    detection = float(printed.strip().splitlines()[-1])  # the tripled friction is detected early in the run
-    assert 0.0 <= detection < 0.5
 
 
 def test_sweep_ladder_ends_at_the_default_preset_and_runs_a_group(example):

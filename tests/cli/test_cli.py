@@ -161,6 +161,7 @@ def test_unexpected_errors_exit_1_and_interrupts_are_clean(monkeypatch, capsys):
     assert code == 1 and "interrupted" in err
 
 
+@pytest.mark.slow  # two interpreters started: about 4 s
 def test_console_entry_point_runs():
     done = subprocess.run([sys.executable, "-m", "bgphm", "--help"], capture_output=True, text=True, timeout=120)
     assert done.returncode == 0 and "prognose" in done.stdout
@@ -332,6 +333,7 @@ def test_bad_json_documents_are_named():
         model_from_json(json.dumps(data), where="m.json")
 
 
+@pytest.mark.slow  # runs bgphm demo
 def test_demo_runs_the_chain_and_predicts_the_injected_end_of_life(tmp_path, capsys):
     code, out, _ = run(capsys, "--quiet", "demo", "dc-motor", "--out", str(tmp_path))
     assert code == 0

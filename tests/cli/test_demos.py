@@ -40,6 +40,7 @@ def demos(tmp_path_factory):
     return runs
 
 
+@pytest.mark.slow  # runs bgphm demo
 @pytest.mark.parametrize("name", ["torsion-bar", "three-tank"])
 def test_demo_detects_after_the_onset_and_predicts_the_end_of_life(demos, name):
     code, out, err, path = demos[name]
@@ -59,6 +60,7 @@ def test_demo_detects_after_the_onset_and_predicts_the_end_of_life(demos, name):
     assert last["theta_mean"] == pytest.approx(theta_true, rel=THETA_TOLERANCE)
 
 
+@pytest.mark.slow  # runs bgphm demo
 def test_torsion_bar_writes_a_python_model_with_its_controller(demos):
     *_, path = demos["torsion-bar"]
     spec = load_model(path / "model.py")  # JSON cannot hold the PI speed loop
@@ -85,6 +87,7 @@ def three_tank_monitor(demos, **options):
     return monitor, record
 
 
+@pytest.mark.slow  # runs bgphm demo
 def test_progress_counts_filter_steps_up_to_the_total(demos):
     monitor, record = three_tank_monitor(demos)
     calls = []
@@ -95,6 +98,7 @@ def test_progress_counts_filter_steps_up_to_the_total(demos):
     assert len(calls) <= 101 and isinstance(done[0], int) and times[-1] == result.t[-1]
 
 
+@pytest.mark.slow  # runs bgphm demo
 @pytest.mark.parametrize("workers", [1, 2])
 def test_an_interrupt_in_the_callback_stops_the_run(demos, workers):
     monitor, record = three_tank_monitor(demos)
@@ -110,6 +114,7 @@ def test_an_interrupt_in_the_callback_stops_the_run(demos, workers):
     assert calls[-1] < calls[0] + 20  # stopped at the first report past 10 steps
 
 
+@pytest.mark.slow  # runs bgphm demo
 def test_prognose_prints_filter_progress_unless_quiet(demos, capsys):
     *_, path = demos["three-tank"]
     argv = ["prognose", str(path / "model.json"), str(path / "data.csv"), "--candidate", "az2", "--degradation",
@@ -122,6 +127,7 @@ def test_prognose_prints_filter_progress_unless_quiet(demos, capsys):
     assert code == 0 and err == "" and out_quiet == out
 
 
+@pytest.mark.slow  # runs bgphm demo
 def test_an_interrupted_prognose_exits_1(demos, capsys, monkeypatch):
     *_, path = demos["three-tank"]
 

@@ -53,6 +53,7 @@ def test_run_main_turns_an_interrupt_into_exit_code_1(capsys):
     assert capsys.readouterr().err == "interrupted\n"
 
 
+@pytest.mark.slow  # waits 3 s for the workers to start
 def test_ctrl_c_stops_every_worker_at_once(tmp_path):
     script = tmp_path / "long_run.py"
     script.write_text(textwrap.dedent(f"""

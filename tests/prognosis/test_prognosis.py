@@ -313,6 +313,7 @@ def test_successive_predictions_differ_but_are_reproducible():
     assert np.array_equal(first.samples, again.samples)
 
 
+@pytest.mark.slow  # a child interpreter and its worker pool: 2-2.5 s
 def test_ctrl_c_during_parallel_predictions_reaches_only_the_caller(tmp_path):
     """Ctrl-C signals the whole process group; the prediction workers must leave it to the caller."""
     script = tmp_path / "interrupted.py"

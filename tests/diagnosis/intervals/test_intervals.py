@@ -257,6 +257,7 @@ def contains_exactly(Z: Interval, value: Fraction) -> bool:
     return above and below
 
 
+@pytest.mark.slow  # 1500 exact rational cases: 2-3 s
 @settings(max_examples=EXACT_EXAMPLES, deadline=None, derandomize=True, database=None)
 @given(interval_and_point(), interval_and_point(), st.sampled_from(sorted(EXACT)))
 def test_rational_operations_contain_the_exact_value(a, b, op):

@@ -73,6 +73,7 @@ def test_a_direct_input_drops_its_column_of_B_from_the_regression():
     assert window_log_posterior(th[None], y, u)[0] != pytest.approx(expected, rel=1e-6)
 
 
+@pytest.mark.slow
 def test_a_direct_input_moves_the_prediction_at_once_and_only_through_D():
     y, u, *_ = _window(direct=True, N=200)
     post = sample_posterior(y, u, 2, particles=400, direct_inputs=(1,), seed=0)
@@ -100,6 +101,7 @@ def test_log_posterior_is_minus_inf_outside_the_prior():
     assert window_log_posterior([[2.2, -1.21, 0.9, -0.2]], y, u, max_radius=1.2)[0] > -np.inf
 
 
+@pytest.mark.slow
 def test_the_posterior_concentrates_on_the_true_poles():
     y, u, a, f = _window(N=300)
     post = sample_posterior(y, u, 2, particles=800, seed=3)
@@ -131,6 +133,7 @@ def test_mixture_quantile_solves_the_mixture_cdf():
     assert x[0] == pytest.approx(2.0 + 0.5 * special.stdtrit(5, 0.975))
 
 
+@pytest.mark.slow
 def test_posterior_predictive_is_calibrated_on_its_own_model():
     """Windows and futures drawn from one first-order model: 95 % intervals cover about 95 %."""
     inside, total = 0, 0

@@ -263,6 +263,7 @@ def long_record(tank):
     return tank.simulate_tanks(3, drift=False, steps=10_000)
 
 
+@pytest.mark.slow  # 10^4 filter steps: about 2.5 s each
 @pytest.mark.parametrize("name", ["SCKF", "STSCKF"])
 def test_square_root_stays_a_positive_definite_factor_over_ten_thousand_steps(tank, long_record, name):
     """Every one of 10^4 steps: S lower triangular with a positive diagonal, P = S S^T positive definite.
