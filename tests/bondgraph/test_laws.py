@@ -2,14 +2,14 @@
 
 Law strings are parsed without ``eval``/``sympify``: only arithmetic, numbers,
 declared names, a fixed set of functions and ``pi`` are accepted; anything else
-raises :class:`bondgraph.LawError` naming the element.
+raises :class:`bondgraph.LawError` naming the element.  How fast hostile laws are rejected is
+measured in benchmarks/bench_laws.py, not here.
 """
 
 from __future__ import annotations
 
 import multiprocessing
 import re
-import time
 
 import networkx as nx
 import pytest
@@ -50,17 +50,17 @@ def assert_element_rejects(law, match=None, **extra):
     assert "valve" not in bg.graph
 
 
-def run_with_deadline(function, seconds: float):
-    """Run ``function`` in a forked child; return (outcome, message, elapsed).
+def run_with_deadline(function, seconds: float = 60.0):
+    """Run ``function`` in a forked child; return (outcome, message).
 
     A child is used so that a parser that hangs on a huge integer (C-level
     arithmetic cannot be interrupted) fails the test instead of the test run.
+    ``seconds`` only guards against such a hang; the speed is benchmarks/bench_laws.py's.
     """
     context = multiprocessing.get_context("fork")
     receiver, sender = context.Pipe(duplex=False)
 
     def target():
-        start = time.perf_counter()
         try:
             function()
             outcome, message = "accepted", ""
@@ -68,7 +68,7 @@ def run_with_deadline(function, seconds: float):
             outcome, message = "LawError", str(exc)
         except BaseException as exc:  # report anything else to the parent
             outcome, message = type(exc).__name__, str(exc)
-        sender.send((outcome, message[:1000], time.perf_counter() - start))
+        sender.send((outcome, message[:1000]))
 
     process = context.Process(target=target)
     process.start()
@@ -295,41 +295,36 @@ def test_names_are_only_those_declared():
     "text",
     ["9**9**9**9", "2**1000", "e**1e6", "10**-1000", "e**(9**99)", "(e + 1)**100000", "2**-1000"],
 )
-def test_huge_exponents_are_rejected_quickly(text):
-    outcome, message, elapsed = run_with_deadline(lambda: parse(text), seconds=10.0)
+def test_huge_exponents_are_rejected_without_hanging(text):
+    outcome, message = run_with_deadline(lambda: parse(text))
     assert outcome == "LawError", f"{text!r}: {outcome} {message}"
     assert WHERE in message
-    assert elapsed < 1.0, f"{text!r} took {elapsed:.2f} s"
 
 
 @pytest.mark.parametrize("text", ["f - 9**9**9**9*e", "f - e**1e6", "f - a*e**2**1000"])
-def test_huge_exponents_in_element_law_are_rejected_quickly(text):
+def test_huge_exponents_in_element_law_are_rejected_without_hanging(text):
     def build():
         BondGraph(valve_graph(text))
 
-    outcome, message, elapsed = run_with_deadline(build, seconds=10.0)
+    outcome, message = run_with_deadline(build)
     assert outcome == "LawError", f"{text!r}: {outcome} {message}"
     assert "'valve'" in message
-    assert elapsed < 1.0, f"{text!r} took {elapsed:.2f} s"
 
 
 @pytest.mark.parametrize("text", ["(((9**99)**99)**99)**99", "((((2**99)**99)**99)**99)*e"])
-def test_nested_power_towers_are_rejected_quickly(text):
+def test_nested_power_towers_are_rejected_without_hanging(text):
     """Each exponent is small, but the tower is 9**(99**4): as huge as 9**9**9**9."""
-    outcome, message, elapsed = run_with_deadline(lambda: parse(text), seconds=10.0)
+    outcome, message = run_with_deadline(lambda: parse(text))
     assert outcome == "LawError", f"{text!r}: {outcome} {message}"
     assert WHERE in message
-    assert elapsed < 1.0, f"{text!r} took {elapsed:.2f} s"
 
 
 @pytest.mark.parametrize("length", [2_001, 10_000, 1_000_000])
-def test_overly_long_strings_are_rejected_quickly(length):
+def test_overly_long_strings_are_rejected(length):
     text = ("e + " * length)[: length - 1] + "e"
     assert len(text) >= 2_000
-    start = time.perf_counter()
     with pytest.raises(LawError, match=re.escape(WHERE)):
         parse(text)
-    assert time.perf_counter() - start < 1.0
 
 
 def test_overly_long_law_on_element():
@@ -338,10 +333,8 @@ def test_overly_long_law_on_element():
 
 @pytest.mark.parametrize("text", ["-" * 1999 + "e", "(" * 300 + "e" + ")" * 300, "sqrt(" * 300 + "e" + ")" * 300])
 def test_deep_nesting_is_rejected(text):
-    start = time.perf_counter()
     with pytest.raises(LawError, match=re.escape(WHERE)):
         parse(text)
-    assert time.perf_counter() - start < 1.0
 
 
 def test_non_string_law_is_rejected():
@@ -386,10 +379,8 @@ def test_solve_valve_law_for_flow():
 
 
 def test_solve_valve_law_for_effort_is_refused():
-    start = time.perf_counter()
     with pytest.raises(LawError, match=re.escape("R 'valve'")):
         solve_for(VALVE_EXPR, e, where="R 'valve'")
-    assert time.perf_counter() - start < 10.0
 
 
 def test_solve_parsed_valve_law_on_element():
@@ -407,13 +398,9 @@ def test_solve_does_not_pick_one_of_several_roots(law):
 
 # Regressions for defects found while writing these tests.
 @pytest.mark.parametrize("text", ["(((9**99)**99)**99)**99", "((((2**99)**99)**99)**99)*e"])
-def test_towers_of_powers_are_rejected_quickly(text):
-    import time
-
-    start = time.perf_counter()
+def test_towers_of_powers_are_rejected(text):
     with pytest.raises(LawError, match="too large"):
         parse_expression(text, {"e": sp.Symbol("e")}, where="R 'tower'")
-    assert time.perf_counter() - start < 1.0
 
 
 def test_wrong_arity_of_an_allowed_function_is_a_law_error():

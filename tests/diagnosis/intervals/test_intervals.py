@@ -1,4 +1,4 @@
-"""Tests of diagnosis.intervals: soundness, outward rounding, dependency problem, speed.
+"""Tests of diagnosis.intervals: soundness, outward rounding, dependency problem (speed: benchmarks/bench_intervals.py).
 
 Soundness is checked two ways on seeded random boxes: (a) the float value of
 the operation at random points of the boxes lies inside the interval result,
@@ -10,7 +10,6 @@ are also checked exactly with :class:`fractions.Fraction` by hypothesis.
 from __future__ import annotations
 
 import math
-import time
 import warnings
 from fractions import Fraction
 
@@ -561,11 +560,11 @@ def test_midpoints_of_unbounded_intervals_agree_between_scalar_and_array():
 
 
 # --------------------------------------------------------------------------
-# Speed
+# A million samples (how fast: benchmarks/bench_intervals.py)
 # --------------------------------------------------------------------------
 
 
-def test_compiled_evaluation_of_a_million_samples_is_fast():
+def test_compiled_evaluation_of_a_million_samples():
     x1, x2, x3 = sp.symbols("x1 x2 x3")
     d3, d4 = sp.symbols("delta_3 delta_4")
     a, b, c, d = 0.5, 1.3, 2.7, 0.01
@@ -573,14 +572,8 @@ def test_compiled_evaluation_of_a_million_samples_is_fast():
     box = {d1: (-0.05, 0.05), d2: (0.0, 0.2), d3: (-0.1, 0.1), d4: (-0.02, 0.03)}
     f = compile_interval(expr, [x1, x2, x3], box)
     X = [np.random.default_rng(i).standard_normal(1_000_000) for i in range(3)]
-    f(*X)
-    best = math.inf
-    for _ in range(3):
-        start = time.perf_counter()
-        B = f(*X)
-        best = min(best, time.perf_counter() - start)
+    B = f(*X)
     assert B.shape == (1_000_000,)
-    assert best < 1.0, best
 
 
 def test_random_case_budget():
