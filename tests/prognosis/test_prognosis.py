@@ -176,8 +176,10 @@ def test_missing_measurement_predicts_without_update():
 
 def test_resampling_only_when_ess_is_low():
     pf = make_filter(resample_below=0.5, resampling="stratified")
-    pf.initialize((0.9, 1.1))
-    assert not pf.step(np.array([0.0])).resampled.any() or True  # first step may or may not degenerate
+    pf.initialize((0.99, 1.01))
+    diagnostics = pf.step(np.array([0.0]))  # every particle explains y = 0: the ESS stays high
+    assert diagnostics.ess[0] >= 0.5 * 400 and not diagnostics.resampled.any()
+    assert not np.allclose(pf.weights, 1 / 400)  # the weights carry over, no resampling reset them
     pf.initialize((0.0, 2.0))
     diagnostics = pf.step(np.array([0.0]))  # y = 0 favours theta near 1: the ESS collapses
     assert diagnostics.resampled.all() and diagnostics.ess[0] < 0.5 * 400
