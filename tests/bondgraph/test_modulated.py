@@ -40,7 +40,8 @@ def test_mtf_modulated_by_an_input_signal():
     bg = two_port_model("MTF", signal="r")
     eqs = bg.state_equations()
     r = sp.Function("r")(sp.Symbol("t"))
-    assert sp.simplify(eqs.rhs[0] - (sp.Function("u")(sp.Symbol("t")) - r**2 * sp.Symbol("b") * sp.Symbol("p_L") / sp.Symbol("L"))) == 0
+    expected = sp.Function("u")(sp.Symbol("t")) - r**2 * sp.Symbol("b") * sp.Symbol("p_L") / sp.Symbol("L")
+    assert sp.simplify(eqs.rhs[0] - expected) == 0
     # e1 = r e2, f2 = r f1, e2 = b f2  =>  L dp/dt... dp/dt = u - r^2 b p / L
     result = compare(bg, {"u": 1.0, "r": modulation}, lambda t, x: [1.0 - modulation(t) ** 2 * B * x[0] / L])
     assert np.allclose(result.flows[4], modulation(result.t) * result.flows[3])  # f2 = r f1

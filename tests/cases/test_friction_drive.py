@@ -1,4 +1,4 @@
-"""examples/friction_drive.py, the friction drive of Rodriguez Obando et al. (2021): the three scenarios on a fast run."""
+"""examples/friction_drive.py, the friction drive of Rodriguez Obando et al. (2021): three scenarios, fast run."""
 
 import json
 

@@ -81,8 +81,8 @@ def three_tank_monitor(demos, **options):
     *_, path = demos["three-tank"]
     arr = next(a for a in derive_arrs(load_model(path / "model.json").model) if a.name == "ARR_0_2")
     record = read_csv(path / "data.csv", arr.signals)
-    monitor = HealthMonitor(arr, "az2", ExponentialDegradation(), theta_fail=1.2, dt=1.0, n_particles=50, noise_std=3e-6,
-                            gamma_bounds=(0.0, 0.01), rul_every=20, horizon=2000.0,
+    monitor = HealthMonitor(arr, "az2", ExponentialDegradation(), theta_fail=1.2, dt=1.0, n_particles=50,
+                            noise_std=3e-6, gamma_bounds=(0.0, 0.01), rul_every=20, horizon=2000.0,
                             detection={"margin": 6e-6, "persistence": 5}, **options)
     return monitor, record
 

@@ -154,7 +154,8 @@ def test_estimate_plot_mean_band_and_truth(monitored):
     ax = plotting.plot_estimate(monitored, truth=lambda t: 1.0 + (t - 1.0))
     x, lower, upper = _band_curves(ax.collections[0], 5)
     assert np.allclose(x, monitored.t)
-    assert np.allclose(lower, monitored.theta["quantiles"][:, 0]) and np.allclose(upper, monitored.theta["quantiles"][:, 2])
+    quantiles = monitored.theta["quantiles"]
+    assert np.allclose(lower, quantiles[:, 0]) and np.allclose(upper, quantiles[:, 2])
     assert len(ax.lines) == 2
     assert np.array_equal(ax.lines[0].get_ydata(), monitored.theta["mean"])
     assert np.allclose(ax.lines[1].get_ydata(), monitored.t)

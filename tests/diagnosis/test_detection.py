@@ -13,7 +13,8 @@ from diagnosis.signals import RecordError
 @pytest.fixture(scope="module")
 def rlc():
     bg = rlc_circuit()
-    record = simulate(bg, (0, 0.5), {"V": lambda t: 1.0 + 0.5 * np.sin(40 * t)}, t_eval=np.linspace(0, 0.5, 2001)).record()
+    record = simulate(bg, (0, 0.5), {"V": lambda t: 1.0 + 0.5 * np.sin(40 * t)},
+                      t_eval=np.linspace(0, 0.5, 2001)).record()
     return derive_arrs(bg), record
 
 
@@ -99,7 +100,8 @@ def test_nonlinear_uncertainty_uses_a_sound_natural_extension():
     from bondgraph import BondGraph
 
     bg = BondGraph()
-    bg.add("u", "Sf"), bg.add("j", "1"), bg.add("R", "R", value=2.0), bg.add("C", "C", value=0.5, uncertainty=(-0.2, 0.2))
+    bg.add("u", "Sf"), bg.add("j", "1"), bg.add("R", "R", value=2.0)
+    bg.add("C", "C", value=0.5, uncertainty=(-0.2, 0.2))
     bg.add("y", "Df"), bg.add("j0", "0"), bg.add("v", "De")
     for tail, head in [("u", "j0"), ("j0", "j"), ("j", "R"), ("j", "C"), ("j", "y"), ("j0", "v")]:
         bg.bond(tail, head)

@@ -30,7 +30,8 @@ def torsion_arr():
 # -- degradation ---------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("model", [LinearDegradation(process_noise=1e-3), ExponentialDegradation(process_noise=1e-3),
-                                   CustomDegradation(lambda th, g, dt: th * np.exp(g[..., 0] * dt), process_noise=1e-3)])
+                                   CustomDegradation(lambda th, g, dt: th * np.exp(g[..., 0] * dt),
+                                                     process_noise=1e-3)])
 def test_horizon_path_equals_stepping(model):
     rng = np.random.default_rng(0)
     theta = rng.uniform(0.5, 1.0, (2, 4))
@@ -253,7 +254,8 @@ def test_deterministic_linear_and_exponential_rul():
     assert exponential.samples[0, 0] == pytest.approx(np.log(0.45 / 0.005025) / 0.05, abs=0.1)
 
 
-@pytest.mark.parametrize("model", [LinearDegradation(), CustomDegradation(lambda theta, gamma, dt: theta + gamma[..., 0] * dt)])
+@pytest.mark.parametrize("model", [LinearDegradation(),
+                                   CustomDegradation(lambda theta, gamma, dt: theta + gamma[..., 0] * dt)])
 def test_crossing_time_is_interpolated_within_the_step(model):
     # theta = 1 + 0.5 t crosses 1.337 at t = 0.674, between the steps at 0.6 and 0.7; also in a later chunk
     for fail, expected in [(1.337, 0.674), (1.0 + 0.5 * 123.456, 123.456)]:
@@ -265,8 +267,8 @@ def test_crossing_time_is_interpolated_within_the_step(model):
 def test_downward_failure_and_censoring():
     theta, weights = np.array([[1.0, 1.0, 1.0]]), np.full((1, 3), 1 / 3)
     gamma = np.array([[[-0.5], [-0.25], [0.0]]])  # the last particle never degrades
-    rul = predict_rul(LinearDegradation(), theta, gamma, weights, dt=0.1, theta_fail=0.5, gamma_std=0.0, direction="down",
-                      horizon=10.0, rng=np.random.default_rng(0))
+    rul = predict_rul(LinearDegradation(), theta, gamma, weights, dt=0.1, theta_fail=0.5, gamma_std=0.0,
+                      direction="down", horizon=10.0, rng=np.random.default_rng(0))
     assert np.allclose(rul.samples[0, :2], [1.0, 2.0]) and np.isinf(rul.samples[0, 2])
     assert rul.censored_weight[0] == pytest.approx(1 / 3)
     assert rul.mean[0] == pytest.approx(1.5)  # over crossed particles, reported with the censored weight
@@ -278,7 +280,8 @@ def test_stepwise_and_closed_form_predictions_agree_in_distribution():
     theta = np.full((1, 4000), 0.05)
     gamma = rng.normal(0.05, 0.005, (1, 4000, 1))
     weights = np.full((1, 4000), 1 / 4000)
-    closed = RULPredictor(ExponentialDegradation(1e-4), dt=0.1, theta_fail=0.45, seed=1).predict(theta, gamma, weights, 0.002)
+    closed = RULPredictor(ExponentialDegradation(1e-4), dt=0.1, theta_fail=0.45, seed=1).predict(theta, gamma, weights,
+                                                                                                 0.002)
     custom = CustomDegradation(lambda th, g, dt: th * np.exp(g[..., 0] * dt), process_noise=1e-4)
     stepwise = RULPredictor(custom, dt=0.1, theta_fail=0.45, seed=2).predict(theta, gamma, weights, 0.002)
     a, b = closed.samples[np.isfinite(closed.samples)], stepwise.samples[np.isfinite(stepwise.samples)]
@@ -310,7 +313,8 @@ def test_successive_predictions_differ_but_are_reproducible():
     theta, gamma, weights = np.full((1, 200), 0.05), np.full((1, 200, 1), 0.05), np.full((1, 200), 1 / 200)
     predictor = RULPredictor(ExponentialDegradation(1e-4), dt=0.1, theta_fail=0.45, seed=7)
     first, second = predictor.predict(theta, gamma, weights, 0.01), predictor.predict(theta, gamma, weights, 0.01)
-    again = RULPredictor(ExponentialDegradation(1e-4), dt=0.1, theta_fail=0.45, seed=7).predict(theta, gamma, weights, 0.01)
+    again = RULPredictor(ExponentialDegradation(1e-4), dt=0.1, theta_fail=0.45, seed=7).predict(theta, gamma, weights,
+                                                                                                0.01)
     assert not np.array_equal(first.samples, second.samples)
     assert np.array_equal(first.samples, again.samples)
 
@@ -344,8 +348,8 @@ def test_filter_and_rul_on_the_seed_b_md_problem(torsion_arr):
     observation = observation_model(torsion_arr, "b_Md")
     compiled = compile_arr(torsion_arr)
     points = [np.array([OMEGA if str(p) == "omega_m" else 0.0]) for p in compiled.points]
-    pf = ParticleFilter(ExponentialDegradation(1e-5), observation, n_particles=500, dt=0.1, noise_std=0.01, inflation=4.0,
-                        gamma_std=0.02, adaptation=VarianceAdaptation(band=(0.03, 0.07)), seed=0)
+    pf = ParticleFilter(ExponentialDegradation(1e-5), observation, n_particles=500, dt=0.1, noise_std=0.01,
+                        inflation=4.0, gamma_std=0.02, adaptation=VarianceAdaptation(band=(0.03, 0.07)), seed=0)
     pf.initialize((B_N, 1.2 * B_N))
     rng = np.random.default_rng(0)
     predictor = RULPredictor(ExponentialDegradation(1e-5), dt=0.1, theta_fail=0.45, seed=1)
@@ -360,7 +364,8 @@ def test_filter_and_rul_on_the_seed_b_md_problem(torsion_arr):
 
 def test_two_progression_parameters_through_filter_and_rul():
     # theta_k = theta_{k-1} (1 + gamma_1 dt + gamma_2 dt^2): two random-walk progression parameters
-    model = CustomDegradation(lambda th, g, dt: th * (1 + g[..., 0] * dt + g[..., 1] * dt**2), n_gamma=2, process_noise=1e-4)
+    model = CustomDegradation(lambda th, g, dt: th * (1 + g[..., 0] * dt + g[..., 1] * dt**2), n_gamma=2,
+                              process_noise=1e-4)
     pf = ParticleFilter(model, linear_observation, n_particles=300, dt=0.1, noise_std=0.05, gamma_std=[0.01, 0.01],
                         seed=2)
     pf.initialize((1.0, 1.0))

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 from scipy import special
 
-from prognosis.identification.predictive import (PosteriorPrediction, _mixture_quantile, sample_posterior, window_log_posterior)
+from prognosis.identification.predictive import (PosteriorPrediction, _mixture_quantile, sample_posterior,
+                                                 window_log_posterior)
 
 
 def _companion(c):

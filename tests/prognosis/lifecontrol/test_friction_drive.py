@@ -11,10 +11,11 @@ from scipy import stats
 
 from bondgraph.library import friction_drive, rlc_circuit
 from prognosis import RULDistribution
-from prognosis.lifecontrol import (RULController, chebyshev_bounds, chebyshev_intervals, chebyshev_level, chebyshev_scale,
-                                   covariance_from_bounds, energy_deterioration, monte_carlo_rul, sample_gaussian)
-from prognosis.statespace import (ExtendedKalmanFilter, InnovationMonitor, StrongTracking, discretize, innovation_consistency,
-                                  whiten)
+from prognosis.lifecontrol import (RULController, chebyshev_bounds, chebyshev_intervals, chebyshev_level,
+                                   chebyshev_scale, covariance_from_bounds, energy_deterioration, monte_carlo_rul,
+                                   sample_gaussian)
+from prognosis.statespace import (ExtendedKalmanFilter, InnovationMonitor, StrongTracking, discretize,
+                                  innovation_consistency, whiten)
 from tests.scenarios import FrictionDriveRUL
 
 J1, B1, r1, alpha, r2, J2, B2 = sp.symbols("J1 B1 r1 alpha r2 J2 B2")

@@ -1,4 +1,4 @@
-"""prognosis.statespace.kalman, prognosis.statespace.bootstrap and prognosis.statespace.lookahead on a linear-Gaussian model and the three-tank system."""
+"""prognosis.statespace: kalman, bootstrap and lookahead on a linear-Gaussian model and the three-tank system."""
 
 from types import SimpleNamespace
 
