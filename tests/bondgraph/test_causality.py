@@ -60,7 +60,7 @@ def test_torsion_bar_dependent_storage_in_integral_causality():
 
 
 def test_torsion_bar_shaft_spring_stays_integral_for_diagnosis():
-    # seed 003 section 6.2: the C element remains in integral causality
+    # Jha et al. (2016), section 6.2: the C element remains in integral causality
     causality = torsion_bar_monitorable().assign_causality("derivative")
     assert causality.storage == {"J_m": "derivative", "J_Md": "derivative", "k_s": "integral", "J_Ld": "derivative"}
     assert causality.dependent_storage == ["k_s"]

@@ -1,4 +1,4 @@
-"""Validation of bond graph models (DESIGN.md, "Model contract").
+"""Validation of bond graph models (docs/design.md, "Model contract").
 
 Every check is exercised on a graph built with networkx and wrapped by
 ``BondGraph(G)`` and, where it makes sense, on the same graph built with the

@@ -1,4 +1,4 @@
-"""Issue 6: the three-tank system of seed 001 (examples/three_tank.py), diagnosis and estimation."""
+"""Issue 6: the three-tank system of Du et al. (examples/three_tank.py), diagnosis and estimation."""
 
 import json
 

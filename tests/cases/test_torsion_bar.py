@@ -1,4 +1,5 @@
-"""The main job (examples/torsion_bar.py) runs and reproduces the facts DESIGN.md states for seed 003."""
+"""The main job (examples/torsion_bar.py) runs and reproduces the facts docs/design.md states for the torsion bar of
+Jha et al. (2016)."""
 
 import json
 from pathlib import Path
@@ -20,7 +21,7 @@ def test_torsion_bar_example_reproduces_the_degradation_scenario(example, b_md):
     facts = b_md.facts
     assert facts["dependent_storage"] == ["J_Md"]
     assert facts["omega_Md_end_nominal_rad_s"] == pytest.approx(30.0, rel=1e-4)
-    # DESIGN.md: saturation in the mid-40 s, omega_Md = 3 rad/s and b_Md = 0.45 at t = 100 s
+    # docs/design.md: saturation in the mid-40 s, omega_Md = 3 rad/s and b_Md = 0.45 at t = 100 s
     assert 42.0 < facts["saturation_time_s"] < 48.0
     assert facts["omega_Md_end_degraded_rad_s"] == pytest.approx(3.0, abs=0.1)
     case = example.CASES["b-md"]

@@ -1,4 +1,4 @@
-"""ARR derivation: seed 003 eqs. (48)-(49), seed 001 tank balances, signatures, implicit relations."""
+"""ARR derivation: Jha et al. (2016), eqs. (48)-(49), the tank balances of Du et al., signatures, implicit relations."""
 
 import networkx as nx
 import pytest
@@ -141,7 +141,10 @@ def test_two_sensors_on_one_junction_give_a_measurement_arr():
 
 
 def test_signature_matrix_lists_parameters_no_arr_can_see():
-    """Default rows are every element parameter, so an unmonitorable fault shows as Mb = 0 (seed 003 table 2)."""
+    """Default rows are every element parameter, so an unmonitorable fault shows as Mb = 0.
+
+    As in Jha et al. (2016), table 2.
+    """
     import warnings
 
     from bondgraph.library import torsion_bar

@@ -1,4 +1,4 @@
-"""Prognostic metrics on hand-computed cases (seed 003 section 5; Saxena et al. 2010)."""
+"""Prognostic metrics on hand-computed cases (Jha et al. (2016), section 5; Saxena et al. 2010)."""
 
 import warnings
 

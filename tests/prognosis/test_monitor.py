@@ -1,4 +1,4 @@
-"""Health monitor (seed 003 Table V): detection, then estimation and RUL, whole record or sample by sample."""
+"""Health monitor (Jha et al. (2016), Table V): detection, then estimation and RUL, whole record or sample by sample."""
 
 import numpy as np
 import pytest
@@ -16,7 +16,7 @@ ANTIDERIVATIVES = {"omega_m": "theta_m", "omega_Ld": "theta_Ld"}  # encoder angl
 
 
 def b_md_degrading(t):
-    """b_Md,n exp(0.05 (t - 10)) from t = 10 s (seed 003 section 6.3.2)."""
+    """b_Md,n exp(0.05 (t - 10)) from t = 10 s (Jha et al. (2016), section 6.3.2)."""
     return 5.025e-3 * np.exp(0.05 * np.maximum(np.asarray(t, float) - 10.0, 0.0))
 
 

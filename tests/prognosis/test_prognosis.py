@@ -219,7 +219,7 @@ def test_rul_percentiles_keep_their_columns_without_any_prediction():
     assert MonitorResult(detection_time=0.0, rul=[one, one]).rul_percentiles(50).shape == (2, 1)
 
 
-# -- variance adaptation (Table III with the DESIGN.md sign) ---------------------------------------
+# -- variance adaptation (Table III with the sign of docs/design.md) -------------------------------
 
 def test_adaptation_shrinks_a_too_wide_random_walk_inside_the_band():
     adaptation = VarianceAdaptation(band=(0.03, 0.07), reference=0.10, gain=0.01, window=3)
@@ -344,7 +344,7 @@ def test_ctrl_c_during_parallel_predictions_reaches_only_the_caller(tmp_path):
 
 
 def test_filter_and_rul_on_the_seed_b_md_problem(torsion_arr):
-    """Seed 003 section 6.3 fault model on synthetic y (eq. 52-53): estimate and predict."""
+    """The fault model of Jha et al. (2016), section 6.3, on synthetic y (eqs. 52-53): estimate and predict."""
     observation = observation_model(torsion_arr, "b_Md")
     compiled = compile_arr(torsion_arr)
     points = [np.array([OMEGA if str(p) == "omega_m" else 0.0]) for p in compiled.points]

@@ -1,4 +1,5 @@
-"""prognosis.identification (seed 004): Kalman smoother, EM, online identification, trend detection, prediction."""
+"""prognosis.identification, the method of Gasperin et al. (2011): Kalman smoother, EM, online identification,
+trend detection, prediction."""
 
 import warnings
 
@@ -244,7 +245,10 @@ def test_em_recovers_eigenvalues_and_markov_parameters():
 
 
 def test_the_all_ones_start_of_the_seed_keeps_the_states_exchangeable():
-    """Why fit_em does not start from the seed's all-ones matrices: EM keeps the symmetry, rank stays 1."""
+    """Why fit_em does not start from the all-ones matrices of Gasperin et al. (2011).
+
+    EM keeps the symmetry, the rank stays 1.
+    """
     truth = LinearGaussianModel(A=[[0.9, 0.0], [0.0, 0.4]], B=[[1.0], [1.0]], C=[[1.0, 1.0]], D=[[0.0]],
                                 Q=0.05 * np.eye(2), R=[[0.05]])
     rng = np.random.default_rng(8)

@@ -1,7 +1,7 @@
-"""Seed 000: the friction drive (bond graph, energy deterioration, EKF pieces, Chebyshev bounds,
-innovation consistency, Monte Carlo RUL, RUL control); examples/friction_drive.py runs in tests/cases.
+"""The friction drive of Rodriguez Obando et al. (2021): bond graph, energy deterioration, EKF pieces, Chebyshev
+bounds, innovation consistency, Monte Carlo RUL, RUL control (examples/friction_drive.py runs in tests/cases).
 
-Expected values come from the seed's equations written by hand, closed forms or brute force.
+Expected values come from the paper's equations written by hand, closed forms or brute force.
 """
 
 import numpy as np

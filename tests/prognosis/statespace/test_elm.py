@@ -1,4 +1,4 @@
-"""ROS-ELM (seed 001 eqs. 47-56) and the per-variable series forecaster (seed 001 section 5)."""
+"""ROS-ELM (Du et al., eqs. 47-56) and the per-variable series forecaster (Du et al., section 5)."""
 
 import numpy as np
 import pytest
@@ -51,7 +51,7 @@ def test_online_rows_and_blocks_equal_batch_ridge(regression_data, one_output):
 
 def test_ridge_formula_with_fewer_samples_than_nodes():
     rng = np.random.default_rng(0)
-    X = rng.uniform(-1, 1, size=(47, 3))  # the seed's N0 = 47 pairs for L = 50 nodes
+    X = rng.uniform(-1, 1, size=(47, 3))  # the N0 = 47 pairs of Du et al. for L = 50 nodes
     T = np.sin(X.sum(axis=1))
     model = ROSELM(3, 50, 1e-3, seed=2).fit(X, T)
     beta_ref, K_ref, H = ridge_reference(model, X, T, 1e-3)

@@ -61,7 +61,7 @@ def simulate(steps, seed, *, ramp=0.0, q=Q, noise=True):
 def kalman(z, u, x=X0, p=P0, q=Q, rho=None):
     """The textbook Kalman filter, means and covariances after each update.
 
-    With ``rho``, Zhou's strong tracking filter (seed 001 eqs. 7-11, beta = 1): the propagated part of the
+    With ``rho``, Zhou's strong tracking filter (Du et al., eqs. 7-11, beta = 1): the propagated part of the
     prior covariance is multiplied by ``lambda_k = max(1, tr N_k / tr M_k)``; the factors are returned too.
     """
     x, p = np.array(x, float), np.array(p, float)
@@ -234,7 +234,7 @@ def tank():
 
 
 def test_stsckf_tracks_the_az2_ramp_of_eq61_better_than_sckf(tank):
-    """Seed 001 section 6: az2 follows eq. (61), both filters assume az2_k = az2_{k-1} + d, std(d) = 1e-3.
+    """Du et al., section 6: az2 follows eq. (61), both filters assume az2_k = az2_{k-1} + d, std(d) = 1e-3.
 
     Measured az2 RMSE over k = 101..200 (seeds 0-5): SCKF 0.200-0.204, STSCKF 0.042-0.045; the fading
     factor reaches 8-21.

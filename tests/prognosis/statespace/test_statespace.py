@@ -1,4 +1,4 @@
-"""prognosis.statespace: the discrete three-tank model of seed 001 (eqs. 58-59, 62), Jacobians, errors."""
+"""prognosis.statespace: the discrete three-tank model of Du et al. (eqs. 58-59, 62), Jacobians, errors."""
 
 import numpy as np
 import pytest
@@ -8,7 +8,7 @@ from scipy.integrate import solve_ivp
 from bondgraph.library import three_tank
 from prognosis.statespace import discretize
 
-# Seed 001 section 6.1
+# Du et al., section 6.1
 A_S, S_N, G = 0.0154, 5e-5, 9.81
 AZ = {"az1": 0.5, "az2": 0.6, "az3": 0.5}
 Q_IN = 4.5e-5
