@@ -17,20 +17,21 @@ Examples
 >>> from types import SimpleNamespace
 >>> x, a = sp.symbols("x a")
 >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
->>> model = discretize(decay, dt=1.0, augment=["a"])
+>>> model = discretize(decay, dt=1.0, augment=["a"])   # the decay rate a becomes a state
+>>> model.states
+('x', 'a')
 >>> ekf = ExtendedKalmanFilter(model, [1.0, 0.2], np.diag([1e-4, 1e-2]), np.diag([1e-8, 1e-6]), [[1e-6]])
->>> truth = 1.0
->>> for k in range(60):
-...     truth *= 0.9
-...     _ = ekf.step([truth])
->>> round(float(ekf.mean[1]), 2)
+>>> for k in range(1, 61):
+...     _ = ekf.step([0.9**k])
+>>> round(float(ekf.mean[1]), 2)   # Euler step: x_{k+1} = (1 - a) x_k = 0.9 x_k
 0.1
 """
 
 from .bootstrap import BootstrapParticleFilter
 from .consistency import ConsistencyReport, InnovationMonitor, innovation_consistency, whiten
 from .elm import ROSELM, SeriesForecaster
-from .kalman import CubatureKalmanFilter, ExtendedKalmanFilter, FilterWarning, Innovation, StrongTracking, UnscentedKalmanFilter
+from .kalman import (CubatureKalmanFilter, ExtendedKalmanFilter, FilterWarning, Innovation, StrongTracking,
+                     UnscentedKalmanFilter)
 from .lookahead import LookAhead, look_ahead, predict_ahead
 from .model import DiscreteModel, discretize
 
