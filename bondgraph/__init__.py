@@ -10,7 +10,8 @@ from .causality import Causality, CausalIssue, assign_causality
 from .control import PIController
 from .equations import AlgebraicLoopError, StateEquations, causal_equations, model_equations, state_equations
 from .errors import CausalityError, EquationError, LawError, ModelError, SimulationError
-from .model import BondGraph, Bond, Element, signal_function
+from .model import BondGraph
+from .structure import Bond, Element, signal_function
 from .simulation import SimulationResult, simulate
 from .drawing import to_svg, to_tikz
 from .io import load_model, to_json

@@ -43,7 +43,7 @@ from bondgraph import BondGraph
 from bondgraph import elements as el
 from bondgraph.causality import diagnosis_causality
 from bondgraph.equations import causal_equations, constitutive_law, substitute
-from bondgraph.model import T, Structure, signal_function
+from bondgraph.structure import T, Structure, signal_function
 
 
 class ARRWarning(UserWarning):
