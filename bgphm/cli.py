@@ -32,14 +32,13 @@ import numpy as np
 
 from bgphm.errors import UsageError
 from bgphm.files import csv_text
-from bondgraph.errors import CausalityError, EquationError, ModelError, SimulationError
+from bondgraph.errors import PHMError
 from bondgraph.io import ModelSpec, load_model
 from diagnosis.signals import Record, RecordError, RecordWarning, gaps, read_csv
 
 __all__ = ["main"]
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
-BAD_INPUT = (ModelError, RecordError, SimulationError, CausalityError, EquationError)
 
 
 class Progress:
@@ -598,7 +597,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             if value is not None and not (math.isfinite(value) and value > 0):
                 raise UsageError(f"--{option} must be a positive number of seconds, got {value}")
         return args.run(args, progress)
-    except (UsageError, *BAD_INPUT) as exc:
+    except PHMError as exc:  # bad usage or bad input: a model, a record, equations, a simulation
         print(f"bgphm: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:

@@ -7,6 +7,8 @@
 
 from __future__ import annotations
 
+from bondgraph.errors import PHMError
 
-class UsageError(ValueError):
+
+class UsageError(PHMError, ValueError):
     """Bad arguments or input found after parsing (exit code 2)."""
