@@ -33,6 +33,8 @@ import sympy as sp
 
 from bondgraph import BondGraph
 from bondgraph import drawing
+from bondgraph.causality import diagnosis_causality
+from bondgraph.errors import ModelError
 
 from .arrs import ARR, ARRWarning, derive_arrs
 from .deltas import latex, mathml
@@ -113,10 +115,6 @@ def _drawings(bg: BondGraph) -> list:
 
 def _causality(bg: BondGraph, preferred: str):
     """The assignment the toolkit uses: integral for simulation, derivative with dualized sensors for ARRs."""
-    from bondgraph.errors import ModelError
-
-    from bondgraph.causality import diagnosis_causality
-
     try:
         if preferred == "derivative":
             return diagnosis_causality(bg)
