@@ -31,7 +31,6 @@ import numpy as np
 
 from bondgraph.library import torsion_bar_monitorable
 from diagnosis import derive_arrs
-from diagnosis.residuals import compile_arr
 from prognosis.degradation import ExponentialDegradation
 from prognosis.particle_filter import ParticleFilter, VarianceAdaptation
 from prognosis.observation import observation_model
@@ -50,7 +49,7 @@ def measurements(steps: int, dt: float, seed: int) -> tuple[np.ndarray, np.ndarr
 def ours(steps: int, particles: int, dt: float, seed: int, workers: int = 1) -> dict:
     arr = next(a for a in derive_arrs(torsion_bar_monitorable()) if a.junction == "1_1")
     observation = observation_model(arr, "b_Md")
-    compiled = compile_arr(arr)
+    compiled = arr.compiled
     points = [np.array([OMEGA_M if str(p) == "omega_m" else 0.0]) for p in compiled.points]
     model = ExponentialDegradation(process_noise=1e-5)
     pf = ParticleFilter(model, observation, n_particles=particles, dt=dt, noise_std=SIGMA_W, inflation=4.0,

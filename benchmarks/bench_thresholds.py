@@ -25,7 +25,7 @@ import sympy as sp
 
 from bondgraph.library import torsion_bar_monitorable
 from diagnosis import derive_arrs
-from diagnosis.residuals import compile_arr, read_record
+from diagnosis.residuals import read_record
 from diagnosis.thresholds import interval_threshold
 
 
@@ -64,7 +64,7 @@ def main() -> None:
     arr.evaluate(record)  # synthetic signals are not a physical trajectory: only the time counts
     total = time.perf_counter() - start
 
-    compiled = compile_arr(arr)
+    compiled = arr.compiled
     points = compiled.point_values(read_record(arr, record))
     start = time.perf_counter()
     interval_threshold(compiled, points)

@@ -1,10 +1,11 @@
 """``bgphm demo``: the whole chain on a built-in example, through the same commands a user runs.
 
 A demo simulates the example with one parameter degrading exponentially from a known time, adds sensor
-noise, writes the model and the record (``data.csv``) to the output directory, then runs ``bgphm arr``,
-``bgphm detect`` and ``bgphm prognose`` on those files, printing each command so that it can be rerun
-by hand with the same results, and writes ``truth.json`` with the degradation it injected and the true
-end of life to set beside the prediction.
+noise, writes the model and the record (``data.csv``) to the output directory with ``truth.json``, the
+degradation it injected and the true end of life to set beside the prediction.  :func:`prepare_demo`
+does that and returns the ``bgphm arr``, ``bgphm detect`` and ``bgphm prognose`` command lines on
+those files; the CLI's ``demo`` command runs them, printing each one so that it can be rerun by hand
+with the same results.
 
 * ``dc-motor``: rotor friction ``b`` x20 from t = 1 s, at 12 V (ARR of the mechanical junction).
 * ``torsion-bar``: load-disk bearing friction ``b_Ld`` under the PI speed loop, at seed 003's rate
@@ -33,16 +34,19 @@ from __future__ import annotations
 import json
 import math
 import numbers
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from bgphm.errors import UsageError
+from bgphm.files import csv_text
 from bondgraph.io import to_json
 from bondgraph.library import Example, example
 from diagnosis.signals import add_noise, as_record
 
-__all__ = ["Demo", "DEMOS", "run_demo"]
+__all__ = ["Demo", "DEMOS", "DemoPlan", "prepare_demo"]
 
 
 @dataclass(frozen=True)
@@ -95,13 +99,57 @@ DEMOS = {
 }
 
 
-def run_demo(name: str, out: Path, progress, *, seed: int = 0) -> int:
-    """Run the demo ``name`` into ``out``; returns the exit code of the last command.
+@dataclass(frozen=True)
+class DemoPlan:
+    """A demo ready to run: its files are written, its ``bgphm`` command lines are listed.
 
-    Raises :class:`bgphm.cli.UsageError` for an unknown demo, naming the available ones.
+    Attributes
+    ----------
+    demo : Demo
+        The scenario.
+    commands : list of list of str
+        The ``bgphm`` argument lists to run in order (without ``bgphm`` and its global options).
+    truth : dict
+        What ``truth.json`` holds: the injected degradation and the true end of life ``eol``.
+    out : Path
+        The output directory; ``prognose`` writes ``out / "prognose" / "prognosis.json"``.
     """
-    from bgphm.cli import UsageError, main
 
+    demo: Demo
+    commands: list
+    truth: dict
+    out: Path
+
+    def truth_line(self) -> str | None:
+        """The true RUL and candidate value at the last prediction of ``prognose``; None without an alarm.
+
+        Read after the commands ran, from the ``prognosis.json`` they wrote.
+        """
+        summary = json.loads((self.out / "prognose" / "prognosis.json").read_text())
+        if summary.get("detection_time") is None:
+            return None
+        t = summary["last"]["t"]
+        theta = self.demo.theta(self.truth["nominal"])(t)
+        return (f"truth: at t = {t:g} s the RUL is {self.truth['eol'] - t:.4g} s and {self.demo.candidate} = "
+                f"{theta:.4g}")
+
+
+def prepare_demo(name: str, out: Path, progress: Callable[[str], None], *, seed: int = 0) -> DemoPlan:
+    """Write the model, the record and ``truth.json`` of the demo ``name`` into ``out``; return its commands.
+
+    ``progress`` receives a progress line (the CLI prints it on stderr unless ``--quiet``).
+    Raises :class:`~bgphm.errors.UsageError` for an unknown demo, naming the available ones.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> out = pathlib.Path(tempfile.mkdtemp())
+    >>> plan = prepare_demo("three-tank", out, progress=lambda line: None)  # doctest: +ELLIPSIS
+    wrote ...model.json, ...data.csv and ...truth.json (true end of life 546.6 s)
+    >>> [command[0] for command in plan.commands], plan.truth["candidate"]
+    (['arr', 'detect', 'prognose'], 'az2')
+    >>> import shutil; shutil.rmtree(out)
+    """
     if name not in DEMOS:
         raise UsageError(f"unknown demo {name!r} (available: {', '.join(DEMOS)})")
     demo = DEMOS[name]
@@ -117,23 +165,12 @@ def run_demo(name: str, out: Path, progress, *, seed: int = 0) -> int:
              "noise_std": demo.noise, "seed": seed}
     (out / "truth.json").write_text(json.dumps(truth, indent=2))
     print(f"wrote {model_path}, {data_path} and {out / 'truth.json'} (true end of life {truth['eol']:.4g} s)")
-    quiet = ["--quiet"] if progress.quiet else []
-    for command in _commands(demo, model_path, data_path, truth["failure_value"], out, seed):
-        print("$ bgphm " + " ".join(command))
-        code = main(quiet + command)
-        if code:
-            return code
-    summary = json.loads((out / "prognose" / "prognosis.json").read_text())
-    if summary.get("detection_time") is not None:
-        last = summary["last"]
-        print(f"truth: at t = {last['t']:g} s the RUL is {truth['eol'] - last['t']:.4g} s and {demo.candidate} = "
-              f"{demo.theta(nominal)(last['t']):.4g}")
-    return 0
+    commands = _commands(demo, model_path, data_path, truth["failure_value"], out, seed)
+    return DemoPlan(demo, commands, truth, out)
 
 
 def _write_record(demo: Demo, ex: Example, nominal: float, path: Path, seed: int) -> Path:
     """Simulate the degradation, add the sensor noise and write the CSV the commands read."""
-    from bgphm.cli import _csv_text
     from bondgraph.simulation import simulate  # scipy's solvers: not needed to build the CLI's parser
 
     t = np.linspace(0.0, demo.t_end, demo.samples)
@@ -141,7 +178,7 @@ def _write_record(demo: Demo, ex: Example, nominal: float, path: Path, seed: int
                       parameters={demo.candidate: demo.theta(nominal)}, t_eval=t,
                       max_step=demo.t_end / demo.samples * 5)
     record = add_noise(as_record(result.record(), name=demo.example), demo.noise, seed=seed)
-    path.write_text(_csv_text({"t": record.t, **record.columns}))
+    path.write_text(csv_text({"t": record.t, **record.columns}))
     return path
 
 
@@ -187,7 +224,8 @@ def _commands(demo: Demo, model_path: Path, data_path: Path, fail: float, out: P
         ["arr", model, "--format", "html", "--out", str(out / "report.html")],
         ["detect", model, data, *detection, "--out", str(out / "detect")],
         ["prognose", model, data, "--candidate", demo.candidate, "--degradation", "exponential",
-         "--fail", f"{fail:.6g}", *detection, "--particles", str(demo.particles), "--seed", str(seed), "--out", str(out / "prognose")],
+         "--fail", f"{fail:.6g}", *detection, "--particles", str(demo.particles), "--seed", str(seed),
+         "--out", str(out / "prognose")],
     ]
 
 

@@ -25,7 +25,8 @@ from scipy.integrate import solve_ivp
 from ._optional import pandas_for
 from .equations import StateEquations
 from .errors import SimulationError
-from .model import T, BondGraph, signal_function
+from .model import BondGraph
+from .structure import T, signal_function
 
 
 @dataclass

@@ -1,22 +1,19 @@
 """Structural checks of a bond graph: bonds per element, detectors, names.
 
 Node-local checks (kind, value, uncertainty, law) happen when an element is
-read (:func:`bondgraph.model._read_element`); this module checks how elements
-are connected and that names are used consistently across the model.
+read (:meth:`bondgraph.model.BondGraph.add` and ``structure``); this module checks
+how elements are connected and that names are used consistently across the model.
 """
 
 from __future__ import annotations
 
 from collections.abc import Hashable, Mapping
-from typing import TYPE_CHECKING
 
 import sympy as sp
 
 from . import elements as el
 from .errors import ModelError
-
-if TYPE_CHECKING:  # model imports this module
-    from .model import Bond, Element
+from .structure import Bond, Element
 
 
 def check_model(elements: Mapping[Hashable, Element], bonds: list[Bond]) -> dict[str, float]:

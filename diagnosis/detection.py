@@ -36,7 +36,7 @@ import numpy as np
 
 from bondgraph._optional import pandas_for
 
-from .residuals import compile_arr, read_record
+from .residuals import read_record
 from .thresholds import bglft_threshold, interval_threshold
 
 
@@ -181,7 +181,7 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     if not np.isfinite(margin) or margin < 0:
         raise ValueError(f"noise margin must be a finite non-negative number, got {margin}")
     data = read_record(arr, record, extra=tuple((antiderivatives or {}).values()))
-    compiled = compile_arr(arr)
+    compiled = arr.compiled
     points = compiled.point_values(data, method=method, window=window, polyorder=polyorder,
                                    exact=exact_derivatives, antiderivatives=antiderivatives)
     residual = compiled.residual(points)

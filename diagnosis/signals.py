@@ -78,6 +78,8 @@ from numpy.typing import ArrayLike
 from scipy.integrate import cumulative_trapezoid
 from scipy.signal import savgol_filter
 
+from bondgraph.errors import PHMError
+
 __all__ = [
     "Record",
     "RecordError",
@@ -95,7 +97,7 @@ METHODS = ("savgol", "central", "exact")
 UNIFORM_RTOL = 1e-6
 
 
-class RecordError(ValueError):
+class RecordError(PHMError, ValueError):
     """Bad recorded data or estimator settings; the message names the column or signal."""
 
 
