@@ -1,4 +1,4 @@
-"""Speed of estimation and RUL prediction on the torsion-bar fault model (seed 003 section 6.3).
+"""Speed of estimation and RUL prediction on the torsion-bar fault model (Jha et al. (2016), section 6.3).
 
 b_Md degrades as b_Md,n exp(0.05 (t - 10)); the filter (N = 500, dt = 0.1 s)
 runs 900 steps from t = 10 s to 100 s on y = (b_Md - b_Md,n)(-omega_m / k_belt^2)

@@ -1,4 +1,4 @@
-"""Throughput of residual and threshold evaluation on the torsion-bar ARR (seed 003 eq. 48-49).
+"""Throughput of residual and threshold evaluation on the torsion-bar ARR (Jha et al. (2016), eqs. 48-49).
 
 Evaluates ARR_1_1 of the torsion bar's monitorable part over a record of
 10^6 samples: nominal residual r_n (with Savitzky-Golay derivatives and the

@@ -8,10 +8,10 @@ those files; the CLI's ``demo`` command runs them, printing each one so that it 
 with the same results.
 
 * ``dc-motor``: rotor friction ``b`` x20 from t = 1 s, at 12 V (ARR of the mechanical junction).
-* ``torsion-bar``: load-disk bearing friction ``b_Ld`` under the PI speed loop, at seed 003's rate
+* ``torsion-bar``: load-disk bearing friction ``b_Ld`` under the PI speed loop, at the rate of Jha et al. (2016)
   (0.05 1/s from t = 10 s), failing at 90 x nominal at t = 100 s (ARR of the load disk, ``1_2``).
 * ``three-tank``: outlet valve ``az2`` of tank 2 opening up (erosion) at 2e-3 1/s from t = 200 s,
-  failing at 2 x nominal (ARR of tank 2, ``0_2``), sampled every second as in seed 001.
+  failing at 2 x nominal (ARR of tank 2, ``0_2``), sampled every second as in Du et al. (n.d.).
 
 The model file is JSON (data, no code) when every input of the example is a number.  The torsion
 bar's voltage comes from a PI speed loop, which JSON cannot hold: that demo writes ``model.py``,
@@ -19,12 +19,12 @@ which rebuilds the library example with its controller, so that ``bgphm simulate
 the nominal closed-loop run.  ``detect`` and ``prognose`` take every signal from the record and
 nothing from the model's inputs, so the file type does not change their results.
 
-Torsion bar.  Seed 003 degrades the motor-disk friction ``b_Md``; without a current sensor no ARR of
-the complete torsion bar contains it (the seed measures the motor torque as an extra input), so the
-demo degrades the bearing friction its ARR does see, with the seed's onset, rate and end of life.
+Torsion bar.  Jha et al. (2016) degrade the motor-disk friction ``b_Md``; without a current sensor no ARR of
+the complete torsion bar contains it (the paper measures the motor torque as an extra input), so the
+demo degrades the bearing friction its ARR does see, with the paper's onset, rate and end of life.
 That ARR integrates the shaft's twist rate from the two speeds, and the CLI has no encoder angles
 to take that integral from: the record is sampled at 1 kHz (at 100 Hz the trapezoidal rule misses
-2.8 mrad of twist in the start-up, a 5 mN.m offset) with 1e-3 rad/s speed noise.  With the seed's
+2.8 mrad of twist in the start-up, a 5 mN.m offset) with 1e-3 rad/s speed noise.  With the paper's
 0.01 rad/s, the integrated noise (about 5 mN.m over the record) and a margin ten times wider hide
 the fault until t = 65-70 s; with 1e-3 rad/s the alarm comes at t = 30-36 s, b_Ld at 3-4 x nominal.
 """
@@ -89,10 +89,10 @@ DEMOS = {
     "dc-motor": Demo("dc-motor", "b", rate=0.8, onset=1.0, fail_factor=20.0, t_end=4.0, samples=4001,
                      noise={"i": 0.01, "omega": 0.5}, calibrate=0.9,
                      description="rotor friction b x20 at 12 V"),
-    # seed 003's rate and onset; b_Ld fails at 90 x nominal at t = 100 s (b_Md at 0.45 is 89.6 x nominal)
+    # the rate and onset of Jha et al. (2016); b_Ld fails at 90 x nominal at t = 100 s (b_Md at 0.45 is 89.6 x nominal)
     "torsion-bar": Demo("torsion-bar", "b_Ld", rate=0.05, onset=10.0, fail_factor=90.0, t_end=90.0, samples=90001,
                         noise={"omega_m": 1e-3, "omega_Ld": 1e-3}, calibrate=9.5, particles=200,
-                        description="load-disk bearing friction b_Ld x90 under the PI speed loop (seed 003's rate)"),
+                        description="load-disk bearing friction b_Ld x90, PI speed loop, rate of Jha et al. (2016)"),
     "three-tank": Demo("three-tank", "az2", rate=2e-3, onset=200.0, fail_factor=2.0, t_end=500.0, samples=501,
                        noise={"h1": 2e-4, "h2": 2e-4, "h3": 2e-4}, calibrate=190.0, particles=500,
                        description="outlet valve az2 of tank 2 opening up x2 (erosion)"),

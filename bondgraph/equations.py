@@ -5,7 +5,7 @@ Variables
 ---------
 Each power bond with label ``k`` carries an effort ``e_k`` and a flow ``f_k``
 (sympy Symbols).  Energy variables of storage elements are functions of time,
-``q_<C>(t)`` and ``p_<I>(t)``; signals are ``name(t)`` (DESIGN.md, ARR
+``q_<C>(t)`` and ``p_<I>(t)``; signals are ``name(t)`` (docs/design.md, ARR
 contract); parameters are Symbols named after ``param``.
 
 Sign conventions: power flows along the bond direction.  A one-port's own flow
@@ -531,7 +531,7 @@ class StateEquations:
     def power(self, element: Hashable) -> sp.Expr:
         """Power flowing into one-port ``element``, ``sum_k s_k e_k f_k``, in states and inputs.
 
-        For an R element this is the power it dissipates (seed 000 eq. 6: ``P_c = F_c v``).
+        For an R element this is the power it dissipates (Rodriguez Obando et al. (2021), eq. 6: ``P_c = F_c v``).
 
         >>> from bondgraph.library import rlc_circuit
         >>> rlc_circuit().state_equations().power("R")

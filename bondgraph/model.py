@@ -1,6 +1,6 @@
 """The bond graph model: a networkx.DiGraph wrapped with a small DSL and validation.
 
-A bond graph is a ``networkx.DiGraph`` (model contract in DESIGN.md): node
+A bond graph is a ``networkx.DiGraph`` (model contract in docs/design.md): node
 attribute ``kind``; ``param``, ``value``, ``uncertainty``, ``law`` on
 parametric elements; ``signal`` on sources and detectors; an edge ``u -> v`` is
 a bond whose direction is the power half-arrow, and edges into De/Df are signal
@@ -55,7 +55,7 @@ from .validation import check_model
 
 
 class BondGraph:
-    """A bond graph model following the DESIGN.md contract.
+    """A bond graph model following the model contract of docs/design.md.
 
     Parameters
     ----------

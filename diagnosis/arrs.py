@@ -1,6 +1,6 @@
 """Interval-valued analytical redundancy relations (I-ARRs) from a bond graph.
 
-Seed 003 section 2.1 (after Samantaray, Djeziri and Ould Bouamama's BG-LFT):
+Jha et al. (2016), section 2.1 (after Samantaray, Djeziri and Ould Bouamama's BG-LFT):
 
 1. preferred derivative causality, detectors dualized (De -> SSe, Df -> SSf);
 2. one candidate ARR per junction carrying a dualized detector: its power
@@ -10,7 +10,7 @@ Seed 003 section 2.1 (after Samantaray, Djeziri and Ould Bouamama's BG-LFT):
 3. unknown efforts and flows eliminated along causal paths back to inputs,
    measured signals and their derivatives; storage left in integral causality
    with a known input becomes an integral from the start of the record
-   (seed 003 eq. 45, the shaft spring; the energy variable is taken as zero at
+   (Jha et al. (2016), eq. 45, the shaft spring; the energy variable is taken as zero at
    the start of the record);
 4. the uncertain parameters split each ARR into a nominal part ``r_n``
    (Psi_1, nominal values) and an uncertain part Psi_2 in the multiplicative
@@ -155,7 +155,7 @@ def derive_arrs(bg: BondGraph) -> list[ARR]:
     Parameters
     ----------
     bg : BondGraph
-        A model following the DESIGN.md contract, with De/Df detectors.
+        A model following the model contract of docs/design.md, with De/Df detectors.
 
     Returns
     -------

@@ -1,6 +1,6 @@
 """Robust thresholds: the range of Psi_2 over the uncertainty box, per sample.
 
-Interval threshold (seed 003 eqs. 16-20, Table I): ``[B_lo(t), B_hi(t)]``, the
+Interval threshold (Jha et al. (2016), eqs. 16-20, Table I): ``[B_lo(t), B_hi(t)]``, the
 range of the uncertain part Psi_2 when every ``delta_p`` ranges over its
 interval, computed by outward-rounded interval arithmetic
 (:mod:`diagnosis.intervals`).  When Psi_2 is linear in each delta with no

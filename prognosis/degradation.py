@@ -1,10 +1,10 @@
-"""Degradation models of the prognostic candidate theta (seed 003 section 3.1).
+"""Degradation models of the prognostic candidate theta (Jha et al. (2016), section 3.1).
 
 A model maps ``theta_{k-1}`` and the degradation progression parameters
 ``gamma_{k-1}`` to ``theta_k``, plus additive process noise ``v ~ N(0, s^2)``:
 
-* :class:`LinearDegradation` ``theta_k = theta_{k-1} + gamma dt + v``           (seed 003 eq. 60)
-* :class:`ExponentialDegradation` ``theta_k = theta_{k-1} exp(gamma dt) + v``        (seed 003 eq. 53)
+* :class:`LinearDegradation` ``theta_k = theta_{k-1} + gamma dt + v``           (Jha et al. (2016), eq. 60)
+* :class:`ExponentialDegradation` ``theta_k = theta_{k-1} exp(gamma dt) + v``        (Jha et al. (2016), eq. 53)
 * :class:`CustomDegradation` ``theta_k = g(theta_{k-1}, gamma, dt) + v``
 
 Arrays are vectorized over assets and particles: ``theta`` has shape

@@ -1,4 +1,4 @@
-"""Health monitoring of one prognostic candidate (seed 003 Table V).
+"""Health monitoring of one prognostic candidate (Jha et al. (2016), Table V).
 
 Detection with the candidate's I-ARR (:mod:`diagnosis`) runs until the first
 alarm; the particle filter then starts from the candidate's uncertainty
@@ -110,11 +110,11 @@ class MonitorResult:
 
     def metrics(self, theta_true, gamma_true, eol: float, *, after: float | None = None,
                 alpha: float = 0.1, beta: float = 0.5) -> dict:
-        """Seed 003 section 5 metrics against the truth.
+        """The metrics of Jha et al. (2016), section 5, against the truth.
 
         ``theta_true``, ``gamma_true``: callables of t; ``eol``: true end of
         life (s).  RA, RMAD of the RUL and the alpha-lambda pass rate use the
-        predictions made at or after ``after`` (the seed uses t = 52 s) and
+        predictions made at or after ``after`` (Jha et al. (2016) use t = 52 s) and
         before the end of life (the true RUL must be positive).  The
         prognostic horizon is ``eol - t_j`` from the first prediction after
         which at least ``beta`` of the RUL mass stays within ``RUL* -+ alpha

@@ -1,4 +1,4 @@
-"""Observation equation from an ARR's nominal part (seed 003 section 3.2).
+"""Observation equation from an ARR's nominal part (Jha et al. (2016), section 3.2).
 
 With the prognostic candidate theta^d free and every other parameter at its
 nominal value, the balance of the junction holds for the true system:

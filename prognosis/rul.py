@@ -1,4 +1,4 @@
-"""Remaining useful life by propagating the particles to the failure threshold (seed 003 Table IV).
+"""Remaining useful life by propagating the particles to the failure threshold (Jha et al. (2016), Table IV).
 
 Each particle keeps its weight and is propagated with its degradation model
 and the random walk of its gamma until theta crosses ``theta_fail`` (upwards or

@@ -19,7 +19,7 @@ class IdentificationWarning(RuntimeWarning):
 
 @dataclass(frozen=True, eq=False, repr=False)
 class LinearGaussianModel:
-    """``x_{t+1} = A x_t + B u_t + w_t``, ``y_t = C x_t + D u_t + v_t`` (seed 004 eqs. 2-3).
+    """``x_{t+1} = A x_t + B u_t + w_t``, ``y_t = C x_t + D u_t + v_t`` (Gasperin et al. (2011), eqs. 2-3).
 
     ``[w_t; v_t] ~ N(0, [[Q, S], [S^T, R]])`` independently over ``t`` and of ``x_1 ~ N(mu1, P1)``.
 

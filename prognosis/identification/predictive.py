@@ -1,4 +1,4 @@
-"""Long-term feature prediction with the uncertainty of the identified parameters (seed 004 section 5.2).
+"""Long-term feature prediction with the uncertainty of the identified parameters (Gasperin et al. (2011), section 5.2).
 
 :func:`~prognosis.identification.predict_feature` propagates the noises of one identified model.  Over a
 horizon of a few window lengths the error of the parameters dominates: a pole error of 0.005 grows to a

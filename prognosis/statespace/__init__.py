@@ -5,7 +5,7 @@ sympy Jacobians), which every estimator here tracks through one interface (``pre
 ``update``, ``step``, ``mean``, ``covariance``, ``copy``):
 
 * :mod:`.kalman`: extended, unscented and square-root cubature Kalman filters, each with the
-  strong-tracking fading factor of Du et al. (section 3);
+  strong-tracking fading factor of Du et al. (n.d.), section 3;
 * :mod:`.bootstrap`: a bootstrap (SIR) particle filter with the same interface;
 * :mod:`.consistency`: innovation consistency tests and an online supervisor of the innovations;
 * :mod:`.lookahead`: n-step-ahead prediction by filtering forecast measurements;

@@ -1,8 +1,8 @@
 """Bootstrap (SIR) particle filter on a discrete state-space model.
 
-The particle filter of seed 003 (:mod:`prognosis.particle_filter`) runs on an ARR's
+The particle filter of Jha et al. (2016) (:mod:`prognosis.particle_filter`) runs on an ARR's
 residual; this one runs on the augmented state-space model of
-:mod:`prognosis.statespace` (seed 001 eqs. 3-4, 62-63), with the interface of
+:mod:`prognosis.statespace` (Du et al. (n.d.), eqs. 3-4, 62-63), with the interface of
 the Kalman filters in :mod:`prognosis.statespace.kalman` so that the two families can be
 compared on the same data (Gordon, Salmond and Smith 1993):
 

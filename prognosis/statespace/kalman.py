@@ -16,14 +16,14 @@ Filters
 :class:`UnscentedKalmanFilter`
     Scaled unscented transform (alpha, beta, kappa), covariance form.
 :class:`CubatureKalmanFilter`
-    Square-root cubature Kalman filter (Arasaratnam and Haykin 2009; seed 001
+    Square-root cubature Kalman filter (Arasaratnam and Haykin 2009; Du et al. (n.d.),
     eqs. 21-26, 37-46): ``2n`` points ``x + S xi_i``, ``xi_i = +-sqrt(n) e_i``,
     equal weights, and the covariance carried as a lower-triangular factor
     ``S`` (``P = S S^T``) updated by QR triangularization only, so that it
     stays positive semi-definite by construction.
 
-Strong tracking (seed 001 section 3; Zhou et al. 1990)
-------------------------------------------------------
+Strong tracking (Du et al. (n.d.), section 3; Zhou et al. 1990)
+---------------------------------------------------------------
 Pass ``fading=StrongTracking()`` to any of them.  At the measurement update
 the predicted covariance's propagated part is inflated by a suboptimal fading
 factor ``lambda_k >= 1`` (eq. 7, 36)::
@@ -124,15 +124,15 @@ class Innovation:
 
 @dataclass
 class StrongTracking:
-    """Suboptimal fading factor of the strong tracking filter (seed 001 eqs. 7-10, 17-20).
+    """Suboptimal fading factor of the strong tracking filter (Du et al. (n.d.), eqs. 7-10, 17-20).
 
     Parameters
     ----------
     forgetting : float
-        ``rho`` of eq. (10), in (0, 1]: weight of the past in ``V_k``.  The seed
+        ``rho`` of eq. (10), in (0, 1]: weight of the past in ``V_k``.  The paper
         does not give it; 0.95 is the value of Zhou et al.
     softening : float
-        ``beta >= 1`` multiplying ``R_k`` in ``N_k`` (1 in the seed); a larger value
+        ``beta >= 1`` multiplying ``R_k`` in ``N_k`` (1 in the paper); a larger value
         makes the filter fade less on measurement noise.
     max_factor : float
         Upper bound on ``lambda_k`` (no bound by default).
@@ -228,7 +228,7 @@ class _GaussianFilter:
     def reinitialize(self, mean=None, covariance=None) -> None:
         """Restart from a new estimate and/or covariance ``P_0`` (e.g. wider bounds after a model change).
 
-        Strong tracking, if any, starts afresh.  Seed 000 section 6.1 restarts its EKF
+        Strong tracking, if any, starts afresh.  Rodriguez Obando et al. (2021), section 6.1, restart their EKF
         this way when the estimated ``m`` stops being consistent with ``dm/dt = 0``.
         """
         n = self.model.n_states
@@ -276,7 +276,7 @@ class ExtendedKalmanFilter(_GaussianFilter):
     mean, covariance : initial estimate ``x_0|0`` (n,) and ``P_0|0`` (n, n)
     process_noise, measurement_noise : Q (n, n) and R (m, m)
     fading : StrongTracking, optional
-        Strong tracking EKF (Zhou et al. 1990; seed 001 eqs. 7-12).
+        Strong tracking EKF (Zhou et al. 1990; Du et al. (n.d.), eqs. 7-12).
 
     Examples
     --------
@@ -432,7 +432,7 @@ class UnscentedKalmanFilter(_GaussianFilter):
 
 
 class CubatureKalmanFilter(_GaussianFilter):
-    """Square-root cubature Kalman filter (seed 001 eqs. 21-46); with ``fading``, the STSCKF.
+    """Square-root cubature Kalman filter (Du et al. (n.d.), eqs. 21-46); with ``fading``, the STSCKF.
 
     The estimate's covariance is held as ``S`` (lower triangular, non-negative
     diagonal, ``P = S S^T``) and only ever rebuilt by :func:`tria`, so it stays
@@ -444,7 +444,7 @@ class CubatureKalmanFilter(_GaussianFilter):
     mean, covariance : initial estimate ``x_0|0`` (n,) and ``P_0|0`` (n, n)
     process_noise, measurement_noise : Q (n, n) and R (m, m)
     fading : StrongTracking, optional
-        Strong tracking SCKF (STSCKF, seed 001).
+        Strong tracking SCKF (STSCKF, Du et al. (n.d.)).
 
     Examples
     --------

@@ -1,4 +1,4 @@
-"""Multi-step-ahead fault prediction with forecast measurements (seed 001 section 5).
+"""Multi-step-ahead fault prediction with forecast measurements (Du et al. (n.d.), section 5).
 
 A filter that estimates a drifting parameter as a state needs measurements to
 move; the future ones do not exist yet.  At each step ``k``:
@@ -13,7 +13,7 @@ move; the future ones do not exist yet.  At each step ``k``:
 
 The real filter is never fed a forecast: the copy is thrown away, and step
 ``k + 1`` starts from the filter that saw ``z_1..z_{k+1}`` (our reading of
-step 9, which the seed leaves open).
+step 9, which the paper leaves open).
 
 Example
 -------
@@ -148,7 +148,7 @@ def predict_ahead(estimator, measurements, *, horizon: int, start: int, forecast
     horizon : int
         ``n``, the number of steps predicted ahead.
     start : int
-        First time ``k`` at which a prediction is made (the seed's ``N0``, the end of the training window).
+        First time ``k`` at which a prediction is made (the paper's ``N0``, the end of the training window).
     forecasts : callable
         ``forecasts(k)`` -> array (horizon, m) of the measurements forecast at time ``k`` for ``k+1..k+n``.
         The forecaster is expected to have learned ``z_1..z_k`` when it is called.
