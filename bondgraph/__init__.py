@@ -9,7 +9,7 @@
 from .causality import Causality, CausalIssue, assign_causality
 from .control import PIController
 from .equations import AlgebraicLoopError, StateEquations, causal_equations, model_equations, state_equations
-from .errors import CausalityError, EquationError, LawError, ModelError, PHMError, SimulationError
+from .errors import CausalityError, EquationError, LawError, ModelError, PHMError, PHMWarning, SimulationError
 from .model import BondGraph
 from .structure import Bond, Element, signal_function
 from .simulation import SimulationResult, simulate
@@ -19,6 +19,6 @@ from .io import load_model, to_json
 __all__ = [
     "BondGraph", "Bond", "Element", "Causality", "CausalIssue", "PIController", "StateEquations",
     "SimulationResult", "assign_causality", "causal_equations", "model_equations", "state_equations",
-    "simulate", "signal_function", "PHMError", "ModelError", "LawError", "CausalityError", "EquationError",
+    "simulate", "signal_function", "PHMError", "PHMWarning", "ModelError", "LawError", "CausalityError", "EquationError",
     "SimulationError", "AlgebraicLoopError", "load_model", "to_json", "to_svg", "to_tikz",
 ]

@@ -35,6 +35,25 @@ class PHMError(Exception):
     """
 
 
+class PHMWarning(UserWarning):
+    """Base of every warning the toolkit issues, so that a user can filter them all at once.
+
+    Each warning of the toolkit derives from it (and keeps its own second base, ``UserWarning`` or
+    ``RuntimeWarning``): ARR derivation, records, interval evaluation, filters, identification,
+    sampling and metrics.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from prognosis.statespace import FilterWarning
+    >>> issubclass(FilterWarning, PHMWarning), issubclass(FilterWarning, RuntimeWarning)
+    (True, True)
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore", PHMWarning)   # silence the toolkit, not numpy
+    ...     warnings.warn("covariance repaired", FilterWarning)
+    """
+
+
 class ModelError(PHMError, ValueError):
     """The bond graph violates the model contract (kind, bonds, values, laws, names)."""
 

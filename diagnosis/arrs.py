@@ -43,14 +43,15 @@ from bondgraph import BondGraph
 from bondgraph import elements as el
 from bondgraph.causality import diagnosis_causality
 from bondgraph.equations import causal_equations, constitutive_law, substitute
-from bondgraph.structure import T, Structure, signal_function
+from bondgraph.errors import PHMWarning
+from bondgraph.structure import Structure, T, signal_function
 
 from .deltas import delta, delta_parameter, latex
 from .detection import Evaluation, evaluate
 from .residuals import CompiledARR, compile_arr
 
 
-class ARRWarning(UserWarning):
+class ARRWarning(PHMWarning):
     """A candidate ARR that could not be expressed in known variables."""
 
 

@@ -36,13 +36,15 @@ import warnings
 import numpy as np
 from numpy.typing import ArrayLike
 
+from bondgraph.errors import PHMWarning
+
 __all__ = [
     "MetricWarning", "alpha_lambda", "convergence", "cumulative_relative_accuracy", "mean_relative_accuracy",
     "mean_rmad", "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad", "weighted_median",
 ]
 
 
-class MetricWarning(UserWarning):
+class MetricWarning(PHMWarning):
     """A metric undefined at some points (set to NaN there)."""
 
 

@@ -7,12 +7,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from bondgraph.errors import PHMWarning
+
 from .. import _linalg as linalg
 from .data import check_covariance, check_data, check_inputs, check_matrix
 
 
-
-class IdentificationWarning(RuntimeWarning):
+class IdentificationWarning(PHMWarning, RuntimeWarning):
     """An M-step had to floor the eigenvalues of a noise covariance (the model is close to degenerate)."""
 
 

@@ -66,13 +66,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import special
 
-from .data import check_data, check_future_inputs
+from bondgraph.errors import PHMWarning
+
 from ..resampling import systematic
+from .data import check_data, check_future_inputs
 
 __all__ = ["PosteriorPrediction", "SamplerWarning", "WindowPosterior", "sample_posterior", "window_log_posterior"]
 
 
-class SamplerWarning(RuntimeWarning):
+class SamplerWarning(PHMWarning, RuntimeWarning):
     """The tempering sampler degenerated (few distinct particles or moves rarely accepted)."""
 
 

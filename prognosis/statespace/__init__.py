@@ -4,8 +4,9 @@ The degrading parameter becomes an extra state of a :class:`DiscreteModel` (:mod
 sympy Jacobians), which every estimator here tracks through one interface (``predict``,
 ``update``, ``step``, ``mean``, ``covariance``, ``copy``):
 
-* :mod:`.kalman`: extended, unscented and square-root cubature Kalman filters, each with the
-  strong-tracking fading factor of Du et al. (n.d.), section 3;
+* :mod:`.ekf`, :mod:`.ukf`, :mod:`.ckf`: the extended, unscented and square-root cubature Kalman
+  filters on the shared base of :mod:`.gaussian`, each with the strong-tracking fading factor of
+  :mod:`.strong_tracking` (Du et al. (n.d.), section 3);
 * :mod:`.bootstrap`: a bootstrap (SIR) particle filter with the same interface;
 * :mod:`.consistency`: innovation consistency tests and an online supervisor of the innovations;
 * :mod:`.lookahead`: n-step-ahead prediction by filtering forecast measurements;
@@ -30,8 +31,11 @@ Examples
 from .bootstrap import BootstrapParticleFilter
 from .consistency import ConsistencyReport, InnovationMonitor, innovation_consistency, whiten
 from .elm import ROSELM, SeriesForecaster
-from .kalman import (CubatureKalmanFilter, ExtendedKalmanFilter, FilterWarning, Innovation, StrongTracking,
-                     UnscentedKalmanFilter)
+from .ckf import CubatureKalmanFilter
+from .ekf import ExtendedKalmanFilter
+from .gaussian import FilterWarning, Innovation
+from .strong_tracking import StrongTracking
+from .ukf import UnscentedKalmanFilter
 from .lookahead import LookAhead, look_ahead, predict_ahead
 from .model import DiscreteModel, discretize
 

@@ -19,7 +19,7 @@ Example
 -------
 >>> import sympy as sp
 >>> from types import SimpleNamespace
->>> from prognosis.statespace.kalman import CubatureKalmanFilter
+>>> from prognosis.statespace import CubatureKalmanFilter
 >>> from prognosis.statespace import discretize
 >>> x, a = sp.symbols("x a")
 >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
@@ -64,7 +64,7 @@ def look_ahead(estimator, forecasts, inputs=None) -> np.ndarray:
     --------
     >>> import sympy as sp
     >>> from types import SimpleNamespace
-    >>> from prognosis.statespace.kalman import CubatureKalmanFilter
+    >>> from prognosis.statespace import CubatureKalmanFilter
     >>> from prognosis.statespace import discretize
     >>> x, a = sp.symbols("x a")
     >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
@@ -110,7 +110,7 @@ class LookAhead:
 
     >>> import sympy as sp
     >>> from types import SimpleNamespace
-    >>> from prognosis.statespace.kalman import CubatureKalmanFilter
+    >>> from prognosis.statespace import CubatureKalmanFilter
     >>> from prognosis.statespace import discretize
     >>> x, a = sp.symbols("x a")
     >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
@@ -141,7 +141,8 @@ def predict_ahead(estimator, measurements, *, horizon: int, start: int, forecast
 
     Parameters
     ----------
-    estimator : filter with ``step``, ``mean`` and ``copy`` (:mod:`prognosis.statespace.kalman`, :mod:`prognosis.statespace.bootstrap`)
+    estimator : filter with ``step``, ``mean`` and ``copy`` (the Kalman filters or
+        :class:`~prognosis.statespace.BootstrapParticleFilter`)
         Advanced in place over the real measurements.
     measurements : array (K, m)
         ``z_1..z_K``; row ``k - 1`` is time ``k``.
@@ -165,7 +166,7 @@ def predict_ahead(estimator, measurements, *, horizon: int, start: int, forecast
 
     >>> import sympy as sp
     >>> from types import SimpleNamespace
-    >>> from prognosis.statespace.kalman import ExtendedKalmanFilter
+    >>> from prognosis.statespace import ExtendedKalmanFilter
     >>> from prognosis.statespace import discretize
     >>> x, a = sp.symbols("x a")
     >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
