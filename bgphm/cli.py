@@ -572,7 +572,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     --------
     >>> import tempfile, pathlib
     >>> out = pathlib.Path(tempfile.mkdtemp()) / "rlc.csv"
-    >>> main(["--quiet", "simulate", "rlc", "--t-end", "0.1", "--samples", "11", "--out", str(out)])  # doctest: +ELLIPSIS
+    >>> main(["--quiet", "simulate", "rlc", "--t-end", "0.1", "--samples", "11",
+    ...       "--out", str(out)])  # doctest: +ELLIPSIS
     wrote ...rlc.csv
     0
     >>> out.read_text().splitlines()[0]

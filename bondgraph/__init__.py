@@ -19,6 +19,7 @@ from .io import load_model, to_json
 __all__ = [
     "BondGraph", "Bond", "Element", "Causality", "CausalIssue", "PIController", "StateEquations",
     "SimulationResult", "assign_causality", "causal_equations", "model_equations", "state_equations",
-    "simulate", "signal_function", "PHMError", "PHMWarning", "ModelError", "LawError", "CausalityError", "EquationError",
+    "simulate", "signal_function", "PHMError", "PHMWarning", "ModelError", "LawError", "CausalityError",
+    "EquationError",
     "SimulationError", "AlgebraicLoopError", "load_model", "to_json", "to_svg", "to_tikz",
 ]

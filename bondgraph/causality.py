@@ -394,7 +394,8 @@ class _Scap:
                 out = [self.effort_from[b.key] == node for b in bonds]
                 ok = out[0] != out[1] if kind in el.TRANSFORMERS else out[0] == out[1]
                 if not ok:
-                    rule = "passes effort through" if kind in el.TRANSFORMERS else "takes effort on both ports or neither"
+                    rule = ("passes effort through" if kind in el.TRANSFORMERS
+                            else "takes effort on both ports or neither")
                     raise _Conflict(node, f"{self.elements[node]} {rule}")
             return []
         known = assigned[0]

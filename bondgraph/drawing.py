@@ -209,7 +209,8 @@ def layout(bg: BondGraphLike, causality: str | Causality | None = None) -> Drawi
     bonds = []
     for bond in structure.bonds:
         start, end = _clip(positions[bond.tail], positions[bond.head], sizes[bond.tail], sizes[bond.head])
-        dualized = causal is not None and bond.is_signal and (bond.head in causal.dualized or bond.tail in causal.dualized)
+        dualized = (causal is not None and bond.is_signal
+                    and (bond.head in causal.dualized or bond.tail in causal.dualized))
         stroke = None
         if causal is not None and bond.key in causal.effort_from:
             stroke = causal.stroke(bond.key)

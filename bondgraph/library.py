@@ -42,7 +42,8 @@ def rlc_circuit(R: float = 10.0, L: float = 0.1, C: float = 1e-3) -> BondGraph:
     return bg
 
 
-def dc_motor(R_a: float = 1.23, L_a: float = 1.34e-3, k_m: float = 3.89e-2, J: float = 1e-4, b: float = 1e-4) -> BondGraph:
+def dc_motor(R_a: float = 1.23, L_a: float = 1.34e-3, k_m: float = 3.89e-2, J: float = 1e-4,
+             b: float = 1e-4) -> BondGraph:
     """Permanent-magnet DC motor with current and speed sensors.
 
     ``Se:U -> 1_e (R:R_a, I:L_a, Df:i) -> GY:k_m -> 1_m (I:J, R:b, Df:omega)``.
@@ -308,7 +309,8 @@ class Example:
 def example(name: str) -> Example:
     """A built-in example by name: ``rlc``, ``dc-motor``, ``torsion-bar``, ``three-tank``."""
     builders = {
-        "rlc": lambda: Example("rlc", rlc_circuit(), {"V": 1.0}, 0.5, description="step response of a series RLC circuit"),
+        "rlc": lambda: Example("rlc", rlc_circuit(), {"V": 1.0}, 0.5,
+                               description="step response of a series RLC circuit"),
         "dc-motor": lambda: Example("dc-motor", dc_motor(), {"U": 12.0}, 1.0, description="DC motor speed-up at 12 V"),
         "torsion-bar": lambda: Example("torsion-bar", torsion_bar(), {"U": torsion_bar_controller()}, 10.0,
                                        description="torsion bar under the PI speed loop (omega_m -> 112.5 rad/s)"),

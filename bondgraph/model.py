@@ -288,7 +288,8 @@ def _read_uncertainty(where: str, interval) -> tuple[float, float]:
             "(true value = value * (1 + delta), delta in [lo, hi])"
         )
     if lo <= -1.0:
-        raise ModelError(f"{where}: uncertainty {interval!r} lets the parameter reach zero or change sign (need lo > -1)")
+        raise ModelError(f"{where}: uncertainty {interval!r} lets the parameter reach zero or change sign "
+                         "(need lo > -1)")
     return (lo, hi)
 
 

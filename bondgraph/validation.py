@@ -68,7 +68,8 @@ def _check_bonds(elements, bonds) -> None:
         if element.kind in el.JUNCTIONS and n_in + n_out < 2:
             raise ModelError(f"{where}: a junction needs at least 2 power bonds, it has {n_in + n_out}")
         if element.kind in el.DETECTORS and len(sensors[name]) != 1:
-            raise ModelError(f"{where}: a detector needs exactly 1 signal bond from a junction, it has {len(sensors[name])}")
+            raise ModelError(f"{where}: a detector needs exactly 1 signal bond from a junction, "
+                             f"it has {len(sensors[name])}")
 
 
 def _check_node_names(elements) -> None:

@@ -218,7 +218,8 @@ def _latex(bg: BondGraph, c: _Content) -> str:
     t = drawing.latex_escape
     parts = [r"\documentclass{article}", r"\usepackage[margin=2cm]{geometry}", r"\usepackage{amsmath}",
              r"\usepackage{tikz}", r"\usepackage{longtable}", r"\begin{document}",
-             rf"\section*{{ARR report: {t(c.title)}}}", r"\subsection*{Elements}", _tex_table(ELEMENT_HEADER, c.elements),
+             rf"\section*{{ARR report: {t(c.title)}}}", r"\subsection*{Elements}",
+             _tex_table(ELEMENT_HEADER, c.elements),
              r"\subsection*{Bond graph}"]
     for caption, causality, issues in c.drawings:
         parts += [rf"\paragraph{{{t(caption)}}}", "", r"\begin{center}", drawing.to_tikz(bg, causality),
@@ -226,7 +227,8 @@ def _latex(bg: BondGraph, c: _Content) -> str:
         parts += [t(i) + r"\\" for i in issues]
     parts.append(r"\subsection*{Analytical redundancy relations}")
     for arr in c.arrs:
-        parts += [rf"\paragraph{{{t(arr.name)}}} Junction {t(str(arr.junction))}; signals: {t(', '.join(arr.signals))}.",
+        signals = t(", ".join(arr.signals))
+        parts += [rf"\paragraph{{{t(arr.name)}}} Junction {t(str(arr.junction))}; signals: {signals}.",
                   r"\begin{align*}", "r_n &= " + latex(arr.nominal) + r" \\",
                   r"\Psi_2 &= " + latex(arr.uncertain), r"\end{align*}"]
     header, rows = _signature_rows(c.signatures)

@@ -101,7 +101,8 @@ class Scenario:
 
     def scaled(self, k: float) -> "Scenario":
         """The same story ``k`` times faster: m times k, energies (D), times and noise variances divided by k."""
-        return replace(self, d_max=self.d_max / k, m_initial=self.m_initial * k, m_after=self.m_after * k, change=self.change / k,
+        return replace(self, d_max=self.d_max / k, m_initial=self.m_initial * k, m_after=self.m_after * k,
+                       change=self.change / k,
                        predict_without_restart=self.predict_without_restart / k,
                        predict_with_restart=self.predict_with_restart / k, control_start=self.control_start / k,
                        control_period=self.control_period / k, rul_ref=self.rul_ref / k, end=self.end / k,
@@ -158,7 +159,8 @@ def predict_rul(mean, covariance, t, omega2_star, seed, keep=0, d_max=D_MAX):
         dissipated = power(x[0], omega2_star)
         return np.vstack([-x[1] * dissipated, np.zeros_like(dissipated), dissipated])
 
-    return monte_carlo_rul(rates, mu, p, lambda x: margin(x, d_max), origin=t, horizon=MONTE_CARLO["horizon"], dt=MONTE_CARLO["dt"],
+    return monte_carlo_rul(rates, mu, p, lambda x: margin(x, d_max), origin=t, horizon=MONTE_CARLO["horizon"],
+                           dt=MONTE_CARLO["dt"],
                            n_samples=MONTE_CARLO["n_samples"], lower=np.maximum(lo, 0.0), upper=hi, seed=seed,
                            keep=keep)
 
@@ -329,11 +331,13 @@ def run_seed(seed: int, scenario: Scenario = Scenario(), keep: bool = False) -> 
             "after_restart": float(inside[after_restart].mean()) if after_restart.any() else None,
             "without_restart_after_change": float(twin_inside[~before].mean()),
         },
-        "m_estimate_at_eol": {"with_restart": float(log["mean"][-1, 3]), "without_restart": float(log["twin_mean"][-1, 3]),
+        "m_estimate_at_eol": {"with_restart": float(log["mean"][-1, 3]),
+                              "without_restart": float(log["twin_mean"][-1, 3]),
                               "true": float(log["truth"][-1, 3])},
         "scenario_1": _summary(prediction_1, h, s),
         "scenario_2": _summary(prediction_2, h, s),
-        "scenario_3": {**_summary(prediction_3, h, s), "theta": first["theta"], "omega2_star": OMEGA2_REF + first["theta"],
+        "scenario_3": {**_summary(prediction_3, h, s), "theta": first["theta"],
+                       "omega2_star": OMEGA2_REF + first["theta"],
                        "decisions": decisions},
         "ekf_us_per_step": drive.ekf_seconds / max(drive.ekf_steps, 1) * 1e6,
         "seconds": time.perf_counter() - started,

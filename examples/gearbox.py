@@ -359,7 +359,8 @@ def write(out: Path, summary: dict, results: list[dict], first: dict, seconds: f
     """results.json and, with matplotlib, the figures of the first seed."""
     out.mkdir(parents=True, exist_ok=True)
     gain = first["record"].fault_gain
-    truth = {"healthy": _matrices(true_model(False, fault_gain=gain)), "faulty": _matrices(true_model(True, fault_gain=gain))}
+    truth = {"healthy": _matrices(true_model(False, fault_gain=gain)),
+             "faulty": _matrices(true_model(True, fault_gain=gain))}
     payload = {
         "setting": {"step_h": STEP_H, "duration_h": first["record"].hours[-1] + STEP_H, "onset_h": ONSET_H,
                     "torque_nm": TORQUE_NM, "segment_h": SEGMENT_H, "ambient_c": AMBIENT_C,
@@ -516,7 +517,8 @@ def _report(summary: dict) -> None:
         print("    by lead time: " + ", ".join(f"{band} {s['mean']:.2f}" for band, s in p["coverage_by_lead"].items()
                                               if s is not None))
         post = p["posterior"]
-        line = (f"    posterior predictive: coverage {post['coverage']['mean']:.2f} (min {post['coverage']['min']:.2f}, "
+        coverage = post["coverage"]
+        line = (f"    posterior predictive: coverage {coverage['mean']:.2f} (min {coverage['min']:.2f}, "
                 f">= 0.9 in {post['coverage_at_least_0.9_in']}/{post['coverage']['n']})")
         if post.get("coverage_before_onset") is not None:
             line += f", before the onset {post['coverage_before_onset']['mean']:.2f}"
@@ -524,8 +526,8 @@ def _report(summary: dict) -> None:
                  f"{post['true_radius_rank']['mean']:.2f} ({post['true_radius_rank']['min']:.2f}-"
                  f"{post['true_radius_rank']['max']:.2f}, > 0.95 in {post['true_radius_rank_above_0.95_in']})")
         print(line)
-        print("      by lead time: " + ", ".join(f"{band} {s['mean']:.2f}" for band, s in post["coverage_by_lead"].items()
-                                                if s is not None))
+        by_lead = post["coverage_by_lead"].items()
+        print("      by lead time: " + ", ".join(f"{band} {s['mean']:.2f}" for band, s in by_lead if s is not None))
     print(f"  run time {summary['run_seconds']:.1f} s")
 
 

@@ -48,12 +48,12 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from bgphm.plotting import pyplot, save_figure, write_figures
-from bgphm.runs import over_seeds, progress_line, run_main
-from bondgraph.library import THREE_TANK, three_tank
-from diagnosis import derive_arrs, noise_margin, signature_matrix
-from prognosis.statespace import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter, SeriesForecaster,
-                                  StrongTracking, UnscentedKalmanFilter, discretize, predict_ahead)
+from bgphm.plotting import pyplot, save_figure, write_figures  # noqa: E402
+from bgphm.runs import over_seeds, progress_line, run_main  # noqa: E402
+from bondgraph.library import THREE_TANK, three_tank  # noqa: E402
+from diagnosis import derive_arrs, noise_margin, signature_matrix  # noqa: E402
+from prognosis.statespace import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter,  # noqa: E402
+                                  SeriesForecaster, StrongTracking, UnscentedKalmanFilter, discretize, predict_ahead)
 
 # Du et al. (n.d.), section 6
 STEPS = 200
@@ -243,7 +243,8 @@ def summarize(results: list[dict]) -> dict:
         detection[arr] = {"detected_in": len(found), "of": len(times),
                           "detection_time_s": float(np.mean(found)) if found else None,
                           "detection_time_s_std": float(np.std(found, ddof=1)) if len(found) > 1 else 0.0,
-                          "false_alarms_nominal": int(sum(r["detection"][arr]["false_alarms_nominal"] for r in results))}
+                          "false_alarms_nominal": int(sum(r["detection"][arr]["false_alarms_nominal"]
+                                                          for r in results))}
     rank = sorted(methods, key=lambda n: table[n]["mae"])
     return {"seeds": [r["seed"] for r in results], "table": table, "ranking_by_mae": rank, "detection": detection,
             "elm_rmse_by_step_m": np.mean([r["elm_rmse_by_step"] for r in results], axis=0).tolist(),
@@ -375,7 +376,8 @@ def main(argv=None) -> dict:
                               progress=report and (lambda done, _: report(done + 1, len(seeds))))
     summary = summarize(results)
     for name, d in summary["detection"].items():
-        when = "never" if d["detection_time_s"] is None else f"k = {d['detection_time_s']:.1f} +- {d['detection_time_s_std']:.1f}"
+        when = ("never" if d["detection_time_s"] is None
+                else f"k = {d['detection_time_s']:.1f} +- {d['detection_time_s_std']:.1f}")
         print(f"  {name}: alarm in {d['detected_in']}/{d['of']} seeds, {when}; "
               f"false alarms on the fault-free twins: {d['false_alarms_nominal']}")
     print(f"  ROS-ELM forecast RMSE by step (m): {', '.join(f'{v:.2e}' for v in summary['elm_rmse_by_step_m'])}")

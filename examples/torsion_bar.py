@@ -294,7 +294,8 @@ def run(case: str | Case = "b-md", preset: str = "default", seed: int = 0, *, sc
 def _threshold_widths(evaluation) -> dict:
     """Median widths of the interval and BG-LFT thresholds on the nominal record (issue 3)."""
     width = evaluation.upper - evaluation.lower
-    return {"interval_width_median": float(np.median(width)), "bglft_width_median": float(np.median(2 * evaluation.bglft)),
+    return {"interval_width_median": float(np.median(width)),
+            "bglft_width_median": float(np.median(2 * evaluation.bglft)),
             "interval_never_wider_than_bglft": bool(np.all(width <= 2 * evaluation.bglft * (1 + 1e-12)))}
 
 
@@ -317,7 +318,8 @@ def summarize(figures: list[dict]) -> dict:
 
 def table(figures: dict, case: Case) -> str:
     """Our figures beside the paper's (percent where the paper gives percent)."""
-    rows = [("detection time (s)", "detection_time_s", 1, None), ("false alarms, nominal run", "false_alarms_nominal", 1, None),
+    rows = [("detection time (s)", "detection_time_s", 1, None),
+            ("false alarms, nominal run", "false_alarms_nominal", 1, None),
             ("RMSE theta (%)", "rmse_theta", 100, "rmse_theta"), ("RMSE gamma (%)", "rmse_gamma", 100, "rmse_gamma"),
             ("mean RMAD gamma (%)", "rmad_gamma", 100, None),
             (f"RA after t = {case.after:g} s (%)", "ra", 100, "ra"),
@@ -329,7 +331,8 @@ def table(figures: dict, case: Case) -> str:
     lines = [f"  {'figure':<44} {'ours':>16} {'Jha et al. (2016)':>18}"]
     for label, key, scale, paper_key in rows:
         value, spread = figures.get(key), figures.get(f"{key}_std")
-        ours = "-" if value is None else f"{value * scale:.2f}" + ("" if spread is None else f" +- {spread * scale:.2f}")
+        ours = ("-" if value is None
+                else f"{value * scale:.2f}" + ("" if spread is None else f" +- {spread * scale:.2f}"))
         paper = case.paper_figures.get(paper_key) if paper_key else None
         lines.append(f"  {label:<44} {ours:>16} {'-' if paper is None else f'{paper * scale:.2f}':>18}")
     return "\n".join(lines)
@@ -478,7 +481,8 @@ def main(argv=None) -> dict:
         f = runs[-1].figures
         if args.runs > 1:
             print(f"  seed {f['seed']}: RMSE theta {100 * f.get('rmse_theta', np.nan):.2f} %, "
-                  f"RA {100 * f.get('ra', np.nan):.2f} %, alpha-lambda {100 * f.get('alpha_lambda_pass_rate', np.nan):.1f} %")
+                  f"RA {100 * f.get('ra', np.nan):.2f} %, "
+                  f"alpha-lambda {100 * f.get('alpha_lambda_pass_rate', np.nan):.1f} %")
     figures = summarize([r.figures for r in runs]) if args.runs > 1 else runs[0].figures
     first = runs[0]
     facts = first.scenario.facts

@@ -113,7 +113,8 @@ class CustomDegradation:
     (each step still vectorized over particles).
 
     >>> import numpy as np
-    >>> model = CustomDegradation(lambda theta, gamma, dt: theta * (1 + gamma[..., 0] * dt + gamma[..., 1] * dt**2), n_gamma=2)
+    >>> model = CustomDegradation(lambda theta, gamma, dt: theta * (1 + gamma[..., 0] * dt + gamma[..., 1] * dt**2),
+    ...                           n_gamma=2)
     >>> model.step(np.array([1.0]), np.array([[1.0, 2.0]]), dt=0.5)
     array([2.])
     """
@@ -197,5 +198,6 @@ def degradation_model(name: str, process_noise: float = 0.0):
     [2.0]
     """
     if name not in MODELS:
-        raise ValueError(f"unknown degradation model {name!r}; choose from {sorted(MODELS)} or use CustomDegradation(g)")
+        raise ValueError(f"unknown degradation model {name!r}; choose from {sorted(MODELS)} "
+                         "or use CustomDegradation(g)")
     return MODELS[name](process_noise=process_noise)

@@ -191,7 +191,8 @@ class ParticleFilter:
         self.noise_std, self.inflation = noise_std, inflation
         self.initial_variance = np.square(np.atleast_1d(np.asarray(gamma_std, float)))
         if self.initial_variance.size != model.n_gamma:
-            raise ValueError(f"gamma_std has {self.initial_variance.size} entries; the model has {model.n_gamma} gammas")
+            raise ValueError(f"gamma_std has {self.initial_variance.size} entries; "
+                             f"the model has {model.n_gamma} gammas")
         self.adaptation = adaptation
         self.resample = get_scheme(resampling)
         self.resample_below = resample_below

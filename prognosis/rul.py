@@ -152,7 +152,10 @@ class RULDistribution:
         return self.quantile(0.5)
 
     def probability_before(self, rul: float):
-        """``Pr(RUL <= rul)``: the weight of the samples failing within ``rul`` (Rodriguez Obando et al. (2021), eq. 51)."""
+        """``Pr(RUL <= rul)``: the weight of the samples failing within ``rul``.
+
+        Rodriguez Obando et al. (2021), eq. 51.
+        """
         return self._mass(np.asarray(self.samples) <= rul)
 
     @property

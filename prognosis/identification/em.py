@@ -78,7 +78,8 @@ def em_step(model: LinearGaussianModel, y: ArrayLike, u: ArrayLike | None = None
     return new, smoothed.log_likelihood
 
 
-def em_arrays_step(model: LinearGaussianModel, y: np.ndarray, u: np.ndarray, cross_covariance: bool, estimate_initial: bool
+def em_arrays_step(model: LinearGaussianModel, y: np.ndarray, u: np.ndarray, cross_covariance: bool,
+                   estimate_initial: bool
         ) -> tuple[LinearGaussianModel, SmootherResult]:
     """One EM iteration on checked arrays: smooth with ``model``, then the M-step; returns (new model, smoothing).
 

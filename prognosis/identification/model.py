@@ -186,7 +186,8 @@ class LinearGaussianModel:
             raise ValueError(f"T must have shape ({self.n_states}, {self.n_states}), got {t.shape}")
         t_inv = np.linalg.inv(t)  # raises LinAlgError if T is singular
         return LinearGaussianModel(A=t @ self.A @ t_inv, B=t @ self.B, C=self.C @ t_inv, D=self.D,
-                                   Q=linalg.symmetric(t @ self.Q @ t.T), R=self.R, S=t @ self.S if np.any(self.S) else None,
+                                   Q=linalg.symmetric(t @ self.Q @ t.T), R=self.R,
+                                   S=t @ self.S if np.any(self.S) else None,
                                    mu1=t @ self.mu1, P1=linalg.symmetric(t @ self.P1 @ t.T))
 
     @property

@@ -28,7 +28,8 @@ Prior
     predictor ``rho(F) < 1``.  Then, with ``nu = N - dim(beta)``::
 
         p(theta | y) ~ RSS(theta)^(-nu / 2),
-        y_{T+h} | theta, y ~ Student t_nu(g_h + G_h beta_hat, s^2 (1 + sum_{i<h-1} (e_1^T A^i K)^2 + G_h (Phi^T Phi)^-1 G_h^T)),
+        y_{T+h} | theta, y ~ Student t_nu(g_h + G_h beta_hat,
+                                          s^2 (1 + sum_{i<h-1} (e_1^T A^i K)^2 + G_h (Phi^T Phi)^-1 G_h^T)),
 
     ``RSS`` the least-squares residual, ``beta_hat`` the estimate, ``s^2 = RSS / nu``, ``G_h`` the sensitivity
     of the future mean to ``beta``.
