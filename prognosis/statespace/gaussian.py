@@ -165,6 +165,8 @@ def innovation(rows: np.ndarray, residual=None, covariance=None, fading: float =
     return Innovation(full_r, full_p, float(residual @ linalg.solve(covariance, residual)), fading)
 
 def cholesky_or_repair(p: np.ndarray, what: str) -> np.ndarray:
+    """The Cholesky factor of ``p``, or of ``p`` with its eigenvalues clipped at 1e-12 of the largest, with a
+    :class:`FilterWarning` naming ``what`` (a covariance that round-off made indefinite)."""
     try:
         return np.linalg.cholesky(p)
     except np.linalg.LinAlgError:
