@@ -1,6 +1,6 @@
 """ProgPy baseline: particle filter + Monte-Carlo RUL on the torsion-bar friction fault.
 
-Seed 003 (Jha et al. 2016), section 6.3: the motor-disk friction b_Md of the
+Jha et al. (2016), section 6.3: the motor-disk friction b_Md of the
 torsion bar degrades exponentially, b_k = b_{k-1} exp(gamma_{k-1} dt), with an
 unknown rate gamma (random walk).  The residual of the ARR is the observation,
 y_k = (b_k - b_n) * (-omega_m / k_belt^2) + w.  Failure: b >= 0.45.
@@ -38,7 +38,7 @@ Modelling choices (the same ones our benchmark should use to be comparable)
   ProgPy as rates sigma / dt.
 * Observations are generated from the truth b*(t) = b_n exp(0.05 (t - 10)) with
   the residual noise std 0.01 (``--obs-std``); the filter's likelihood uses the
-  std 2 * 0.01 (4x the residual variance), as in seed 003.
+  std 2 * 0.01 (4x the residual variance), as in Jha et al. (2016).
 * omega_m = 112.5 rad/s is a constant model parameter: ProgPy's ``output(x)``
   takes no input, so it cannot be a ProgPy input of the observation.
 * Prediction: by default the predictor's model keeps the process noise on b but

@@ -30,18 +30,15 @@ from pathlib import Path
 
 import numpy as np
 
-from bondgraph.errors import CausalityError, EquationError, ModelError, SimulationError
+from bgphm.errors import UsageError
+from bgphm.files import csv_text
+from bondgraph.errors import PHMError
 from bondgraph.io import ModelSpec, load_model
 from diagnosis.signals import Record, RecordError, RecordWarning, gaps, read_csv
 
-__all__ = ["main", "UsageError"]
+__all__ = ["main"]
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
-BAD_INPUT = (ModelError, RecordError, SimulationError, CausalityError, EquationError)
-
-
-class UsageError(ValueError):
-    """Bad arguments or input found after parsing (exit code 2)."""
 
 
 class Progress:
@@ -97,7 +94,7 @@ def cmd_simulate(args, progress: Progress) -> int:
     result = simulate(spec.model, (0.0, t_end), spec.inputs, x0=spec.x0, parameters=parameters,
                       t_eval=np.linspace(0.0, t_end, args.samples))
     columns = result.record()
-    text = _csv_text(columns)
+    text = csv_text(columns)
     _emit(text, args.out, progress)
     return EXIT_OK
 
@@ -128,7 +125,7 @@ def cmd_detect(args, progress: Progress) -> int:
             # the threshold holds -r_n in [lower - margin, upper + margin]; written as the band on r_n itself
             columns.update({f"{e.name}.residual": e.residual, f"{e.name}.lower": -(e.upper + e.margin),
                             f"{e.name}.upper": -(e.lower - e.margin), f"{e.name}.alarm": e.alarm.astype(float)})
-        (out / "residuals.csv").write_text(_csv_text(columns))
+        (out / "residuals.csv").write_text(csv_text(columns))
         written = [out / "detection.json", out / "residuals.csv"] + _plots("detection", out, evaluations, progress)
         for path in written:
             print(f"wrote {path}")
@@ -202,9 +199,9 @@ def cmd_prognose(args, progress: Progress) -> int:
         written = [out / "prognosis.json"]
         if result.t.size:
             columns = {"t": result.t, "theta_mean": result.theta["mean"], "gamma_mean": result.gamma["mean"]}
-            (out / "estimates.csv").write_text(_csv_text(columns))
+            (out / "estimates.csv").write_text(csv_text(columns))
             p = result.rul_percentiles((5, 50, 95))
-            (out / "rul.csv").write_text(_csv_text({"t": result.rul_t, "rul_mean": result.rul_mean,
+            (out / "rul.csv").write_text(csv_text({"t": result.rul_t, "rul_mean": result.rul_mean,
                                                     "rul_p5": p[:, 0], "rul_median": p[:, 1], "rul_p95": p[:, 2]}))
             written += [out / "estimates.csv", out / "rul.csv"]
         written += _plots("prognosis", out, (evaluation, result), progress)
@@ -214,13 +211,26 @@ def cmd_prognose(args, progress: Progress) -> int:
 
 
 def cmd_demo(args, progress: Progress) -> int:
-    """``bgphm demo``: run the demo ``args.name`` into ``args.out`` (:func:`bgphm.demo.run_demo`).
+    """``bgphm demo``: write the files of the demo ``args.name`` into ``args.out`` and run its commands.
 
-    Returns 0, or the exit code of the first of its commands that fails.
+    :func:`bgphm.demo.prepare_demo` writes the model, the record and ``truth.json`` and lists the
+    ``arr``, ``detect`` and ``prognose`` command lines; each is printed, then run as :func:`main` runs
+    it, and the true end of life is printed beside the prediction.  Returns 0, or the exit code of
+    the first command that fails.
     """
-    from bgphm.demo import run_demo
+    from bgphm.demo import prepare_demo
 
-    return run_demo(args.name, Path(args.out), progress, seed=args.seed)
+    plan = prepare_demo(args.name, Path(args.out), progress, seed=args.seed)
+    quiet = ["--quiet"] if progress.quiet else []
+    for command in plan.commands:
+        print("$ bgphm " + " ".join(command))
+        code = main(quiet + command)
+        if code:
+            return code
+    line = plan.truth_line()
+    if line is not None:
+        print(line)
+    return EXIT_OK
 
 
 # ------------------------------------------------------------------------------------------- helpers
@@ -443,14 +453,6 @@ def _has_value(model, signal: str) -> bool:
     return any(e.signal == signal and e.value is not None for e in model.elements.values())
 
 
-def _csv_text(columns: dict) -> str:
-    names = list(columns)
-    data = np.column_stack([np.asarray(columns[n], float) for n in names])
-    lines = [",".join(names)]
-    lines += [",".join("" if not np.isfinite(v) else repr(float(v)) for v in row) for row in data]
-    return "\n".join(lines) + "\n"
-
-
 def _emit(text: str, out: str | None, progress: Progress) -> None:
     if out in (None, "-"):
         sys.stdout.write(text)
@@ -570,7 +572,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     --------
     >>> import tempfile, pathlib
     >>> out = pathlib.Path(tempfile.mkdtemp()) / "rlc.csv"
-    >>> main(["--quiet", "simulate", "rlc", "--t-end", "0.1", "--samples", "11", "--out", str(out)])  # doctest: +ELLIPSIS
+    >>> main(["--quiet", "simulate", "rlc", "--t-end", "0.1", "--samples", "11",
+    ...       "--out", str(out)])  # doctest: +ELLIPSIS
     wrote ...rlc.csv
     0
     >>> out.read_text().splitlines()[0]
@@ -595,7 +598,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             if value is not None and not (math.isfinite(value) and value > 0):
                 raise UsageError(f"--{option} must be a positive number of seconds, got {value}")
         return args.run(args, progress)
-    except (UsageError, *BAD_INPUT) as exc:
+    except PHMError as exc:  # bad usage or bad input: a model, a record, equations, a simulation
         print(f"bgphm: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:

@@ -1,16 +1,17 @@
 """``bgphm demo``: the whole chain on a built-in example, through the same commands a user runs.
 
 A demo simulates the example with one parameter degrading exponentially from a known time, adds sensor
-noise, writes the model and the record (``data.csv``) to the output directory, then runs ``bgphm arr``,
-``bgphm detect`` and ``bgphm prognose`` on those files, printing each command so that it can be rerun
-by hand with the same results, and writes ``truth.json`` with the degradation it injected and the true
-end of life to set beside the prediction.
+noise, writes the model and the record (``data.csv``) to the output directory with ``truth.json``, the
+degradation it injected and the true end of life to set beside the prediction.  :func:`prepare_demo`
+does that and returns the ``bgphm arr``, ``bgphm detect`` and ``bgphm prognose`` command lines on
+those files; the CLI's ``demo`` command runs them, printing each one so that it can be rerun by hand
+with the same results.
 
 * ``dc-motor``: rotor friction ``b`` x20 from t = 1 s, at 12 V (ARR of the mechanical junction).
-* ``torsion-bar``: load-disk bearing friction ``b_Ld`` under the PI speed loop, at seed 003's rate
+* ``torsion-bar``: load-disk bearing friction ``b_Ld`` under the PI speed loop, at the rate of Jha et al. (2016)
   (0.05 1/s from t = 10 s), failing at 90 x nominal at t = 100 s (ARR of the load disk, ``1_2``).
 * ``three-tank``: outlet valve ``az2`` of tank 2 opening up (erosion) at 2e-3 1/s from t = 200 s,
-  failing at 2 x nominal (ARR of tank 2, ``0_2``), sampled every second as in seed 001.
+  failing at 2 x nominal (ARR of tank 2, ``0_2``), sampled every second as in Du et al. (n.d.).
 
 The model file is JSON (data, no code) when every input of the example is a number.  The torsion
 bar's voltage comes from a PI speed loop, which JSON cannot hold: that demo writes ``model.py``,
@@ -18,12 +19,12 @@ which rebuilds the library example with its controller, so that ``bgphm simulate
 the nominal closed-loop run.  ``detect`` and ``prognose`` take every signal from the record and
 nothing from the model's inputs, so the file type does not change their results.
 
-Torsion bar.  Seed 003 degrades the motor-disk friction ``b_Md``; without a current sensor no ARR of
-the complete torsion bar contains it (the seed measures the motor torque as an extra input), so the
-demo degrades the bearing friction its ARR does see, with the seed's onset, rate and end of life.
+Torsion bar.  Jha et al. (2016) degrade the motor-disk friction ``b_Md``; without a current sensor no ARR of
+the complete torsion bar contains it (the paper measures the motor torque as an extra input), so the
+demo degrades the bearing friction its ARR does see, with the paper's onset, rate and end of life.
 That ARR integrates the shaft's twist rate from the two speeds, and the CLI has no encoder angles
 to take that integral from: the record is sampled at 1 kHz (at 100 Hz the trapezoidal rule misses
-2.8 mrad of twist in the start-up, a 5 mN.m offset) with 1e-3 rad/s speed noise.  With the seed's
+2.8 mrad of twist in the start-up, a 5 mN.m offset) with 1e-3 rad/s speed noise.  With the paper's
 0.01 rad/s, the integrated noise (about 5 mN.m over the record) and a margin ten times wider hide
 the fault until t = 65-70 s; with 1e-3 rad/s the alarm comes at t = 30-36 s, b_Ld at 3-4 x nominal.
 """
@@ -33,16 +34,19 @@ from __future__ import annotations
 import json
 import math
 import numbers
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from bgphm.errors import UsageError
+from bgphm.files import csv_text
 from bondgraph.io import to_json
 from bondgraph.library import Example, example
 from diagnosis.signals import add_noise, as_record
 
-__all__ = ["Demo", "DEMOS", "run_demo"]
+__all__ = ["Demo", "DEMOS", "DemoPlan", "prepare_demo"]
 
 
 @dataclass(frozen=True)
@@ -85,23 +89,67 @@ DEMOS = {
     "dc-motor": Demo("dc-motor", "b", rate=0.8, onset=1.0, fail_factor=20.0, t_end=4.0, samples=4001,
                      noise={"i": 0.01, "omega": 0.5}, calibrate=0.9,
                      description="rotor friction b x20 at 12 V"),
-    # seed 003's rate and onset; b_Ld fails at 90 x nominal at t = 100 s (b_Md at 0.45 is 89.6 x nominal)
+    # the rate and onset of Jha et al. (2016); b_Ld fails at 90 x nominal at t = 100 s (b_Md at 0.45 is 89.6 x nominal)
     "torsion-bar": Demo("torsion-bar", "b_Ld", rate=0.05, onset=10.0, fail_factor=90.0, t_end=90.0, samples=90001,
                         noise={"omega_m": 1e-3, "omega_Ld": 1e-3}, calibrate=9.5, particles=200,
-                        description="load-disk bearing friction b_Ld x90 under the PI speed loop (seed 003's rate)"),
+                        description="load-disk bearing friction b_Ld x90, PI speed loop, rate of Jha et al. (2016)"),
     "three-tank": Demo("three-tank", "az2", rate=2e-3, onset=200.0, fail_factor=2.0, t_end=500.0, samples=501,
                        noise={"h1": 2e-4, "h2": 2e-4, "h3": 2e-4}, calibrate=190.0, particles=500,
                        description="outlet valve az2 of tank 2 opening up x2 (erosion)"),
 }
 
 
-def run_demo(name: str, out: Path, progress, *, seed: int = 0) -> int:
-    """Run the demo ``name`` into ``out``; returns the exit code of the last command.
+@dataclass(frozen=True)
+class DemoPlan:
+    """A demo ready to run: its files are written, its ``bgphm`` command lines are listed.
 
-    Raises :class:`bgphm.cli.UsageError` for an unknown demo, naming the available ones.
+    Attributes
+    ----------
+    demo : Demo
+        The scenario.
+    commands : list of list of str
+        The ``bgphm`` argument lists to run in order (without ``bgphm`` and its global options).
+    truth : dict
+        What ``truth.json`` holds: the injected degradation and the true end of life ``eol``.
+    out : Path
+        The output directory; ``prognose`` writes ``out / "prognose" / "prognosis.json"``.
     """
-    from bgphm.cli import UsageError, main
 
+    demo: Demo
+    commands: list
+    truth: dict
+    out: Path
+
+    def truth_line(self) -> str | None:
+        """The true RUL and candidate value at the last prediction of ``prognose``; None without an alarm.
+
+        Read after the commands ran, from the ``prognosis.json`` they wrote.
+        """
+        summary = json.loads((self.out / "prognose" / "prognosis.json").read_text())
+        if summary.get("detection_time") is None:
+            return None
+        t = summary["last"]["t"]
+        theta = self.demo.theta(self.truth["nominal"])(t)
+        return (f"truth: at t = {t:g} s the RUL is {self.truth['eol'] - t:.4g} s and {self.demo.candidate} = "
+                f"{theta:.4g}")
+
+
+def prepare_demo(name: str, out: Path, progress: Callable[[str], None], *, seed: int = 0) -> DemoPlan:
+    """Write the model, the record and ``truth.json`` of the demo ``name`` into ``out``; return its commands.
+
+    ``progress`` receives a progress line (the CLI prints it on stderr unless ``--quiet``).
+    Raises :class:`~bgphm.errors.UsageError` for an unknown demo, naming the available ones.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> out = pathlib.Path(tempfile.mkdtemp())
+    >>> plan = prepare_demo("three-tank", out, progress=lambda line: None)  # doctest: +ELLIPSIS
+    wrote ...model.json, ...data.csv and ...truth.json (true end of life 546.6 s)
+    >>> [command[0] for command in plan.commands], plan.truth["candidate"]
+    (['arr', 'detect', 'prognose'], 'az2')
+    >>> import shutil; shutil.rmtree(out)
+    """
     if name not in DEMOS:
         raise UsageError(f"unknown demo {name!r} (available: {', '.join(DEMOS)})")
     demo = DEMOS[name]
@@ -117,23 +165,12 @@ def run_demo(name: str, out: Path, progress, *, seed: int = 0) -> int:
              "noise_std": demo.noise, "seed": seed}
     (out / "truth.json").write_text(json.dumps(truth, indent=2))
     print(f"wrote {model_path}, {data_path} and {out / 'truth.json'} (true end of life {truth['eol']:.4g} s)")
-    quiet = ["--quiet"] if progress.quiet else []
-    for command in _commands(demo, model_path, data_path, truth["failure_value"], out, seed):
-        print("$ bgphm " + " ".join(command))
-        code = main(quiet + command)
-        if code:
-            return code
-    summary = json.loads((out / "prognose" / "prognosis.json").read_text())
-    if summary.get("detection_time") is not None:
-        last = summary["last"]
-        print(f"truth: at t = {last['t']:g} s the RUL is {truth['eol'] - last['t']:.4g} s and {demo.candidate} = "
-              f"{demo.theta(nominal)(last['t']):.4g}")
-    return 0
+    commands = _commands(demo, model_path, data_path, truth["failure_value"], out, seed)
+    return DemoPlan(demo, commands, truth, out)
 
 
 def _write_record(demo: Demo, ex: Example, nominal: float, path: Path, seed: int) -> Path:
     """Simulate the degradation, add the sensor noise and write the CSV the commands read."""
-    from bgphm.cli import _csv_text
     from bondgraph.simulation import simulate  # scipy's solvers: not needed to build the CLI's parser
 
     t = np.linspace(0.0, demo.t_end, demo.samples)
@@ -141,7 +178,7 @@ def _write_record(demo: Demo, ex: Example, nominal: float, path: Path, seed: int
                       parameters={demo.candidate: demo.theta(nominal)}, t_eval=t,
                       max_step=demo.t_end / demo.samples * 5)
     record = add_noise(as_record(result.record(), name=demo.example), demo.noise, seed=seed)
-    path.write_text(_csv_text({"t": record.t, **record.columns}))
+    path.write_text(csv_text({"t": record.t, **record.columns}))
     return path
 
 
@@ -187,7 +224,8 @@ def _commands(demo: Demo, model_path: Path, data_path: Path, fail: float, out: P
         ["arr", model, "--format", "html", "--out", str(out / "report.html")],
         ["detect", model, data, *detection, "--out", str(out / "detect")],
         ["prognose", model, data, "--candidate", demo.candidate, "--degradation", "exponential",
-         "--fail", f"{fail:.6g}", *detection, "--particles", str(demo.particles), "--seed", str(seed), "--out", str(out / "prognose")],
+         "--fail", f"{fail:.6g}", *detection, "--particles", str(demo.particles), "--seed", str(seed),
+         "--out", str(out / "prognose")],
     ]
 
 

@@ -9,8 +9,9 @@
 from .causality import Causality, CausalIssue, assign_causality
 from .control import PIController
 from .equations import AlgebraicLoopError, StateEquations, causal_equations, model_equations, state_equations
-from .errors import CausalityError, EquationError, LawError, ModelError, SimulationError
-from .model import BondGraph, Bond, Element, signal_function
+from .errors import CausalityError, EquationError, LawError, ModelError, PHMError, PHMWarning, SimulationError
+from .model import BondGraph
+from .structure import Bond, Element, signal_function
 from .simulation import SimulationResult, simulate
 from .drawing import to_svg, to_tikz
 from .io import load_model, to_json
@@ -18,6 +19,7 @@ from .io import load_model, to_json
 __all__ = [
     "BondGraph", "Bond", "Element", "Causality", "CausalIssue", "PIController", "StateEquations",
     "SimulationResult", "assign_causality", "causal_equations", "model_equations", "state_equations",
-    "simulate", "signal_function", "ModelError", "LawError", "CausalityError", "EquationError",
+    "simulate", "signal_function", "PHMError", "PHMWarning", "ModelError", "LawError", "CausalityError",
+    "EquationError",
     "SimulationError", "AlgebraicLoopError", "load_model", "to_json", "to_svg", "to_tikz",
 ]

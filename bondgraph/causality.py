@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 from . import elements as el
 from .laws import solve_for
 from .errors import LawError
-from .model import PORT_SYMBOLS, Bond, BondGraph
+from .structure import PORT_SYMBOLS, Bond, BondGraphLike
 
 INTEGRAL, DERIVATIVE = "integral", "derivative"
 
@@ -142,7 +142,7 @@ class _Conflict(Exception):
         self.node = node
 
 
-def assign_causality(bg: BondGraph, preferred: str = INTEGRAL, *, dualize_detectors=None) -> Causality:
+def assign_causality(bg: BondGraphLike, preferred: str = INTEGRAL, *, dualize_detectors=None) -> Causality:
     """Assign causality to every bond of ``bg`` by SCAP.
 
     Parameters
@@ -165,6 +165,7 @@ def assign_causality(bg: BondGraph, preferred: str = INTEGRAL, *, dualize_detect
     Two inertias on one 1-junction share their velocity: the second one is
     dependent storage, forced into derivative causality by the first.
 
+    >>> from bondgraph import BondGraph
     >>> bg = BondGraph(name="two inertias")
     >>> bg.add("F", "Se"), bg.add("J", "1")
     ('F', 'J')
@@ -193,7 +194,7 @@ def assign_causality(bg: BondGraph, preferred: str = INTEGRAL, *, dualize_detect
     return _Scap(bg, preferred, dualize_detectors).run()
 
 
-def diagnosis_causality(bg: BondGraph) -> Causality:
+def diagnosis_causality(bg: BondGraphLike) -> Causality:
     """Derivative causality with as many detectors dualized as causality allows (the ARRs' assignment).
 
     Dualize every detector (De -> SSe, Df -> SSf); while dualized detectors clash, measure the last
@@ -203,7 +204,7 @@ def diagnosis_causality(bg: BondGraph) -> Causality:
     >>> diagnosis_causality(dc_motor()).dualized
     {'i': 'SSf', 'omega': 'SSf'}
     """
-    dualized = {n for n, e in bg.elements.items() if e.kind in el.DETECTORS}
+    dualized = {n for n, e in bg.structure().elements.items() if e.kind in el.DETECTORS}
     while True:
         causality = assign_causality(bg, DERIVATIVE, dualize_detectors=dualized)
         clashing = {n for issue in causality.conflicts for n in issue.elements if n in dualized}
@@ -213,7 +214,7 @@ def diagnosis_causality(bg: BondGraph) -> Causality:
 
 
 class _Scap:
-    def __init__(self, bg: BondGraph, preferred: str, dualize):
+    def __init__(self, bg: BondGraphLike, preferred: str, dualize):
         structure = bg.structure()
         self.elements = structure.elements
         detectors = [n for n, e in self.elements.items() if e.kind in el.DETECTORS]
@@ -393,7 +394,8 @@ class _Scap:
                 out = [self.effort_from[b.key] == node for b in bonds]
                 ok = out[0] != out[1] if kind in el.TRANSFORMERS else out[0] == out[1]
                 if not ok:
-                    rule = "passes effort through" if kind in el.TRANSFORMERS else "takes effort on both ports or neither"
+                    rule = ("passes effort through" if kind in el.TRANSFORMERS
+                            else "takes effort on both ports or neither")
                     raise _Conflict(node, f"{self.elements[node]} {rule}")
             return []
         known = assigned[0]

@@ -41,9 +41,9 @@ import networkx as nx
 
 from . import elements as el
 from .causality import DERIVATIVE, INTEGRAL, Causality, assign_causality, diagnosis_causality
-from .model import BondGraph, Element
+from .structure import BondGraphLike, Element
 
-__all__ = ["Drawing", "DrawnBond", "layout", "to_svg", "to_tikz"]
+__all__ = ["Drawing", "DrawnBond", "layout", "to_svg", "to_tikz", "display_svg", "display_html", "latex_escape"]
 
 # Geometry, in drawing units (SVG user units; 1 unit = 0.75 pt in TikZ).
 FONT = 12.0  # label font size, monospace
@@ -162,7 +162,7 @@ class Drawing:
 # -- geometry ---------------------------------------------------------------------------
 
 
-def layout(bg: BondGraph, causality: str | Causality | None = None) -> Drawing:
+def layout(bg: BondGraphLike, causality: str | Causality | None = None) -> Drawing:
     """Compute the drawing of ``bg``: label positions, bond lines, causal strokes.
 
     Parameters
@@ -209,7 +209,8 @@ def layout(bg: BondGraph, causality: str | Causality | None = None) -> Drawing:
     bonds = []
     for bond in structure.bonds:
         start, end = _clip(positions[bond.tail], positions[bond.head], sizes[bond.tail], sizes[bond.head])
-        dualized = causal is not None and bond.is_signal and (bond.head in causal.dualized or bond.tail in causal.dualized)
+        dualized = (causal is not None and bond.is_signal
+                    and (bond.head in causal.dualized or bond.tail in causal.dualized))
         stroke = None
         if causal is not None and bond.key in causal.effort_from:
             stroke = causal.stroke(bond.key)
@@ -221,7 +222,7 @@ def layout(bg: BondGraph, causality: str | Causality | None = None) -> Drawing:
                    str(bg.name), _notes(causal, bonds))
 
 
-def _resolve_causality(bg: BondGraph, causality) -> Causality | None:
+def _resolve_causality(bg: BondGraphLike, causality) -> Causality | None:
     if causality is None or isinstance(causality, Causality):
         return causality
     if causality == INTEGRAL:
@@ -459,7 +460,7 @@ def _num(value: float) -> str:
     return "0" if text in ("-0", "") else text
 
 
-def to_svg(bg: BondGraph, causality: str | Causality | None = "integral", *, scale: float = 1.0) -> str:
+def to_svg(bg: BondGraphLike, causality: str | Causality | None = "integral", *, scale: float = 1.0) -> str:
     """A standalone SVG drawing of ``bg`` (no scripts, no external references).
 
     Parameters
@@ -543,12 +544,35 @@ def to_svg(bg: BondGraph, causality: str | Causality | None = "integral", *, sca
     return "\n".join(out)
 
 
-def _svg_html(svg: str) -> str:
-    """An HTML snippet with the inline SVG (for Jupyter)."""
-    return f'<div class="bondgraph-drawing" style="max-width:100%;overflow-x:auto">{svg}</div>'
+def display_svg(bg: BondGraphLike) -> str:
+    """The SVG drawing Jupyter shows for a bond graph (``BondGraph._repr_svg_``).
+
+    Integral causality when it can be assigned, else the acausal drawing: a display never fails
+    on causality.
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit
+    >>> svg = display_svg(rlc_circuit())
+    >>> svg.startswith("<svg"), "integral causality" in svg
+    (True, True)
+    """
+    return to_svg(bg, _display_causality(bg))
 
 
-def _display_causality(bg: BondGraph) -> Causality | None:
+def display_html(bg: BondGraphLike) -> str:
+    """The HTML snippet Jupyter shows for a bond graph (``BondGraph._repr_html_``): :func:`display_svg` inline.
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit
+    >>> display_html(rlc_circuit()).startswith('<div class="bondgraph-drawing"')
+    True
+    """
+    return f'<div class="bondgraph-drawing" style="max-width:100%;overflow-x:auto">{display_svg(bg)}</div>'
+
+
+def _display_causality(bg: BondGraphLike) -> Causality | None:
     """Integral causality for display, or None (acausal) if it cannot be assigned."""
     try:
         return assign_causality(bg, INTEGRAL)
@@ -575,7 +599,7 @@ def latex_escape(value: object) -> str:
     return "".join(_LATEX.get(ch, ch) for ch in text)
 
 
-def to_tikz(bg: BondGraph, causality: str | Causality | None = "integral") -> str:
+def to_tikz(bg: BondGraphLike, causality: str | Causality | None = "integral") -> str:
     r"""A ``tikzpicture`` of ``bg`` (plain TikZ: ``\usepackage{tikz}`` is enough).
 
     Coordinates are the drawing units of :func:`layout` (``x=0.75pt``,

@@ -1,6 +1,6 @@
 """Element kinds of a bond graph and their port structure.
 
-The kinds follow the model contract of DESIGN.md::
+The kinds follow the model contract of docs/design.md::
 
     sources      Se Sf MSe MSf      one power port, impose effort (e) or flow (f)
     storage      C I                one power port, integral or derivative causality

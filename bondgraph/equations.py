@@ -5,7 +5,7 @@ Variables
 ---------
 Each power bond with label ``k`` carries an effort ``e_k`` and a flow ``f_k``
 (sympy Symbols).  Energy variables of storage elements are functions of time,
-``q_<C>(t)`` and ``p_<I>(t)``; signals are ``name(t)`` (DESIGN.md, ARR
+``q_<C>(t)`` and ``p_<I>(t)``; signals are ``name(t)`` (docs/design.md, ARR
 contract); parameters are Symbols named after ``param``.
 
 Sign conventions: power flows along the bond direction.  A one-port's own flow
@@ -36,7 +36,7 @@ from . import elements as el
 from .causality import INTEGRAL, Causality, assign_causality
 from .errors import CausalityError, EquationError, LawError
 from .laws import solve_for
-from .model import PORT_SYMBOLS, T, BondGraph, Element, signal_function
+from .structure import PORT_SYMBOLS, T, BondGraphLike, Element, signal_function
 
 E_, F_, Q_, P_ = (PORT_SYMBOLS[n] for n in "efqp")
 
@@ -83,7 +83,7 @@ def constitutive_law(element: Element) -> sp.Expr:
 # acausal equations
 
 
-def model_equations(bg: BondGraph) -> list[sp.Eq]:
+def model_equations(bg: BondGraphLike) -> list[sp.Eq]:
     """Every constitutive and junction equation of ``bg``, without causality.
 
     Examples
@@ -195,7 +195,7 @@ class CausalEquations:
         return substitute(expression, self.resolved, set(self.assignments))
 
 
-def causal_equations(bg: BondGraph, causality: Causality, structure=None, *,
+def causal_equations(bg: BondGraphLike, causality: Causality, structure=None, *,
                      keep_blocked: bool = False) -> CausalEquations:
     """Orient every element equation of ``bg`` according to ``causality``.
 
@@ -531,7 +531,7 @@ class StateEquations:
     def power(self, element: Hashable) -> sp.Expr:
         """Power flowing into one-port ``element``, ``sum_k s_k e_k f_k``, in states and inputs.
 
-        For an R element this is the power it dissipates (seed 000 eq. 6: ``P_c = F_c v``).
+        For an R element this is the power it dissipates (Rodriguez Obando et al. (2021), eq. 6: ``P_c = F_c v``).
 
         >>> from bondgraph.library import rlc_circuit
         >>> rlc_circuit().state_equations().power("R")
@@ -590,7 +590,7 @@ class StateEquations:
         return "\n".join(lines)
 
 
-def state_equations(bg: BondGraph, causality: Causality | None = None) -> StateEquations:
+def state_equations(bg: BondGraphLike, causality: Causality | None = None) -> StateEquations:
     """Derive the state equations of ``bg`` in (preferred) integral causality.
 
     Storage forced into derivative causality (dependent storage) is handled by

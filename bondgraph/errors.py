@@ -1,9 +1,60 @@
-"""Errors raised by the bond graph core.  Each names the node, bond or signal at fault."""
+"""Errors raised by the toolkit on bad input.  Each names the node, bond, signal, file or option at fault.
+
+:class:`PHMError` is the base of them all (``bondgraph``, ``diagnosis`` and the ``bgphm`` command
+line), and each is also a :class:`ValueError`.
+
+>>> from bondgraph import BondGraph
+>>> try:
+...     BondGraph().add("X", "Q")
+... except PHMError as error:
+...     print(type(error).__name__, "-", error)
+ModelError - node 'X': unknown kind 'Q' (expected one of 0, 1, C, De, Df, GY, I, MGY, MSe, MSf, MTF, R, Se, Sf, TF)
+"""
 
 from __future__ import annotations
 
 
-class ModelError(ValueError):
+class PHMError(Exception):
+    """Base of every error the toolkit raises on bad input, so that a user can catch them all.
+
+    Bad input is a model, a law, a record, a model file or a command line that the toolkit cannot
+    use, or equations or a simulation that cannot be had from it.  A wrong argument to a function
+    (an unknown option name, say) is a plain :class:`ValueError` or :class:`KeyError`.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from diagnosis import RecordError, as_record
+    >>> issubclass(RecordError, PHMError), issubclass(ModelError, PHMError)
+    (True, True)
+    >>> try:
+    ...     as_record({"t": np.array([0.0, 1.0])}, ["omega"])
+    ... except PHMError as error:
+    ...     print(error)
+    record: missing column(s) ['omega']; columns present: ['t']
+    """
+
+
+class PHMWarning(UserWarning):
+    """Base of every warning the toolkit issues, so that a user can filter them all at once.
+
+    Each warning of the toolkit derives from it (and keeps its own second base, ``UserWarning`` or
+    ``RuntimeWarning``): ARR derivation, records, interval evaluation, filters, identification,
+    sampling and metrics.
+
+    Examples
+    --------
+    >>> import warnings
+    >>> from prognosis.statespace import FilterWarning
+    >>> issubclass(FilterWarning, PHMWarning), issubclass(FilterWarning, RuntimeWarning)
+    (True, True)
+    >>> with warnings.catch_warnings():
+    ...     warnings.simplefilter("ignore", PHMWarning)   # silence the toolkit, not numpy
+    ...     warnings.warn("covariance repaired", FilterWarning)
+    """
+
+
+class ModelError(PHMError, ValueError):
     """The bond graph violates the model contract (kind, bonds, values, laws, names)."""
 
 
@@ -11,13 +62,13 @@ class LawError(ModelError):
     """A constitutive law or modulus that cannot be parsed, is unsafe, or cannot be inverted."""
 
 
-class CausalityError(ValueError):
+class CausalityError(PHMError, ValueError):
     """Equations were requested for a causal assignment that cannot give them."""
 
 
-class EquationError(ValueError):
+class EquationError(PHMError, ValueError):
     """State or output equations that cannot be derived (e.g. an unsolvable algebraic loop)."""
 
 
-class SimulationError(ValueError):
+class SimulationError(PHMError, ValueError):
     """Bad simulation input: missing signal, unknown parameter or state, wrong shape."""

@@ -3,10 +3,10 @@
 ========================  =====================================================
 :func:`rlc_circuit`       series RLC circuit, current and capacitor-voltage sensors
 :func:`dc_motor`          DC motor: Se, R_a, L_a, GY k_m, rotor J, friction b
-:func:`torsion_bar`       seed 003 Fig. 5-6: the complete torsion-bar system
-:func:`torsion_bar_monitorable`  seed 003 Fig. 7: its monitorable mechanical part
-:func:`three_tank`        seed 001: the DTS200 three-tank system
-:func:`friction_drive`    seed 000: roller-on-tire friction drive
+:func:`torsion_bar`       Jha et al. (2016), Figs. 5-6: the complete torsion-bar system
+:func:`torsion_bar_monitorable`  Jha et al. (2016), Fig. 7: its monitorable mechanical part
+:func:`three_tank`        Du et al. (n.d.): the DTS200 three-tank system
+:func:`friction_drive`    Rodriguez Obando et al. (2021): roller-on-tire friction drive
 :func:`mass_spring_chain` n mass-spring-damper stages (benchmarks)
 ========================  =====================================================
 
@@ -42,7 +42,8 @@ def rlc_circuit(R: float = 10.0, L: float = 0.1, C: float = 1e-3) -> BondGraph:
     return bg
 
 
-def dc_motor(R_a: float = 1.23, L_a: float = 1.34e-3, k_m: float = 3.89e-2, J: float = 1e-4, b: float = 1e-4) -> BondGraph:
+def dc_motor(R_a: float = 1.23, L_a: float = 1.34e-3, k_m: float = 3.89e-2, J: float = 1e-4,
+             b: float = 1e-4) -> BondGraph:
     """Permanent-magnet DC motor with current and speed sensors.
 
     ``Se:U -> 1_e (R:R_a, I:L_a, Df:i) -> GY:k_m -> 1_m (I:J, R:b, Df:omega)``.
@@ -64,8 +65,8 @@ def dc_motor(R_a: float = 1.23, L_a: float = 1.34e-3, k_m: float = 3.89e-2, J: f
     return bg
 
 
-# Seed 003 Table VI, with k_m = 3.89e-2 N.m/A (the table's 3.89e-4 cannot hold the
-# nominal speed; see DESIGN.md).  b_s is Table VI's "R_s".
+# Jha et al. (2016), Table VI, with k_m = 3.89e-2 N.m/A (the table's 3.89e-4 cannot hold the
+# nominal speed; see docs/design.md).  b_s is Table VI's "R_s".
 TORSION_BAR = {
     "J_m": (6.76e-6, (-0.02, 0.02)),
     "f_m": (2e-6, (0.0, 0.3)),
@@ -115,7 +116,7 @@ def _mechanical_part(bg: BondGraph, values: dict) -> None:
 
 
 def torsion_bar(**overrides: float) -> BondGraph:
-    """The complete torsion-bar system of seed 003 (Fig. 5-6, Table VI).
+    """The complete torsion-bar system of Jha et al. (2016), Figs. 5-6 and Table VI.
 
     ``MSe:U -> 1_e (R:R_a, I:L_a) -> GY:k_m -> 1_1 (I:J_m, R:f_m, Df:omega_m)
     -> TF:1/k_belt -> 1_Md (I:J_Md, R:b_Md) -> 0_s -> [1_s (C:k_s, R:b_s)]
@@ -140,7 +141,7 @@ def torsion_bar(**overrides: float) -> BondGraph:
 
 
 def torsion_bar_monitorable(**overrides: float) -> BondGraph:
-    """Seed 003 Fig. 7: the monitorable mechanical part, driven by the motor torque ``tau_m``."""
+    """Jha et al. (2016), Fig. 7: the monitorable mechanical part, driven by the motor torque ``tau_m``."""
     values = _values(overrides)
     bg = BondGraph(name="torsion bar (monitorable part)")
     bg.add("tau_m", "MSe")
@@ -149,16 +150,16 @@ def torsion_bar_monitorable(**overrides: float) -> BondGraph:
     return bg
 
 
-# Seed 003 section 7: a suspended load of mass M presses a lever on the motor disk
+# Jha et al. (2016), section 7: a suspended load of mass M presses a lever on the motor disk
 # (Coulomb friction mu M g r_Md sgn(omega_Md), eqs. 54-56).  r_Md is not given in the
-# seed; 0.05 m is our assumption.
+# paper; 0.05 m is our assumption.
 MASS_LOAD = {"M": 0.1, "mu": 0.27, "g": 9.81, "r_Md": 0.05}
 MU_UNCERTAINTY = (-0.1, 0.1)
 
 
 def torsion_bar_with_load(M: float = MASS_LOAD["M"], mu: float = MASS_LOAD["mu"], r_Md: float = MASS_LOAD["r_Md"],
                           **overrides: float) -> BondGraph:
-    """Seed 003 section 7: the monitorable part with the suspended-mass friction on the motor disk.
+    """Jha et al. (2016), section 7: the monitorable part with the suspended-mass friction on the motor disk.
 
     The motor-disk R element gets the law ``e = b_Md f + mu M g r_Md sign(f)``
     (eq. 56), with M (kg), mu and r_Md as law constants and mu uncertain as in
@@ -192,17 +193,17 @@ def _values(overrides: dict) -> dict:
 
 
 def torsion_bar_controller(kp: float = 0.05, ki: float = 0.5, setpoint: float | Callable = OMEGA_M_REF) -> PIController:
-    """PI speed loop on ``omega_m`` with the 12 V actuator saturation (gains are ours; the seed gives none)."""
+    """PI speed loop on ``omega_m`` with the 12 V actuator saturation (gains are ours; the paper gives none)."""
     return PIController("omega_m", setpoint=setpoint, kp=kp, ki=ki, limits=(-U_MAX, U_MAX))
 
 
-# Seed 001 section 6.1 (DTS200).  Levels h are efforts, volumetric flows are flows.
+# Du et al. (n.d.), section 6.1 (DTS200).  Levels h are efforts, volumetric flows are flows.
 THREE_TANK = {"A_s": 0.0154, "S_n": 5e-5, "g": 9.81, "az1": 0.5, "az2": 0.6, "az3": 0.5, "Q1": 4.5e-5, "Q2": 4.5e-5}
 
 
 def three_tank(az1: float = 0.5, az2: float = 0.6, az3: float = 0.5, A_s: float = 0.0154,
                uncertainty: float = 0.05, area_uncertainty: float | None = None) -> BondGraph:
-    """The DTS200 three-tank system of seed 001 (eq. 57-58).
+    """The DTS200 three-tank system of Du et al. (n.d.), eqs. 57-58.
 
     Tanks 1, 3, 2 in series: ``Q1 -> tank 1 -> valve az1 -> tank 3 -> valve az3
     -> tank 2 -> valve az2 -> out``, ``Q2 -> tank 2``.  Tanks are C elements
@@ -236,7 +237,7 @@ def three_tank(az1: float = 0.5, az2: float = 0.6, az3: float = 0.5, A_s: float 
 
 def friction_drive(J1: float = 9.9225e-4, B1: float = 6.36e-3, r1: float = 0.0315, alpha: float = 11.0,
                    r2: float = 0.35, J2: float = 12.25, B2: float = 0.625) -> BondGraph:
-    """The roller-on-tire friction drive of seed 000 (eqs. 1-5; defaults: Table 1 in SI units, alpha of eq. 57).
+    """Roller-on-tire friction drive, Rodriguez Obando et al. (2021), eqs. 1-5 (defaults: Table 1 in SI, alpha: eq. 57).
 
     ``MSe:T_m -> 1_1 (I:J1, R:B1, Df:omega1) -> TF:r1 -> 0_c (R:alpha)
     -> TF:1/r2 -> 1_2 (I:J2, R:B2, Df:omega2)``.  The 0-junction carries the
@@ -308,7 +309,8 @@ class Example:
 def example(name: str) -> Example:
     """A built-in example by name: ``rlc``, ``dc-motor``, ``torsion-bar``, ``three-tank``."""
     builders = {
-        "rlc": lambda: Example("rlc", rlc_circuit(), {"V": 1.0}, 0.5, description="step response of a series RLC circuit"),
+        "rlc": lambda: Example("rlc", rlc_circuit(), {"V": 1.0}, 0.5,
+                               description="step response of a series RLC circuit"),
         "dc-motor": lambda: Example("dc-motor", dc_motor(), {"U": 12.0}, 1.0, description="DC motor speed-up at 12 V"),
         "torsion-bar": lambda: Example("torsion-bar", torsion_bar(), {"U": torsion_bar_controller()}, 10.0,
                                        description="torsion bar under the PI speed loop (omega_m -> 112.5 rad/s)"),

@@ -1,6 +1,6 @@
 """The bond graph model: a networkx.DiGraph wrapped with a small DSL and validation.
 
-A bond graph is a ``networkx.DiGraph`` (model contract in DESIGN.md): node
+A bond graph is a ``networkx.DiGraph`` (model contract in docs/design.md): node
 attribute ``kind``; ``param``, ``value``, ``uncertainty``, ``law`` on
 parametric elements; ``signal`` on sources and detectors; an edge ``u -> v`` is
 a bond whose direction is the power half-arrow, and edges into De/Df are signal
@@ -13,6 +13,10 @@ bonds.  Extensions kept by this toolkit (other attributes are kept and ignored):
 ``params``
     A dict of auxiliary constants a law uses besides the element's own
     parameter, e.g. ``{"S_n": 5e-5, "g": 9.81}`` for a valve.
+
+The model sits on top of the analyses: its elements and bonds are read into the
+types of :mod:`bondgraph.structure`, checked by :mod:`bondgraph.validation`, and its
+methods call causality, equations and drawing, none of which imports this module.
 
 Examples
 --------
@@ -35,155 +39,23 @@ from __future__ import annotations
 
 import math
 from collections.abc import Hashable, Mapping
-from dataclasses import dataclass, field
 
 import networkx as nx
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from . import drawing
 from . import elements as el
+from .causality import Causality, assign_causality
+from .equations import StateEquations, model_equations, state_equations
 from .errors import LawError, ModelError
 from .laws import parse_expression
-
-T = sp.Symbol("t")
-PORT_SYMBOLS = {name: sp.Symbol(name) for name in ("e", "f", "q", "p")}
-RESERVED_NAMES = frozenset(PORT_SYMBOLS) | {"t"}
-
-
-def signal_function(name: str) -> sp.Expr:
-    """The contract's form of a measured or input signal: ``name(t)``.
-
-    >>> signal_function("omega_m")
-    omega_m(t)
-    """
-    return sp.Function(name)(T)
-
-
-@dataclass(frozen=True)
-class Element:
-    """A validated node of the bond graph.
-
-    ``law`` is in the port symbols ``e, f, q, p`` and parameter symbols;
-    ``modulus`` (two-ports) is in parameter symbols and signal functions.
-    Elements are read from the graph by :attr:`BondGraph.elements`.
-
-    Examples
-    --------
-    >>> from bondgraph.library import rlc_circuit, torsion_bar_monitorable
-    >>> r = rlc_circuit().elements["R"]
-    >>> str(r), r.kind, r.param, r.value, r.uncertainty
-    ("R 'R'", 'R', 'R', 10.0, (-0.05, 0.05))
-    >>> r.law is None, r.uncertainties   # default linear law e = R f
-    (True, {'R': (-0.05, 0.05)})
-    >>> spring = torsion_bar_monitorable().elements["k_s"]
-    >>> spring.law, spring.value
-    (e - k_s*q, 1.786)
-    """
-
-    name: Hashable
-    kind: str
-    param: str | None = None
-    value: float | None = None
-    uncertainty: tuple[float, float] | None = None
-    law: sp.Expr | None = None
-    modulus: sp.Expr | None = None
-    signal: str | None = None
-    constants: Mapping[str, float] = field(default_factory=dict)
-    constant_uncertainties: Mapping[str, tuple[float, float]] = field(default_factory=dict)
-
-    @property
-    def uncertainties(self) -> dict[str, tuple[float, float]]:
-        """Multiplicative interval of the element's parameter and of its uncertain law constants."""
-        own = {self.param: self.uncertainty} if self.uncertainty is not None else {}
-        return {**own, **self.constant_uncertainties}
-
-    def __str__(self) -> str:
-        return f"{self.kind} {self.name!r}"
-
-
-@dataclass(frozen=True)
-class Bond:
-    """A bond ``tail -> head`` (power direction); signal bonds end at a detector.
-
-    Power bonds carry a ``label`` (numbered in edge order unless given), which
-    names their effort and flow symbols ``e_<label>``, ``f_<label>``; signal
-    bonds have none.
-
-    Examples
-    --------
-    >>> from bondgraph.library import rlc_circuit
-    >>> bonds = rlc_circuit().bonds
-    >>> first = bonds[0]
-    >>> str(first), first.key, first.label
-    ("bond 1 ('V' -> 'J1')", ('V', 'J1'), 1)
-    >>> first.other("V"), first.sign_into("J1"), first.sign_into("V")
-    ('J1', 1, -1)
-    >>> first.other("R")
-    Traceback (most recent call last):
-    ...
-    ValueError: 'R' is not an end of bond 1 ('V' -> 'J1')
-    >>> sensor = bonds[-1]   # signal bonds come after the power bonds
-    >>> str(sensor), sensor.is_signal
-    ("signal bond ('J0' -> 'v_C')", True)
-    """
-
-    tail: Hashable
-    head: Hashable
-    label: Hashable | None
-    is_signal: bool = False
-
-    @property
-    def key(self) -> tuple[Hashable, Hashable]:
-        """The edge ``(tail, head)`` that identifies the bond, e.g. in ``Causality.effort_from``."""
-        return (self.tail, self.head)
-
-    def other(self, node: Hashable) -> Hashable:
-        """The node at the other end of the bond from ``node``, one of its two ends (else ValueError)."""
-        if node == self.tail:
-            return self.head
-        if node == self.head:
-            return self.tail
-        raise ValueError(f"{node!r} is not an end of {self}")
-
-    def sign_into(self, node: Hashable) -> int:
-        """+1 if power flows into ``node`` along this bond, -1 if out of it (``node`` one of its ends)."""
-        if node == self.head:
-            return 1
-        if node == self.tail:
-            return -1
-        raise ValueError(f"{node!r} is not an end of {self}")
-
-    def __str__(self) -> str:
-        name = f"bond {self.label} " if self.label is not None else "signal bond "
-        return f"{name}({self.tail!r} -> {self.head!r})"
-
-
-@dataclass(frozen=True)
-class Structure:
-    """A validated snapshot of a bond graph, taken once per analysis.
-
-    ``at[node]`` lists the bonds (power and signal) touching ``node``.
-    """
-
-    elements: dict
-    bonds: list
-    parameters: dict
-    at: dict
-
-    @property
-    def inputs(self) -> list[str]:
-        """Input signal names, without repeats, in element order: of the sources and the modulating ones of MTF/MGY."""
-        names = [e.signal for e in self.elements.values() if e.kind in el.SOURCES | el.MODULATED_TWO_PORTS]
-        return list(dict.fromkeys(names))
-
-    @property
-    def outputs(self) -> list[str]:
-        """Measured signal names, one per detector (De, Df), in element order."""
-        return [e.signal for e in self.elements.values() if e.kind in el.DETECTORS]
+from .structure import PORT_SYMBOLS, RESERVED_NAMES, Bond, Element, Structure, signal_function
+from .validation import check_model
 
 
 class BondGraph:
-    """A bond graph model following the DESIGN.md contract.
+    """A bond graph model following the model contract of docs/design.md.
 
     Parameters
     ----------
@@ -280,8 +152,6 @@ class BondGraph:
         """
         elements = {name: _read_element(name, data) for name, data in self._graph.nodes(data=True)}
         bonds = _read_bonds(self._graph, elements)
-        from .validation import check_model
-
         parameters = check_model(elements, bonds)
         at: dict[Hashable, list[Bond]] = {name: [] for name in elements}
         for bond in bonds:
@@ -320,35 +190,25 @@ class BondGraph:
         return self.structure().outputs
 
     # -- analysis -----------------------------------------------------------
-    def assign_causality(self, preferred: str = "integral", *, dualize_detectors: bool | None = None):
+    def assign_causality(self, preferred: str = "integral", *, dualize_detectors: bool | None = None) -> Causality:
         """Sequential causality assignment; see :func:`bondgraph.causality.assign_causality`."""
-        from .causality import assign_causality
-
         return assign_causality(self, preferred=preferred, dualize_detectors=dualize_detectors)
 
     def equations(self) -> list[sp.Eq]:
         """Acausal constitutive and junction equations; see :func:`bondgraph.equations.model_equations`."""
-        from .equations import model_equations
-
         return model_equations(self)
 
-    def state_equations(self, causality=None):
+    def state_equations(self, causality: Causality | None = None) -> StateEquations:
         """State equations in integral causality; see :func:`bondgraph.equations.state_equations`."""
-        from .equations import state_equations
-
         return state_equations(self, causality)
 
     def _repr_svg_(self) -> str:
-        """Jupyter display: the drawing in integral causality (acausal if it cannot be assigned)."""
-        from .drawing import _display_causality, to_svg
-
-        return to_svg(self, _display_causality(self))
+        """Jupyter display: :func:`bondgraph.drawing.display_svg`."""
+        return drawing.display_svg(self)
 
     def _repr_html_(self) -> str:
-        """Jupyter display: the SVG drawing inline in a small HTML snippet."""
-        from .drawing import _display_causality, _svg_html, to_svg
-
-        return _svg_html(to_svg(self, _display_causality(self)))
+        """Jupyter display: :func:`bondgraph.drawing.display_html`."""
+        return drawing.display_html(self)
 
     def __repr__(self) -> str:
         kinds: dict[str, int] = {}
@@ -428,7 +288,8 @@ def _read_uncertainty(where: str, interval) -> tuple[float, float]:
             "(true value = value * (1 + delta), delta in [lo, hi])"
         )
     if lo <= -1.0:
-        raise ModelError(f"{where}: uncertainty {interval!r} lets the parameter reach zero or change sign (need lo > -1)")
+        raise ModelError(f"{where}: uncertainty {interval!r} lets the parameter reach zero or change sign "
+                         "(need lo > -1)")
     return (lo, hi)
 
 

@@ -25,7 +25,8 @@ from scipy.integrate import solve_ivp
 from ._optional import pandas_for
 from .equations import StateEquations
 from .errors import SimulationError
-from .model import T, BondGraph, signal_function
+from .model import BondGraph
+from .structure import T, signal_function
 
 
 @dataclass
@@ -153,10 +154,12 @@ def simulate(
         solution = solve_ivp(plan.derivative, t_span, z0, method=method, t_eval=t_eval,
                              rtol=rtol, atol=atol, max_step=max_step)
     if not solution.success:
-        raise SimulationError(f"integration failed at t = {solution.t[-1] if solution.t.size else t_span[0]}: {solution.message}")
+        failed_at = solution.t[-1] if solution.t.size else t_span[0]
+        raise SimulationError(f"integration failed at t = {failed_at}: {solution.message}")
     if not np.all(np.isfinite(solution.y)):
         k = int(np.argmax(~np.all(np.isfinite(solution.y), axis=0)))
-        raise SimulationError(f"the state became NaN or infinite at t = {solution.t[k]:g}; check the laws and parameters")
+        raise SimulationError(f"the state became NaN or infinite at t = {solution.t[k]:g}; "
+                              "check the laws and parameters")
     return plan.result(solution)
 
 
@@ -207,11 +210,13 @@ class _Plan:
                 try:
                     value = float(spec)
                 except (TypeError, ValueError):
-                    raise SimulationError(f"input {name!r}: {spec!r} is not a number, a callable or a controller") from None
+                    raise SimulationError(f"input {name!r}: {spec!r} is not a number, a callable "
+                                          "or a controller") from None
                 self.open_loop[name] = lambda t, v=value: v
         unknown = set(parameters) - set(equations.parameters)
         if unknown:
-            raise SimulationError(f"parameters {sorted(unknown)} are not in the model; it has {sorted(equations.parameters)}")
+            raise SimulationError(f"parameters {sorted(unknown)} are not in the model; "
+                                  f"it has {sorted(equations.parameters)}")
         self.parameter_names = list(equations.parameters)
         self.parameter_values = {**equations.parameters, **parameters}
         self.input_names = names
@@ -246,8 +251,8 @@ class _Plan:
                     f"measured signal {name!r} depends directly on a feedback input; the loop is algebraic"
                 )
         self.labels = list(eq.efforts)
-        self.f_bonds, _ = compile_list([*eq.efforts.values(), *eq.flows.values()],
-                                       [f"effort of bond {k}" for k in eq.efforts] + [f"flow of bond {k}" for k in eq.flows])
+        what = [f"effort of bond {k}" for k in eq.efforts] + [f"flow of bond {k}" for k in eq.flows]
+        self.f_bonds, _ = compile_list([*eq.efforts.values(), *eq.flows.values()], what)
 
     def _theta(self, t):
         return [v(t) if callable(v) else v for v in (self.parameter_values[n] for n in self.parameter_names)]

@@ -1,22 +1,19 @@
 """Structural checks of a bond graph: bonds per element, detectors, names.
 
 Node-local checks (kind, value, uncertainty, law) happen when an element is
-read (:func:`bondgraph.model._read_element`); this module checks how elements
-are connected and that names are used consistently across the model.
+read (:meth:`bondgraph.model.BondGraph.add` and ``structure``); this module checks
+how elements are connected and that names are used consistently across the model.
 """
 
 from __future__ import annotations
 
 from collections.abc import Hashable, Mapping
-from typing import TYPE_CHECKING
 
 import sympy as sp
 
 from . import elements as el
 from .errors import ModelError
-
-if TYPE_CHECKING:  # model imports this module
-    from .model import Bond, Element
+from .structure import Bond, Element
 
 
 def check_model(elements: Mapping[Hashable, Element], bonds: list[Bond]) -> dict[str, float]:
@@ -71,7 +68,8 @@ def _check_bonds(elements, bonds) -> None:
         if element.kind in el.JUNCTIONS and n_in + n_out < 2:
             raise ModelError(f"{where}: a junction needs at least 2 power bonds, it has {n_in + n_out}")
         if element.kind in el.DETECTORS and len(sensors[name]) != 1:
-            raise ModelError(f"{where}: a detector needs exactly 1 signal bond from a junction, it has {len(sensors[name])}")
+            raise ModelError(f"{where}: a detector needs exactly 1 signal bond from a junction, "
+                             f"it has {len(sensors[name])}")
 
 
 def _check_node_names(elements) -> None:

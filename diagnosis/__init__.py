@@ -6,7 +6,8 @@
 ['ARR_1_1', 'ARR_1_2']
 """
 
-from .arrs import ARR, ARRWarning, delta, derive_arrs
+from .arrs import ARR, ARRWarning, derive_arrs
+from .deltas import delta
 from .detection import Evaluation, evaluate, noise_margin, robust_std
 from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, compile_interval
 from .signals import Record, RecordError, RecordWarning, add_noise, as_record, read_csv

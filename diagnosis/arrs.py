@@ -1,6 +1,6 @@
 """Interval-valued analytical redundancy relations (I-ARRs) from a bond graph.
 
-Seed 003 section 2.1 (after Samantaray, Djeziri and Ould Bouamama's BG-LFT):
+Jha et al. (2016), section 2.1 (after Samantaray, Djeziri and Ould Bouamama's BG-LFT):
 
 1. preferred derivative causality, detectors dualized (De -> SSe, Df -> SSf);
 2. one candidate ARR per junction carrying a dualized detector: its power
@@ -10,7 +10,7 @@ Seed 003 section 2.1 (after Samantaray, Djeziri and Ould Bouamama's BG-LFT):
 3. unknown efforts and flows eliminated along causal paths back to inputs,
    measured signals and their derivatives; storage left in integral causality
    with a known input becomes an integral from the start of the record
-   (seed 003 eq. 45, the shaft spring; the energy variable is taken as zero at
+   (Jha et al. (2016), eq. 45, the shaft spring; the energy variable is taken as zero at
    the start of the record);
 4. the uncertain parameters split each ARR into a nominal part ``r_n``
    (Psi_1, nominal values) and an uncertain part Psi_2 in the multiplicative
@@ -43,65 +43,16 @@ from bondgraph import BondGraph
 from bondgraph import elements as el
 from bondgraph.causality import diagnosis_causality
 from bondgraph.equations import causal_equations, constitutive_law, substitute
-from bondgraph.model import T, Structure, signal_function
+from bondgraph.errors import PHMWarning
+from bondgraph.structure import Structure, T, signal_function
+
+from .deltas import delta, delta_parameter, latex
+from .detection import Evaluation, evaluate
+from .residuals import CompiledARR, compile_arr
 
 
-class ARRWarning(UserWarning):
+class ARRWarning(PHMWarning):
     """A candidate ARR that could not be expressed in known variables."""
-
-
-def delta(parameter: str) -> sp.Symbol:
-    """The multiplicative uncertainty symbol of a parameter: ``delta_<param>``.
-
-    The true value of an uncertain parameter is ``value * (1 + delta)``, with
-    ``delta`` in the element's ``uncertainty`` interval.
-
-    Parameters
-    ----------
-    parameter : str
-        A parameter name.
-
-    Returns
-    -------
-    sympy.Symbol
-
-    Examples
-    --------
-    >>> from bondgraph.library import dc_motor
-    >>> delta("R_a")
-    delta_R_a
-    >>> arr = derive_arrs(dc_motor())[0]
-    >>> arr.uncertain.has(delta("R_a")), arr.uncertain.has(delta("J"))
-    (True, False)
-    >>> arr.terms["R_a"]
-    -R_a*delta_R_a*i(t)
-    """
-    return sp.Symbol(f"delta_{parameter}")
-
-
-def delta_parameter(symbol: sp.Symbol) -> str | None:
-    """The parameter whose uncertainty :func:`delta` names with ``symbol``, or None for any other symbol.
-
-    >>> delta_parameter(delta("L_a")), delta_parameter(sp.Symbol("L_a"))
-    ('L_a', None)
-    """
-    return symbol.name[len("delta_"):] if symbol.name.startswith("delta_") else None
-
-
-def latex(expression: sp.Expr) -> str:
-    r"""LaTeX of an ARR expression, each ``delta_<param>`` typeset as delta with the parameter's own subscript.
-
-    sympy alone reads ``delta_L_a`` as two subscripts and prints ``\delta_{L a}``.
-
-    Examples
-    --------
-    >>> from bondgraph.library import dc_motor
-    >>> print(latex(derive_arrs(dc_motor())[0].terms["L_a"]))
-    - L_{a} \delta_{L_{a}} \frac{d}{d t} i{\left(t \right)}
-    """
-    names = {s: f"\\delta_{{{sp.latex(sp.Symbol(delta_parameter(s)))}}}"
-             for s in expression.free_symbols if delta_parameter(s) is not None}
-    return sp.latex(expression, symbol_names=names)
 
 
 @dataclass
@@ -161,7 +112,7 @@ class ARR:
     detector: Hashable | None = None
     implicit: bool = False
     blocked_by: tuple = ()
-    _compiled: object = field(default=None, init=False, repr=False, compare=False)
+    _compiled: CompiledARR | None = field(default=None, init=False, repr=False, compare=False)
 
     @property
     def signals(self) -> list[str]:
@@ -172,16 +123,30 @@ class ARR:
         return f"{self.name}: r_n = {self.nominal}\n  Psi_2 = {self.uncertain}"
 
     def latex(self) -> str:
-        """LaTeX of ``r_n`` and Psi_2, each delta with its parameter as subscript (:func:`diagnosis.arrs.latex`)."""
+        """LaTeX of ``r_n`` and Psi_2, each delta with its parameter as subscript (:func:`diagnosis.deltas.latex`)."""
         return f"r_{{n}} = {latex(self.nominal)}, \\quad \\Psi_2 = {latex(self.uncertain)}"
 
     def _repr_latex_(self) -> str:
         return f"$\\displaystyle {self.latex()}$"
 
-    def evaluate(self, record, **options):
-        """Residual, thresholds and alarms over a record; see :func:`diagnosis.detection.evaluate`."""
-        from .detection import evaluate
+    @property
+    def compiled(self) -> CompiledARR:
+        """The relation compiled for numpy (:func:`~diagnosis.residuals.compile_arr`), built on first use.
 
+        Evaluating an ARR over many records compiles it once: the lambdified functions and
+        threshold evaluators are cached on this object.
+
+        >>> from bondgraph.library import rlc_circuit
+        >>> arr = derive_arrs(rlc_circuit())[1]
+        >>> arr.compiled.points, arr.compiled is arr.compiled
+        ([i, v_C, d1_v_C], True)
+        """
+        if self._compiled is None:
+            self._compiled = compile_arr(self)
+        return self._compiled
+
+    def evaluate(self, record, **options) -> Evaluation:
+        """Residual, thresholds and alarms over a record; see :func:`diagnosis.detection.evaluate`."""
         return evaluate(self, record, **options)
 
 
@@ -191,7 +156,7 @@ def derive_arrs(bg: BondGraph) -> list[ARR]:
     Parameters
     ----------
     bg : BondGraph
-        A model following the DESIGN.md contract, with De/Df detectors.
+        A model following the model contract of docs/design.md, with De/Df detectors.
 
     Returns
     -------

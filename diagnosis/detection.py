@@ -1,4 +1,4 @@
-"""Fault detection with interval-valued ARRs (seed 003 Table I).
+"""Fault detection with interval-valued ARRs (Jha et al. (2016), Table I).
 
 At every sample the nominal residual ``r_n`` is compared with the range of the
 uncertain part: normal when ``-r_n`` lies in ``[B_lo, B_hi]`` (eq. 19), fault
@@ -36,7 +36,7 @@ import numpy as np
 
 from bondgraph._optional import pandas_for
 
-from .residuals import compile_arr, read_record
+from .residuals import read_record
 from .thresholds import bglft_threshold, interval_threshold
 
 
@@ -104,7 +104,7 @@ class Evaluation:
 
         Columns ``t, residual, lower, upper, bglft, violation, alarm``, one row per sample, with
         the default integer index: ``t`` is a column, as in the records that
-        :func:`evaluate` reads.  ``lower`` and ``upper`` are the band on ``-residual`` (seed 003:
+        :func:`evaluate` reads.  ``lower`` and ``upper`` are the band on ``-residual`` (Jha et al. (2016):
         ``-r_n`` in ``[B_lo, B_hi]``) without the margin (``self.margin``), as on the object; the
         ``residuals.csv`` of ``bgphm detect`` writes the band on ``r_n`` itself, margin included.
 
@@ -181,7 +181,7 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     if not np.isfinite(margin) or margin < 0:
         raise ValueError(f"noise margin must be a finite non-negative number, got {margin}")
     data = read_record(arr, record, extra=tuple((antiderivatives or {}).values()))
-    compiled = compile_arr(arr)
+    compiled = arr.compiled
     points = compiled.point_values(data, method=method, window=window, polyorder=polyorder,
                                    exact=exact_derivatives, antiderivatives=antiderivatives)
     residual = compiled.residual(points)

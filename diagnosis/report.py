@@ -30,12 +30,14 @@ import warnings
 from dataclasses import dataclass
 
 import sympy as sp
-from sympy.printing.mathml import MathMLPresentationPrinter
 
 from bondgraph import BondGraph
 from bondgraph import drawing
+from bondgraph.causality import diagnosis_causality
+from bondgraph.errors import ModelError
 
-from .arrs import ARR, ARRWarning, delta_parameter, derive_arrs, latex
+from .arrs import ARR, ARRWarning, derive_arrs
+from .deltas import latex, mathml
 from .signatures import SignatureMatrix, signature_matrix
 
 __all__ = ["arr_report", "FORMATS"]
@@ -113,10 +115,6 @@ def _drawings(bg: BondGraph) -> list:
 
 def _causality(bg: BondGraph, preferred: str):
     """The assignment the toolkit uses: integral for simulation, derivative with dualized sensors for ARRs."""
-    from bondgraph.errors import ModelError
-
-    from bondgraph.causality import diagnosis_causality
-
     try:
         if preferred == "derivative":
             return diagnosis_causality(bg)
@@ -201,35 +199,8 @@ def _html(bg: BondGraph, c: _Content) -> str:
     return "\n".join(parts)
 
 
-class _Presentation(MathMLPresentationPrinter):
-    """Presentation MathML typeset as :func:`diagnosis.arrs.latex` does: ``omega_m(t)`` as a subscripted
-    omega of t (sympy writes the function's raw name), ``delta_L_a`` as delta with subscript L_a."""
-
-    def _print_Symbol(self, sym, style="plain"):
-        parameter = delta_parameter(sym)
-        if parameter is not None:
-            return self._print(sp.IndexedBase("delta")[sp.Symbol(parameter)])
-        return super()._print_Symbol(sym, style)
-
-    def _print_AppliedUndef(self, signal):
-        row = self.dom.createElement("mrow")
-        row.appendChild(self._print(sp.Symbol(signal.func.__name__)))
-        row.appendChild(self._operator("("))
-        for i, argument in enumerate(signal.args):
-            if i:
-                row.appendChild(self._operator(","))
-            row.appendChild(self._print(argument))
-        row.appendChild(self._operator(")"))
-        return row
-
-    def _operator(self, text: str):
-        mark = self.dom.createElement("mo")
-        mark.appendChild(self.dom.createTextNode(text))
-        return mark
-
-
 def _math(label: str, expression: sp.Expr) -> str:
-    body = _Presentation({}).doprint(expression)
+    body = mathml(expression)
     return (f"<p><math display=\"block\" xmlns=\"http://www.w3.org/1998/Math/MathML\"><mrow><mi>{html.escape(label)}"
             f"</mi><mo>=</mo>{body}</mrow></math></p>")
 
@@ -247,7 +218,8 @@ def _latex(bg: BondGraph, c: _Content) -> str:
     t = drawing.latex_escape
     parts = [r"\documentclass{article}", r"\usepackage[margin=2cm]{geometry}", r"\usepackage{amsmath}",
              r"\usepackage{tikz}", r"\usepackage{longtable}", r"\begin{document}",
-             rf"\section*{{ARR report: {t(c.title)}}}", r"\subsection*{Elements}", _tex_table(ELEMENT_HEADER, c.elements),
+             rf"\section*{{ARR report: {t(c.title)}}}", r"\subsection*{Elements}",
+             _tex_table(ELEMENT_HEADER, c.elements),
              r"\subsection*{Bond graph}"]
     for caption, causality, issues in c.drawings:
         parts += [rf"\paragraph{{{t(caption)}}}", "", r"\begin{center}", drawing.to_tikz(bg, causality),
@@ -255,7 +227,8 @@ def _latex(bg: BondGraph, c: _Content) -> str:
         parts += [t(i) + r"\\" for i in issues]
     parts.append(r"\subsection*{Analytical redundancy relations}")
     for arr in c.arrs:
-        parts += [rf"\paragraph{{{t(arr.name)}}} Junction {t(str(arr.junction))}; signals: {t(', '.join(arr.signals))}.",
+        signals = t(", ".join(arr.signals))
+        parts += [rf"\paragraph{{{t(arr.name)}}} Junction {t(str(arr.junction))}; signals: {signals}.",
                   r"\begin{align*}", "r_n &= " + latex(arr.nominal) + r" \\",
                   r"\Psi_2 &= " + latex(arr.uncertain), r"\end{align*}"]
     header, rows = _signature_rows(c.signatures)

@@ -19,7 +19,7 @@ Everything is vectorized over samples.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -61,66 +61,27 @@ class CompiledARR:
     uncertain: sp.Expr
     terms: dict
     symbols: dict = field(default_factory=dict, repr=False)
-    _functions: dict = field(default_factory=dict, repr=False)
+    _cache: dict = field(default_factory=dict, repr=False)
 
-    @classmethod
-    def from_arr(cls, arr) -> "CompiledARR":
-        """Compile an :class:`~diagnosis.arrs.ARR`: its signals, derivatives and integrals become point symbols.
+    def cached(self, key: str, build: Callable[[], object]):
+        """The value kept under ``key``, made by ``build()`` on first use (lambdified functions, evaluators).
 
-        A signal ``x(t)`` becomes the symbol ``x``, its ``n``-th time derivative ``dn_x`` and the ``k``-th integral
-        (in sorted order) ``int<k>`` (with ``_`` appended while the name is a signal's or another symbol's);
-        nominal parameter values are substituted, the ``delta_*`` symbols of the uncertain part are kept.
+        Everything numeric derived from the relation is built once per compiled ARR, however many
+        records it evaluates.
 
-        Raises
-        ------
-        ValueError
-            For a derivative that is not a time derivative of a signal.
+        >>> from bondgraph.library import rlc_circuit
+        >>> from diagnosis import derive_arrs
+        >>> compiled = derive_arrs(rlc_circuit())[1].compiled
+        >>> compiled.cached("answer", lambda: 42), compiled.cached("answer", lambda: 0)
+        (42, 42)
         """
-        replace: dict = {}
-        signals = sorted({f.func.__name__ for f in (arr.nominal + arr.uncertain).atoms(AppliedUndef)})
-        signal_symbols = {name: sp.Symbol(name) for name in signals}
-        for name in signals:
-            replace[sp.Function(name)(sp.Symbol("t"))] = signal_symbols[name]
-        derivatives, integrals = {}, {}
-        # a signal may be called d1_x or int0 too: point names must not merge two different quantities
-        taken = set(signals) | {str(s) for s in (arr.nominal + arr.uncertain).free_symbols}
-
-        def fresh(name: str) -> sp.Symbol:
-            while name in taken:
-                name += "_"
-            taken.add(name)
-            return sp.Symbol(name)
-
-        for d in sorted((arr.nominal + arr.uncertain).atoms(sp.Derivative), key=str):
-            (variable, order), = d.variable_count
-            if not isinstance(d.expr, AppliedUndef) or str(variable) != "t":
-                raise ValueError(f"{arr.name}: cannot evaluate {d} (only time derivatives of signals)")
-            symbol = fresh(f"d{order}_{d.expr.func.__name__}")
-            derivatives[symbol] = (d.expr.func.__name__, int(order))
-            replace[d] = symbol
-        for k, integral in enumerate(sorted((arr.nominal + arr.uncertain).atoms(sp.Integral), key=str)):
-            symbol = fresh(f"int{k}")
-            integrals[symbol] = integral.function.xreplace(replace)
-            replace[integral] = symbol
-        values = {sp.Symbol(p): v for p, v in arr.values.items()}
-        points = [signal_symbols[n] for n in signals] + list(derivatives) + list(integrals)
-        return cls(
-            arr=arr,
-            points=points,
-            signals=signals,
-            derivatives=derivatives,
-            integrals={s: g.xreplace(values) for s, g in integrals.items()},
-            nominal=arr.nominal.xreplace(replace).xreplace(values),
-            uncertain=arr.uncertain.xreplace(replace).xreplace(values),
-            terms={p: w.xreplace(replace).xreplace(values) for p, w in arr.terms.items()},
-            symbols=replace,
-        )
+        if key not in self._cache:
+            self._cache[key] = build()
+        return self._cache[key]
 
     def function(self, key: str, expression: sp.Expr, extra: tuple = ()):
         """A cached numpy function of the point symbols (and ``extra`` symbols)."""
-        if key not in self._functions:
-            self._functions[key] = sp.lambdify([*self.points, *extra], expression, modules="numpy", cse=True)
-        return self._functions[key]
+        return self.cached(key, lambda: sp.lambdify([*self.points, *extra], expression, modules="numpy", cse=True))
 
     def point_values(self, record: Record, *, method: str = "savgol", window: int | None = None,
                      polyorder: int = 3, exact: Mapping | None = None,
@@ -173,15 +134,74 @@ def _from_antiderivatives(integrand: sp.Expr, record: Record, antiderivatives: M
 
 
 def compile_arr(arr) -> CompiledARR:
-    """Compile an ARR once (cached on the ARR object)."""
-    if arr._compiled is None:
-        arr._compiled = CompiledARR.from_arr(arr)
-    return arr._compiled
+    """Compile an :class:`~diagnosis.arrs.ARR`: its signals, derivatives and integrals become point symbols.
+
+    A signal ``x(t)`` becomes the symbol ``x``, its ``n``-th time derivative ``dn_x`` and the ``k``-th integral
+    (in sorted order) ``int<k>`` (with ``_`` appended while the name is a signal's or another symbol's);
+    nominal parameter values are substituted, the ``delta_*`` symbols of the uncertain part are kept.
+
+    Each call compiles afresh; :attr:`ARR.compiled <diagnosis.arrs.ARR.compiled>` keeps one per ARR, so that
+    its lambdified functions are built once.
+
+    Raises
+    ------
+    ValueError
+        For a derivative that is not a time derivative of a signal.
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> compiled = compile_arr(derive_arrs(rlc_circuit())[0])
+    >>> compiled.points, compiled.derivatives
+    ([V, i, v_C, d1_i], {d1_i: ('i', 1)})
+    >>> compiled.nominal
+    V - 0.1*d1_i - 10.0*i - v_C
+    """
+    replace: dict = {}
+    signals = sorted({f.func.__name__ for f in (arr.nominal + arr.uncertain).atoms(AppliedUndef)})
+    signal_symbols = {name: sp.Symbol(name) for name in signals}
+    for name in signals:
+        replace[sp.Function(name)(sp.Symbol("t"))] = signal_symbols[name]
+    derivatives, integrals = {}, {}
+    # a signal may be called d1_x or int0 too: point names must not merge two different quantities
+    taken = set(signals) | {str(s) for s in (arr.nominal + arr.uncertain).free_symbols}
+
+    def fresh(name: str) -> sp.Symbol:
+        while name in taken:
+            name += "_"
+        taken.add(name)
+        return sp.Symbol(name)
+
+    for d in sorted((arr.nominal + arr.uncertain).atoms(sp.Derivative), key=str):
+        (variable, order), = d.variable_count
+        if not isinstance(d.expr, AppliedUndef) or str(variable) != "t":
+            raise ValueError(f"{arr.name}: cannot evaluate {d} (only time derivatives of signals)")
+        symbol = fresh(f"d{order}_{d.expr.func.__name__}")
+        derivatives[symbol] = (d.expr.func.__name__, int(order))
+        replace[d] = symbol
+    for k, integral in enumerate(sorted((arr.nominal + arr.uncertain).atoms(sp.Integral), key=str)):
+        symbol = fresh(f"int{k}")
+        integrals[symbol] = integral.function.xreplace(replace)
+        replace[integral] = symbol
+    values = {sp.Symbol(p): v for p, v in arr.values.items()}
+    points = [signal_symbols[n] for n in signals] + list(derivatives) + list(integrals)
+    return CompiledARR(
+        arr=arr,
+        points=points,
+        signals=signals,
+        derivatives=derivatives,
+        integrals={s: g.xreplace(values) for s, g in integrals.items()},
+        nominal=arr.nominal.xreplace(replace).xreplace(values),
+        uncertain=arr.uncertain.xreplace(replace).xreplace(values),
+        terms={p: w.xreplace(replace).xreplace(values) for p, w in arr.terms.items()},
+        symbols=replace,
+    )
 
 
 def read_record(arr, data, name: str = "record", extra: tuple = ()) -> Record:
     """Validate a record for an ARR: a ``t`` column and one column per signal it uses (and ``extra``)."""
     try:
-        return as_record(data, [*compile_arr(arr).signals, *extra], name=name)
+        return as_record(data, [*arr.compiled.signals, *extra], name=name)
     except RecordError as exc:
         raise RecordError(f"{arr.name}: {exc}") from None

@@ -78,6 +78,8 @@ from numpy.typing import ArrayLike
 from scipy.integrate import cumulative_trapezoid
 from scipy.signal import savgol_filter
 
+from bondgraph.errors import PHMError, PHMWarning
+
 __all__ = [
     "Record",
     "RecordError",
@@ -95,11 +97,11 @@ METHODS = ("savgol", "central", "exact")
 UNIFORM_RTOL = 1e-6
 
 
-class RecordError(ValueError):
+class RecordError(PHMError, ValueError):
     """Bad recorded data or estimator settings; the message names the column or signal."""
 
 
-class RecordWarning(UserWarning):
+class RecordWarning(PHMWarning):
     """A value computed from a record is unknown (NaN) because of a gap in the data."""
 
 

@@ -116,5 +116,6 @@ def signature_matrix(arrs: Sequence, rows: Sequence[str] | None = None) -> Signa
     """
     if rows is None:
         rows = list(dict.fromkeys(p for arr in arrs for p in arr.candidates))
-    matrix = np.array([[int(p in arr.parameters) for arr in arrs] for p in rows], dtype=int).reshape(len(rows), len(arrs))
+    matrix = np.array([[int(p in arr.parameters) for arr in arrs] for p in rows], dtype=int)
+    matrix = matrix.reshape(len(rows), len(arrs))
     return SignatureMatrix(tuple(rows), tuple(arr.name for arr in arrs), matrix)

@@ -1,6 +1,6 @@
 """Robust thresholds: the range of Psi_2 over the uncertainty box, per sample.
 
-Interval threshold (seed 003 eqs. 16-20, Table I): ``[B_lo(t), B_hi(t)]``, the
+Interval threshold (Jha et al. (2016), eqs. 16-20, Table I): ``[B_lo(t), B_hi(t)]``, the
 range of the uncertain part Psi_2 when every ``delta_p`` ranges over its
 interval, computed by outward-rounded interval arithmetic
 (:mod:`diagnosis.intervals`).  When Psi_2 is linear in each delta with no
@@ -18,21 +18,14 @@ from __future__ import annotations
 
 import numpy as np
 
-from .arrs import delta
+from .deltas import delta
 from .intervals import affine_range, compile_interval
 from .residuals import CompiledARR
 
 
 def interval_threshold(compiled: CompiledARR, points: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """``(B_lo, B_hi)`` of Psi_2 at every sample; ``-r_n`` is normal inside it."""
-    evaluator = compiled._functions.get("interval")
-    if evaluator is None:
-        boxes = {delta(p): tuple(map(float, box)) for p, box in compiled.arr.uncertainties.items()}
-        try:
-            evaluator = affine_range(compiled.uncertain, compiled.points, boxes)
-        except ValueError:  # not of the BG-LFT linear form: natural extension (sound, may overestimate)
-            evaluator = compile_interval(compiled.uncertain, compiled.points, boxes)
-        compiled._functions["interval"] = evaluator
+    evaluator = compiled.cached("interval", lambda: _interval_evaluator(compiled))
     shape = points[0].shape if points else ()
     band = evaluator(*points)
     return np.broadcast_to(band.lo, shape).copy(), np.broadcast_to(band.hi, shape).copy()
@@ -53,3 +46,12 @@ def bglft_threshold(compiled: CompiledARR, points: list[np.ndarray]) -> np.ndarr
         ends = [np.abs(np.broadcast_to(np.asarray(function(*points, value), float), shape)) for value in (lo, hi)]
         total += np.maximum(*ends)
     return total
+
+
+def _interval_evaluator(compiled: CompiledARR):
+    """The range of Psi_2 over the box of the deltas, as a function of the point values."""
+    boxes = {delta(p): tuple(map(float, box)) for p, box in compiled.arr.uncertainties.items()}
+    try:
+        return affine_range(compiled.uncertain, compiled.points, boxes)
+    except ValueError:  # not of the BG-LFT linear form: natural extension (sound, may overestimate)
+        return compile_interval(compiled.uncertain, compiled.points, boxes)

@@ -45,13 +45,14 @@ PACKAGES = [
     ("bgphm", "command line, plots and long runs", ["bgphm.plotting", "bgphm.runs"]),
 ]
 #: Modules first in this order within each package (the rest follow alphabetically).
-MODULE_ORDER = ["bondgraph.model", "bondgraph.causality", "bondgraph.equations", "bondgraph.simulation",
-                "bondgraph.control", "bondgraph.errors", "bondgraph.library", "bondgraph.io", "bondgraph.drawing",
-                "diagnosis.arrs", "diagnosis.signatures", "diagnosis.detection", "diagnosis.signals",
-                "diagnosis.intervals.rounding", "diagnosis.intervals.kernels", "diagnosis.intervals.interval",
-                "diagnosis.intervals.functions", "diagnosis.intervals.compiler", "prognosis.observation",
-                "prognosis.degradation", "prognosis.particle_filter", "prognosis.rul", "prognosis.monitor", "prognosis.metrics",
-                "bgphm.cli", "bgphm.plotting", "bgphm.runs"]
+MODULE_ORDER = ["bondgraph.model", "bondgraph.structure", "bondgraph.causality", "bondgraph.equations",
+                "bondgraph.simulation", "bondgraph.control", "bondgraph.errors", "bondgraph.library", "bondgraph.io",
+                "bondgraph.drawing", "diagnosis.arrs", "diagnosis.deltas", "diagnosis.signatures",
+                "diagnosis.detection", "diagnosis.signals", "diagnosis.intervals.rounding",
+                "diagnosis.intervals.kernels", "diagnosis.intervals.interval", "diagnosis.intervals.functions",
+                "diagnosis.intervals.compiler", "prognosis.observation", "prognosis.degradation",
+                "prognosis.particle_filter", "prognosis.rul", "prognosis.monitor", "prognosis.metrics", "bgphm.cli",
+                "bgphm.plotting", "bgphm.runs"]
 #: Names documented for a package that has no useful ``__all__``.
 EXPLICIT = {"bgphm": ["bgphm.cli.main"]}
 

@@ -1,4 +1,4 @@
-"""Seed 000 (Rodriguez Obando et al. 2021): deterioration estimation, RUL prediction and RUL control of a friction drive.
+"""Rodriguez Obando et al. (2021): deterioration estimation, RUL prediction and RUL control of a friction drive.
 
     python examples/friction_drive.py [--seeds 4] [--workers 2] [--speedup 1] [--out DIR]
 
@@ -23,10 +23,10 @@
    that Pr(RUL <= RUL_ref) <= eta, re-deciding every 30 min, and runs the
    controlled drive to its end of life (scenario 3).
 
-Failure (Definition 2): alpha reaches 0 or D reaches D_max = 5e6 J (the seed
+Failure (Definition 2): alpha reaches 0 or D reaches D_max = 5e6 J (the paper
 does not give D_max).  Sampling: 1 s; the EKF's Euler step runs in 10
 substeps of 0.1 s (the contact mode is at about -17 1/s, so a 1 s Euler step
-would be unstable); the seed does not give t_s.
+would be unstable); the paper does not give t_s.
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ from prognosis.statespace import (ExtendedKalmanFilter, InnovationMonitor, discr
                                   innovation_consistency)
 
 HOUR = 3600.0
-DT = 1.0                      # s, sampling period (not given in the seed)
+DT = 1.0                      # s, sampling period (not given in the paper)
 SUBSTEPS = 10                 # integration steps per sample (EKF Euler, truth RK4)
 R = np.diag([33.33, 0.33])    # eq. 54
 Q = np.diag([0.1, 0.001, 0.0, 0.0, 0.0])  # eq. 55
@@ -67,7 +67,7 @@ X0_BOUNDS = np.array([23.0, 2.0, 5.0, 1e-6, 5e5])        # eq. 57
 X0_TRUE = np.array([0.0, 0.0, 10.0, 1e-6, 0.0])          # inside the bounds
 OMEGA2_REF = 20.0             # rad/s
 PI_GAINS = (0.0048, 0.0048)   # eq. 59
-D_MAX = 5e6                   # J, maximal admissible deterioration (not given in the seed)
+D_MAX = 5e6                   # J, maximal admissible deterioration (not given in the paper)
 ALPHA_MIN = 0.0
 MONTE_CARLO = {"n_samples": 1000, "dt": 30.0, "horizon": 12 * HOUR}
 CONTROL = {"rul_ref": 3.0 * HOUR, "eta": 0.05, "gain": 1e-3, "lower": -15.0, "period": 0.5 * HOUR, "tolerance": 36.0}
@@ -101,7 +101,8 @@ class Scenario:
 
     def scaled(self, k: float) -> "Scenario":
         """The same story ``k`` times faster: m times k, energies (D), times and noise variances divided by k."""
-        return replace(self, d_max=self.d_max / k, m_initial=self.m_initial * k, m_after=self.m_after * k, change=self.change / k,
+        return replace(self, d_max=self.d_max / k, m_initial=self.m_initial * k, m_after=self.m_after * k,
+                       change=self.change / k,
                        predict_without_restart=self.predict_without_restart / k,
                        predict_with_restart=self.predict_with_restart / k, control_start=self.control_start / k,
                        control_period=self.control_period / k, rul_ref=self.rul_ref / k, end=self.end / k,
@@ -158,7 +159,8 @@ def predict_rul(mean, covariance, t, omega2_star, seed, keep=0, d_max=D_MAX):
         dissipated = power(x[0], omega2_star)
         return np.vstack([-x[1] * dissipated, np.zeros_like(dissipated), dissipated])
 
-    return monte_carlo_rul(rates, mu, p, lambda x: margin(x, d_max), origin=t, horizon=MONTE_CARLO["horizon"], dt=MONTE_CARLO["dt"],
+    return monte_carlo_rul(rates, mu, p, lambda x: margin(x, d_max), origin=t, horizon=MONTE_CARLO["horizon"],
+                           dt=MONTE_CARLO["dt"],
                            n_samples=MONTE_CARLO["n_samples"], lower=np.maximum(lo, 0.0), upper=hi, seed=seed,
                            keep=keep)
 
@@ -329,11 +331,13 @@ def run_seed(seed: int, scenario: Scenario = Scenario(), keep: bool = False) -> 
             "after_restart": float(inside[after_restart].mean()) if after_restart.any() else None,
             "without_restart_after_change": float(twin_inside[~before].mean()),
         },
-        "m_estimate_at_eol": {"with_restart": float(log["mean"][-1, 3]), "without_restart": float(log["twin_mean"][-1, 3]),
+        "m_estimate_at_eol": {"with_restart": float(log["mean"][-1, 3]),
+                              "without_restart": float(log["twin_mean"][-1, 3]),
                               "true": float(log["truth"][-1, 3])},
         "scenario_1": _summary(prediction_1, h, s),
         "scenario_2": _summary(prediction_2, h, s),
-        "scenario_3": {**_summary(prediction_3, h, s), "theta": first["theta"], "omega2_star": OMEGA2_REF + first["theta"],
+        "scenario_3": {**_summary(prediction_3, h, s), "theta": first["theta"],
+                       "omega2_star": OMEGA2_REF + first["theta"],
                        "decisions": decisions},
         "ekf_us_per_step": drive.ekf_seconds / max(drive.ekf_steps, 1) * 1e6,
         "seconds": time.perf_counter() - started,
@@ -513,8 +517,8 @@ def _progress(quiet: bool, done: int, total: int) -> None:
 
 
 def main(argv=None) -> dict:
-    parser = argparse.ArgumentParser(description="Seed 000 on the friction drive: EKF deterioration estimation "
-                                                 "with Chebyshev bounds and restart, Monte Carlo RUL, RUL control")
+    parser = argparse.ArgumentParser(description="Friction drive, Rodriguez Obando et al. (2021): EKF deterioration "
+                                                 "estimation, Chebyshev bounds, restart, Monte Carlo RUL, RUL control")
     parser.add_argument("--seeds", type=int, default=4, help="number of noise seeds (default 4)")
     parser.add_argument("--first-seed", type=int, default=0)
     parser.add_argument("--workers", type=int, default=2, help="processes over seeds (default 2)")
@@ -529,8 +533,8 @@ def main(argv=None) -> dict:
         parser.error("--speedup must be at least 1")
     scenario = Scenario().scaled(args.speedup) if args.speedup != 1.0 else Scenario()
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
-    print(f"Seed 000 on the friction drive: omega2_ref = {OMEGA2_REF} rad/s, m {scenario.m_initial:g} -> "
-          f"{scenario.m_after:g} at 4 h, D_max = {scenario.d_max:g} J, {len(seeds)} seeds"
+    print(f"Rodriguez Obando et al. (2021) on the friction drive: omega2_ref = {OMEGA2_REF} rad/s, "
+          f"m {scenario.m_initial:g} -> {scenario.m_after:g} at 4 h, D_max = {scenario.d_max:g} J, {len(seeds)} seeds"
           + (f", {args.speedup:g}x faster" if args.speedup != 1.0 else ""))
     results = over_seeds(run_seed, [(seed, scenario, i == 0) for i, seed in enumerate(seeds)],
                          workers=max(1, args.workers), progress=lambda done, total: _progress(args.quiet, done, total))

@@ -1,15 +1,15 @@
-"""Seed 004 (Gasperin et al. 2011): gearbox fault trend and prognosis from an online-identified state-space model.
+"""Gasperin et al. (2011): gearbox fault trend and prognosis from an online-identified state-space model.
 
     python examples/gearbox.py [--out results/gearbox] [--seeds 5] [--seed 0] [--hours 180] [--fault-gain 6e-5]
                                [--workers 2] [--quiet]
 
-The seed's test-bed data are not public, so this example generates a record in the seed's setting
-(section 4) and runs the seed's method (sections 3.4, 5.1, 5.2) on it:
+The paper's test-bed data are not public, so this example generates a record in the paper's setting
+(section 4) and runs the paper's method (sections 3.4, 5.1, 5.2) on it:
 
 1. synthetic record, one sample every 5 min for 180 h: torque (piecewise-constant load, a random level
    between 40 and 100 N m every 2-6 h), oil temperature (a first-order lag, 1.5 h, following the
    torque plus a 22 C ambient with a 1 C daily swing) and one vibration feature (sideband energy);
-2. the feature comes from a 2-state linear Gaussian model (seed eqs. 2-3, see ``TRUTH``): a load mode
+2. the feature comes from a 2-state linear Gaussian model (the paper's eqs. 2-3, see ``TRUTH``): a load mode
    (pole 0.9) and a damage mode driven by the torque.  The damage pole is 0.6 until the fault onset at
    55 h and 1.003 after (3.7 % growth per hour): the feature starts to grow slowly, faster under load;
 3. ``OnlineEM`` re-identifies a model with n = 2 states, r = 2 inputs, m = 1 output on the last N = 200
@@ -43,12 +43,12 @@ from prognosis.identification import (FeaturePrediction, IdentificationWarning, 
                                       detect_trend, fault_trend, predict_feature)
 from prognosis.identification.predictive import PosteriorPrediction, sample_posterior
 
-# Seed 004 section 4: one acquisition every 5 min, about 180 h, fault around 55 h
+# Gasperin et al. (2011), section 4: one acquisition every 5 min, about 180 h, fault around 55 h
 STEP_H = 5.0 / 60.0
 DURATION_H = 180.0
 ONSET_H = 55.0
 
-# Operating conditions (our choice: the seed shows its load profile only as a figure)
+# Operating conditions (our choice: the paper shows its load profile only as a figure)
 TORQUE_NM = (40.0, 100.0)  # range of the random load levels
 SEGMENT_H = (2.0, 6.0)  # each level lasts a uniform random time in this range
 AMBIENT_C = 22.0
@@ -63,23 +63,23 @@ TRUTH = {
     "load_gain": 0.001,  # s_{t+1} = 0.9 s_t + 0.001 torque_t: s = 0.01 per N m at steady state
     "fault_pole_before": 0.6,  # damage mode well inside the unit circle before the onset
     "fault_pole_after": 1.003,  # slightly outside after it
-    "fault_gain": 6e-5,  # torque drive of the damage (per N m): the damage is visible at 78 h, as in the seed
+    "fault_gain": 6e-5,  # torque drive of the damage (per N m): the damage is visible at 78 h, as in the paper
     "temperature_gain": 0.01,  # direct effect of the temperature on the feature (per C)
     "load_noise": 0.005,  # std of w on s
     "fault_noise": 0.003,  # std of w on d
     "measurement_noise": 0.02,  # std of v
 }
 
-# The method (seed section 5: n = 2, r = 2, m = 1, N = 200; cadence and EM steps are our choice)
+# The method (the paper's section 5: n = 2, r = 2, m = 1, N = 200; cadence and EM steps are our choice)
 IDENTIFICATION = {"n_states": 2, "window": 200, "every": 12, "iterations": 5, "initial_iterations": 200}
 DETECTION = {"threshold": 1.0, "persistence": 3}
-PREDICT_AT_H = (44.0, 78.0)  # the seed's Figs. 5-7
-# The posterior predictive over the window's parameters (prognosis.identification.predictive, our addition to the seed).
+PREDICT_AT_H = (44.0, 78.0)  # the paper's Figs. 5-7
+# The posterior predictive over the window's parameters (prognosis.identification.predictive, not in the paper).
 # The oil temperature (input 1) changes the feature's level directly (D), it does not drive the damage:
 # declared so, it cannot act as a free drift of the growing mode, which biased its growth rate low
-# (--temperature-in-state gives the seed's general B back, for comparison).
+# (--temperature-in-state gives the paper's general B back, for comparison).
 POSTERIOR = {"particles": 2000, "moves": 5, "target_ess": 0.7, "max_radius": 1.05, "direct_inputs": (1,)}
-HORIZON_H = 42.0  # to 120 h from 78 h, the end of the seed's Figs. 6-7
+HORIZON_H = 42.0  # to 120 h from 78 h, the end of the paper's Figs. 6-7
 LEVEL = 0.95
 LEAD_BANDS_H = ((0.0, 1.0), (1.0, 6.0), (6.0, 12.0), (12.0, 24.0), (24.0, 42.0))
 
@@ -178,7 +178,7 @@ class Prediction:
     at: int  # sample index of the prediction time T (the feature is predicted from T + 1)
     model: LinearGaussianModel
     load: FeaturePrediction  # under the known future load profile
-    constant: FeaturePrediction  # under the load and temperature held at their values at T (seed Fig. 5)
+    constant: FeaturePrediction  # under the load and temperature held at their values at T (the paper's Fig. 5)
     oracle: FeaturePrediction  # the true model (the one in force at T) from the true state at T, known load
     posterior: PosteriorPrediction  # posterior predictive over the window's parameters, known load
     radii: np.ndarray  # posterior draws of rho(A)
@@ -210,7 +210,7 @@ def identify(record: Record, posterior: dict = POSTERIOR) -> Identified:
 
 def predict_from(online: OnlineEM, record: Record, at: int, horizon: int, posterior: dict = POSTERIOR
                  ) -> Prediction:
-    """Seed section 5.2: the filtered state at T pushed through the current model under future inputs."""
+    """Gasperin et al. (2011), section 5.2: the filtered state at T through the current model under future inputs."""
     smoothed = online.smoother()
     future = record.inputs[at + 1:at + 1 + horizon]  # shorter than the horizon near the end of the record
     held = np.repeat(record.inputs[at:at + 1], future.shape[0], axis=0)
@@ -359,7 +359,8 @@ def write(out: Path, summary: dict, results: list[dict], first: dict, seconds: f
     """results.json and, with matplotlib, the figures of the first seed."""
     out.mkdir(parents=True, exist_ok=True)
     gain = first["record"].fault_gain
-    truth = {"healthy": _matrices(true_model(False, fault_gain=gain)), "faulty": _matrices(true_model(True, fault_gain=gain))}
+    truth = {"healthy": _matrices(true_model(False, fault_gain=gain)),
+             "faulty": _matrices(true_model(True, fault_gain=gain))}
     payload = {
         "setting": {"step_h": STEP_H, "duration_h": first["record"].hours[-1] + STEP_H, "onset_h": ONSET_H,
                     "torque_nm": TORQUE_NM, "segment_h": SEGMENT_H, "ambient_c": AMBIENT_C,
@@ -449,8 +450,8 @@ def _json(value):
 
 
 def main(argv=None) -> dict:
-    parser = argparse.ArgumentParser(description="Seed 004 on a synthetic gearbox record: online EM identification, "
-                                                 "fault-trend detection and long-term prediction")
+    parser = argparse.ArgumentParser(description="Gasperin et al. (2011) on a synthetic gearbox record: online EM "
+                                                 "identification, fault-trend detection and long-term prediction")
     parser.add_argument("--out", type=Path, default=Path("results/gearbox"),
                         help="directory for results.json and the figures (default results/gearbox)")
     parser.add_argument("--seed", type=int, default=0, help="first record seed (default 0)")
@@ -462,7 +463,7 @@ def main(argv=None) -> dict:
                              "subtle fault of docs/gearbox.md)")
     parser.add_argument("--temperature-in-state", action="store_true",
                         help="let the oil temperature drive the state in the posterior predictive's model too "
-                             "(the seed's general B; by default it acts on the feature through D only)")
+                             "(the paper's general B; by default it acts on the feature through D only)")
     parser.add_argument("--workers", type=int, default=2, help="processes over seeds (default 2)")
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
     args = parser.parse_args(argv)
@@ -474,9 +475,9 @@ def main(argv=None) -> dict:
     if not args.hours > minimum:
         parser.error(f"--hours must exceed one identification window ({minimum:.1f} h)")
     seeds = list(range(args.seed, args.seed + args.seeds))
-    print(f"Seed 004 on a synthetic gearbox record: {args.hours:g} h at {STEP_H * 60:g} min, fault onset at "
-          f"{ONSET_H:g} h, damage drive {args.fault_gain:g} per N m, window N = {IDENTIFICATION['window']}, "
-          f"{len(seeds)} seeds")
+    print(f"Gasperin et al. (2011) on a synthetic gearbox record: {args.hours:g} h at {STEP_H * 60:g} min, "
+          f"fault onset at {ONSET_H:g} h, damage drive {args.fault_gain:g} per N m, "
+          f"window N = {IDENTIFICATION['window']}, {len(seeds)} seeds")
     start = time.perf_counter()
     posterior = {**POSTERIOR, "direct_inputs": ()} if args.temperature_in_state else POSTERIOR
     results = over_seeds(run_seed, [(seed, args.hours, i == 0, args.fault_gain, posterior)
@@ -516,7 +517,8 @@ def _report(summary: dict) -> None:
         print("    by lead time: " + ", ".join(f"{band} {s['mean']:.2f}" for band, s in p["coverage_by_lead"].items()
                                               if s is not None))
         post = p["posterior"]
-        line = (f"    posterior predictive: coverage {post['coverage']['mean']:.2f} (min {post['coverage']['min']:.2f}, "
+        coverage = post["coverage"]
+        line = (f"    posterior predictive: coverage {coverage['mean']:.2f} (min {coverage['min']:.2f}, "
                 f">= 0.9 in {post['coverage_at_least_0.9_in']}/{post['coverage']['n']})")
         if post.get("coverage_before_onset") is not None:
             line += f", before the onset {post['coverage_before_onset']['mean']:.2f}"
@@ -524,8 +526,8 @@ def _report(summary: dict) -> None:
                  f"{post['true_radius_rank']['mean']:.2f} ({post['true_radius_rank']['min']:.2f}-"
                  f"{post['true_radius_rank']['max']:.2f}, > 0.95 in {post['true_radius_rank_above_0.95_in']})")
         print(line)
-        print("      by lead time: " + ", ".join(f"{band} {s['mean']:.2f}" for band, s in post["coverage_by_lead"].items()
-                                                if s is not None))
+        by_lead = post["coverage_by_lead"].items()
+        print("      by lead time: " + ", ".join(f"{band} {s['mean']:.2f}" for band, s in by_lead if s is not None))
     print(f"  run time {summary['run_seconds']:.1f} s")
 
 

@@ -1,4 +1,4 @@
-"""Seed 001 (Du et al.) on the DTS200 three-tank system: ARRs, detection, and the Kalman family beside the PF.
+"""Du et al. (n.d.) on the DTS200 three-tank system: ARRs, detection, and the Kalman family beside the PF.
 
     python examples/three_tank.py [--seeds 20] [--first-seed 0] [--methods ...] [--workers 2] [--out DIR]
 
@@ -17,12 +17,12 @@
 5. runs every estimator over the real measurements and, at each k, a copy of
    it over the five forecasts: its az2 at k + 5 is the 5-step-ahead
    prediction (section 5);
-6. reports MAE, RMSE and the seed's "RMSE" column (which is the mean squared
+6. reports MAE, RMSE and the paper's "RMSE" column (which is the mean squared
    error, see below) and the time per method, as mean and standard deviation
    over ``--seeds`` noise seeds.
 
-Estimators: SCKF, STUKF, STSCKF (the seed's three), our EKF and bootstrap PF,
-and, to complete the grid, UKF and STEKF.  Tuning the seed leaves open (see
+Estimators: SCKF, STUKF, STSCKF (the paper's three), our EKF and bootstrap PF,
+and, to complete the grid, UKF and STEKF.  Tuning the paper leaves open (see
 ``TUNING``): az2's random walk d_k ~ N(0, 1e-3^2) per step for the Kalman
 filters and 1e-2 for the PF (a bootstrap PF cannot move its particles' levels
 faster than the process noise, so with 1e-3 it loses the drift; the docs give
@@ -48,14 +48,14 @@ for _variable in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
 
 import numpy as np  # noqa: E402
 
-from bgphm.plotting import pyplot, save_figure, write_figures
-from bgphm.runs import over_seeds, progress_line, run_main
-from bondgraph.library import THREE_TANK, three_tank
-from diagnosis import derive_arrs, noise_margin, signature_matrix
-from prognosis.statespace import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter, SeriesForecaster,
-                                  StrongTracking, UnscentedKalmanFilter, discretize, predict_ahead)
+from bgphm.plotting import pyplot, save_figure, write_figures  # noqa: E402
+from bgphm.runs import over_seeds, progress_line, run_main  # noqa: E402
+from bondgraph.library import THREE_TANK, three_tank  # noqa: E402
+from diagnosis import derive_arrs, noise_margin, signature_matrix  # noqa: E402
+from prognosis.statespace import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter,  # noqa: E402
+                                  SeriesForecaster, StrongTracking, UnscentedKalmanFilter, discretize, predict_ahead)
 
-# Seed 001 section 6
+# Du et al. (n.d.), section 6
 STEPS = 200
 DT = 1.0
 ONSET = 10  # az2 drifts from k = 11 (eq. 61)
@@ -69,13 +69,13 @@ TRAIN = 50  # first 50 measurements train ROS-ELM; prediction starts at k = 51
 HORIZON = 5
 ELM = {"embedding": 3, "n_hidden": 50, "regularization": 1e-8, "activation": "sigmoid"}
 
-# Diagnosis (our choice: the seed has no uncertainty box)
+# Diagnosis (our choice: the paper has no uncertainty box)
 VALVE_UNCERTAINTY = 0.05  # manual valve coefficients
 AREA_UNCERTAINTY = 0.02  # machined cylinders
 DETECTION = {"window": 11, "persistence": 3}
 MARGIN_SIGMAS = 3.0
 
-# Estimators (our choice where the seed is silent)
+# Estimators (our choice where the paper is silent)
 TUNING = {
     "parameter_std": 1e-3,  # d_k of eq. (62), Kalman filters
     "pf_parameter_std": 1e-2,  # d_k for the bootstrap PF
@@ -85,7 +85,7 @@ TUNING = {
     "particles": 1000,
 }
 METHODS = ("SCKF", "STUKF", "STSCKF", "EKF", "PF", "UKF", "STEKF")
-SEED_TABLE = {"SCKF": (0.4402, 0.3017, 1.3011), "STUKF": (0.0930, 0.0111, 1.2868), "STSCKF": (0.0318, 0.0015, 1.3540)}
+PAPER_TABLE = {"SCKF": (0.4402, 0.3017, 1.3011), "STUKF": (0.0930, 0.0111, 1.2868), "STSCKF": (0.0318, 0.0015, 1.3540)}
 KEYS = ("mae", "rmse", "mse", "held_mae", "filtered_rmse", "seconds", "mean_fading", "max_fading")
 
 
@@ -243,7 +243,8 @@ def summarize(results: list[dict]) -> dict:
         detection[arr] = {"detected_in": len(found), "of": len(times),
                           "detection_time_s": float(np.mean(found)) if found else None,
                           "detection_time_s_std": float(np.std(found, ddof=1)) if len(found) > 1 else 0.0,
-                          "false_alarms_nominal": int(sum(r["detection"][arr]["false_alarms_nominal"] for r in results))}
+                          "false_alarms_nominal": int(sum(r["detection"][arr]["false_alarms_nominal"]
+                                                          for r in results))}
     rank = sorted(methods, key=lambda n: table[n]["mae"])
     return {"seeds": [r["seed"] for r in results], "table": table, "ranking_by_mae": rank, "detection": detection,
             "elm_rmse_by_step_m": np.mean([r["elm_rmse_by_step"] for r in results], axis=0).tolist(),
@@ -251,12 +252,12 @@ def summarize(results: list[dict]) -> dict:
 
 
 def markdown(summary: dict) -> str:
-    """Our table beside seed 001 Table 1."""
-    lines = ["| method | MAE | RMSE | MSE | MAE without look-ahead | filtered RMSE | time (s) | seed MAE | seed 'RMSE' "
-             "| seed time (s) |", "|---|---|---|---|---|---|---|---|---|---|"]
+    """Our table beside Du et al. (n.d.), Table 1."""
+    lines = ["| method | MAE | RMSE | MSE | MAE without look-ahead | filtered RMSE | time (s) | paper MAE "
+             "| paper 'RMSE' | paper time (s) |", "|---|---|---|---|---|---|---|---|---|---|"]
     for name, row in summary["table"].items():
-        seed = SEED_TABLE.get(name)
-        theirs = " | ".join(f"{v:.4f}" for v in seed) if seed else "- | - | -"
+        paper = PAPER_TABLE.get(name)
+        theirs = " | ".join(f"{v:.4f}" for v in paper) if paper else "- | - | -"
         lines.append(f"| {name} | {row['mae']:.4f} +- {row['mae_std']:.4f} | {row['rmse']:.4f} +- {row['rmse_std']:.4f}"
                      f" | {row['mse']:.5f} | {row['held_mae']:.4f} | {row['filtered_rmse']:.4f} | {row['seconds']:.3f}"
                      f" | {theirs} |")
@@ -274,7 +275,7 @@ def write(out: Path, summary: dict, results: list[dict], first: dict) -> list[Pa
                     "detection": DETECTION, "margin_sigmas": MARGIN_SIGMAS, "tuning": TUNING},
         "arrs": {arr.name: str(arr.nominal) for arr in arrs()},
         "signature_matrix": {row: fsm.row(row) for row in fsm.rows},
-        "seed_table_1": {name: {"mae": v[0], "rmse_column": v[1], "seconds": v[2]} for name, v in SEED_TABLE.items()},
+        "paper_table_1": {name: {"mae": v[0], "rmse_column": v[1], "seconds": v[2]} for name, v in PAPER_TABLE.items()},
         **summary,
         "per_seed": results,
     }
@@ -292,7 +293,7 @@ def write(out: Path, summary: dict, results: list[dict], first: dict) -> list[Pa
 
 
 def plot(out: Path, first: dict) -> list[Path]:
-    """Figures like seed 001 Fig. 1-3, and the ARR residuals with their thresholds."""
+    """Figures like Du et al. (n.d.), Figs. 1-3, and the ARR residuals with their thresholds."""
     plt = pyplot("Agg")
 
     s, runs, forecasts = first["scenario"], first["runs"], first["forecasts"]
@@ -346,7 +347,7 @@ def plot(out: Path, first: dict) -> list[Path]:
 
 
 def main(argv=None) -> dict:
-    parser = argparse.ArgumentParser(description="Seed 001 on the three-tank system: detection, ROS-ELM and "
+    parser = argparse.ArgumentParser(description="Du et al. (n.d.) on the three-tank system: detection, ROS-ELM and "
                                                  "5-step-ahead prediction of az2 by the Kalman family and a PF")
     parser.add_argument("--seeds", type=int, default=20, help="number of noise seeds (default 20)")
     parser.add_argument("--first-seed", type=int, default=0)
@@ -362,7 +363,7 @@ def main(argv=None) -> dict:
     if args.parameter_std is not None and not args.parameter_std > 0:
         parser.error("--parameter-std must be positive")
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
-    print(f"Seed 001 on the DTS200 three-tank system: {STEPS} steps, az2 drift from k = {ONSET}, "
+    print(f"Du et al. (n.d.) on the DTS200 three-tank system: {STEPS} steps, az2 drift from k = {ONSET}, "
           f"{HORIZON}-step-ahead prediction from k = {TRAIN}, {len(seeds)} seeds")
     first = run_seed(seeds[0], args.methods, args.parameter_std, keep=True)
     results = [{k: v for k, v in first.items() if k not in ("scenario", "runs", "forecasts")}]
@@ -375,7 +376,8 @@ def main(argv=None) -> dict:
                               progress=report and (lambda done, _: report(done + 1, len(seeds))))
     summary = summarize(results)
     for name, d in summary["detection"].items():
-        when = "never" if d["detection_time_s"] is None else f"k = {d['detection_time_s']:.1f} +- {d['detection_time_s_std']:.1f}"
+        when = ("never" if d["detection_time_s"] is None
+                else f"k = {d['detection_time_s']:.1f} +- {d['detection_time_s_std']:.1f}")
         print(f"  {name}: alarm in {d['detected_in']}/{d['of']} seeds, {when}; "
               f"false alarms on the fault-free twins: {d['false_alarms_nominal']}")
     print(f"  ROS-ELM forecast RMSE by step (m): {', '.join(f'{v:.2e}' for v in summary['elm_rmse_by_step_m'])}")

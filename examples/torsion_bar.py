@@ -1,10 +1,10 @@
-"""Seed 003 (Jha et al. 2016) end to end on the torsion-bar mechatronic system.
+"""Jha et al. (2016) end to end on the torsion-bar mechatronic system.
 
     python examples/torsion_bar.py [--case b-md|mass-linear|mass-exponential]
                                    [--preset default|paper] [--seed 0] [--runs K] [--out DIR]
 
-1. builds the torsion-bar bond graph (seed 003 Fig. 5-7, Table VI, k_m =
-   3.89e-2 N.m/A per DESIGN.md) and simulates the PI speed loop (omega_Md at
+1. builds the torsion-bar bond graph (Jha et al. (2016), Figs. 5-7, Table VI, k_m =
+   3.89e-2 N.m/A per docs/design.md) and simulates the PI speed loop (omega_Md at
    30 rad/s, 12 V saturation) twice: nominal, and with the case's degradation;
 2. derives the I-ARR of the monitorable part from the bond graph (ARR_1_1,
    eqs. 45-49; eqs. 57-58 with the suspended load), calibrates a noise margin
@@ -13,8 +13,8 @@
    at 2000 counts per revolution, the motor torque k_m i as known input);
 3. starts the particle filter at detection (dt = 0.1 s, N = 500 or 50),
    estimates theta and gamma, and predicts the RUL at every filter step;
-4. computes the figures of seed 003 section 5 and prints them beside the
-   seed's; with ``--out DIR`` writes ``results.json``, ``timeseries.csv``,
+4. computes the figures of Jha et al. (2016), section 5, and prints them beside
+   the paper's; with ``--out DIR`` writes ``results.json``, ``timeseries.csv``,
    ``prognosis.csv`` and, when matplotlib is installed, PNG plots like
    Fig. 8-12.
 
@@ -24,12 +24,12 @@ Cases (``--case``):
   failure at 0.45 N.m.s/rad (t = 99.8 s); section 6.3.
 * ``mass-linear`` / ``mass-exponential``: the suspended load M of section 7
   (eqs. 54-64) grows linearly or exponentially up to M_fail = 1.5 / 1.8 kg.
-  The seed's experiments are reproduced as simulations; where its numbers
+  The paper's experiments are reproduced as simulations; where its numbers
   cannot all hold (gamma_2* = 0.005 kg/s cannot bring the load to 1.5 kg
   within its 60 s experiment), the time line is kept: see ``CASES``.
 
 Presets (``--preset``): ``paper`` is the tuning Jha et al. (2016) report (section
-6.3.4, 7.1.3, 7.2.2) with the DESIGN.md sign of Table III; ``default`` is ours,
+6.3.4, 7.1.3, 7.2.2) with the sign of Table III corrected (docs/design.md); ``default`` is ours,
 chosen with ``examples/torsion_bar_sweep.py`` (see docs/prognosis.md).
 """
 
@@ -57,8 +57,8 @@ from diagnosis.signals import add_noise, as_record
 from prognosis import ExponentialDegradation, HealthMonitor, LinearDegradation, VarianceAdaptation
 
 DT_RECORD = 0.01  # s, sampling of the simulated sensors
-DT_FILTER = 0.1  # s, seed 003 section 6.3.3
-SPEED_NOISE = 0.01  # rad/s, seed 003 section 6.3.1
+DT_FILTER = 0.1  # s, Jha et al. (2016), section 6.3.3
+SPEED_NOISE = 0.01  # rad/s, Jha et al. (2016), section 6.3.1
 ENCODER_COUNT = 2 * np.pi / 2000  # rad, 2000 counts per revolution
 MARGIN_SIGMAS = 3.0
 PERSISTENCE = 10  # consecutive samples (0.1 s)
@@ -70,7 +70,7 @@ KEYS = ("detection_time_s", "false_alarms_nominal", "rmse_theta", "rmse_gamma", 
 
 @dataclass(frozen=True)
 class Case:
-    """A degradation scenario: what degrades, how, when it fails, and what the seed reports."""
+    """A degradation scenario: what degrades, how, when it fails, and what the paper reports."""
 
     name: str
     candidate: str  # "b_Md" or "M"
@@ -83,8 +83,8 @@ class Case:
     after: float  # RA, RMAD and alpha-lambda over predictions from this time (s)
     alpha: float
     process_noise: float  # sigma_v of the degradation model
-    seed_tuning: dict
-    seed_figures: dict = field(default_factory=dict)
+    paper_tuning: dict
+    paper_figures: dict = field(default_factory=dict)
     theta_bounds: tuple | None = None  # eq. 39 start; None: the candidate's uncertainty interval in the ARR
 
     def truth(self, t):
@@ -118,27 +118,27 @@ class Case:
 
 M_N = MASS_LOAD["M"]  # kg, the known load of the nominal run (mu is calibrated with it, section 7)
 CASES = {
-    # Section 6.3: gamma_1* = 0.05 1/s; the seed's tuning of section 6.3.4 (Table III sign per DESIGN.md).
+    # Section 6.3: gamma_1* = 0.05 1/s; the paper's tuning of section 6.3.4 (Table III sign per docs/design.md).
     "b-md": Case("b-md", "b_Md", "exponential", TORSION_BAR["b_Md"][0], 0.05, 10.0, 0.45, 500, 52.0, 0.1, 1e-5,
-                 seed_tuning={"gamma_std": 0.02, "gain": 0.001, "reference": 0.10, "band": (0.03, 0.07),
-                              "noise_std": 0.01, "inflation": 4.0},
-                 seed_figures={"rmse_theta": 0.0421, "rmse_gamma": 0.0302, "ra": 0.9715, "rmad_rul": 0.098,
-                               "wall_time_s": 32 * 60.0}),
+                 paper_tuning={"gamma_std": 0.02, "gain": 0.001, "reference": 0.10, "band": (0.03, 0.07),
+                               "noise_std": 0.01, "inflation": 4.0},
+                 paper_figures={"rmse_theta": 0.0421, "rmse_gamma": 0.0302, "ra": 0.9715, "rmad_rul": 0.098,
+                                "wall_time_s": 32 * 60.0}),
     # Section 7.1: M_fail = 1.5 kg reached at t = 60 s as in Fig. 18-21, so gamma_2* = 0.028 kg/s (the
-    # printed 0.005 kg/s would take 280 s); the seed's band [3e-3, 7e-3] around 0.005 and its initial
+    # printed 0.005 kg/s would take 280 s); the paper's band [3e-3, 7e-3] around 0.005 and its initial
     # random-walk sigma (1e-3, i.e. 0.2 gamma*) are scaled to gamma_2*.  sigma_w = 5e-3, 9x inflation.
     "mass-linear": Case("mass-linear", "M", "linear", M_N, 0.028, 10.0, 1.5, 50, 35.0, 0.2, 1e-3,
-                        seed_tuning={"gamma_std": 0.2 * 0.028, "gain": 0.007, "reference": 0.05,
-                                     "band": (0.6 * 0.028, 1.4 * 0.028), "noise_std": 5e-3, "inflation": 9.0},
-                        seed_figures={"rmse_theta": 0.0398, "ra": 0.9864, "rmad_rul": 0.094},
+                        paper_tuning={"gamma_std": 0.2 * 0.028, "gain": 0.007, "reference": 0.05,
+                                      "band": (0.6 * 0.028, 1.4 * 0.028), "noise_std": 5e-3, "inflation": 9.0},
+                        paper_figures={"rmse_theta": 0.0398, "ra": 0.9864, "rmad_rul": 0.094},
                         theta_bounds=(M_N, 1.2 * M_N)),  # M, a law constant, has no uncertainty interval
     # Section 7.2: gamma_3* = 0.05 1/s from the known load at t = 0, M_fail = 1.8 kg (t = 57.8 s);
     # sigma_xi,0^2 = 4e-6, P = 0.003, v* = 10 %, band [0.01, 0.09], sigma_v = 8e-4 kg.
     "mass-exponential": Case("mass-exponential", "M", "exponential", M_N, 0.05, 0.0, 1.8, 50, 32.0, 0.2, 8e-4,
-                             seed_tuning={"gamma_std": 2e-3, "gain": 0.003, "reference": 0.10, "band": (0.01, 0.09),
-                                          "noise_std": 5e-3, "inflation": 9.0},
-                             seed_figures={"rmse_theta": 0.0378, "rmse_gamma": 0.076, "ra": 0.9702,
-                                           "rmad_rul": 0.094},
+                             paper_tuning={"gamma_std": 2e-3, "gain": 0.003, "reference": 0.10, "band": (0.01, 0.09),
+                                           "noise_std": 5e-3, "inflation": 9.0},
+                             paper_figures={"rmse_theta": 0.0378, "rmse_gamma": 0.076, "ra": 0.9702,
+                                            "rmad_rul": 0.094},
                              theta_bounds=(M_N, 1.2 * M_N)),
 }
 PRESETS = ("default", "paper")
@@ -155,16 +155,16 @@ def tuning(case: Case, preset: str, residual_std: float) -> dict:
     50 particles cannot stagnate on a wrong gamma), and gamma held in the RUL prediction.
     examples/torsion_bar_sweep.py shows what each change does.
     """
-    seed = case.seed_tuning
+    paper = case.paper_tuning
     if preset == "paper":
-        settings = {"gamma_std": seed["gamma_std"], "noise_std": seed["noise_std"], "inflation": seed["inflation"],
-                    "adaptation": VarianceAdaptation(band=seed["band"], reference=seed["reference"],
-                                                     gain=seed["gain"]),
+        settings = {"gamma_std": paper["gamma_std"], "noise_std": paper["noise_std"], "inflation": paper["inflation"],
+                    "adaptation": VarianceAdaptation(band=paper["band"], reference=paper["reference"],
+                                                      gain=paper["gain"]),
                     "start": "uncertainty_box", "gamma0": 0.0, "prediction_walk": 1.0}
     elif preset == "default":
         settings = {"gamma_std": 0.2 * case.gamma, "noise_std": residual_std, "inflation": 4.0,
-                    "adaptation": VarianceAdaptation(band=seed["band"], reference=0.02, gain=0.01, floor=1e-3),
-                    "start": "residual", "gamma_bounds": seed["band"], "prediction_walk": 0.0}
+                    "adaptation": VarianceAdaptation(band=paper["band"], reference=0.02, gain=0.01, floor=1e-3),
+                    "start": "residual", "gamma_bounds": paper["band"], "prediction_walk": 0.0}
     else:
         raise ValueError(f"unknown preset {preset!r}; choose one of {', '.join(PRESETS)}")
     return settings
@@ -294,7 +294,8 @@ def run(case: str | Case = "b-md", preset: str = "default", seed: int = 0, *, sc
 def _threshold_widths(evaluation) -> dict:
     """Median widths of the interval and BG-LFT thresholds on the nominal record (issue 3)."""
     width = evaluation.upper - evaluation.lower
-    return {"interval_width_median": float(np.median(width)), "bglft_width_median": float(np.median(2 * evaluation.bglft)),
+    return {"interval_width_median": float(np.median(width)),
+            "bglft_width_median": float(np.median(2 * evaluation.bglft)),
             "interval_never_wider_than_bglft": bool(np.all(width <= 2 * evaluation.bglft * (1 + 1e-12)))}
 
 
@@ -316,8 +317,9 @@ def summarize(figures: list[dict]) -> dict:
 # -- output ----------------------------------------------------------------------------------------
 
 def table(figures: dict, case: Case) -> str:
-    """Our figures beside the seed's (percent where the seed gives percent)."""
-    rows = [("detection time (s)", "detection_time_s", 1, None), ("false alarms, nominal run", "false_alarms_nominal", 1, None),
+    """Our figures beside the paper's (percent where the paper gives percent)."""
+    rows = [("detection time (s)", "detection_time_s", 1, None),
+            ("false alarms, nominal run", "false_alarms_nominal", 1, None),
             ("RMSE theta (%)", "rmse_theta", 100, "rmse_theta"), ("RMSE gamma (%)", "rmse_gamma", 100, "rmse_gamma"),
             ("mean RMAD gamma (%)", "rmad_gamma", 100, None),
             (f"RA after t = {case.after:g} s (%)", "ra", 100, "ra"),
@@ -326,12 +328,13 @@ def table(figures: dict, case: Case) -> str:
             ("prognostic horizon (s)", "prognostic_horizon_s", 1, None),
             ("wall time of the run (s)", "wall_time_s", 1, "wall_time_s"),
             ("wall time per filter step (ms)", "wall_time_per_step_s", 1000, None)]
-    lines = [f"  {'figure':<44} {'ours':>16} {'seed 003':>10}"]
-    for label, key, scale, seed_key in rows:
+    lines = [f"  {'figure':<44} {'ours':>16} {'Jha et al. (2016)':>18}"]
+    for label, key, scale, paper_key in rows:
         value, spread = figures.get(key), figures.get(f"{key}_std")
-        ours = "-" if value is None else f"{value * scale:.2f}" + ("" if spread is None else f" +- {spread * scale:.2f}")
-        seed = case.seed_figures.get(seed_key) if seed_key else None
-        lines.append(f"  {label:<44} {ours:>16} {'-' if seed is None else f'{seed * scale:.2f}':>10}")
+        ours = ("-" if value is None
+                else f"{value * scale:.2f}" + ("" if spread is None else f" +- {spread * scale:.2f}"))
+        paper = case.paper_figures.get(paper_key) if paper_key else None
+        lines.append(f"  {label:<44} {ours:>16} {'-' if paper is None else f'{paper * scale:.2f}':>18}")
     return "\n".join(lines)
 
 
@@ -381,7 +384,7 @@ def _prognosis(r: Run) -> dict:
 
 
 def plot(out: Path, r: Run) -> list[Path]:
-    """PNG plots like seed 003 Fig. 8-12."""
+    """PNG plots like Jha et al. (2016), Figs. 8-12."""
     plt = pyplot("Agg")
 
     ts, pr, case = _timeseries(r), _prognosis(r), r.case
@@ -454,7 +457,7 @@ def plot(out: Path, r: Run) -> list[Path]:
 
 
 def main(argv=None) -> dict:
-    parser = argparse.ArgumentParser(description="Seed 003 end to end on the torsion bar: bond graph to RUL")
+    parser = argparse.ArgumentParser(description="Jha et al. (2016) end to end on the torsion bar: bond graph to RUL")
     parser.add_argument("--case", choices=sorted(CASES), default="b-md")
     parser.add_argument("--preset", choices=PRESETS, default="default", help="filter tuning (default: ours)")
     parser.add_argument("--seed", type=int, default=0, help="noise and filter seed (first seed with --runs)")
@@ -467,7 +470,7 @@ def main(argv=None) -> dict:
     if args.runs < 1:
         parser.error("--runs must be at least 1")
     case = CASES[args.case]
-    print(f"Seed 003 on the torsion bar, case {case.name} ({case.candidate} {case.law}, "
+    print(f"Jha et al. (2016) on the torsion bar, case {case.name} ({case.candidate} {case.law}, "
           f"failure at {case.theta_fail:g}, true end of life {case.eol:.1f} s), preset {args.preset}")
     scenario = None
     runs = []
@@ -478,7 +481,8 @@ def main(argv=None) -> dict:
         f = runs[-1].figures
         if args.runs > 1:
             print(f"  seed {f['seed']}: RMSE theta {100 * f.get('rmse_theta', np.nan):.2f} %, "
-                  f"RA {100 * f.get('ra', np.nan):.2f} %, alpha-lambda {100 * f.get('alpha_lambda_pass_rate', np.nan):.1f} %")
+                  f"RA {100 * f.get('ra', np.nan):.2f} %, "
+                  f"alpha-lambda {100 * f.get('alpha_lambda_pass_rate', np.nan):.1f} %")
     figures = summarize([r.figures for r in runs]) if args.runs > 1 else runs[0].figures
     first = runs[0]
     facts = first.scenario.facts

@@ -1,12 +1,12 @@
-"""The qualitative study of seed 003 section 6.4 as a sweep, and the path from the seed's tuning to ours.
+"""The qualitative study of Jha et al. (2016), section 6.4, as a sweep, and the path from their tuning to ours.
 
     python examples/torsion_bar_sweep.py [--case b-md] [--seeds 3] [--particles 500] [--out DIR]
 
-Part 1 (section 6.4, Fig. 13-14): one parameter at a time around the seed's
+Part 1 (section 6.4, Fig. 13-14): one parameter at a time around the paper's
 tuning of Fig. 11a: the initial random-walk deviation sigma_xi,0, the gain P,
 the reference RMAD v* and the band [gamma_l*, gamma_u*].
 
-Part 2 (our default preset): starting from the seed's tuning, each change of
+Part 2 (our default preset): starting from the paper's tuning, each change of
 the default preset is added in turn, so that the table shows what each one
 buys: the residual noise calibrated on the nominal record, the theta start
 that explains the alarm's residual, gamma's prior over the band, gamma held in
@@ -40,10 +40,10 @@ FIGURES = ("rmse_theta", "rmse_gamma", "rmad_gamma", "ra", "rmad_rul", "alpha_la
            "prognostic_horizon_s")
 
 
-def seed_study(case) -> list[tuple[str, str, dict]]:
-    """(parameter, value label, overrides of the seed preset): section 6.4 one at a time."""
-    tuning = case.seed_tuning
-    scale = case.gamma / 0.05  # the values below are the seed's for gamma* = 0.05
+def paper_study(case) -> list[tuple[str, str, dict]]:
+    """(parameter, value label, overrides of the paper preset): section 6.4 one at a time."""
+    tuning = case.paper_tuning
+    scale = case.gamma / 0.05  # the values below are the paper's for gamma* = 0.05
 
     def adaptation(**change):
         settings = {"band": tuning["band"], "reference": tuning["reference"], "gain": tuning["gain"], **change}
@@ -58,23 +58,23 @@ def seed_study(case) -> list[tuple[str, str, dict]]:
 
 
 def ladder(case, residual_std: float) -> list[tuple[str, str, dict]]:
-    """From the seed preset to the default preset, one change at a time (cumulative)."""
-    seed, default = example.tuning(case, "paper", residual_std), example.tuning(case, "default", residual_std)
-    steps = [("seed preset", {}),
+    """From the paper preset to the default preset, one change at a time (cumulative)."""
+    paper, default = example.tuning(case, "paper", residual_std), example.tuning(case, "default", residual_std)
+    steps = [("paper preset", {}),
              ("+ calibrated residual noise", {"noise_std": default["noise_std"]}),
              ("+ start from the alarm's residual", {"start": "residual"}),
              ("+ gamma prior over the band", {"gamma_bounds": default["gamma_bounds"]}),
              ("+ gamma held in the RUL prediction", {"prediction_walk": 0.0}),
-             ("+ gain P = 0.01", {"adaptation": VarianceAdaptation(band=seed["adaptation"].band,
-                                                                   reference=seed["adaptation"].reference,
+             ("+ gain P = 0.01", {"adaptation": VarianceAdaptation(band=paper["adaptation"].band,
+                                                                   reference=paper["adaptation"].reference,
                                                                    gain=default["adaptation"].gain)}),
              ("+ reference v* = 2 %, variance floor 1e-3", {"adaptation": default["adaptation"]}),
              ("+ sigma_xi0 = 0.2 gamma*, 4x inflation (default)", {"gamma_std": default["gamma_std"],
                                                                   "inflation": default["inflation"]})]
-    rows, settings = [], dict(seed)
+    rows, settings = [], dict(paper)
     for label, change in steps:
         settings = {**settings, **change}
-        rows.append(("seed -> default", label, dict(settings)))
+        rows.append(("paper -> default", label, dict(settings)))
     return rows
 
 
@@ -88,7 +88,7 @@ def sweep(case_name: str = "b-md", seeds: int = 3, n_particles: int | None = Non
     scenario = example.simulate_case(case)
     detection = example.detection_setup(case, scenario, seed=0)[2]
     residual_std = detection["margin"] / example.MARGIN_SIGMAS
-    plan = [(p, v, {**example.tuning(case, "paper", residual_std), **o}) for p, v, o in seed_study(case)]
+    plan = [(p, v, {**example.tuning(case, "paper", residual_std), **o}) for p, v, o in paper_study(case)]
     plan += ladder(case, residual_std)
     if parameters is not None:
         unknown = set(parameters) - {p for p, _, _ in plan}
@@ -127,31 +127,31 @@ def plot(rows: list[dict], path: Path, case) -> list[Path]:
     plt = pyplot("Agg")
 
     groups = list(dict.fromkeys(r["parameter"] for r in rows))
-    studies = [g for g in groups if g != "seed -> default"]
+    studies = [g for g in groups if g != "paper -> default"]
     fig = plt.figure(figsize=(3.6 * max(len(studies), 1), 8.5))
     grid = fig.add_gridspec(2, max(len(studies), 1), height_ratios=(1, 1.3))
     axes = [fig.add_subplot(grid[0, i]) for i in range(len(studies))]
-    if "seed -> default" in groups:
+    if "paper -> default" in groups:
         axes.append(fig.add_subplot(grid[1, :]))
-        studies.append("seed -> default")
+        studies.append("paper -> default")
     for ax, group in zip(axes, studies):
         part = [r for r in rows if r["parameter"] == group]
         x = np.arange(len(part))
         for key, label in (("ra", "RA"), ("alpha_lambda_pass_rate", "alpha-lambda pass"),
                            ("rmse_gamma", "RMSE gamma"), ("rmad_rul", "RMAD RUL")):
             ax.plot(x, [np.nan if r[key] is None else r[key] for r in part], "o-", label=label)
-        ladder_panel = group == "seed -> default"
+        ladder_panel = group == "paper -> default"
         ax.set_xticks(x, [r["value"] for r in part], rotation=12 if ladder_panel else 30, ha="right", fontsize=7)
-        ax.set_title(group if not ladder_panel else "from the seed's tuning to the default, one change at a time")
+        ax.set_title(group if not ladder_panel else "from the paper's tuning to the default, one change at a time")
         ax.set_ylim(0, 1.05)
         ax.grid(alpha=0.3)
     axes[0].legend(fontsize=8)
-    fig.suptitle(f"Seed 003 section 6.4 as a sweep, case {case.name} (means over seeds)")
+    fig.suptitle(f"Jha et al. (2016), section 6.4, as a sweep, case {case.name} (means over seeds)")
     return [save_figure(fig, path, dpi=100)]
 
 
 def main(argv=None) -> list[dict]:
-    parser = argparse.ArgumentParser(description="Tuning sweep of the torsion-bar prognosis (seed 003 section 6.4)")
+    parser = argparse.ArgumentParser(description="Tuning sweep of Jha et al. (2016), section 6.4, on the torsion bar")
     parser.add_argument("--case", choices=sorted(example.CASES), default="b-md")
     parser.add_argument("--seeds", type=int, default=3, help="noise seeds per setting (default 3)")
     parser.add_argument("--particles", type=int, help="particles (default: the case's)")
@@ -162,7 +162,7 @@ def main(argv=None) -> list[dict]:
     if args.seeds < 1:
         parser.error("--seeds must be at least 1")
     rows = sweep(args.case, args.seeds, args.particles, args.workers, args.quiet)
-    print(f"Seed 003 section 6.4 sweep, case {args.case}, {args.seeds} seed(s) per setting "
+    print(f"Jha et al. (2016), section 6.4, sweep of case {args.case}, {args.seeds} seed(s) per setting "
           f"(RA, RMAD RUL, alpha-lambda over predictions after t = {example.CASES[args.case].after:g} s)")
     print(table(rows))
     if args.out:

@@ -11,7 +11,7 @@ Three method families sit beside it as subpackages:
 
 * :mod:`prognosis.statespace`: Kalman filters (EKF, UKF, square-root CKF, strong tracking), a
   bootstrap particle filter, consistency tests, look-ahead and ROS-ELM forecasts on a discrete
-  model of the bond graph (Du et al.);
+  model of the bond graph (Du et al. (n.d.));
 * :mod:`prognosis.identification`: linear Gaussian models identified by EM on a sliding window,
   fault trend and the posterior predictive (Gasperin et al. (2011));
 * :mod:`prognosis.lifecontrol`: energy-driven deterioration, Chebyshev bounds, Monte Carlo RUL and

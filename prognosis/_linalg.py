@@ -33,7 +33,7 @@ def tria(matrix: np.ndarray) -> np.ndarray:
     """Lower-triangular ``S`` with ``S S^T = C C^T`` from the QR decomposition of ``C^T``.
 
     The triangularization of the square-root cubature filter (Arasaratnam and Haykin 2009;
-    Du et al., eq. 25).  The diagonal is made non-negative (column signs are free).
+    Du et al. (n.d.), eq. 25).  The diagonal is made non-negative (column signs are free).
 
     >>> c = np.array([[1.0, 2.0, 0.5], [0.0, 1.0, 3.0]])
     >>> s = tria(c)

@@ -1,10 +1,10 @@
-"""Degradation models of the prognostic candidate theta (seed 003 section 3.1).
+"""Degradation models of the prognostic candidate theta (Jha et al. (2016), section 3.1).
 
 A model maps ``theta_{k-1}`` and the degradation progression parameters
 ``gamma_{k-1}`` to ``theta_k``, plus additive process noise ``v ~ N(0, s^2)``:
 
-* :class:`LinearDegradation` ``theta_k = theta_{k-1} + gamma dt + v``           (seed 003 eq. 60)
-* :class:`ExponentialDegradation` ``theta_k = theta_{k-1} exp(gamma dt) + v``        (seed 003 eq. 53)
+* :class:`LinearDegradation` ``theta_k = theta_{k-1} + gamma dt + v``           (Jha et al. (2016), eq. 60)
+* :class:`ExponentialDegradation` ``theta_k = theta_{k-1} exp(gamma dt) + v``        (Jha et al. (2016), eq. 53)
 * :class:`CustomDegradation` ``theta_k = g(theta_{k-1}, gamma, dt) + v``
 
 Arrays are vectorized over assets and particles: ``theta`` has shape
@@ -113,7 +113,8 @@ class CustomDegradation:
     (each step still vectorized over particles).
 
     >>> import numpy as np
-    >>> model = CustomDegradation(lambda theta, gamma, dt: theta * (1 + gamma[..., 0] * dt + gamma[..., 1] * dt**2), n_gamma=2)
+    >>> model = CustomDegradation(lambda theta, gamma, dt: theta * (1 + gamma[..., 0] * dt + gamma[..., 1] * dt**2),
+    ...                           n_gamma=2)
     >>> model.step(np.array([1.0]), np.array([[1.0, 2.0]]), dt=0.5)
     array([2.])
     """
@@ -197,5 +198,6 @@ def degradation_model(name: str, process_noise: float = 0.0):
     [2.0]
     """
     if name not in MODELS:
-        raise ValueError(f"unknown degradation model {name!r}; choose from {sorted(MODELS)} or use CustomDegradation(g)")
+        raise ValueError(f"unknown degradation model {name!r}; choose from {sorted(MODELS)} "
+                         "or use CustomDegradation(g)")
     return MODELS[name](process_noise=process_noise)

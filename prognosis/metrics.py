@@ -1,6 +1,6 @@
-"""Estimation, prediction and prognostic metrics (seed 003 section 5; Saxena et al. 2010).
+"""Estimation, prediction and prognostic metrics (Jha et al. (2016), section 5; Saxena et al. 2010).
 
-Seed 003 evaluates a particle-filter prognoser with
+Jha et al. (2016) evaluate a particle-filter prognoser with
 
 * estimation: relative RMSE (eq. 40) and the spread RMAD (eqs. 35, 41) of the
   estimated state and degradation parameters;
@@ -36,13 +36,15 @@ import warnings
 import numpy as np
 from numpy.typing import ArrayLike
 
+from bondgraph.errors import PHMWarning
+
 __all__ = [
     "MetricWarning", "alpha_lambda", "convergence", "cumulative_relative_accuracy", "mean_relative_accuracy",
     "mean_rmad", "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad", "weighted_median",
 ]
 
 
-class MetricWarning(UserWarning):
+class MetricWarning(PHMWarning):
     """A metric undefined at some points (set to NaN there)."""
 
 
@@ -138,7 +140,7 @@ def weighted_median(samples: ArrayLike, weights: ArrayLike | None = None, axis: 
 
 
 def rmad(samples: ArrayLike, weights: ArrayLike | None = None, axis: int = -1) -> np.ndarray | float:
-    """Relative median absolute deviation, the robust spread of seed 003 eq. (35).
+    """Relative median absolute deviation, the robust spread of Jha et al. (2016), eq. (35).
 
     ``RMAD(X) = Median_i |X_i - Median_j X_j| / Median_j X_j``
 
@@ -177,7 +179,7 @@ def rmad(samples: ArrayLike, weights: ArrayLike | None = None, axis: int = -1) -
 
 
 def mean_rmad(rmads: ArrayLike, axis: int = -1) -> np.ndarray | float:
-    """Mean spread over time, seed 003 eq. (41): ``mean RMAD = Mean_k RMAD_k``.
+    """Mean spread over time, Jha et al. (2016), eq. (41): ``mean RMAD = Mean_k RMAD_k``.
 
     NaN entries (e.g. time steps without an estimate) are ignored; an
     all-NaN slice gives NaN.
@@ -194,7 +196,7 @@ def mean_rmad(rmads: ArrayLike, axis: int = -1) -> np.ndarray | float:
 
 
 def relative_rmse(estimates: ArrayLike, truth: ArrayLike, axis: int = -1) -> np.ndarray | float:
-    """Relative root mean square error, seed 003 eq. (40).
+    """Relative root mean square error, Jha et al. (2016), eq. (40).
 
     ``RMSE_X = sqrt( Mean_k ((X_k - X*_k) / X*_k)^2 )``
 
@@ -222,7 +224,7 @@ def relative_rmse(estimates: ArrayLike, truth: ArrayLike, axis: int = -1) -> np.
 
 
 def relative_accuracy(rul_true: ArrayLike, rul_predicted_mean: ArrayLike) -> np.ndarray | float:
-    """Relative accuracy at each prediction point, seed 003 eq. (42).
+    """Relative accuracy at each prediction point, Jha et al. (2016), eq. (42).
 
     ``RA_kp = 1 - |RUL*_kp - Mean(RUL_kp)| / RUL*_kp``
 
@@ -249,7 +251,7 @@ def relative_accuracy(rul_true: ArrayLike, rul_predicted_mean: ArrayLike) -> np.
 
 
 def mean_relative_accuracy(ra: ArrayLike, axis: int = -1) -> np.ndarray | float:
-    """Overall accuracy, seed 003 eq. (43): ``mean RA = Mean_kp RA_kp``.
+    """Overall accuracy, Jha et al. (2016), eq. (43): ``mean RA = Mean_kp RA_kp``.
 
     NaN entries (points where RA is undefined) are ignored.
 
@@ -263,7 +265,7 @@ def mean_relative_accuracy(ra: ArrayLike, axis: int = -1) -> np.ndarray | float:
 
 def alpha_lambda(rul_samples: ArrayLike, weights: ArrayLike | None, rul_true: ArrayLike, alpha: float,
                  beta: float) -> tuple[np.ndarray, np.ndarray]:
-    """Alpha-lambda accuracy with a probability-mass threshold (seed 003 section 5.3).
+    """Alpha-lambda accuracy with a probability-mass threshold (Jha et al. (2016), section 5.3).
 
     At each prediction point the probability mass of the predicted RUL
     distribution inside the cone ``[(1 - alpha) RUL*, (1 + alpha) RUL*]``
@@ -272,7 +274,7 @@ def alpha_lambda(rul_samples: ArrayLike, weights: ArrayLike | None, rul_true: Ar
     ``pi = sum_i w_i [ (1 - alpha) RUL* <= RUL_i <= (1 + alpha) RUL* ] / sum_i w_i``
 
     and the prediction is acceptable when ``pi >= beta`` (Saxena et al.
-    2010).  Seed 003 uses ``beta = 0.5`` at every prediction point (all
+    2010).  Jha et al. (2016) use ``beta = 0.5`` at every prediction point (all
     lambda): pass the prediction points of interest.
 
     Censoring: a particle whose RUL is ``+inf`` or NaN (it never crossed the
@@ -378,7 +380,7 @@ def cumulative_relative_accuracy(ra: ArrayLike, weights: ArrayLike | None = None
     ``CRA = sum_l w_l RA_l / sum_l w_l``
 
     over the prediction points ``l`` along ``axis``: a normalized weighted
-    sum, equal to mean RA (seed 003 eq. 43) for the default uniform weights.
+    sum, equal to mean RA (Jha et al. (2016), eq. 43) for the default uniform weights.
     Saxena et al. suggest weights growing as the RUL shrinks, so late
     predictions, closer to failure, count more.  Points where RA is NaN are
     dropped together with their weights.

@@ -1,4 +1,4 @@
-"""Health monitoring of one prognostic candidate (seed 003 Table V).
+"""Health monitoring of one prognostic candidate (Jha et al. (2016), Table V).
 
 Detection with the candidate's I-ARR (:mod:`diagnosis`) runs until the first
 alarm; the particle filter then starts from the candidate's uncertainty
@@ -110,11 +110,11 @@ class MonitorResult:
 
     def metrics(self, theta_true, gamma_true, eol: float, *, after: float | None = None,
                 alpha: float = 0.1, beta: float = 0.5) -> dict:
-        """Seed 003 section 5 metrics against the truth.
+        """The metrics of Jha et al. (2016), section 5, against the truth.
 
         ``theta_true``, ``gamma_true``: callables of t; ``eol``: true end of
         life (s).  RA, RMAD of the RUL and the alpha-lambda pass rate use the
-        predictions made at or after ``after`` (the seed uses t = 52 s) and
+        predictions made at or after ``after`` (Jha et al. (2016) use t = 52 s) and
         before the end of life (the true RUL must be positive).  The
         prognostic horizon is ``eol - t_j`` from the first prediction after
         which at least ``beta`` of the RUL mass stays within ``RUL* -+ alpha
@@ -174,7 +174,8 @@ class HealthMonitor:
     gamma_bounds : (lo, hi), optional
         Draw the initial gamma uniformly over this interval instead of ``gamma0``.
     start : {"residual", "uncertainty_box"}
-        Initial theta interval.  ``"uncertainty_box"``: the candidate's uncertainty interval, as in Jha et al. (2016), eq. 39.
+        Initial theta interval.  ``"uncertainty_box"``: the candidate's uncertainty interval, as in
+        Jha et al. (2016), eq. 39.
         ``"residual"``: that interval widened to contain the theta that explains the residual on
         the ``persistence`` samples that raised the alarm (inverting the observation equation);
         by the time a degradation is detected, theta has usually left the uncertainty interval.
@@ -198,7 +199,8 @@ class HealthMonitor:
 
     def __init__(self, arr, candidate: str, model, *, theta_fail: float, direction: str = "up", dt: float = 0.1,
                  n_particles: int = 500, noise_std: float = 0.01, inflation: float = 4.0, gamma_std=0.02,
-                 gamma0=0.0, gamma_bounds=None, start: str = "residual", theta_bounds=None, adaptation: VarianceAdaptation | None = None, resampling: str = "systematic",
+                 gamma0=0.0, gamma_bounds=None, start: str = "residual", theta_bounds=None,
+                 adaptation: VarianceAdaptation | None = None, resampling: str = "systematic",
                  resample_below: float = 1.0, prediction_walk: float = 1.0, rul_every: int = 1, horizon: float = 200.0,
                  detection: Mapping | None = None, seed: int = 0):
         self.arr, self.candidate, self.model = arr, candidate, model
@@ -343,7 +345,8 @@ class HealthMonitor:
         estimate = self.filter.estimate()
         self._rows.append((time, estimate))
         if self._steps % self.rul_every == 0:
-            arguments = (self.filter.theta, self.filter.gamma, self.filter.weights, self.prediction_walk * np.sqrt(self.filter.variance))
+            arguments = (self.filter.theta, self.filter.gamma, self.filter.weights,
+                         self.prediction_walk * np.sqrt(self.filter.variance))
             if self._pool is not None:
                 prediction = self._pool.submit(*arguments, key=self._steps)
             else:

@@ -1,4 +1,4 @@
-"""Observation equation from an ARR's nominal part (seed 003 section 3.2).
+"""Observation equation from an ARR's nominal part (Jha et al. (2016), section 3.2).
 
 With the prognostic candidate theta^d free and every other parameter at its
 nominal value, the balance of the junction holds for the true system:
@@ -23,8 +23,6 @@ from dataclasses import dataclass, field
 import numpy as np
 import sympy as sp
 
-from diagnosis.residuals import compile_arr
-
 
 @dataclass
 class ObservationModel:
@@ -48,12 +46,11 @@ class ObservationModel:
 
     >>> from bondgraph.library import rlc_circuit
     >>> from diagnosis import derive_arrs
-    >>> from diagnosis.residuals import compile_arr
     >>> arr = derive_arrs(rlc_circuit())[0]
     >>> h = observation_model(arr, "R")
     >>> h.candidate, h.nominal, h.expression, h.coefficient
     ('R', 10.0, -(R - 10.0)*i(t), -i(t))
-    >>> compile_arr(arr).points   # the order of the point values
+    >>> arr.compiled.points   # the order of the point values
     [V, i, v_C, d1_i]
 
     Called on particles (here three values of R, with i = 0.5 A), and inverted:
@@ -80,7 +77,7 @@ class ObservationModel:
     def function(self):
         """``h(theta, *points)``, vectorized; ``points`` in the order of the compiled ARR."""
         if self._function is None:
-            compiled = compile_arr(self.arr)
+            compiled = self.arr.compiled
             values = {sp.Symbol(p): v for p, v in self.arr.values.items() if p != self.candidate}
             numeric = self.expression.xreplace(compiled.symbols).xreplace(values)
             self._function = sp.lambdify([self.symbol, *compiled.points], numeric, modules="numpy", cse=True)

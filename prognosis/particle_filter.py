@@ -1,4 +1,4 @@
-"""SIR particle filter for joint estimation of theta and gamma (seed 003 Table II).
+"""SIR particle filter for joint estimation of theta and gamma (Jha et al. (2016), Table II).
 
 State arrays are batched over independent assets: ``theta`` (A, N),
 ``gamma`` (A, N, G), log-weights (A, N); one asset is a batch of one.  A step:
@@ -6,7 +6,7 @@ State arrays are batched over independent assets: ``theta`` (A, N),
 1. predict: ``gamma_k = gamma_{k-1} + xi``, ``xi ~ N(0, var_xi)`` (random
    walk), ``theta_k = g(theta_{k-1}, gamma_{k-1}) + v``;
 2. update: ``log w += -(y - h(theta_k))^2 / (2 c sigma_w^2)``, with ``c`` the
-   inflation of the residual noise variance (the seed uses 4 and 9);
+   inflation of the residual noise variance (the paper uses 4 and 9);
    a missing measurement (NaN) skips the update;
 3. normalize in log space (log-sum-exp) and resample (systematic by default)
    every step or when the effective sample size falls below a fraction of N;
@@ -16,7 +16,7 @@ State arrays are batched over independent assets: ``theta`` (A, N),
 
 Initialisation at detection (eq. 39): theta uniform over the candidate's
 uncertainty interval ``theta_n (1 + [delta_lo, delta_hi])``, gamma at a given
-start value (0 in the seed).
+start value (0 in the paper).
 """
 
 from __future__ import annotations
@@ -32,7 +32,7 @@ from .resampling import effective_sample_size, get_scheme, normalize_log_weights
 
 @dataclass
 class VarianceAdaptation:
-    """Random-walk variance adaptation (seed 003 section 4.1.1, Table III).
+    """Random-walk variance adaptation (Jha et al. (2016), section 4.1.1, Table III).
 
     For each progression parameter j, the moving average of the estimated
     mean of gamma_j over the last ``window + 1`` steps (eq. 36) decides:
@@ -46,7 +46,7 @@ class VarianceAdaptation:
       kept within ``[floor * var_xi,0, var_xi,0]``.  Table III as printed
       multiplies by ``1 + P (v - v*)/v*``, which grows the noise when the
       spread is too large; the intent (section 4.1.1, after Daigle and Goebel)
-      is to shrink it, hence the minus sign (see DESIGN.md).  Table III also
+      is to shrink it, hence the minus sign (see docs/design.md).  Table III also
       writes the spread and the variance with the same symbol; here the
       spread steers the variance of the previous step.
     * outside the band: reset to the initial variance ``var_xi,0``.
@@ -151,7 +151,7 @@ class ParticleFilter:
     noise_std : float or array (A,)
         Standard deviation sigma_w of the residual noise.
     inflation : float
-        Multiplier of sigma_w^2 in the likelihood (seed 003: 4 or 9).
+        Multiplier of sigma_w^2 in the likelihood (Jha et al. (2016): 4 or 9).
     gamma_std : float or sequence (G,)
         Initial random-walk standard deviation of each gamma.
     adaptation : VarianceAdaptation, optional
@@ -191,7 +191,8 @@ class ParticleFilter:
         self.noise_std, self.inflation = noise_std, inflation
         self.initial_variance = np.square(np.atleast_1d(np.asarray(gamma_std, float)))
         if self.initial_variance.size != model.n_gamma:
-            raise ValueError(f"gamma_std has {self.initial_variance.size} entries; the model has {model.n_gamma} gammas")
+            raise ValueError(f"gamma_std has {self.initial_variance.size} entries; "
+                             f"the model has {model.n_gamma} gammas")
         self.adaptation = adaptation
         self.resample = get_scheme(resampling)
         self.resample_below = resample_below
@@ -202,7 +203,7 @@ class ParticleFilter:
         """Particles at detection: theta ~ U(lo, hi) per asset (eq. 39), gamma = gamma0.
 
         ``gamma_bounds = (lo, hi)`` (each a scalar or (G,)) draws gamma uniformly instead, e.g. over
-        the band of :class:`VarianceAdaptation`, the prior knowledge of gamma the seed already uses.
+        the band of :class:`VarianceAdaptation`, the prior knowledge of gamma the paper already uses.
         """
         lo, hi = (np.broadcast_to(np.asarray(b, float), (assets,)) for b in theta_bounds)
         if np.any(lo > hi):

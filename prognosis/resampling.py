@@ -1,6 +1,6 @@
 """Resampling schemes for particle filters, vectorized over a batch of assets.
 
-Seed 003 uses sampling importance resampling (SIR): after the weights are
+Jha et al. (2016) use sampling importance resampling (SIR): after the weights are
 updated with the likelihood of the new residual, particles are drawn again
 from their weighted empirical distribution (eq. 37 before propagation).  Each
 scheme here returns *ancestor indices*: ``particles[..., indices]`` (with

@@ -1,4 +1,4 @@
-"""Remaining useful life by propagating the particles to the failure threshold (seed 003 Table IV).
+"""Remaining useful life by propagating the particles to the failure threshold (Jha et al. (2016), Table IV).
 
 Each particle keeps its weight and is propagated with its degradation model
 and the random walk of its gamma until theta crosses ``theta_fail`` (upwards or
@@ -152,7 +152,10 @@ class RULDistribution:
         return self.quantile(0.5)
 
     def probability_before(self, rul: float):
-        """``Pr(RUL <= rul)``: the weight of the samples failing within ``rul`` (Rodriguez Obando et al. (2021), eq. 51)."""
+        """``Pr(RUL <= rul)``: the weight of the samples failing within ``rul``.
+
+        Rodriguez Obando et al. (2021), eq. 51.
+        """
         return self._mass(np.asarray(self.samples) <= rul)
 
     @property

@@ -1,7 +1,7 @@
 r"""Interval arithmetic with outward rounding for robust fault-detection thresholds.
 
-The uncertain part :math:`\Psi_2` of an interval-valued ARR (seed 003, Jha et
-al. 2016, section 2.3) is an expression in point-valued signals, point-valued
+The uncertain part :math:`\Psi_2` of an interval-valued ARR (Jha et
+al. (2016), section 2.3) is an expression in point-valued signals, point-valued
 nominal parameters and interval-valued multiplicative uncertainties
 :math:`[\delta_\theta]`. Its range :math:`[\underline B(t), \overline B(t)]`
 over the uncertainty box is the detection threshold: a fault is declared when
@@ -10,7 +10,7 @@ over the uncertainty box is the detection threshold: a fault is declared when
 Natural interval extension
 --------------------------
 :func:`compile_interval` replaces every real operation of the sympy expression
-by its interval counterpart (seed 003, Appendix A, Definition A.2). Each
+by its interval counterpart (Jha et al. (2016), Appendix A, Definition A.2). Each
 interval operation encloses the exact range of the real operation over its
 arguments, so the result is a rational interval function, inclusion isotonic
 (Moore; Lemma A.3.1), and by the fundamental theorem of interval analysis

@@ -1,5 +1,9 @@
 """Interval kernels on ``(lo, hi)`` pairs: the arithmetic under :class:`~diagnosis.intervals.Interval`.
 
+>>> lo, hi = mul((np.float64(-1.0), np.float64(2.0)), point(3.0))   # [-1, 2] * 3, rounded outward
+>>> float(lo), float(hi)
+(-3.0000000000000004, 6.000000000000001)
+
 A pair holds two floats or two arrays of broadcastable shapes; ``lo is hi``
 marks an exact point (:func:`point`), whose result a kernel computes once and
 rounds outward once, or not at all when it is exact. Every kernel returns an
@@ -46,6 +50,7 @@ def _is_zero(a: Pair) -> bool:
 
 
 def add(a: Pair, b: Pair) -> Pair:
+    """Enclosure of ``a + b``."""
     if _is_zero(a) or _is_zero(b):
         return b if _is_zero(a) else a
     if is_point(a) and is_point(b):
@@ -54,6 +59,7 @@ def add(a: Pair, b: Pair) -> Pair:
 
 
 def sub(a: Pair, b: Pair) -> Pair:
+    """Enclosure of ``a - b``."""
     if _is_zero(b):
         return a
     if is_point(a) and is_point(b):
@@ -62,6 +68,7 @@ def sub(a: Pair, b: Pair) -> Pair:
 
 
 def neg(a: Pair) -> Pair:
+    """``-a`` (exact: the bounds swap and change sign)."""
     if is_point(a):
         n = -a[0]
         return n, n
@@ -84,6 +91,7 @@ def _scale(a: Pair, p) -> Pair:
 
 
 def mul(a: Pair, b: Pair) -> Pair:
+    """Enclosure of ``a * b`` (the hull of the four bound products, an exact point factor scaled once)."""
     if is_point(a):
         a, b = b, a
     if is_point(b):
@@ -112,6 +120,7 @@ def _zero_hull(lo, hi, zero) -> Pair:
 
 
 def div(a: Pair, b: Pair) -> Pair:
+    """Enclosure of ``a / b``; where the divisor contains 0 the result is ``(-inf, inf)``, with a warning."""
     al, ah = a
     bl, bh = b
     if is_point(b):
@@ -191,6 +200,7 @@ def _clip_domain(a: Pair, name: str, closed: bool) -> Pair:
 
 
 def sqrt(a: Pair) -> Pair:
+    """Enclosure of ``sqrt(a)``; the part of ``a`` below 0 is cut off with a warning."""
     a = _clip_domain(a, "sqrt", closed=True)
     if is_point(a):
         root = np.sqrt(a[0])
@@ -207,16 +217,19 @@ def _monotone(a: Pair, fn) -> Pair:
 
 
 def exp(a: Pair) -> Pair:
+    """Enclosure of ``exp(a)`` (increasing), widened for libm's error."""
     lo, hi = _monotone(a, np.exp)
     return np.maximum(lo, 0.0), hi
 
 
 def log(a: Pair) -> Pair:
+    """Enclosure of ``log(a)`` (increasing); the part of ``a`` at or below 0 is cut off with a warning."""
     a = _clip_domain(a, "log", closed=False)
     return _monotone(a, np.log)  # a lower end clipped to 0 gives log(0) = -inf
 
 
 def tanh(a: Pair) -> Pair:
+    """Enclosure of ``tanh(a)`` (increasing), widened for libm's error."""
     lo, hi = _monotone(a, np.tanh)
     return np.maximum(lo, -1.0), np.minimum(hi, 1.0)
 
@@ -261,14 +274,17 @@ def _periodic(a: Pair, fn, peak: float, trough: float) -> Pair:
 
 
 def sin(a: Pair) -> Pair:
+    """Enclosure of ``sin(a)``, with the peaks and troughs ``a`` contains."""
     return _periodic(a, np.sin, _HALF_PI, -_HALF_PI)
 
 
 def cos(a: Pair) -> Pair:
+    """Enclosure of ``cos(a)``, with the peaks and troughs ``a`` contains."""
     return _periodic(a, np.cos, 0.0, math.pi)
 
 
 def absolute(a: Pair) -> Pair:
+    """``|a|`` (exact: 0 is the lower bound when ``a`` contains it)."""
     lo, hi = a
     if is_point(a):
         m = np.abs(lo)
@@ -277,6 +293,7 @@ def absolute(a: Pair) -> Pair:
 
 
 def sign(a: Pair) -> Pair:
+    """The range of ``sign`` over ``a``: a subset of [-1, 1]."""
     if is_point(a):
         s = np.sign(a[0])
         return s, s
@@ -284,6 +301,7 @@ def sign(a: Pair) -> Pair:
 
 
 def minimum(a: Pair, b: Pair) -> Pair:
+    """``min(a, b)`` elementwise (exact)."""
     if is_point(a) and is_point(b):
         m = np.minimum(a[0], b[0])
         return m, m
@@ -291,6 +309,7 @@ def minimum(a: Pair, b: Pair) -> Pair:
 
 
 def maximum(a: Pair, b: Pair) -> Pair:
+    """``max(a, b)`` elementwise (exact)."""
     if is_point(a) and is_point(b):
         m = np.maximum(a[0], b[0])
         return m, m

@@ -20,6 +20,8 @@ from typing import Any
 
 import numpy as np
 
+from bondgraph.errors import PHMWarning
+
 TRANSCENDENTAL_ULPS = 4
 """Assumed worst error, in ulps, of numpy's exp, log, tanh, sin, cos and power."""
 
@@ -32,7 +34,7 @@ _TRANS_REL = (2 * TRANSCENDENTAL_ULPS + 1) * EPS
 _TRANS_SUB = (TRANSCENDENTAL_ULPS + 1) * _TINY
 
 
-class IntervalWarning(RuntimeWarning):
+class IntervalWarning(PHMWarning, RuntimeWarning):
     """An interval operation left its domain and returned a widened, still sound, result."""
 
 

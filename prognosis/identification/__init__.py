@@ -1,6 +1,6 @@
-"""Linear Gaussian state-space identification by EM, for fault-trend detection and prediction (seed 004).
+"""Linear Gaussian state-space identification by EM for fault-trend detection and prediction (Gasperin et al. (2011)).
 
-Model (seed 004 eqs. 2-3)::
+Model (Gasperin et al. (2011), eqs. 2-3)::
 
     x_{t+1} = A x_t + B u_t + w_t,        [w_t]      (    [Q    S])
     y_t     = C x_t + D u_t + v_t,        [v_t]  ~ N (0,  [S^T  R]),     x_1 ~ N(mu1, P1),

@@ -21,7 +21,7 @@ from .smoother import SmootherResult, filter_arrays, smooth_arrays
 
 def em_step(model: LinearGaussianModel, y: ArrayLike, u: ArrayLike | None = None, *, cross_covariance: bool = True,
             estimate_initial: bool = True) -> tuple[LinearGaussianModel, float]:
-    """One EM iteration (seed 004 eqs. 14-23): returns ``(new_model, log p(Y | model))``.
+    """One EM iteration (Gasperin et al. (2011), eqs. 14-23): returns ``(new_model, log p(Y | model))``.
 
     E-step: :func:`kalman_smoother` gives ``x_t = E[x_t | Y]``, ``P_t = Cov(x_t | Y)``,
     ``M_t = Cov(x_{t+1}, x_t | Y)``, hence ``E[x_t x_t^T] = P_t + x_t x_t^T`` and
@@ -78,7 +78,8 @@ def em_step(model: LinearGaussianModel, y: ArrayLike, u: ArrayLike | None = None
     return new, smoothed.log_likelihood
 
 
-def em_arrays_step(model: LinearGaussianModel, y: np.ndarray, u: np.ndarray, cross_covariance: bool, estimate_initial: bool
+def em_arrays_step(model: LinearGaussianModel, y: np.ndarray, u: np.ndarray, cross_covariance: bool,
+                   estimate_initial: bool
         ) -> tuple[LinearGaussianModel, SmootherResult]:
     """One EM iteration on checked arrays: smooth with ``model``, then the M-step; returns (new model, smoothing).
 
@@ -181,12 +182,12 @@ class EMResult:
 def fit_em(y: ArrayLike, u: ArrayLike | None, n_states: int, *, initial: LinearGaussianModel | None = None,
            max_iter: int = 200, tol: float = 1e-8, cross_covariance: bool = True, estimate_initial: bool = True,
            seed: int | None = None) -> EMResult:
-    """Maximum-likelihood ``A, B, C, D, Q, R`` (and ``S``, ``mu1``, ``P1``) by EM (seed 004 section 3.3).
+    """Maximum-likelihood ``A, B, C, D, Q, R`` (and ``S``, ``mu1``, ``P1``) by EM (Gasperin et al. (2011), section 3.3).
 
     Iterates :func:`em_step` until ``(L_k - L_{k-1}) <= tol |L_{k-1}|`` (relative change of the
     log-likelihood ``L``) or ``max_iter`` steps.
 
-    Start.  The seed sets every entry of every matrix to 1 and argues the likelihood is unimodal.  It is
+    Start.  The paper sets every entry of every matrix to 1 and argues the likelihood is unimodal.  It is
     not (any change of state basis gives the same likelihood, and there are genuine local maxima), and
     the all-ones start is a trap: with identical rows and columns the states are exchangeable, EM keeps
     that symmetry at every step, and the model stays of order 1 for ever.  The default start is
@@ -208,7 +209,7 @@ def fit_em(y: ArrayLike, u: ArrayLike | None, n_states: int, *, initial: LinearG
         Start model (``n_states`` must match); overrides the default start.
     max_iter, tol : stopping rule (``max_iter`` EM steps at most).
     cross_covariance : bool
-        Estimate ``S`` (True) or impose ``S = 0`` (the seed's eq. 24 lists ``A, B, C, D, Q, R`` only).
+        Estimate ``S`` (True) or impose ``S = 0`` (the paper's eq. 24 lists ``A, B, C, D, Q, R`` only).
     estimate_initial : bool
         Estimate ``mu1`` and ``P1`` (True) or keep the start's.
 

@@ -7,19 +7,20 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from bondgraph.errors import PHMWarning
+
 from .. import _linalg as linalg
 from .data import check_covariance, check_data, check_inputs, check_matrix
 
 
-
-class IdentificationWarning(RuntimeWarning):
+class IdentificationWarning(PHMWarning, RuntimeWarning):
     """An M-step had to floor the eigenvalues of a noise covariance (the model is close to degenerate)."""
 
 
 
 @dataclass(frozen=True, eq=False, repr=False)
 class LinearGaussianModel:
-    """``x_{t+1} = A x_t + B u_t + w_t``, ``y_t = C x_t + D u_t + v_t`` (seed 004 eqs. 2-3).
+    """``x_{t+1} = A x_t + B u_t + w_t``, ``y_t = C x_t + D u_t + v_t`` (Gasperin et al. (2011), eqs. 2-3).
 
     ``[w_t; v_t] ~ N(0, [[Q, S], [S^T, R]])`` independently over ``t`` and of ``x_1 ~ N(mu1, P1)``.
 
@@ -185,7 +186,8 @@ class LinearGaussianModel:
             raise ValueError(f"T must have shape ({self.n_states}, {self.n_states}), got {t.shape}")
         t_inv = np.linalg.inv(t)  # raises LinAlgError if T is singular
         return LinearGaussianModel(A=t @ self.A @ t_inv, B=t @ self.B, C=self.C @ t_inv, D=self.D,
-                                   Q=linalg.symmetric(t @ self.Q @ t.T), R=self.R, S=t @ self.S if np.any(self.S) else None,
+                                   Q=linalg.symmetric(t @ self.Q @ t.T), R=self.R,
+                                   S=t @ self.S if np.any(self.S) else None,
                                    mu1=t @ self.mu1, P1=linalg.symmetric(t @ self.P1 @ t.T))
 
     @property

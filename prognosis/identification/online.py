@@ -58,7 +58,7 @@ class WindowIdentification:
 
 
 class OnlineEM:
-    """Sliding-window EM identification (seed 004 section 3.4).
+    """Sliding-window EM identification (Gasperin et al. (2011), section 3.4).
 
     Keeps the last ``window`` samples ``(y_t, u_t)``.  When the window first fills, :func:`fit_em` runs
     from the default start (up to ``initial_iterations`` steps).  Afterwards, every ``every`` new samples,
@@ -66,9 +66,9 @@ class OnlineEM:
     initial state moved to the new window's first sample (``mu1``, ``P1`` = the last E-step's smoothed
     state at that sample).  Between re-identifications :meth:`update` returns the last model.
 
-    Defaults (the seed re-identifies at every sample and does not say how many iterations): ``window=200``
-    (the seed's N, 16.7 h at 5 min), ``every=12`` (hourly at 5 min), ``iterations=5``,
-    ``initial_iterations=200``, ``cross_covariance=False`` (the seed's parameter vector, eq. 24, has no S;
+    Defaults (the paper re-identifies at every sample and does not say how many iterations): ``window=200``
+    (the paper's N, 16.7 h at 5 min), ``every=12`` (hourly at 5 min), ``iterations=5``,
+    ``initial_iterations=200``, ``cross_covariance=False`` (the paper's parameter vector, eq. 24, has no S;
     this also allows missing samples).  Successive windows overlap by ``window - every`` samples, so the
     EM steps accumulate along the record: each identification continues the previous one's ascent.
     One identification costs ``iterations`` Kalman smoother passes over the window.

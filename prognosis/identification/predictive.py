@@ -1,4 +1,4 @@
-"""Long-term feature prediction with the uncertainty of the identified parameters (seed 004 section 5.2).
+"""Long-term feature prediction with the uncertainty of the identified parameters (Gasperin et al. (2011), section 5.2).
 
 :func:`~prognosis.identification.predict_feature` propagates the noises of one identified model.  Over a
 horizon of a few window lengths the error of the parameters dominates: a pole error of 0.005 grows to a
@@ -28,7 +28,8 @@ Prior
     predictor ``rho(F) < 1``.  Then, with ``nu = N - dim(beta)``::
 
         p(theta | y) ~ RSS(theta)^(-nu / 2),
-        y_{T+h} | theta, y ~ Student t_nu(g_h + G_h beta_hat, s^2 (1 + sum_{i<h-1} (e_1^T A^i K)^2 + G_h (Phi^T Phi)^-1 G_h^T)),
+        y_{T+h} | theta, y ~ Student t_nu(g_h + G_h beta_hat,
+                                          s^2 (1 + sum_{i<h-1} (e_1^T A^i K)^2 + G_h (Phi^T Phi)^-1 G_h^T)),
 
     ``RSS`` the least-squares residual, ``beta_hat`` the estimate, ``s^2 = RSS / nu``, ``G_h`` the sensitivity
     of the future mean to ``beta``.
@@ -66,13 +67,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import special
 
-from .data import check_data, check_future_inputs
+from bondgraph.errors import PHMWarning
+
 from ..resampling import systematic
+from .data import check_data, check_future_inputs
 
 __all__ = ["PosteriorPrediction", "SamplerWarning", "WindowPosterior", "sample_posterior", "window_log_posterior"]
 
 
-class SamplerWarning(RuntimeWarning):
+class SamplerWarning(PHMWarning, RuntimeWarning):
     """The tempering sampler degenerated (few distinct particles or moves rarely accepted)."""
 
 

@@ -107,7 +107,7 @@ def kalman_smoother(model: LinearGaussianModel, y: ArrayLike, u: ArrayLike | Non
 
 
 def log_likelihood(model: LinearGaussianModel, y: ArrayLike, u: ArrayLike | None = None) -> float:
-    """``log p(y_1..y_T | theta)`` from the innovations of the Kalman filter (seed 004 eq. 10).
+    """``log p(y_1..y_T | theta)`` from the innovations of the Kalman filter (Gasperin et al. (2011), eq. 10).
 
     ``sum_t -1/2 (m log 2 pi + log det S_t + e_t^T S_t^-1 e_t)`` over the observed rows (see
     :func:`kalman_smoother` for ``e_t``, ``S_t`` and missing rows).

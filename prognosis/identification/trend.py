@@ -17,7 +17,7 @@ from .model import LinearGaussianModel
 
 
 def fault_trend(model: LinearGaussianModel, margin: float = 0.0) -> bool:
-    """Whether the fault is progressing: ``rho(A) > 1 + margin`` (seed 004 section 5.1).
+    """Whether the fault is progressing: ``rho(A) > 1 + margin`` (Gasperin et al. (2011), section 5.1).
 
     A stable ``A`` means the feature settles for a constant load (the fault stays the same size); an
     eigenvalue outside the unit circle means it grows even at constant load.
@@ -104,7 +104,7 @@ class FeaturePrediction:
 
 def predict_feature(model: LinearGaussianModel, mean: ArrayLike, covariance: ArrayLike, u_future: ArrayLike | None,
                     level: float = 0.95, *, steps: int | None = None) -> FeaturePrediction:
-    """Long-term prediction of the feature under a known future load profile (seed 004 section 5.2).
+    """Long-term prediction of the feature under a known future load profile (Gasperin et al. (2011), section 5.2).
 
     ``mean``, ``covariance`` describe the state at the first predicted time, ``x_{T+1} | y_1..y_T``: the
     filtered state at the prediction time ``T`` pushed one step through the model

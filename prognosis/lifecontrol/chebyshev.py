@@ -1,4 +1,4 @@
-"""Distribution-free interval bounds from a mean and a covariance (seed 000 eqs. 37-44).
+"""Distribution-free interval bounds from a mean and a covariance (Rodriguez Obando et al. (2021), eqs. 37-44).
 
 The multivariate Chebyshev inequality (Stellato et al. 2017) holds for any
 distribution of the estimation error ``x~`` with zero mean and covariance ``P``
@@ -12,10 +12,10 @@ The ellipsoid ``x~^T P^{-1} x~ <= c^2`` lies inside the box
     x^_i - xbar_i <= x_i <= x^_i + xbar_i,   xbar = c sqrt(diag P)      (38)-(43)
 
 jointly, with probability at least ``1 - n/c^2``: ``c = 10`` gives 95 % for
-``n = 5``.  (The seed's ``diag(P^{1/2})`` with an elementwise root is
+``n = 5``.  (The paper's ``diag(P^{1/2})`` with an elementwise root is
 ``sqrt(diag P)``.)  Read backwards, bounds ``xbar_0`` on the initial state give
 a diagonal initial covariance ``P_0 = diag((xbar_0 / c)^2)`` (eq. 44); with the
-seed's ``xbar_0 = (23, 2, 5, 1e-6, 5e5)`` and ``c = 10`` the ``D`` entry is
+paper's ``xbar_0 = (23, 2, 5, 1e-6, 5e5)`` and ``c = 10`` the ``D`` entry is
 ``(5e5/10)^2 = 2.5e9`` (eq. 58 prints 2.5e-9).
 
 The box is conservative: one component alone satisfies the univariate bound

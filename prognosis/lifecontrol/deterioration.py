@@ -1,4 +1,4 @@
-"""Energy-driven deterioration appended to a model's state equations (seed 000 section 2.2).
+"""Energy-driven deterioration appended to a model's state equations (Rodriguez Obando et al. (2021), section 2.2).
 
 The deterioration ``D`` of a dissipative element is the energy it has
 dissipated, ``D(t) = int_0^t P(tau) dtau`` (eq. 8), where ``P`` is the power the
@@ -120,7 +120,7 @@ def energy_deterioration(equations, element: Hashable, *, coefficient: str | Non
     Returns
     -------
     DeteriorationEquations
-        ``d alpha/dt = -m P``, ``dm/dt = 0``, ``dD/dt = P`` appended (seed 000 eqs. 17-19).
+        ``d alpha/dt = -m P``, ``dm/dt = 0``, ``dD/dt = P`` appended (Rodriguez Obando et al. (2021), eqs. 17-19).
 
     Examples
     --------

@@ -1,4 +1,4 @@
-"""Monte Carlo RUL from a Gaussian state estimate (seed 000 section 5.1, eq. 46).
+"""Monte Carlo RUL from a Gaussian state estimate (Rodriguez Obando et al. (2021), section 5.1, eq. 46).
 
 At the prediction time ``t_0`` the deterioration states (e.g. ``alpha, m, D``)
 are drawn from the estimate ``N(x^, P)`` -- optionally kept inside bounds such

@@ -1,4 +1,4 @@
-"""RUL control: the smallest change of operation that keeps the predicted life (seed 000 section 5.2).
+"""RUL control: the least change of operation that keeps the life (Rodriguez Obando et al. (2021), section 5.2).
 
 The decision ``theta`` shifts the operation (for the friction drive the speed
 reference, ``omega2* = omega2_ref + theta``, eq. 47).  The RUL controller

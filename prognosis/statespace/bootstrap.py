@@ -1,9 +1,9 @@
 """Bootstrap (SIR) particle filter on a discrete state-space model.
 
-The particle filter of seed 003 (:mod:`prognosis.particle_filter`) runs on an ARR's
+The particle filter of Jha et al. (2016) (:mod:`prognosis.particle_filter`) runs on an ARR's
 residual; this one runs on the augmented state-space model of
-:mod:`prognosis.statespace` (seed 001 eqs. 3-4, 62-63), with the interface of
-the Kalman filters in :mod:`prognosis.statespace.kalman` so that the two families can be
+:mod:`prognosis.statespace` (Du et al. (n.d.), eqs. 3-4, 62-63), with the interface of
+the Kalman filters in :mod:`prognosis.statespace.gaussian` so that the two families can be
 compared on the same data (Gordon, Salmond and Smith 1993):
 
 1. predict: every particle (a column of ``X``, shape ``(n, N)``) goes through
@@ -42,7 +42,7 @@ import copy as _copy
 import numpy as np
 
 from .. import _linalg as linalg
-from .kalman import Innovation, innovation, measured_rows, noises
+from .gaussian import Innovation, innovation, measured_rows, noises
 from ..resampling import effective_sample_size, get_scheme, normalize_log_weights
 
 __all__ = ["BootstrapParticleFilter"]

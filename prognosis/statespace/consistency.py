@@ -1,11 +1,11 @@
-"""Innovation consistency of a Kalman filter (seed 000 section 4.3; Bar-Shalom et al. 2001).
+"""Innovation consistency of a Kalman filter (Rodriguez Obando et al. (2021), section 4.3; Bar-Shalom et al. 2001).
 
 A filter whose model and noise covariances are right produces innovations
 ``e_k = y_k - C x^_{k|k-1}`` that are zero-mean, white, with covariance
 ``S_k``.  Whitened by ``S_k = L_k L_k^T``, ``nu_k = L_k^{-1} e_k`` is then
 standard normal in every channel, so over ``K`` samples:
 
-* variance: ``var(e_i) / mean(S_ii) <= 1`` (the seed's tuning rule for Q);
+* variance: ``var(e_i) / mean(S_ii) <= 1`` (the tuning rule of Rodriguez Obando et al. (2021) for Q);
 * unbiasedness: ``z_i = sqrt(K) mean(nu_i)`` is N(0, 1);
 * NIS: ``sum_k e_k^T S_k^{-1} e_k`` is chi-square with ``m K`` degrees of freedom;
 * whiteness: the sample autocorrelations of ``nu_i`` at lags 1..L lie within
@@ -14,7 +14,7 @@ standard normal in every channel, so over ``K`` samples:
 :func:`innovation_consistency` runs these checks on a record;
 :class:`InnovationMonitor` runs the bias and NIS checks online over a sliding
 window, the supervisor that decides when a filter's model no longer holds and
-the filter must be restarted (seed 000 section 6.1, "Re-starting the EKF").
+the filter must be restarted (Rodriguez Obando et al. (2021), section 6.1, "Re-starting the EKF").
 
 Example
 -------
@@ -122,7 +122,7 @@ class ConsistencyReport:
 
     @property
     def variance_consistent(self) -> bool:
-        """The seed's rule: no channel varies more than ``S`` says."""
+        """The rule of Rodriguez Obando et al. (2021): no channel varies more than ``S`` says."""
         return bool(np.all(self.variance_ratio <= 1.0 + self._slack))
 
     @property

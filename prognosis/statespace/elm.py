@@ -1,4 +1,4 @@
-"""Regularized online sequential extreme learning machine (ROS-ELM) and series forecasts (seed 001 sections 4-5).
+"""Regularized online sequential extreme learning machine (ROS-ELM), series forecasts (Du et al. (n.d.), sections 4-5).
 
 An extreme learning machine with ``L`` additive hidden nodes maps an input
 ``mu`` to
@@ -16,7 +16,7 @@ in two phases:
 
 * initialization (eq. 54): ``K0 = (H0^T H0 + lambda I)^-1``, ``beta0 = K0 H0^T T0``.
   ``lambda > 0`` makes this well defined with fewer samples than nodes
-  (the seed initializes with N0 = 47 pairs and L = 50);
+  (Du et al. (n.d.) initialize with N0 = 47 pairs and L = 50);
 * online learning (eqs. 55-56), for a new row ``h_k`` or, in the Woodbury form
   of the same recursion, a block of rows ``H_k``:
 
@@ -25,7 +25,7 @@ in two phases:
 
   so that ``beta_k`` stays the batch solution (eq. 53) of all rows seen so far.
 
-:class:`SeriesForecaster` runs one ROS-ELM per measured variable (seed section 5
+:class:`SeriesForecaster` runs one ROS-ELM per measured variable (Du et al. (n.d.), section 5,
 step 1): network ``i`` learns ``z_{i,t+1}`` from the embedding
 ``(z_{i,t-p+1}, ..., z_{i,t})``, is initialized on the first ``N0``
 measurements (``N0 - p`` pairs) and updated online with each new measurement.
@@ -102,7 +102,7 @@ def _ridge_init(H: np.ndarray, T: np.ndarray, regularization: float) -> tuple[np
 
 
 class ROSELM:
-    """Regularized online sequential extreme learning machine (seed 001 eqs. 47-56).
+    """Regularized online sequential extreme learning machine (Du et al. (n.d.), eqs. 47-56).
 
     Parameters
     ----------
@@ -115,7 +115,7 @@ class ROSELM:
     activation : {"sigmoid", "tanh"}
         Hidden-node function ``g``.
     weight_range, bias_range : (float, float)
-        Uniform ranges of the input weights ``a_i`` and biases ``b_i`` (the seed's [-1, 1] and [0, 1]).
+        Uniform ranges of the input weights ``a_i`` and biases ``b_i`` (the paper's [-1, 1] and [0, 1]).
     seed : int, numpy.random.SeedSequence or None
         Seed of ``numpy.random.default_rng`` drawing ``a_i`` and ``b_i``.
 
@@ -258,27 +258,27 @@ class ROSELM:
 
 
 class SeriesForecaster:
-    """One ROS-ELM per measured variable with iterated multi-step forecasts (seed 001 section 5 steps 1, 3).
+    """One ROS-ELM per measured variable with iterated multi-step forecasts (Du et al. (n.d.), section 5, steps 1, 3).
 
     Network ``i`` maps the embedding ``(z_{i,t-p+1}, ..., z_{i,t})`` to ``z_{i,t+1}``.
 
     Parameters
     ----------
     embedding : int
-        Embedding dimension ``p`` (the seed uses 3).
+        Embedding dimension ``p`` (the paper uses 3).
     n_hidden, regularization, activation
-        Passed to every :class:`ROSELM` (the seed uses L = 50, lambda = 1e-8, sigmoid).
+        Passed to every :class:`ROSELM` (the paper uses L = 50, lambda = 1e-8, sigmoid).
     scale : bool
         Standardize variable ``i`` (its network's inputs and output) with the mean and
         standard deviation of the initial window given to :meth:`fit` (a numerically
         constant variable gets standard deviation 1); the statistics stay frozen online.
-        Off by default, as in the seed, which trains on raw levels: raw tank levels (about
+        Off by default, as in Du et al. (n.d.), who train on raw levels: raw tank levels (about
         1 m, changing by about 1e-3 per step) sit on one spot of each sigmoid, so the
         network acts as a nearly linear autoregression, which extrapolates trends.  Scaled
         inputs of a trending series leave the initial window's range (a 1 - 0.004 t ramp
         reaches -12 standard deviations after 150 steps) and saturate the sigmoids: on that
         ramp with N(0, 2e-4^2) noise scaling raised the 5-step RMSE from about 3e-4 to
-        0.7-1.7e-3, on the seed's three-tank case (section 6.1) up to 0.66 m.  Scaling helps
+        0.7-1.7e-3, on the paper's three-tank case (section 6.1) up to 0.66 m.  Scaling helps
         data far from unit magnitude and stationary series seen whole in the initial window.
     seed : int or None
         Root seed; variable ``i``'s network gets child ``i`` of ``numpy.random.SeedSequence(seed)``.
@@ -399,7 +399,7 @@ class SeriesForecaster:
     def forecast(self, steps: int) -> np.ndarray:
         """Forecasts ``z_{k+1}, ..., z_{k+steps}`` (steps, m) by iterating one-step predictions.
 
-        Each prediction becomes the newest input of the next step (seed section 5 step 3);
+        Each prediction becomes the newest input of the next step (Du et al. (n.d.), section 5, step 3);
         the stored history and the networks are left unchanged.
         """
         self._require_fit("forecast")

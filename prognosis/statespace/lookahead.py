@@ -1,4 +1,4 @@
-"""Multi-step-ahead fault prediction with forecast measurements (seed 001 section 5).
+"""Multi-step-ahead fault prediction with forecast measurements (Du et al. (n.d.), section 5).
 
 A filter that estimates a drifting parameter as a state needs measurements to
 move; the future ones do not exist yet.  At each step ``k``:
@@ -13,13 +13,13 @@ move; the future ones do not exist yet.  At each step ``k``:
 
 The real filter is never fed a forecast: the copy is thrown away, and step
 ``k + 1`` starts from the filter that saw ``z_1..z_{k+1}`` (our reading of
-step 9, which the seed leaves open).
+step 9, which the paper leaves open).
 
 Example
 -------
 >>> import sympy as sp
 >>> from types import SimpleNamespace
->>> from prognosis.statespace.kalman import CubatureKalmanFilter
+>>> from prognosis.statespace import CubatureKalmanFilter
 >>> from prognosis.statespace import discretize
 >>> x, a = sp.symbols("x a")
 >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
@@ -64,7 +64,7 @@ def look_ahead(estimator, forecasts, inputs=None) -> np.ndarray:
     --------
     >>> import sympy as sp
     >>> from types import SimpleNamespace
-    >>> from prognosis.statespace.kalman import CubatureKalmanFilter
+    >>> from prognosis.statespace import CubatureKalmanFilter
     >>> from prognosis.statespace import discretize
     >>> x, a = sp.symbols("x a")
     >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
@@ -110,7 +110,7 @@ class LookAhead:
 
     >>> import sympy as sp
     >>> from types import SimpleNamespace
-    >>> from prognosis.statespace.kalman import CubatureKalmanFilter
+    >>> from prognosis.statespace import CubatureKalmanFilter
     >>> from prognosis.statespace import discretize
     >>> x, a = sp.symbols("x a")
     >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})
@@ -141,14 +141,15 @@ def predict_ahead(estimator, measurements, *, horizon: int, start: int, forecast
 
     Parameters
     ----------
-    estimator : filter with ``step``, ``mean`` and ``copy`` (:mod:`prognosis.statespace.kalman`, :mod:`prognosis.statespace.bootstrap`)
+    estimator : filter with ``step``, ``mean`` and ``copy`` (the Kalman filters or
+        :class:`~prognosis.statespace.BootstrapParticleFilter`)
         Advanced in place over the real measurements.
     measurements : array (K, m)
         ``z_1..z_K``; row ``k - 1`` is time ``k``.
     horizon : int
         ``n``, the number of steps predicted ahead.
     start : int
-        First time ``k`` at which a prediction is made (the seed's ``N0``, the end of the training window).
+        First time ``k`` at which a prediction is made (the paper's ``N0``, the end of the training window).
     forecasts : callable
         ``forecasts(k)`` -> array (horizon, m) of the measurements forecast at time ``k`` for ``k+1..k+n``.
         The forecaster is expected to have learned ``z_1..z_k`` when it is called.
@@ -165,7 +166,7 @@ def predict_ahead(estimator, measurements, *, horizon: int, start: int, forecast
 
     >>> import sympy as sp
     >>> from types import SimpleNamespace
-    >>> from prognosis.statespace.kalman import ExtendedKalmanFilter
+    >>> from prognosis.statespace import ExtendedKalmanFilter
     >>> from prognosis.statespace import discretize
     >>> x, a = sp.symbols("x a")
     >>> decay = SimpleNamespace(states=[x], rhs=[-a * x], inputs=[], outputs={"y": x}, parameters={"a": 0.1})

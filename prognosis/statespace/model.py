@@ -4,13 +4,13 @@ A model comes from explicit state equations ``dx/dt = F(x, u, theta)`` with
 outputs ``z = G(x, u, theta)`` given as sympy expressions (the bond graph's
 ``state_equations()`` in integral causality, or any object with ``states``,
 ``rhs``, ``inputs``, ``outputs`` and ``parameters``).  Parameters listed in
-``augment`` become states with the "assistant" dynamics of seed 001 eq. (3)
+``augment`` become states with the "assistant" dynamics of Du et al. (n.d.), eqs. (3)
 and (62): ``theta_k = theta_{k-1}`` (plus the filter's process noise), so a
 filter estimates a drifting parameter whose law is unknown.
 
 Discretization over a step ``dt`` with the input held (zero-order hold):
 
-* ``"euler"`` (seed 001 eq. 59): ``x_k = x_{k-1} + dt F(x_{k-1}, u_{k-1})``;
+* ``"euler"`` (Du et al. (n.d.), eq. 59): ``x_k = x_{k-1} + dt F(x_{k-1}, u_{k-1})``;
 * ``"rk4"``: the classical Runge-Kutta step.
 
 Jacobians for the EKF are derived with sympy (``dF/dx``, ``dG/dx``) and
@@ -261,7 +261,7 @@ def discretize(equations, *, dt: float, augment: Sequence[str] = (), parameters:
     dt : float
         Sampling interval.
     augment : sequence of str
-        Parameters to estimate as states, ``theta_k = theta_{k-1}`` (seed 001 eq. 3).
+        Parameters to estimate as states, ``theta_k = theta_{k-1}`` (Du et al. (n.d.), eq. 3).
     parameters : mapping, optional
         Values overriding the nominal ones for the parameters kept constant.
     outputs : sequence of str, optional

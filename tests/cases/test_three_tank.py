@@ -64,7 +64,7 @@ def test_main_writes_the_table_and_plots(tank, tmp_path, capsys):
     summary = tank.main(["--seeds", "2", "--methods", "SCKF", "STSCKF", "PF", "--workers", "1", "--quiet",
                          "--out", str(tmp_path)])
     out = capsys.readouterr().out
-    assert "| STSCKF |" in out and "seed 'RMSE'" in out
+    assert "| STSCKF |" in out and "paper 'RMSE'" in out
     data = json.loads((tmp_path / "results.json").read_text())
     assert data["seeds"] == [0, 1] and len(data["per_seed"]) == 2
     assert set(data["table"]) == {"SCKF", "STSCKF", "PF"}

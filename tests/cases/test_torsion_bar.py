@@ -89,7 +89,7 @@ def test_main_writes_results_csv_and_plots_over_runs(example, tmp_path, capsys):
     for name in ("fig08_speed_voltage", "fig09_residual_thresholds", "fig10_theta", "fig11_gamma", "fig12_rul"):
         assert (tmp_path / f"{name}.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     printed = capsys.readouterr().out
-    assert "RMSE theta (%)" in printed and "seed 003" in printed
+    assert "RMSE theta (%)" in printed and "Jha et al. (2016)" in printed
 
 
 def test_sweep_ladder_ends_at_the_default_preset_and_runs_a_group(example):

@@ -7,12 +7,12 @@ import sympy as sp
 from bondgraph import simulate
 from bondgraph.library import three_tank, torsion_bar_monitorable
 from diagnosis import derive_arrs
-from diagnosis.residuals import compile_arr, read_record
+from diagnosis.residuals import read_record
 
 
 def identity_error(arr, record, exact, deltas, integral=None):
     """max |r_n + Psi_2(deltas)| and max |Psi_2| over the record (``integral``: exact value of its one integral)."""
-    compiled = compile_arr(arr)
+    compiled = arr.compiled
     points = compiled.point_values(read_record(arr, record), exact=exact)
     if compiled.integrals:
         assert len(compiled.integrals) == 1 and integral is not None

@@ -23,9 +23,9 @@ def test_interval_band_is_exact_for_the_linear_form(rlc):
     arr = arrs[0]  # -L di/dt - R i + V - v_C: Psi_2 = -delta_L L di/dt - delta_R R i
     result = arr.evaluate(record, margin=1e-5)
     L, R = arr.values["L"], arr.values["R"]
-    from diagnosis.residuals import compile_arr, read_record
+    from diagnosis.residuals import read_record
 
-    compiled = compile_arr(arr)
+    compiled = arr.compiled
     points = compiled.point_values(read_record(arr, record))
     di = points[compiled.points.index(next(s for s in compiled.derivatives))]
     i = np.asarray(record["i"])

@@ -11,7 +11,6 @@ import sympy as sp
 
 from bondgraph.library import torsion_bar_monitorable, torsion_bar_with_load
 from diagnosis import derive_arrs
-from diagnosis.residuals import compile_arr
 from prognosis.degradation import CustomDegradation, ExponentialDegradation, LinearDegradation, degradation_model
 from prognosis.particle_filter import ParticleFilter, VarianceAdaptation
 from prognosis.observation import observation_model
@@ -56,7 +55,7 @@ def test_observation_equation_for_b_md_is_eq_52(torsion_arr):
     b, k, w = sp.Symbol("b_Md"), sp.Symbol("k_belt"), sp.Function("omega_m")(t)
     assert sp.simplify(model.expression - (b - B_N) * (-w / k**2)) == 0
     assert sp.simplify(model.coefficient - (-w / k**2)) == 0  # a_1 = d r_n / d b_Md (eq. 27)
-    compiled = compile_arr(torsion_arr)
+    compiled = torsion_arr.compiled
     points = [np.array([OMEGA if str(p) == "omega_m" else 0.0]) for p in compiled.points]
     theta = np.array([[B_N, 2 * B_N, 0.45]])
     assert np.allclose(model(theta, points), (theta - B_N) * (-OMEGA / K_BELT**2))
@@ -84,7 +83,7 @@ def test_invert_recovers_theta_for_linear_and_nonlinear_observations(torsion_arr
 
     linear = observation_model(torsion_arr, "b_Md")
     omega = np.array([112.5, 60.0])
-    points = [omega if str(p) == "omega_m" else np.zeros(2) for p in compile_arr(torsion_arr).points]
+    points = [omega if str(p) == "omega_m" else np.zeros(2) for p in torsion_arr.compiled.points]
     theta = np.array([0.01, 0.2])
     y = (theta - B_N) * (-omega / K_BELT**2)  # eq. 52
     assert np.allclose(linear.invert(y, points), theta)  # exact: no bracket needed
@@ -101,7 +100,7 @@ def test_invert_recovers_theta_for_linear_and_nonlinear_observations(torsion_arr
     current = np.array([1.0, 3.0, 1.0])
     k_true = np.array([2.5, 4.0, 50.0])
     y = current * (1 / 2.0 - 1 / k_true)
-    names = [str(p) for p in compile_arr(model.arr).points]
+    names = [str(p) for p in model.arr.compiled.points]
     values = [current if n == "i" else np.zeros(3) for n in names]
     assert np.allclose(model(k_true[:, None], values)[:, 0], y)
     found = model.invert(y, values, (2.0, 10.0))
@@ -346,7 +345,7 @@ def test_ctrl_c_during_parallel_predictions_reaches_only_the_caller(tmp_path):
 def test_filter_and_rul_on_the_seed_b_md_problem(torsion_arr):
     """The fault model of Jha et al. (2016), section 6.3, on synthetic y (eqs. 52-53): estimate and predict."""
     observation = observation_model(torsion_arr, "b_Md")
-    compiled = compile_arr(torsion_arr)
+    compiled = torsion_arr.compiled
     points = [np.array([OMEGA if str(p) == "omega_m" else 0.0]) for p in compiled.points]
     pf = ParticleFilter(ExponentialDegradation(1e-5), observation, n_particles=500, dt=0.1, noise_std=0.01,
                         inflation=4.0, gamma_std=0.02, adaptation=VarianceAdaptation(band=(0.03, 0.07)), seed=0)

@@ -1,4 +1,5 @@
-"""prognosis.statespace: kalman, bootstrap and lookahead on a linear-Gaussian model and the three-tank system."""
+"""prognosis.statespace: the Kalman filters, the bootstrap filter and lookahead on a linear-Gaussian model and the
+three-tank system."""
 
 from types import SimpleNamespace
 
@@ -8,8 +9,8 @@ import sympy as sp
 
 from prognosis.statespace.bootstrap import BootstrapParticleFilter
 from prognosis._linalg import psd_sqrt, tria
-from prognosis.statespace.kalman import (CubatureKalmanFilter, ExtendedKalmanFilter, FilterWarning, StrongTracking,
-                                         UnscentedKalmanFilter)
+from prognosis.statespace import (CubatureKalmanFilter, ExtendedKalmanFilter, FilterWarning, StrongTracking,
+                                  UnscentedKalmanFilter)
 from prognosis.statespace.lookahead import look_ahead, predict_ahead
 from prognosis.statespace import discretize
 from tests.scenarios import ThreeTanks
