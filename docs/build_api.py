@@ -15,7 +15,7 @@ docstrings are taken as they are (numpy style) and rendered as markdown: section
 headings, parameter lists become bullet lists, ``>>>`` examples become ```` ```pycon ```` blocks.
 
 The output depends only on the code and the docstrings (no dates, no memory addresses), so
-``tests/test_docs.py`` can compare it with the committed file.
+``tests/cases/test_docs.py`` can compare it with the committed file.
 """
 
 from __future__ import annotations
