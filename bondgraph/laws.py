@@ -144,7 +144,7 @@ def solve_for(law: sp.Expr, variable: sp.Symbol, *, where: str) -> sp.Expr:
     """
     coefficient = sp.diff(law, variable)
     if coefficient != 0 and not coefficient.has(variable):
-        return -law.subs(variable, 0) / coefficient
+        return -law.xreplace({variable: 0}) / coefficient
     try:
         solutions = sp.solve(law, variable, dict=False)
     except (NotImplementedError, ValueError):

@@ -37,7 +37,9 @@ import warnings
 from collections.abc import Hashable
 from dataclasses import dataclass, field
 
+import networkx as nx
 import sympy as sp
+from sympy.core.function import AppliedUndef
 
 from bondgraph import BondGraph
 from bondgraph import elements as el
@@ -181,6 +183,8 @@ def derive_arrs(bg: BondGraph) -> list[ARR]:
     nominal = causal_equations(bg, causality, structure, keep_blocked=True)
     true = causal_equations(bg, causality, _uncertain_structure(structure), keep_blocked=True)
     candidates = tuple(dict.fromkeys(e.param for e in structure.elements.values() if e.param is not None))
+    nominal_integrals, true_integrals = _integrals(nominal), _integrals(true)
+    uncertainties = _uncertainties(structure)
 
     arrs = []
     sources = [(junction, None, nominal.balances[junction], true.balances[junction]) for junction in nominal.balances]
@@ -192,12 +196,12 @@ def derive_arrs(bg: BondGraph) -> list[ARR]:
     for junction, detector, balance, true_balance in sources:
         name = f"ARR_{junction if detector is None else detector}"
         try:
-            r_n, blocked_by = _known(balance, nominal)
-            r_true, _ = _known(true_balance, true)
+            r_n, blocked_by = _known(balance, nominal, nominal_integrals)
+            r_true, _ = _known(true_balance, true, true_integrals)
         except _Unknown as exc:
             warnings.warn(f"{name}: cannot be expressed in known variables ({exc})", ARRWarning, stacklevel=2)
             continue
-        arrs.append(_split(name, junction, detector, r_n, r_true, blocked_by, structure, candidates))
+        arrs.append(_split(name, junction, detector, r_n, r_true, blocked_by, structure, candidates, uncertainties))
     return arrs
 
 
@@ -224,15 +228,15 @@ class _Unknown(Exception):
     pass
 
 
-def _known(expression: sp.Expr, equations) -> tuple[sp.Expr, tuple]:
-    """Rewrite a balance in known variables: signals, their derivatives and integrals."""
+def _known(expression: sp.Expr, equations, integrals: dict) -> tuple[sp.Expr, tuple]:
+    """Rewrite a balance in known variables: signals, their derivatives and ``integrals`` (of ``equations``)."""
     expression = equations.express(expression)
-    expression = expression.xreplace(_integrals(equations))
+    expression = expression.xreplace(integrals)
     blocked_by = ()
     for placeholder, (element, law) in equations.blocked.items():
         if not expression.has(placeholder):
             continue
-        law = equations.express(law).xreplace(_integrals(equations))
+        law = equations.express(law).xreplace(integrals)
         coefficient = sp.diff(expression, placeholder)
         if coefficient == 0 or coefficient.has(placeholder):
             raise _Unknown(f"{element} law cannot be inverted and does not enter the balance linearly")
@@ -250,30 +254,43 @@ def _known(expression: sp.Expr, equations) -> tuple[sp.Expr, tuple]:
 
 
 def _integrals(equations) -> dict:
-    """Energy variables of storage left in integral causality, as integrals of known flows/efforts."""
-    pending = {x: substitute(equations.derivatives[name], equations.resolved) for name, x in equations.states.items()}
+    """Energy variables of storage left in integral causality, as integrals of known flows/efforts.
+
+    A state is known once every state its rate needs is known: the rates' dependencies form a graph,
+    built once, and the integrals are made in a topological order of it (linear in the number of
+    states).  A state on a cycle of that graph, or fed by one, has no integral of known quantities.
+    """
+    rates = {x: substitute(equations.derivatives[name], equations.resolved) for name, x in equations.states.items()}
+    needs = nx.DiGraph()
+    needs.add_nodes_from(rates)
+    needs.add_edges_from((other, x) for x, rate in rates.items() for other in rate.atoms(AppliedUndef) & rates.keys())
+    cyclic = {x for component in nx.strongly_connected_components(needs)
+              for x in component if len(component) > 1 or needs.has_edge(x, x)}
+    unknown = cyclic.union(*(nx.descendants(needs, x) for x in cyclic))
     known: dict = {}
-    progress = True
-    while progress:
-        progress = False
-        for x, rate in list(pending.items()):
-            rate = rate.xreplace(known)
-            if not any(rate.has(other) for other in pending if other is not x) and not rate.has(x):
-                known[x] = sp.Integral(rate, (T, 0, T))
-                del pending[x]
-                progress = True
+    for x in nx.topological_sort(needs.subgraph(set(rates) - unknown)):
+        known[x] = sp.Integral(rates[x].xreplace(known), (T, 0, T))
     return known
 
 
-def _split(name, junction, detector, r_n, r_true, blocked_by, structure, candidates) -> ARR:
+def _split(name, junction, detector, r_n, r_true, blocked_by, structure, candidates, parameters) -> ARR:
     deltas = sorted((s for s in r_true.free_symbols if delta_parameter(s) is not None), key=str)
-    parameters = _uncertainties(structure)
+    # r_true - r_n vanishes with every delta, so each delta's term comes from the addends of r_true
+    # that hold it: tidying those alone keeps the cost of an ARR independent of the size of the model
+    holding = {d: [] for d in deltas}
+    shared = False
+    for addend in sp.Add.make_args(r_true):
+        held = addend.free_symbols.intersection(deltas)
+        shared |= len(held) > 1
+        for d in held:
+            holding[d].append(addend)
     terms = {}
     for d in deltas:
-        others = {o: 0 for o in deltas if o is not d}
-        terms[delta_parameter(d)] = _tidy(r_true.xreplace(others) - r_n)
+        part = sp.Add(*holding[d]).xreplace({o: 0 for o in deltas if o is not d})
+        terms[delta_parameter(d)] = _tidy(part - part.xreplace({d: 0}))
     uncertain = sp.Add(*terms.values())
-    cross = _tidy(r_true - r_n - uncertain)
+    # products of deltas (an uncertain element driven through another one) are what the terms miss
+    cross = _tidy(r_true - r_n - uncertain) if shared else sp.S.Zero
     if cross != 0:  # an uncertain element driven through another one: keep the product terms too
         uncertain = uncertain + cross
     names = {s.name for s in r_n.free_symbols}
@@ -302,6 +319,6 @@ def _tidy(expression: sp.Expr) -> sp.Expr:
     Piecewise that interval arithmetic could not evaluate.
     """
     frozen = {a: sp.Dummy() for a in expression.atoms(sp.Derivative, sp.Integral)}
-    numerator, denominator = sp.fraction(sp.together(expression.xreplace(frozen)))
+    numerator, denominator = expression.xreplace(frozen).as_numer_denom()
     tidy = sp.factor_terms(sp.expand(numerator) / denominator)
     return tidy.xreplace({d: a for a, d in frozen.items()})
