@@ -8,7 +8,8 @@
 
 from .causality import Causality, CausalIssue, assign_causality
 from .control import PIController
-from .equations import AlgebraicLoopError, StateEquations, causal_equations, model_equations, state_equations
+from .equations import (AlgebraicLoopError, ModelEquation, StateEquations, causal_equations, labelled_equations,
+                        model_equations, state_equations)
 from .errors import CausalityError, EquationError, LawError, ModelError, PHMError, PHMWarning, SimulationError
 from .model import BondGraph
 from .structure import Bond, Element, signal_function
@@ -17,9 +18,9 @@ from .drawing import to_svg, to_tikz
 from .io import load_model, to_json
 
 __all__ = [
-    "BondGraph", "Bond", "Element", "Causality", "CausalIssue", "PIController", "StateEquations",
-    "SimulationResult", "assign_causality", "causal_equations", "model_equations", "state_equations",
-    "simulate", "signal_function", "PHMError", "PHMWarning", "ModelError", "LawError", "CausalityError",
-    "EquationError",
-    "SimulationError", "AlgebraicLoopError", "load_model", "to_json", "to_svg", "to_tikz",
+    "BondGraph", "Bond", "Element", "Causality", "CausalIssue", "PIController", "StateEquations", "ModelEquation",
+    "SimulationResult", "assign_causality", "causal_equations", "labelled_equations", "model_equations",
+    "state_equations", "simulate", "signal_function", "PHMError", "PHMWarning", "ModelError", "LawError",
+    "CausalityError", "EquationError", "SimulationError", "AlgebraicLoopError", "load_model", "to_json", "to_svg",
+    "to_tikz",
 ]

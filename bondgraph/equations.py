@@ -83,18 +83,44 @@ def constitutive_law(element: Element) -> sp.Expr:
 # acausal equations
 
 
-def model_equations(bg: BondGraphLike) -> list[sp.Eq]:
-    """Every constitutive and junction equation of ``bg``, without causality.
+@dataclass(frozen=True)
+class ModelEquation:
+    """One acausal equation of a bond graph with the node it comes from.
+
+    Attributes
+    ----------
+    equation : sympy.Eq
+    node : str
+        The element or junction the equation belongs to.
+    role : str
+        ``"source"``, ``"law"`` (constitutive law of C, I, R), ``"storage"`` (``dx/dt`` equals
+        the element's flow or effort), ``"transformer"`` (one of the two port relations of a TF
+        or GY), ``"common"`` (a junction's common effort or flow), ``"balance"`` (a junction's
+        sum) or ``"sensor"`` (a detector reads the junction's common variable).
+    """
+
+    equation: sp.Eq
+    node: str
+    role: str
+
+
+def labelled_equations(bg: BondGraphLike) -> list[ModelEquation]:
+    """Every constitutive and junction equation of ``bg``, without causality, with its node and role.
 
     Examples
     --------
     >>> from bondgraph.library import rlc_circuit
-    >>> model_equations(rlc_circuit())[0]
-    Eq(e_1, V(t))
+    >>> first = labelled_equations(rlc_circuit())[0]
+    >>> first.equation, first.node, first.role
+    (Eq(e_1, V(t)), 'V', 'source')
     """
     structure = bg.structure()
     elements, at = structure.elements, structure.at
-    equations: list[sp.Eq] = []
+    equations: list[ModelEquation] = []
+
+    def add(equation: sp.Eq, node: str, role: str) -> None:
+        equations.append(ModelEquation(equation, node, role))
+
     for name, element in elements.items():
         power = [b for b in at[name] if not b.is_signal]
         kind = element.kind
@@ -103,34 +129,49 @@ def model_equations(bg: BondGraphLike) -> list[sp.Eq]:
             s = b.sign_into(name)
             e, f = effort(b.label), s * flow(b.label)
             if kind in el.EFFORT_SOURCES:
-                equations.append(sp.Eq(e, signal_function(element.signal)))
+                add(sp.Eq(e, signal_function(element.signal)), name, "source")
             elif kind in el.FLOW_SOURCES:
-                equations.append(sp.Eq(-f, signal_function(element.signal)))
+                add(sp.Eq(-f, signal_function(element.signal)), name, "source")
             else:
                 x = energy_variable(element) if kind in el.STORAGE else None
                 law = constitutive_law(element).xreplace({E_: e, F_: f, Q_: x, P_: x})
-                equations.append(sp.Eq(law, 0))
+                add(sp.Eq(law, 0), name, "law")
                 if kind == "C":
-                    equations.append(sp.Eq(sp.Derivative(x, T), f))
+                    add(sp.Eq(sp.Derivative(x, T), f), name, "storage")
                 elif kind == "I":
-                    equations.append(sp.Eq(sp.Derivative(x, T), e))
+                    add(sp.Eq(sp.Derivative(x, T), e), name, "storage")
         elif kind in el.TWO_PORTS:
             one, two = sorted(power, key=lambda b: b.head != name)  # entering bond first
             m = element.modulus
             e1, f1, e2, f2 = effort(one.label), flow(one.label), effort(two.label), flow(two.label)
-            if kind in el.TRANSFORMERS:
-                equations += [sp.Eq(e1, m * e2), sp.Eq(f2, m * f1)]
-            else:
-                equations += [sp.Eq(e1, m * f2), sp.Eq(e2, m * f1)]
+            pair = [sp.Eq(e1, m * e2), sp.Eq(f2, m * f1)] if kind in el.TRANSFORMERS else \
+                [sp.Eq(e1, m * f2), sp.Eq(e2, m * f1)]
+            for equation in pair:
+                add(equation, name, "transformer")
         elif kind in el.JUNCTIONS:
             common, summed = (effort, flow) if kind == "0" else (flow, effort)
             first = common(power[0].label)
-            equations += [sp.Eq(common(b.label), first) for b in power[1:]]
-            equations.append(sp.Eq(sp.Add(*(b.sign_into(name) * summed(b.label) for b in power)), 0))
+            for b in power[1:]:
+                add(sp.Eq(common(b.label), first), name, "common")
+            add(sp.Eq(sp.Add(*(b.sign_into(name) * summed(b.label) for b in power)), 0), name, "balance")
             for b in at[name]:
                 if b.is_signal:
-                    equations.append(sp.Eq(signal_function(elements[b.head].signal), first))
+                    add(sp.Eq(signal_function(elements[b.head].signal), first), b.head, "sensor")
     return equations
+
+
+def model_equations(bg: BondGraphLike) -> list[sp.Eq]:
+    """Every constitutive and junction equation of ``bg``, without causality.
+
+    See :func:`labelled_equations` for the node and role of each.
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit
+    >>> model_equations(rlc_circuit())[0]
+    Eq(e_1, V(t))
+    """
+    return [m.equation for m in labelled_equations(bg)]
 
 
 # ---------------------------------------------------------------------------

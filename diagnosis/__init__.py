@@ -12,9 +12,11 @@ from .detection import Evaluation, evaluate, noise_margin, robust_std
 from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, compile_interval
 from .signals import Record, RecordError, RecordWarning, add_noise, as_record, read_csv
 from .signatures import SignatureMatrix, signature_matrix
+from .structural import StructuralLimitError, StructuralModel, structural_model
 
 __all__ = [
     "ARR", "ARRWarning", "Evaluation", "Interval", "IntervalArray", "IntervalWarning", "Record", "RecordError",
-    "RecordWarning", "SignatureMatrix", "add_noise", "affine_range", "as_record", "compile_interval", "delta",
-    "derive_arrs", "evaluate", "noise_margin", "read_csv", "robust_std", "signature_matrix",
+    "RecordWarning", "SignatureMatrix", "StructuralLimitError", "StructuralModel", "add_noise", "affine_range",
+    "as_record", "compile_interval", "delta", "derive_arrs", "evaluate", "noise_margin", "read_csv", "robust_std",
+    "signature_matrix", "structural_model",
 ]

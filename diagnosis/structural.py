@@ -1,0 +1,195 @@
+"""Structural analysis of a bond graph's equations: redundancy, minimal overdetermined sets, fault signatures.
+
+Which analytical redundancy exists does not depend on the values of the parameters, only on which
+unknowns each equation holds.  The equations are those of
+:func:`bondgraph.equations.labelled_equations` (sources, element laws, storage, two-ports, junctions,
+sensors); the unknowns are the bond variables and the energy variables of storage elements, a state
+and its time derivative counting as one unknown (mixed causality: an ARR may integrate or
+differentiate); the known variables are the input and measured signals.
+
+A set of equations is *structurally overdetermined* when it holds more equations than unknowns in
+every part.  The Dulmage-Mendelsohn decomposition of the bipartite graph of equations and unknowns
+gives the overdetermined part ``M+`` of any set (the equations reachable from an unmatched equation
+by alternating paths of a maximum matching), and its redundancy ``|M+| - |unknowns of M+|``.
+Every ARR a model allows comes from an overdetermined set; the *minimal* ones (MSO sets, redundancy
+one; Krysander, Aslund and Nyberg 2008) are the smallest ARRs, and together they reach every
+detectability and isolability the structure allows:
+
+* a fault is detectable when one of its equations lies in ``M+`` of the whole model;
+* fault ``a`` is isolable from fault ``b`` when one of ``a``'s equations lies in ``M+`` of the
+  model without ``b``'s equations.
+
+Faults are the element parameters (each acts on the equations that hold it) and, by default, one
+fault per sensor (a bias or drift acting on its read-out equation).
+
+Examples
+--------
+A DC motor with its speed sensor only has one redundant relation, and it sees every parameter:
+
+>>> from bondgraph import BondGraph
+>>> from bondgraph.library import dc_motor
+>>> graph = dc_motor().graph.copy()
+>>> graph.remove_node("i")   # no current sensor
+>>> model = structural_model(BondGraph(graph))
+>>> model.redundancy()
+1
+>>> sorted(model.detectable())
+['J', 'L_a', 'R_a', 'b', 'k_m', 'sensor omega']
+>>> [len(m) for m in model.mso_sets()]
+[17]
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+
+import networkx as nx
+import sympy as sp
+from sympy.core.function import AppliedUndef
+
+from bondgraph.equations import ModelEquation, effort, energy_variable, flow, labelled_equations
+from bondgraph.errors import PHMError
+from bondgraph.structure import Structure
+
+#: The most overdetermined subsets :meth:`StructuralModel.mso_sets` explores before it gives up.
+MSO_SEARCH_LIMIT = 20000
+
+
+class StructuralLimitError(PHMError, ValueError):
+    """The search for minimal overdetermined sets went over its limit (the model is too large for the full set)."""
+
+
+@dataclass(frozen=True)
+class StructuralModel:
+    """The structure of a model's equations: which unknowns each holds, which faults act on it.
+
+    Attributes
+    ----------
+    equations : tuple of ModelEquation
+        The equations, with the node and role each comes from.
+    unknowns : tuple of frozenset
+        The unknowns of each equation (bond variables ``e_k``, ``f_k`` and energy variables).
+    faults : dict
+        Fault name -> the indices of the equations it acts on: an element parameter by its name,
+        a sensor as ``"sensor <detector>"``.
+    """
+
+    equations: tuple[ModelEquation, ...]
+    unknowns: tuple[frozenset, ...]
+    faults: dict
+
+    @property
+    def all(self) -> frozenset:
+        """The indices of every equation."""
+        return frozenset(range(len(self.equations)))
+
+    def overdetermined(self, equations: Iterable[int] | None = None) -> frozenset:
+        """``M+``: the structurally overdetermined part of ``equations`` (all of them by default)."""
+        equations = self.all if equations is None else frozenset(equations)
+        graph = nx.Graph()
+        rows = [("equation", i) for i in equations]
+        graph.add_nodes_from(rows)
+        graph.add_edges_from((("equation", i), ("unknown", x)) for i in equations for x in self.unknowns[i])
+        matching = nx.bipartite.hopcroft_karp_matching(graph, top_nodes=rows)
+        # alternating paths from the unmatched equations: any edge to an unknown, the matched edge back
+        reached = {row for row in rows if row not in matching}
+        frontier = list(reached)
+        while frontier:
+            row = frontier.pop()
+            for unknown in graph[row]:
+                partner = matching.get(unknown)
+                if partner is not None and partner not in reached:
+                    reached.add(partner)
+                    frontier.append(partner)
+        return frozenset(i for _, i in reached)
+
+    def redundancy(self, equations: Iterable[int] | None = None) -> int:
+        """Equations minus unknowns of the overdetermined part of ``equations``: how many ARRs are independent."""
+        part = self.overdetermined(equations)
+        return len(part) - len(frozenset().union(*(self.unknowns[i] for i in part)))
+
+    def mso_sets(self, limit: int = MSO_SEARCH_LIMIT) -> list[frozenset]:
+        """Every minimal structurally overdetermined set, as sorted equation indices (smallest sets first).
+
+        Each overdetermined set of redundancy above one is reduced by removing one equation at a
+        time and taking the overdetermined part of the rest; sets already seen are not explored
+        again.  Raises :class:`StructuralLimitError` after ``limit`` sets.
+        """
+        found, seen = set(), set()
+        stack = [self.overdetermined()]
+        while stack:
+            current = stack.pop()
+            if current in seen or not current:
+                continue
+            seen.add(current)
+            if len(seen) > limit:
+                raise StructuralLimitError(f"structural analysis: more than {limit} overdetermined subsets; "
+                                           "the full set of minimal ones is out of reach for this model")
+            if self.redundancy(current) == 1:
+                found.add(current)
+                continue
+            stack.extend(self.overdetermined(current - {i}) for i in current)
+        return sorted(found, key=lambda m: (len(m), sorted(m)))
+
+    def detectable(self) -> set:
+        """The faults whose equations reach the overdetermined part of the whole model."""
+        part = self.overdetermined()
+        return {fault for fault, rows in self.faults.items() if rows & part}
+
+    def isolable(self, fault: str, other: str) -> bool:
+        """Whether ``fault`` can be told from ``other``: it acts on ``M+`` of the model without ``other``."""
+        return bool(self.faults[fault] & self.overdetermined(self.all - self.faults[other]))
+
+    def isolability(self) -> dict:
+        """Fault -> the faults it can be told from (every pair of :meth:`isolable`)."""
+        return {a: {b for b in self.faults if b != a and self.isolable(a, b)} for a in self.faults}
+
+    def describe(self, rows: Iterable[int]) -> list[str]:
+        """``"node role"`` of each equation in ``rows``: which junctions and elements a set uses."""
+        return [f"{self.equations[i].node} {self.equations[i].role}" for i in sorted(rows)]
+
+
+def structural_model(bg, *, sensor_faults: bool = True) -> StructuralModel:
+    """The structural model of a bond graph: its equations, their unknowns and the faults acting on them.
+
+    Parameters
+    ----------
+    bg : BondGraph
+        A model with De/Df detectors.
+    sensor_faults : bool
+        Give each sensor a fault of its own (on by default); ``False`` assumes healthy sensors.
+
+    Examples
+    --------
+    >>> from bondgraph.library import dc_motor
+    >>> model = structural_model(dc_motor())
+    >>> len(model.equations), model.redundancy()
+    (18, 2)
+    >>> model.describe(model.faults["sensor i"])
+    ['i sensor']
+    """
+    structure: Structure = bg.structure()
+    equations = labelled_equations(bg)
+    bonds = {b for bonds in structure.at.values() for b in bonds}
+    variables = {v for b in bonds for v in (effort(b.label), flow(b.label))}
+    states = {energy_variable(e): e.name for e in structure.elements.values() if e.kind in ("C", "I")}
+    unknowns = tuple(_unknowns(m.equation, variables, states) for m in equations)
+    faults = {}
+    for name, element in structure.elements.items():
+        if element.param is not None:
+            symbol = sp.Symbol(element.param)
+            rows = frozenset(i for i, m in enumerate(equations) if symbol in m.equation.free_symbols)
+            faults[element.param] = faults.get(element.param, frozenset()) | rows
+    if sensor_faults:
+        for i, m in enumerate(equations):
+            if m.role == "sensor":
+                faults[f"sensor {m.node}"] = frozenset({i})
+    return StructuralModel(tuple(equations), unknowns, faults)
+
+
+def _unknowns(equation: sp.Eq, variables: set, states: dict) -> frozenset:
+    """Bond variables and states (a state's derivative counts as the state) of one equation."""
+    found = {str(s) for s in equation.free_symbols & variables}
+    found |= {f"state {states[f]}" for f in equation.atoms(AppliedUndef) if f in states}
+    return frozenset(found)
