@@ -9,6 +9,7 @@
 from .arrs import ARR, ARRWarning, derive_arrs
 from .deltas import delta
 from .detection import Evaluation, evaluate, noise_margin, robust_std
+from .elimination import structural_arrs
 from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, compile_interval
 from .signals import Record, RecordError, RecordWarning, add_noise, as_record, read_csv
 from .signatures import SignatureMatrix, signature_matrix
@@ -18,5 +19,5 @@ __all__ = [
     "ARR", "ARRWarning", "Evaluation", "Interval", "IntervalArray", "IntervalWarning", "Record", "RecordError",
     "RecordWarning", "SignatureMatrix", "StructuralLimitError", "StructuralModel", "add_noise", "affine_range",
     "as_record", "compile_interval", "delta", "derive_arrs", "evaluate", "noise_margin", "read_csv", "robust_std",
-    "signature_matrix", "structural_model",
+    "signature_matrix", "structural_arrs", "structural_model",
 ]

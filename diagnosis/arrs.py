@@ -84,6 +84,9 @@ class ARR:
     implicit : bool
         True when an element law could not be inverted and the relation keeps
         that law in implicit form; ``blocked_by`` names the elements.
+    origin : tuple of str
+        For an ARR from a set of the model's equations (:mod:`diagnosis.elimination`), the node and
+        role of each equation it comes from; empty for a junction's ARR.
 
     Examples
     --------
@@ -114,6 +117,7 @@ class ARR:
     detector: Hashable | None = None
     implicit: bool = False
     blocked_by: tuple = ()
+    origin: tuple = ()
     _compiled: CompiledARR | None = field(default=None, init=False, repr=False, compare=False)
 
     @property
@@ -181,10 +185,10 @@ def derive_arrs(bg: BondGraph) -> list[ARR]:
     structure = bg.structure()
     causality = diagnosis_causality(bg)
     nominal = causal_equations(bg, causality, structure, keep_blocked=True)
-    true = causal_equations(bg, causality, _uncertain_structure(structure), keep_blocked=True)
+    true = causal_equations(bg, causality, uncertain_structure(structure), keep_blocked=True)
     candidates = tuple(dict.fromkeys(e.param for e in structure.elements.values() if e.param is not None))
     nominal_integrals, true_integrals = _integrals(nominal), _integrals(true)
-    uncertainties = _uncertainties(structure)
+    uncertainties = parameter_intervals(structure)
 
     arrs = []
     sources = [(junction, None, nominal.balances[junction], true.balances[junction]) for junction in nominal.balances]
@@ -201,13 +205,19 @@ def derive_arrs(bg: BondGraph) -> list[ARR]:
         except _Unknown as exc:
             warnings.warn(f"{name}: cannot be expressed in known variables ({exc})", ARRWarning, stacklevel=2)
             continue
-        arrs.append(_split(name, junction, detector, r_n, r_true, blocked_by, structure, candidates, uncertainties))
+        arrs.append(split_relation(name, junction, detector, r_n, r_true, blocked_by, structure, candidates,
+                                   uncertainties))
     return arrs
 
 
-def _uncertain_structure(structure: Structure) -> Structure:
-    """The same model with every uncertain parameter theta replaced by theta (1 + delta_theta)."""
-    uncertain = _uncertainties(structure)
+def uncertain_structure(structure: Structure) -> Structure:
+    """The same model with every uncertain parameter theta replaced by theta (1 + delta_theta).
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> uncertain_structure(rlc_circuit().structure()).elements["R"].law
+    -R*f*(delta_R + 1) + e
+    """
+    uncertain = parameter_intervals(structure)
     mapping = {sp.Symbol(p): sp.Symbol(p) * (1 + delta(p)) for p in uncertain}
     elements = {}
     for name, element in structure.elements.items():
@@ -219,7 +229,7 @@ def _uncertain_structure(structure: Structure) -> Structure:
     return dataclasses.replace(structure, elements=elements)
 
 
-def _uncertainties(structure: Structure) -> dict:
+def parameter_intervals(structure: Structure) -> dict:
     """Parameter -> multiplicative interval, element parameters and law constants alike."""
     return {p: u for e in structure.elements.values() for p, u in e.uncertainties.items()}
 
@@ -273,7 +283,12 @@ def _integrals(equations) -> dict:
     return known
 
 
-def _split(name, junction, detector, r_n, r_true, blocked_by, structure, candidates, parameters) -> ARR:
+def split_relation(name, junction, detector, r_n, r_true, blocked_by, structure, candidates, parameters) -> ARR:
+    """The ARR of a relation: ``r_n`` nominal, ``r_true`` the same with theta (1 + delta_theta) for each parameter.
+
+    Psi_2 is ``r_true - r_n`` split into one term per delta (BG-LFT), plus the products of deltas if
+    an addend holds two.  ``parameters``: parameter -> multiplicative interval of the structure.
+    """
     deltas = sorted((s for s in r_true.free_symbols if delta_parameter(s) is not None), key=str)
     # r_true - r_n vanishes with every delta, so each delta's term comes from the addends of r_true
     # that hold it: tidying those alone keeps the cost of an ARR independent of the size of the model
