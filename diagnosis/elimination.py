@@ -92,14 +92,15 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
         name = f"ARR_MSO_{index + 1}"
         try:
             arr = arr_from_set(bg, rows, model=model, name=name)
-        except (NotImplementedError, ValueError):  # a law that no matching of this set can invert
+        except (NotImplementedError, ValueError):  # see the warning below
             skipped.append(name)
             continue
         supports.append(support)
         added.append(arr)
     if skipped:
-        warnings.warn(f"{len(skipped)} overdetermined set(s) need a law inverted that has no explicit inverse "
-                      f"and were not eliminated: {', '.join(skipped)}", ARRWarning, stacklevel=2)
+        warnings.warn(f"{len(skipped)} overdetermined set(s) could not be eliminated to known signals (a law "
+                      f"without explicit inverse, or a loop only an ODE of the set closes): {', '.join(skipped)}",
+                      ARRWarning, stacklevel=2)
     return added
 
 
@@ -110,10 +111,13 @@ def arr_from_set(bg, rows, *, model: StructuralModel | None = None, name: str = 
     structure = bg.structure()
     true_equations = [m.equation for m in labelled_equations(_StructureOnly(bg.name, uncertain_structure(structure)))]
     nominal_equations = [m.equation for m in model.equations]
-    balances = [i for i in sorted(rows) if model.equations[i].role == "balance"]
-    residual = balances[0] if balances else max(rows)
-    assigned = _matching(model, rows - {residual})
-    r_n = _eliminate(model, nominal_equations, assigned, residual)
+    signals = {f.func.__name__ for m in model.equations if m.role in ("source", "sensor")
+               for f in m.equation.atoms(AppliedUndef)}
+    found = _residual(model, nominal_equations, rows, signals)
+    if found is None:
+        raise ValueError(f"no junction balance of the set leaves a residual in known signals "
+                         f"({', '.join(model.describe(rows))})")
+    residual, assigned, r_n = found
     r_true = _eliminate(model, true_equations, assigned, residual)
     candidates = tuple(dict.fromkeys(e.param for e in structure.elements.values() if e.param is not None))
     arr = split_relation(name, model.equations[residual].node, None, r_n, r_true, (), structure, candidates,
@@ -121,8 +125,46 @@ def arr_from_set(bg, rows, *, model: StructuralModel | None = None, name: str = 
     return dataclasses.replace(arr, origin=tuple(model.describe(rows)))
 
 
-def _matching(model: StructuralModel, rows: frozenset) -> dict:
-    """Equation -> the unknown it is solved for; a state through its law rather than its storage equation."""
+class _DifferentialLoop(Exception):
+    """A block of the matching holds a state: only an ODE of the set, not an elimination, would give it."""
+
+    def __init__(self, states: frozenset):
+        super().__init__(f"states {sorted(states)} in a loop")
+        self.states = states
+
+
+def _residual(model: StructuralModel, equations: list, rows: frozenset, signals: set, attempts: int = 4):
+    """(residual row, matching, nominal residual) for the first junction balance that leaves known signals only.
+
+    A state that ends up in a loop of the matching is tried again in integral causality (from its storage
+    equation), which breaks the loop when the state's rate is known from outside it.
+    """
+    balances = [i for i in sorted(rows) if model.equations[i].role == "balance"] or sorted(rows)
+    for residual in balances:
+        integral: frozenset = frozenset()
+        for _ in range(attempts):
+            assigned = _matching(model, rows - {residual}, integral)
+            try:
+                r_n = _eliminate(model, equations, assigned, residual)
+            except _DifferentialLoop as loop:
+                if loop.states <= integral:
+                    break
+                integral |= loop.states
+                continue
+            except (NotImplementedError, ValueError):
+                break
+            if _in_known_signals(r_n, signals, set().union(*model.unknowns)):
+                return residual, assigned, r_n
+            break
+    return None
+
+
+def _matching(model: StructuralModel, rows: frozenset, integral: frozenset = frozenset()) -> dict:
+    """Equation -> the unknown it is solved for.
+
+    A state comes from its law (derivative causality) unless it is in ``integral``; an unknown that enters
+    its equation non-linearly is matched to it only as a last resort.
+    """
     graph = nx.Graph()
     top = [("equation", i) for i in rows]
     graph.add_nodes_from(top)
@@ -130,11 +172,15 @@ def _matching(model: StructuralModel, rows: frozenset) -> dict:
     for i in rows:
         equation = model.equations[i].equation
         expression = equation.lhs - equation.rhs
-        integral = model.equations[i].role == "storage"
+        storage = model.equations[i].role == "storage"
         for x in model.unknowns[i]:
+            # an unknown entering non-linearly (a valve law solved for its pressure) only as a last resort;
+            # a storage equation gives its state by integration, whatever the form of its rate
             slope = sp.diff(expression, symbols[x])
-            # an unknown entering non-linearly (a valve law solved for its pressure) only as a last resort
-            weight = 10 if slope == 0 or slope.has(symbols[x]) else 2 if integral and x.startswith("state ") else 1
+            weight = 1 if storage or (slope != 0 and not slope.has(symbols[x])) else 10
+            if x.startswith("state "):
+                wanted_from_storage = x[len("state "):] in integral
+                weight += 0 if storage == wanted_from_storage else 4 if wanted_from_storage else 1
             graph.add_edge(("equation", i), ("unknown", x), weight=weight)
     matching = nx.bipartite.minimum_weight_full_matching(graph, top_nodes=top)
     return {i: matching[("equation", i)][1] for i in rows}
@@ -152,6 +198,12 @@ def _eliminate(model: StructuralModel, equations: list, assigned: dict, residual
     for block in nx.topological_sort(blocks):
         members = sorted(blocks.nodes[block]["members"])
         targets = [symbols[assigned[i]] for i in members]
+        states = frozenset(model.equations[i].node for i in members
+                           if model.equations[i].role in ("storage", "law")
+                           and isinstance(symbols[assigned[i]], AppliedUndef))
+        looped = {model.equations[i].node for i in members if model.equations[i].role == "storage"}
+        if len(members) > 1 and (states or looped):
+            raise _DifferentialLoop(states | looped)
         equations_here = [_substituted(equations[i], solution) for i in members]
         if len(members) == 1 and model.equations[members[0]].role == "storage" and isinstance(targets[0], AppliedUndef):
             # integral causality: the state is the integral of its rate from the start of the record
@@ -165,6 +217,12 @@ def _eliminate(model: StructuralModel, equations: list, assigned: dict, residual
         solution.update(found[0])
     equation = _substituted(equations[residual], solution)
     return equation.lhs - equation.rhs
+
+
+def _in_known_signals(expression: sp.Expr, signals: set, unknowns: set) -> bool:
+    """Whether ``expression`` holds none of the ``unknowns`` (bond variables) and no function of time but signals."""
+    functions = {f.func.__name__ for f in expression.atoms(AppliedUndef)}
+    return functions <= signals and not {str(v) for v in expression.free_symbols} & unknowns
 
 
 def _unknown_symbols(equations: list, assigned: dict) -> dict:
