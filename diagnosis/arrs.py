@@ -186,7 +186,7 @@ def derive_arrs(bg: BondGraph) -> list[ARR]:
     causality = diagnosis_causality(bg)
     nominal = causal_equations(bg, causality, structure, keep_blocked=True)
     true = causal_equations(bg, causality, uncertain_structure(structure), keep_blocked=True)
-    candidates = tuple(dict.fromkeys(e.param for e in structure.elements.values() if e.param is not None))
+    candidates = candidate_parameters(structure)
     nominal_integrals, true_integrals = _integrals(nominal), _integrals(true)
     uncertainties = parameter_intervals(structure)
 
@@ -227,6 +227,16 @@ def uncertain_structure(structure: Structure) -> Structure:
             element = dataclasses.replace(element, modulus=element.modulus.xreplace(mapping))
         elements[name] = element
     return dataclasses.replace(structure, elements=elements)
+
+
+def candidate_parameters(structure: Structure) -> tuple:
+    """Every element parameter, in element order: the rows of a signature matrix.
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> candidate_parameters(rlc_circuit().structure())
+    ('R', 'L', 'C')
+    """
+    return tuple(dict.fromkeys(e.param for e in structure.elements.values() if e.param is not None))
 
 
 def parameter_intervals(structure: Structure) -> dict:

@@ -43,7 +43,8 @@ from sympy.core.function import AppliedUndef
 from bondgraph.equations import labelled_equations
 from bondgraph.structure import T
 
-from .arrs import ARR, ARRWarning, parameter_intervals, split_relation, uncertain_structure
+from .arrs import (ARR, ARRWarning, candidate_parameters, derive_arrs, parameter_intervals, split_relation,
+                   uncertain_structure)
 from .structural import StructuralModel, structural_model
 
 
@@ -78,11 +79,9 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
     The sets are tried smallest first; one is kept when the faults it sees detect a fault no kept
     ARR sees, or tell apart a pair of faults no kept ARR tells apart.
     """
-    if existing is None:
-        from .arrs import derive_arrs
-
-        existing = derive_arrs(bg)
+    existing = derive_arrs(bg) if existing is None else existing
     model = structural_model(bg, sensor_faults=sensor_faults)
+    shared = _Shared.of(bg, model)
     supports = [_faults_of_arr(model, arr) for arr in existing]
     added, skipped = [], []
     for index, rows in enumerate(model.mso_sets()):
@@ -91,7 +90,7 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
             continue
         name = f"ARR_MSO_{index + 1}"
         try:
-            arr = arr_from_set(bg, rows, model=model, name=name)
+            arr = shared.arr(rows, name)
         except (NotImplementedError, ValueError):  # see the warning below
             skipped.append(name)
             continue
@@ -106,23 +105,40 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
 
 def arr_from_set(bg, rows, *, model: StructuralModel | None = None, name: str = "ARR_MSO") -> ARR:
     """The ARR of one overdetermined set of equations of ``bg`` (indices into ``model.equations``)."""
-    model = structural_model(bg) if model is None else model
-    rows = frozenset(rows)
-    structure = bg.structure()
-    true_equations = [m.equation for m in labelled_equations(_StructureOnly(bg.name, uncertain_structure(structure)))]
-    nominal_equations = [m.equation for m in model.equations]
-    signals = {f.func.__name__ for m in model.equations if m.role in ("source", "sensor")
-               for f in m.equation.atoms(AppliedUndef)}
-    found = _residual(model, nominal_equations, rows, signals)
-    if found is None:
-        raise ValueError(f"no junction balance of the set leaves a residual in known signals "
-                         f"({', '.join(model.describe(rows))})")
-    residual, assigned, r_n = found
-    r_true = _eliminate(model, true_equations, assigned, residual)
-    candidates = tuple(dict.fromkeys(e.param for e in structure.elements.values() if e.param is not None))
-    arr = split_relation(name, model.equations[residual].node, None, r_n, r_true, (), structure, candidates,
-                         parameter_intervals(structure))
-    return dataclasses.replace(arr, origin=tuple(model.describe(rows)))
+    return _Shared.of(bg, structural_model(bg) if model is None else model).arr(frozenset(rows), name)
+
+
+@dataclasses.dataclass(frozen=True)
+class _Shared:
+    """What the eliminations of every set of one model share, computed once."""
+
+    model: StructuralModel
+    structure: object
+    nominal: list
+    true: list
+    signals: set
+    unknowns: set
+
+    @classmethod
+    def of(cls, bg, model: StructuralModel) -> _Shared:
+        structure = bg.structure()
+        uncertain = _StructureOnly(bg.name, uncertain_structure(structure))
+        signals = {f.func.__name__ for m in model.equations if m.role in ("source", "sensor")
+                   for f in m.equation.atoms(AppliedUndef)}
+        return cls(model, structure, [m.equation for m in model.equations],
+                   [m.equation for m in labelled_equations(uncertain)], signals, set().union(*model.unknowns))
+
+    def arr(self, rows: frozenset, name: str) -> ARR:
+        model = self.model
+        found = _residual(model, self.nominal, rows, self.signals, self.unknowns)
+        if found is None:
+            raise ValueError(f"no junction balance of the set leaves a residual in known signals "
+                             f"({', '.join(model.describe(rows))})")
+        residual, assigned, r_n = found
+        r_true = _eliminate(model, self.true, assigned, residual)
+        arr = split_relation(name, model.equations[residual].node, None, r_n, r_true, (), self.structure,
+                             candidate_parameters(self.structure), parameter_intervals(self.structure))
+        return dataclasses.replace(arr, origin=tuple(model.describe(rows)))
 
 
 class _DifferentialLoop(Exception):
@@ -133,7 +149,8 @@ class _DifferentialLoop(Exception):
         self.states = states
 
 
-def _residual(model: StructuralModel, equations: list, rows: frozenset, signals: set, attempts: int = 4):
+def _residual(model: StructuralModel, equations: list, rows: frozenset, signals: set, unknowns: set,
+              attempts: int = 4):
     """(residual row, matching, nominal residual) for the first junction balance that leaves known signals only.
 
     A state that ends up in a loop of the matching is tried again in integral causality (from its storage
@@ -153,7 +170,7 @@ def _residual(model: StructuralModel, equations: list, rows: frozenset, signals:
                 continue
             except (NotImplementedError, ValueError):
                 break
-            if _in_known_signals(r_n, signals, set().union(*model.unknowns)):
+            if _in_known_signals(r_n, signals, unknowns):
                 return residual, assigned, r_n
             break
     return None

@@ -106,7 +106,10 @@ class StructuralModel:
 
     def redundancy(self, equations: Iterable[int] | None = None) -> int:
         """Equations minus unknowns of the overdetermined part of ``equations``: how many ARRs are independent."""
-        part = self.overdetermined(equations)
+        return self._excess(self.overdetermined(equations))
+
+    def _excess(self, part: frozenset) -> int:
+        """Equations minus unknowns of a set that is already its own overdetermined part."""
         return len(part) - len(frozenset().union(*(self.unknowns[i] for i in part)))
 
     def mso_sets(self, limit: int = MSO_SEARCH_LIMIT) -> list[frozenset]:
@@ -126,7 +129,7 @@ class StructuralModel:
             if len(seen) > limit:
                 raise StructuralLimitError(f"structural analysis: more than {limit} overdetermined subsets; "
                                            "the full set of minimal ones is out of reach for this model")
-            if self.redundancy(current) == 1:
+            if self._excess(current) == 1:  # current is an M+ already: no second matching
                 found.add(current)
                 continue
             stack.extend(self.overdetermined(current - {i}) for i in current)
