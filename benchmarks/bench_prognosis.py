@@ -48,7 +48,8 @@ def measurements(steps: int, dt: float, seed: int) -> tuple[np.ndarray, np.ndarr
 
 
 def ours(steps: int, particles: int, dt: float, seed: int, workers: int = 1) -> dict:
-    arr = next(a for a in derive_arrs(torsion_bar_monitorable()) if a.junction == "1_1")
+    arr = next(a for a in derive_arrs(torsion_bar_monitorable(), complete=False, integrals="keep")
+               if a.junction == "1_1")
     observation = observation_model(arr, "b_Md")
     compiled = arr.compiled
     points = [np.array([OMEGA_M if str(p) == "omega_m" else 0.0]) for p in compiled.points]

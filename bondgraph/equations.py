@@ -129,35 +129,41 @@ def labelled_equations(bg: BondGraphLike) -> list[ModelEquation]:
             s = b.sign_into(name)
             e, f = effort(b.label), s * flow(b.label)
             if kind in el.EFFORT_SOURCES:
-                add(sp.Eq(e, signal_function(element.signal)), name, "source")
+                add(_equal(e, signal_function(element.signal)), name, "source")
             elif kind in el.FLOW_SOURCES:
-                add(sp.Eq(-f, signal_function(element.signal)), name, "source")
+                add(_equal(-f, signal_function(element.signal)), name, "source")
             else:
                 x = energy_variable(element) if kind in el.STORAGE else None
                 law = constitutive_law(element).xreplace({E_: e, F_: f, Q_: x, P_: x})
-                add(sp.Eq(law, 0), name, "law")
+                add(_equal(law, 0), name, "law")
                 if kind == "C":
-                    add(sp.Eq(sp.Derivative(x, T), f), name, "storage")
+                    add(_equal(sp.Derivative(x, T), f), name, "storage")
                 elif kind == "I":
-                    add(sp.Eq(sp.Derivative(x, T), e), name, "storage")
+                    add(_equal(sp.Derivative(x, T), e), name, "storage")
         elif kind in el.TWO_PORTS:
             one, two = sorted(power, key=lambda b: b.head != name)  # entering bond first
             m = element.modulus
             e1, f1, e2, f2 = effort(one.label), flow(one.label), effort(two.label), flow(two.label)
-            pair = [sp.Eq(e1, m * e2), sp.Eq(f2, m * f1)] if kind in el.TRANSFORMERS else \
-                [sp.Eq(e1, m * f2), sp.Eq(e2, m * f1)]
+            pair = [_equal(e1, m * e2), _equal(f2, m * f1)] if kind in el.TRANSFORMERS else \
+                [_equal(e1, m * f2), _equal(e2, m * f1)]
             for equation in pair:
                 add(equation, name, "transformer")
         elif kind in el.JUNCTIONS:
             common, summed = (effort, flow) if kind == "0" else (flow, effort)
             first = common(power[0].label)
             for b in power[1:]:
-                add(sp.Eq(common(b.label), first), name, "common")
-            add(sp.Eq(sp.Add(*(b.sign_into(name) * summed(b.label) for b in power)), 0), name, "balance")
+                add(_equal(common(b.label), first), name, "common")
+            add(_equal(sp.Add(*(b.sign_into(name) * summed(b.label) for b in power)), 0), name, "balance")
             for b in at[name]:
                 if b.is_signal:
-                    add(sp.Eq(signal_function(elements[b.head].signal), first), b.head, "sensor")
+                    add(_equal(signal_function(elements[b.head].signal), first), b.head, "sensor")
     return equations
+
+
+def _equal(lhs, rhs) -> sp.Eq:
+    """``Eq(lhs, rhs)`` as written: sympy's evaluation of an equality asks assumptions of both sides,
+    which costs more than building the whole model and can only turn a model equation into True."""
+    return sp.Eq(lhs, rhs, evaluate=False)
 
 
 def model_equations(bg: BondGraphLike) -> list[sp.Eq]:

@@ -155,3 +155,49 @@ def solve_for(law: sp.Expr, variable: sp.Symbol, *, where: str) -> sp.Expr:
             f"({len(solutions)} found); causality needs it in this form"
         )
     return solutions[0]
+
+
+def signed_power_inverse(law: sp.Expr, variable: sp.Basic) -> sp.Expr | None:
+    """Solve ``law = 0`` for ``variable`` when it enters only as ``c sign(x) |x|^k`` (k > 0), else None.
+
+    Such a law (an orifice, ``f = a sign(e) sqrt(|e|)``) is strictly monotonic in ``x``, so its inverse
+    is unique: with ``w`` the value of ``sign(x) |x|^k`` the law gives, ``x = sign(w) |w|^(1/k)``.
+    sympy's ``solve`` gives up on the sign and the absolute value.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> e, f, a = sp.symbols("e f a")
+    >>> signed_power_inverse(f - a*sp.sign(e)*sp.sqrt(sp.Abs(e)), e)
+    f*Abs(f/a)/a
+    >>> signed_power_inverse(f - a*e**2, e) is None
+    True
+    """
+    x = variable
+    if not law.has(sp.sign(x)):
+        return None
+    shape = sp.Wild("k", exclude=[x])
+    coefficient, power = sp.S.Zero, None
+    rest = []
+    # only the terms holding x are expanded: the rest may be a long expression of known signals
+    terms = [t for term in sp.Add.make_args(law)
+             for t in (sp.Add.make_args(sp.expand(term)) if term.has(x) else [term])]
+    for term in terms:
+        if not term.has(x):
+            rest.append(term)
+            continue
+        factors = sp.Mul.make_args(term)
+        sign = [f for f in factors if f == sp.sign(x)]
+        roots = [f.match(sp.Abs(x) ** shape) for f in factors if f.has(x) and f != sp.sign(x)]
+        others = [f for f in factors if not f.has(x)]
+        if len(sign) != 1 or len(roots) != 1 or roots[0] is None:
+            return None
+        k = roots[0][shape]
+        if not (k.is_number and k.is_positive) or (power is not None and k != power):
+            return None
+        power = k
+        coefficient += sp.Mul(*others)
+    if power is None or coefficient == 0:
+        return None
+    w = -sp.Add(*rest) / coefficient
+    return sp.sign(w) * sp.Abs(w) ** (1 / power) if power != sp.Rational(1, 2) else w * sp.Abs(w)

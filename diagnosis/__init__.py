@@ -3,13 +3,14 @@
 >>> from bondgraph.library import torsion_bar_monitorable
 >>> from diagnosis import derive_arrs
 >>> [arr.name for arr in derive_arrs(torsion_bar_monitorable())]
-['ARR_1_1', 'ARR_1_2']
+['ARR_1_1', 'ARR_1_2', 'ARR_MSO_1']
 """
 
-from .arrs import ARR, ARRWarning, derive_arrs
+from .arrs import derive_arrs
+from .relation import ARR, ARRWarning
 from .deltas import delta
 from .detection import Evaluation, evaluate, noise_margin, robust_std
-from .elimination import structural_arrs
+from .elimination import structural_arrs, unreached
 from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, compile_interval
 from .signals import Record, RecordError, RecordWarning, add_noise, as_record, read_csv
 from .signatures import SignatureMatrix, signature_matrix
@@ -19,5 +20,5 @@ __all__ = [
     "ARR", "ARRWarning", "Evaluation", "Interval", "IntervalArray", "IntervalWarning", "Record", "RecordError",
     "RecordWarning", "SignatureMatrix", "StructuralLimitError", "StructuralModel", "add_noise", "affine_range",
     "as_record", "compile_interval", "delta", "derive_arrs", "evaluate", "noise_margin", "read_csv", "robust_std",
-    "signature_matrix", "structural_arrs", "structural_model",
+    "signature_matrix", "structural_arrs", "structural_model", "unreached",
 ]

@@ -1,15 +1,18 @@
 """ARRs from minimal overdetermined sets: eliminate the unknowns along a matching, keep the BG-LFT split.
 
-:func:`derive_arrs <diagnosis.arrs.derive_arrs>` writes one ARR per sensor junction along causal
-paths, and misses the redundancy that needs an unknown taken from elsewhere (the current of a motor
-from its mechanical balance, say).  :func:`structural_arrs` adds ARRs from the minimal overdetermined
-sets of :mod:`diagnosis.structural`, chosen greedily until the set reaches the detectability and
-isolability the structure allows.  In each set one junction balance is kept as the residual; every
-other equation is solved for the unknown a matching gives it, in the order of the matching's
-dependency graph (an algebraic loop solved as one block).  The matching prefers derivative causality:
-a state is taken from its element's law when it can be, so the ARR needs derivatives of measured
-signals rather than integrals that drift with their noise.  The same elimination on the model with
-theta (1 + delta_theta) gives Psi_2, split per parameter as in ``derive_arrs``.
+:func:`junction_arrs <diagnosis.junctions.junction_arrs>` writes one ARR per sensor junction along
+causal paths, and misses the redundancy that needs an unknown taken from elsewhere (the current of a
+motor from its mechanical balance, say).  :func:`structural_arrs` adds ARRs from the minimal
+overdetermined sets of :mod:`diagnosis.structural`, one for each fault the ARRs in hand cannot detect
+and each pair of faults they cannot tell apart while the structure can (a greedy selection: the sets
+are sought near the fault, and the one of lowest derivative order, then smallest, is kept).
+
+In each set one junction balance is kept as the residual; every other equation is solved for the
+unknown a matching gives it, in the order of the matching's dependency graph (an algebraic loop
+solved as one block).  The matching prefers derivative causality: a state is taken from its element's
+law when it can be, so the ARR needs derivatives of measured signals rather than integrals that drift
+with their noise.  The same elimination on the model with theta (1 + delta_theta) gives Psi_2, split
+per parameter as for the junction ARRs.
 
 Examples
 --------
@@ -24,8 +27,8 @@ gyrator, with the current taken from the mechanical balance:
 >>> (arr,) = structural_arrs(BondGraph(graph), existing=[])
 >>> sorted(arr.parameters)   # U = R_a i + L_a di/dt + k_m omega, i = (J domega/dt + b omega) / k_m
 ['J', 'L_a', 'R_a', 'b', 'k_m']
->>> sorted(str(d) for d in arr.nominal.atoms(sp.Derivative))
-['Derivative(omega(t), (t, 2))', 'Derivative(omega(t), t)']
+>>> arr.derivatives, arr.form
+({'U': 0, 'omega': 2}, 'elimination')
 >>> arr.origin[:3]
 ('U source', '1_e common', '1_e common')
 """
@@ -35,17 +38,36 @@ from __future__ import annotations
 import dataclasses
 import warnings
 from collections.abc import Sequence
+from functools import cached_property
 
 import networkx as nx
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from bondgraph.equations import labelled_equations
+from bondgraph.errors import LawError
+from bondgraph.laws import signed_power_inverse, solve_for
 from bondgraph.structure import T
 
-from .arrs import (ARR, ARRWarning, candidate_parameters, derive_arrs, parameter_intervals, split_relation,
-                   uncertain_structure)
-from .structural import StructuralModel, structural_model
+from .junctions import junction_arrs
+from .relation import (INTEGRAL_FORMS, ARR, ARRWarning, candidate_parameters, parameter_intervals, split_relation,
+                       uncertain_structure, written_without_integrals)
+from .structural import StructuralModel, sensor_fault, structural_model
+
+#: The default bound on the derivatives an ARR added for isolation may need: as high as the ARRs the model
+#: needs anyway (its junction ARRs and those added for detection), no higher.  A second derivative of a
+#: sampled signal is only as good as the sampling resolves the signal's fastest transient; an ARR that
+#: asks more of the data than detection does would trade false alarms for isolation.
+MAX_ORDER = "auto"
+
+#: Above this many fault candidates the isolation search is not run unless asked for (``isolation=True``):
+#: each pair of faults the ARRs cannot tell apart costs a search and an elimination, about a second on a
+#: chain of mass-spring stages, where the detection gaps cost one matching for the whole model.
+ISOLATION_LIMIT = 60
+
+#: An eliminated relation larger than this (sympy operations) is not kept: nested inverses of non-linear
+#: laws grow without bound, and a residual nobody can read or evaluate tightly helps no diagnosis.
+MAX_OPERATIONS = 400
 
 
 class _StructureOnly:
@@ -58,87 +80,256 @@ class _StructureOnly:
         return self._structure
 
 
-def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults: bool = True) -> list[ARR]:
+def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults: bool = True,
+                    max_order: int | str | None = MAX_ORDER, integrals: str = "avoid",
+                    isolation: bool | None = None) -> list[ARR]:
     """ARRs from minimal overdetermined sets that add detectability or isolability to ``existing``.
 
     Parameters
     ----------
     bg : BondGraph
     existing : sequence of ARR, optional
-        The ARRs already in use (``derive_arrs(bg)`` when omitted).
+        The ARRs already in use (``junction_arrs(bg)`` when omitted).
     sensor_faults : bool
         Count a fault per sensor in the signatures the selection improves.
+    max_order : int, "auto" or None
+        The highest derivative of a measured signal an added ARR may need; None for no bound.  With
+        ``"auto"`` (default), an ARR that detects a fault no other ARR detects may need any order (the
+        lowest available is taken), and one added for isolation no more than the highest order of the
+        ARRs in hand.
+    integrals : {"avoid", "keep"}
+        As in :func:`~diagnosis.junctions.junction_arrs`, for the integrals an elimination leaves.
+    isolation : bool or None
+        Add ARRs for isolation as well as for detection; None (default): when the model has at most
+        :data:`ISOLATION_LIMIT` fault candidates.  :func:`unreached` says what is left either way.
 
     Returns
     -------
     list of ARR
-        The added ARRs, each with ``origin`` naming the equations (node and role) it comes from.
+        The added ARRs ``ARR_MSO_1``, ``ARR_MSO_2``..., each with ``origin`` naming the equations
+        (node and role) it comes from.
 
     Notes
     -----
-    The sets are tried smallest first; one is kept when the faults it sees detect a fault no kept
-    ARR sees, or tell apart a pair of faults no kept ARR tells apart.
+    Each fault the ARRs do not detect, then each ordered pair ``(a, b)`` they cannot tell apart
+    (every ARR that sees ``a`` sees ``b``) while the structure can, is a gap.  For a gap, the minimal
+    overdetermined sets that hold ``a`` and avoid ``b`` are sought near ``a``
+    (:meth:`~diagnosis.structural.StructuralModel.msos_through`); the one whose elimination needs the
+    lowest derivatives, then the smallest, is kept if its ARR closes the gap.  Sets that cannot be
+    eliminated (a law without explicit inverse, a loop only an ODE of the set closes) are named in one
+    :class:`ARRWarning`; gaps that only sets above ``max_order`` close are named in another.
     """
-    existing = derive_arrs(bg) if existing is None else existing
+    if integrals not in INTEGRAL_FORMS:
+        raise ValueError(f"option integrals: {integrals!r} is not one of {', '.join(INTEGRAL_FORMS)}")
+    existing = junction_arrs(bg, integrals=integrals) if existing is None else list(existing)
     model = structural_model(bg, sensor_faults=sensor_faults)
-    shared = _Shared.of(bg, model)
-    supports = [_faults_of_arr(model, arr) for arr in existing]
-    added, skipped = [], []
-    for index, rows in enumerate(model.mso_sets()):
-        support = {fault for fault, fault_rows in model.faults.items() if fault_rows & rows}
-        if not _improves(supports, support, model.faults):
+    shared = _Shared(bg, model, integrals == "avoid")   # lazy: built for the first gap
+    supports = [faults_of_arr(model, arr) for arr in existing]
+    if max_order is not None and max_order != "auto" and not (isinstance(max_order, int) and max_order >= 0):
+        raise ValueError(f"option max_order: {max_order!r} is not a non-negative integer, 'auto' or None")
+    if isolation is None:
+        isolation = len(model.faults) <= ISOLATION_LIMIT
+    added, unrealizable, too_high = [], set(), []
+    for fault, other in _gaps(model, supports, isolation=isolation):
+        if _told_apart(supports, fault, other):
             continue
-        name = f"ARR_MSO_{index + 1}"
-        try:
-            arr = shared.arr(rows, name)
-        except (NotImplementedError, ValueError):  # see the warning below
-            skipped.append(name)
+        bound = max_order
+        if max_order == "auto":
+            bound = None if other is None else max((a.order for a in existing + added), default=0)
+        arr = _closing_arr(shared, fault, other, bound, unrealizable, f"ARR_MSO_{len(added) + 1}")
+        if arr is None:
+            too_high.append((fault, other, bound))
             continue
-        supports.append(support)
+        supports.append(faults_of_arr(model, arr))
         added.append(arr)
-    if skipped:
-        warnings.warn(f"{len(skipped)} overdetermined set(s) could not be eliminated to known signals (a law "
-                      f"without explicit inverse, or a loop only an ODE of the set closes): {', '.join(skipped)}",
-                      ARRWarning, stacklevel=2)
+    missed = [gap for gap, other, _ in too_high if other is None]
+    if missed:  # a fault nothing detects; isolation left is for the report (unreached) to say
+        unclosed = f"; {len(unrealizable)} set(s) give none: {'; '.join(sorted(unrealizable))}" if unrealizable else ""
+        warnings.warn(f"{bg.name}: {len(missed)} fault(s) the structure can detect have no closed-form ARR: "
+                      f"{', '.join(missed)}{unclosed}", ARRWarning, stacklevel=2)
     return added
+
+
+def unreached(bg, arrs: Sequence[ARR], *, sensor_faults: bool = True) -> dict:
+    """What the structure of ``bg`` allows and ``arrs`` do not reach.
+
+    Returns
+    -------
+    dict
+        ``"detect"``: the faults the structure can detect and no ARR sees; ``"isolate"``: the ordered
+        pairs ``(a, b)`` the structure can tell apart and the ARRs cannot (every ARR that sees ``a``
+        sees ``b``).
+
+    Examples
+    --------
+    >>> from bondgraph.library import dc_motor
+    >>> from diagnosis import derive_arrs
+    >>> left = unreached(dc_motor(), derive_arrs(dc_motor()))
+    >>> left["detect"], ("k_m", "sensor i") in left["isolate"]   # that one needs a second derivative
+    ([], True)
+    >>> unreached(dc_motor(), derive_arrs(dc_motor(), max_order=2))["isolate"]
+    []
+    """
+    model = structural_model(bg, sensor_faults=sensor_faults)
+    supports = [faults_of_arr(model, arr) for arr in arrs]
+    gaps = list(_gaps(model, supports))
+    return {"detect": [a for a, b in gaps if b is None], "isolate": [(a, b) for a, b in gaps if b is not None]}
 
 
 def arr_from_set(bg, rows, *, model: StructuralModel | None = None, name: str = "ARR_MSO") -> ARR:
     """The ARR of one overdetermined set of equations of ``bg`` (indices into ``model.equations``)."""
-    return _Shared.of(bg, structural_model(bg) if model is None else model).arr(frozenset(rows), name)
+    model = structural_model(bg) if model is None else model
+    return _Shared(bg, model, True).arr(frozenset(rows), name)
 
 
-@dataclasses.dataclass(frozen=True)
+def faults_of_arr(model: StructuralModel, arr: ARR) -> set:
+    """The faults of ``model`` an ARR sees: its parameters and the sensors of the signals it reads."""
+    seen = {p for p in arr.parameters if p in model.faults}
+    return seen | {sensor_fault(s) for s in arr.signals if sensor_fault(s) in model.faults}
+
+
+def _gaps(model: StructuralModel, supports: list, *, isolation: bool = True):
+    """Faults the ARRs miss and the structure detects, then ordered pairs they cannot tell apart and it can.
+
+    A generator: the pairs are listed after the detection gaps are closed, from the supports then.
+    """
+    seen = set().union(*supports)
+    yield from ((fault, None) for fault in model.faults if fault not in seen and fault in model.detectable())
+    if not isolation:
+        return
+    for fault in model.faults:
+        with_fault = [s for s in supports if fault in s]
+        if not with_fault:
+            continue
+        for other in sorted(set.intersection(*with_fault) - {fault}, key=list(model.faults).index):
+            if model.isolable(fault, other):
+                yield fault, other
+
+
+def _told_apart(supports: list, fault: str, other: str | None) -> bool:
+    return any(fault in s and (other is None or other not in s) for s in supports)
+
+
+def _closing_arr(shared: _Shared, fault: str, other: str | None, max_order: int | None, unrealizable: set,
+                 name: str) -> ARR | None:
+    """The ARR of the lowest order, then the smallest set, that sees ``fault`` and not ``other``."""
+    model = shared.model
+    removed = model.faults[other] if other is not None else frozenset()
+    candidates = model.msos_through(model.faults[fault], removed)
+    estimates = {rows: shared.estimated_order(rows) for rows in candidates}
+    for rows in sorted(candidates, key=lambda rows: (estimates[rows] is None, estimates[rows] or 0, len(rows))):
+        if max_order is not None and estimates[rows] is not None and estimates[rows] > max_order + 1:
+            break   # the estimate may overshoot by one (a derivative that cancels), not more
+        arr = shared.cached(rows, unrealizable)
+        if arr is None or (max_order is not None and arr.order > max_order):
+            continue
+        support = faults_of_arr(model, arr)
+        if fault in support and (other is None or other not in support):
+            return dataclasses.replace(arr, name=name)
+    return None
+
+
 class _Shared:
-    """What the eliminations of every set of one model share, computed once."""
+    """What the eliminations of every set of one model share, computed once, on first use."""
 
-    model: StructuralModel
-    structure: object
-    nominal: list
-    true: list
-    signals: set
-    unknowns: set
+    def __init__(self, bg, model: StructuralModel, avoid_integrals: bool) -> None:
+        self.bg, self.model, self.avoid_integrals = bg, model, avoid_integrals
+        self.weights: dict = {}
+        self.results: dict = {}
 
-    @classmethod
-    def of(cls, bg, model: StructuralModel) -> _Shared:
-        structure = bg.structure()
-        uncertain = _StructureOnly(bg.name, uncertain_structure(structure))
-        signals = {f.func.__name__ for m in model.equations if m.role in ("source", "sensor")
-                   for f in m.equation.atoms(AppliedUndef)}
-        return cls(model, structure, [m.equation for m in model.equations],
-                   [m.equation for m in labelled_equations(uncertain)], signals, set().union(*model.unknowns))
+    @cached_property
+    def structure(self):
+        return self.bg.structure()
+
+    @cached_property
+    def signals(self) -> set:
+        return {f.func.__name__ for m in self.model.equations if m.role in ("source", "sensor")
+                for f in m.equation.atoms(AppliedUndef)}
+
+    @cached_property
+    def unknowns(self) -> set:
+        return set().union(*self.model.unknowns)
+
+    @cached_property
+    def _real(self) -> dict:
+        """Plain -> real signals, states and parameters: then d|x|/dt is sign(x) dx/dt, not sympy's re/im form."""
+        equations = self._plain_nominal + self._plain_true
+        real = {f: sp.Function(f.func.__name__, real=True)(*f.args)
+                for equation in equations for f in equation.atoms(AppliedUndef)}
+        real.update({s: sp.Symbol(s.name, real=True) for equation in equations for s in equation.free_symbols
+                     if s != T})
+        return real
+
+    @cached_property
+    def _plain_nominal(self) -> list:
+        return [m.equation for m in self.model.equations]
+
+    @cached_property
+    def _plain_true(self) -> list:
+        uncertain = _StructureOnly(self.bg.name, uncertain_structure(self.structure))
+        return [m.equation for m in labelled_equations(uncertain)]
+
+    @cached_property
+    def nominal(self) -> list:
+        return [e.xreplace(self._real) for e in self._plain_nominal]
+
+    @cached_property
+    def true(self) -> list:
+        return [e.xreplace(self._real) for e in self._plain_true]
+
+    @cached_property
+    def plain(self) -> dict:
+        return {v: k for k, v in self._real.items()}
+
+    def cached(self, rows: frozenset, unrealizable: set) -> ARR | None:
+        """The ARR of ``rows``, made once; None (and the set described in ``unrealizable``) if it has none."""
+        if rows not in self.results:
+            try:
+                self.results[rows] = self.arr(rows, "ARR_MSO")
+            except (NotImplementedError, ValueError) as exc:
+                self.results[rows] = None
+                unrealizable.add(str(exc))
+        return self.results[rows]
 
     def arr(self, rows: frozenset, name: str) -> ARR:
         model = self.model
-        found = _residual(model, self.nominal, rows, self.signals, self.unknowns)
+        found = _residual(self, rows)
         if found is None:
-            raise ValueError(f"no junction balance of the set leaves a residual in known signals "
-                             f"({', '.join(model.describe(rows))})")
+            raise ValueError(f"{_short(model, rows)}: every balance leaves a loop through a state (only an ODE "
+                             "closes it) or an unknown no law gives explicitly")
         residual, assigned, r_n = found
+        size = sp.count_ops(r_n)
+        if size > MAX_OPERATIONS:
+            raise ValueError(f"{_short(model, rows)}: the residual takes {size} operations "
+                             f"(more than {MAX_OPERATIONS})")
         r_true = _eliminate(model, self.true, assigned, residual)
-        arr = split_relation(name, model.equations[residual].node, None, r_n, r_true, (), self.structure,
-                             candidate_parameters(self.structure), parameter_intervals(self.structure))
-        return dataclasses.replace(arr, origin=tuple(model.describe(rows)))
+        r_n, r_true, form = written_without_integrals(r_n, r_true, "elimination", avoid=self.avoid_integrals)
+        r_n, r_true = r_n.xreplace(self.plain), r_true.xreplace(self.plain)
+        return split_relation(name, model.equations[residual].node, None, r_n, r_true, (), self.structure,
+                              candidate_parameters(self.structure), parameter_intervals(self.structure),
+                              origin=tuple(model.describe(rows)), form=form)
+
+    def weight(self, row: int, unknown: str) -> int:
+        """1 if equation ``row`` can be solved explicitly for ``unknown``, 10 if only as a last resort."""
+        key = (row, unknown)
+        if key not in self.weights:
+            m = self.model.equations[row]
+            expression = m.equation.lhs - m.equation.rhs
+            symbol = _symbols_of(m.equation)[unknown]
+            # an unknown entering non-linearly (a valve law solved for its pressure) only as a last resort;
+            # a storage equation gives its state by integration, whatever the form of its rate
+            slope = sp.diff(expression, symbol)
+            self.weights[key] = 1 if m.role == "storage" or (slope != 0 and not slope.has(symbol)) else 10
+        return self.weights[key]
+
+    def estimated_order(self, rows: frozenset) -> int | None:
+        """The derivative order the elimination of ``rows`` would need, from its matching alone (no algebra).
+
+        None when every balance leaves a loop through a state (the elimination would have to retry).
+        """
+        orders = [_structural_order(self.model, _matching(self, rows - {r}), r) for r in _balances(self.model, rows)]
+        orders = [o for o in orders if o is not None]
+        return min(orders) if orders else None
 
 
 class _DifferentialLoop(Exception):
@@ -149,20 +340,28 @@ class _DifferentialLoop(Exception):
         self.states = states
 
 
-def _residual(model: StructuralModel, equations: list, rows: frozenset, signals: set, unknowns: set,
-              attempts: int = 4):
+def _short(model: StructuralModel, rows) -> str:
+    """A set of equations named by its nodes, each once: ``{U, 1_e, R_a, ...}``."""
+    return "{" + ", ".join(dict.fromkeys(model.equations[i].node for i in sorted(rows))) + "}"
+
+
+def _balances(model: StructuralModel, rows: frozenset) -> list:
+    return [i for i in sorted(rows) if model.equations[i].role == "balance"] or sorted(rows)
+
+
+def _residual(shared: _Shared, rows: frozenset, attempts: int = 4):
     """(residual row, matching, nominal residual) for the first junction balance that leaves known signals only.
 
     A state that ends up in a loop of the matching is tried again in integral causality (from its storage
     equation), which breaks the loop when the state's rate is known from outside it.
     """
-    balances = [i for i in sorted(rows) if model.equations[i].role == "balance"] or sorted(rows)
-    for residual in balances:
+    model = shared.model
+    for residual in _balances(model, rows):
         integral: frozenset = frozenset()
         for _ in range(attempts):
-            assigned = _matching(model, rows - {residual}, integral)
+            assigned = _matching(shared, rows - {residual}, integral)
             try:
-                r_n = _eliminate(model, equations, assigned, residual)
+                r_n = _eliminate(model, shared.nominal, assigned, residual)
             except _DifferentialLoop as loop:
                 if loop.states <= integral:
                     break
@@ -170,31 +369,26 @@ def _residual(model: StructuralModel, equations: list, rows: frozenset, signals:
                 continue
             except (NotImplementedError, ValueError):
                 break
-            if _in_known_signals(r_n, signals, unknowns):
+            if _in_known_signals(r_n, shared.signals, shared.unknowns):
                 return residual, assigned, r_n
             break
     return None
 
 
-def _matching(model: StructuralModel, rows: frozenset, integral: frozenset = frozenset()) -> dict:
+def _matching(shared: _Shared, rows: frozenset, integral: frozenset = frozenset()) -> dict:
     """Equation -> the unknown it is solved for.
 
     A state comes from its law (derivative causality) unless it is in ``integral``; an unknown that enters
     its equation non-linearly is matched to it only as a last resort.
     """
+    model = shared.model
     graph = nx.Graph()
     top = [("equation", i) for i in rows]
     graph.add_nodes_from(top)
-    symbols = _unknown_symbols([m.equation for m in model.equations], dict.fromkeys(rows))
     for i in rows:
-        equation = model.equations[i].equation
-        expression = equation.lhs - equation.rhs
         storage = model.equations[i].role == "storage"
         for x in model.unknowns[i]:
-            # an unknown entering non-linearly (a valve law solved for its pressure) only as a last resort;
-            # a storage equation gives its state by integration, whatever the form of its rate
-            slope = sp.diff(expression, symbols[x])
-            weight = 1 if storage or (slope != 0 and not slope.has(symbols[x])) else 10
+            weight = shared.weight(i, x)
             if x.startswith("state "):
                 wanted_from_storage = x[len("state "):] in integral
                 weight += 0 if storage == wanted_from_storage else 4 if wanted_from_storage else 1
@@ -203,17 +397,44 @@ def _matching(model: StructuralModel, rows: frozenset, integral: frozenset = fro
     return {i: matching[("equation", i)][1] for i in rows}
 
 
-def _eliminate(model: StructuralModel, equations: list, assigned: dict, residual: int) -> sp.Expr:
-    """The residual equation with every unknown of ``assigned`` replaced by its value in known signals."""
+def _blocks(model: StructuralModel, assigned: dict) -> list[list[int]]:
+    """The equations of a matching in solving order, an algebraic loop as one block."""
     owner = {x: i for i, x in assigned.items()}
     order = nx.DiGraph()
     order.add_nodes_from(assigned)
     order.add_edges_from((owner[x], i) for i in assigned for x in model.unknowns[i] if x != assigned[i])
     blocks = nx.condensation(order)
+    return [sorted(blocks.nodes[b]["members"]) for b in nx.topological_sort(blocks)]
+
+
+def _structural_order(model: StructuralModel, assigned: dict, residual: int) -> int | None:
+    """The highest derivative of a known signal the residual would need, following the matching.
+
+    A storage equation solved for its rate differentiates its state (one order up), solved for its
+    state integrates the rate (one down); any other equation passes on the highest order of its inputs.
+    None when a block holds a state (a loop the elimination cannot close as it stands).
+    """
+    order: dict = {}
+    for members in _blocks(model, assigned):
+        inputs = {x for i in members for x in model.unknowns[i]} - {assigned[i] for i in members}
+        level = max((order[x] for x in inputs), default=0)
+        if len(members) > 1:
+            if any(assigned[i].startswith("state ") or model.equations[i].role == "storage" for i in members):
+                return None
+            order.update((assigned[i], level) for i in members)
+            continue
+        (i,) = members
+        if model.equations[i].role == "storage":
+            level += -1 if assigned[i].startswith("state ") else 1
+        order[assigned[i]] = level
+    return max((order[x] for x in model.unknowns[residual]), default=0)
+
+
+def _eliminate(model: StructuralModel, equations: list, assigned: dict, residual: int) -> sp.Expr:
+    """The residual equation with every unknown of ``assigned`` replaced by its value in known signals."""
     symbols = _unknown_symbols(equations, assigned)
     solution: dict = {}
-    for block in nx.topological_sort(blocks):
-        members = sorted(blocks.nodes[block]["members"])
+    for members in _blocks(model, assigned):
         targets = [symbols[assigned[i]] for i in members]
         states = frozenset(model.equations[i].node for i in members
                            if model.equations[i].role in ("storage", "law")
@@ -228,12 +449,34 @@ def _eliminate(model: StructuralModel, equations: list, assigned: dict, residual
             rate = equation.rhs if isinstance(equation.lhs, sp.Derivative) else equation.lhs
             solution[targets[0]] = sp.Integral(rate, (T, 0, T))
             continue
-        found = sp.solve([e.lhs - e.rhs for e in equations_here], targets, dict=True)
-        if len(found) != 1:
-            raise ValueError(f"{[model.describe([i])[0] for i in members]}: no unique solution for {targets}")
-        solution.update(found[0])
+        if len(members) == 1:
+            found = {targets[0]: _solve_one(equations_here[0], targets[0], model.describe(members)[0])}
+        else:
+            found = sp.solve([e.lhs - e.rhs for e in equations_here], targets, dict=True)
+            if len(found) != 1:
+                raise ValueError(f"{model.describe(members)}: no unique solution for {targets}")
+            found = found[0]
+        for target, value in found.items():  # stop before nested inverses grow without bound
+            if sp.count_ops(value) > MAX_OPERATIONS:
+                raise ValueError(f"{_short(model, assigned)}: {target} takes more than {MAX_OPERATIONS} operations")
+        solution.update(found)
     equation = _substituted(equations[residual], solution)
     return equation.lhs - equation.rhs
+
+
+def _solve_one(equation: sp.Eq, target, where: str) -> sp.Expr:
+    """One equation solved for one unknown: linearly, as a signed power (an orifice), or by sympy."""
+    expression = equation.lhs - equation.rhs
+    slope = sp.diff(expression, target)
+    if slope != 0 and not slope.has(target):
+        return -expression.xreplace({target: 0}) / slope
+    inverse = signed_power_inverse(expression, target)
+    if inverse is not None:
+        return inverse
+    try:
+        return solve_for(expression, target, where=where)
+    except LawError as exc:
+        raise ValueError(str(exc)) from None
 
 
 def _in_known_signals(expression: sp.Expr, signals: set, unknowns: set) -> bool:
@@ -243,35 +486,28 @@ def _in_known_signals(expression: sp.Expr, signals: set, unknowns: set) -> bool:
 
 
 def _unknown_symbols(equations: list, assigned: dict) -> dict:
-    """Structural unknown name -> its sympy object (bond variable symbol or state function)."""
+    """Structural unknown name -> its sympy object, over the equations of ``assigned``."""
     found = {}
     for i in assigned:
-        found.update({str(s): s for s in equations[i].free_symbols})
-        found.update({f"state {f.func.__name__[2:]}": f for f in equations[i].atoms(AppliedUndef)})
+        found.update(_symbols_of(equations[i]))
+    return found
+
+
+def _symbols_of(equation: sp.Eq) -> dict:
+    """Structural unknown name -> its sympy object (bond variable symbol or state function) in ``equation``."""
+    found = {str(s): s for s in equation.free_symbols}
+    found.update({f"state {f.func.__name__[2:]}": f for f in equation.atoms(AppliedUndef)})
     return found
 
 
 def _substituted(equation: sp.Eq, solution: dict) -> sp.Eq:
     """``equation`` with solved unknowns replaced, a state's derivative by the derivative of its value."""
-    derivatives = {d: sp.diff(solution[d.expr], T, d.derivative_count)
+    derivatives = {d: _rate(solution[d.expr], d.derivative_count)
                    for d in equation.atoms(sp.Derivative) if d.expr in solution}
     return equation.xreplace(derivatives).xreplace(solution)
 
 
-def _faults_of_arr(model: StructuralModel, arr: ARR) -> set:
-    """The faults an ARR sees: its parameters and the sensors of the signals it reads."""
-    sensors = {m.equation.lhs.func.__name__: f"sensor {m.node}" for m in model.equations if m.role == "sensor"}
-    seen = {p for p in arr.parameters if p in model.faults}
-    return seen | {sensors[s] for s in arr.signals if s in sensors and sensors[s] in model.faults}
-
-
-def _improves(supports: list, support: set, faults: dict) -> bool:
-    """Whether a residual seeing ``support`` detects or isolates something the ``supports`` do not."""
-    seen = set().union(*supports) if supports else set()
-    if support - seen:
-        return True
-    for a in support:
-        for b in faults:
-            if b not in support and not any(a in s and b not in s for s in supports):
-                return True
-    return False
+def _rate(expression: sp.Expr, count: int) -> sp.Expr:
+    """The ``count``-th time derivative; the Dirac pulses of a sign's derivative dropped (zero almost everywhere)."""
+    rate = sp.diff(expression, T, count)
+    return rate.xreplace({d: 0 for d in rate.atoms(sp.DiracDelta)})

@@ -38,6 +38,7 @@ from bondgraph.errors import ModelError
 
 from .arrs import ARR, ARRWarning, derive_arrs
 from .deltas import latex, mathml
+from .elimination import unreached
 from .signatures import SignatureMatrix, signature_matrix
 
 __all__ = ["arr_report", "FORMATS"]
@@ -55,6 +56,7 @@ class _Content:
     arrs: list
     signatures: SignatureMatrix
     notes: list
+    unreached: list  # what the structure allows beyond these ARRs, as sentences
 
 
 def arr_report(bg: BondGraph, format: str = "md", *, arrs: list[ARR] | None = None) -> str:
@@ -71,7 +73,8 @@ def arr_report(bg: BondGraph, format: str = "md", *, arrs: list[ARR] | None = No
             warnings.simplefilter("always", ARRWarning)
             arrs = derive_arrs(bg)
         notes = [str(w.message) for w in caught if issubclass(w.category, ARRWarning)]
-    content = _Content(bg.name, _element_rows(bg), _drawings(bg), list(arrs), signature_matrix(arrs), notes)
+    content = _Content(bg.name, _element_rows(bg), _drawings(bg), list(arrs), signature_matrix(arrs), notes,
+                       _unreached_lines(bg, arrs))
     return {"md": _markdown, "html": _html, "tex": _latex}[format](bg, content)
 
 
@@ -123,8 +126,33 @@ def _causality(bg: BondGraph, preferred: str):
         return None
 
 
+def _arr_details(arr: ARR) -> list[str]:
+    """What an ARR is built from and what it asks of the data, as plain sentences."""
+    place = f"sensor {arr.detector}" if arr.detector is not None else f"junction {arr.junction}"
+    derivatives = ", ".join(f"{s} (order {k})" for s, k in arr.derivatives.items() if k) or "none"
+    lines = [f"Residual at {place}, written as: {arr.form}"
+             + ("; implicit (non-invertible law)" if arr.implicit else ""),
+             f"Signals: {', '.join(arr.signals)}; derivatives: {derivatives}; integrals: "
+             + (", ".join(f"of {i}" for i in arr.integrals) or "none")]
+    if arr.origin:
+        lines.append(f"From the equations: {', '.join(arr.origin)}")
+    return lines
+
+
+def _unreached_lines(bg: BondGraph, arrs: list) -> list[str]:
+    if not arrs:
+        return []
+    left = unreached(bg, arrs)
+    lines = [f"Detectable by the structure, seen by no ARR: {fault}" for fault in left["detect"]]
+    pairs = [f"{a} from {b}" for a, b in left["isolate"]]
+    if pairs:
+        lines.append(f"Isolable by the structure, not by these ARRs ({len(pairs)} ordered pairs; higher derivatives, "
+                     f"max_order, or an ODE would be needed): {', '.join(pairs)}")
+    return lines
+
+
 def _signature_rows(s: SignatureMatrix) -> tuple[list[str], list[list[str]]]:
-    header = ["parameter", *map(str, s.columns), "Mb", "Ib"]
+    header = ["fault", *map(str, s.columns), "Mb", "Ib"]
     rows = [[str(r), *map(str, s.matrix[i].tolist()), str(s.detectable[i]), str(s.isolable[i])]
             for i, r in enumerate(s.rows)]
     return header, rows
@@ -145,12 +173,13 @@ def _markdown(bg: BondGraph, c: _Content) -> str:
     if not c.arrs:
         lines += ["The model gives no ARR (it needs De/Df sensors on its junctions).", ""]
     for arr in c.arrs:
-        lines += [f"### {_md(arr.name)}", "", f"Junction {_md(str(arr.junction))}; signals: "
-                  f"{', '.join(arr.signals)}" + ("; implicit (non-invertible law)" if arr.implicit else ""), "",
-                  "$$r_n = " + latex(arr.nominal) + "$$", "", "$$\\Psi_2 = " + latex(arr.uncertain) + "$$", ""]
+        lines += [f"### {_md(arr.name)}", ""] + [f"- {_md(line)}" for line in _arr_details(arr)] + [
+                  "", "$$r_n = " + latex(arr.nominal) + "$$", "", "$$\\Psi_2 = " + latex(arr.uncertain) + "$$", ""]
     lines += ["## Fault signatures", ""]
     header, rows = _signature_rows(c.signatures)
     lines += [_md_table(header, rows), ""]
+    if c.unreached:
+        lines += ["## Beyond these ARRs", ""] + [f"- {_md(n)}" for n in c.unreached] + [""]
     if c.notes:
         lines += ["## Notes", ""] + [f"- {_md(n)}" for n in c.notes] + [""]
     return "\n".join(lines)
@@ -187,12 +216,12 @@ def _html(bg: BondGraph, c: _Content) -> str:
     if not c.arrs:
         parts.append("<p>The model gives no ARR (it needs De/Df sensors on its junctions).</p>")
     for arr in c.arrs:
-        parts += [f"<div class=\"arr\"><h3>{e(arr.name)}</h3>",
-                  f"<p>Junction {e(str(arr.junction))}; signals: {e(', '.join(arr.signals))}"
-                  + ("; implicit (non-invertible law)" if arr.implicit else "") + "</p>",
-                  _math("r_n", arr.nominal), _math("\u03a8_2", arr.uncertain), "</div>"]
+        parts += [f"<div class=\"arr\"><h3>{e(arr.name)}</h3>"] + [f"<p>{e(line)}</p>" for line in _arr_details(arr)]
+        parts += [_math("r_n", arr.nominal), _math("\u03a8_2", arr.uncertain), "</div>"]
     header, rows = _signature_rows(c.signatures)
     parts += ["<h2>Fault signatures</h2>", _html_table(header, rows)]
+    if c.unreached:
+        parts += ["<h2>Beyond these ARRs</h2><ul>"] + [f"<li>{e(n)}</li>" for n in c.unreached] + ["</ul>"]
     if c.notes:
         parts += ["<h2>Notes</h2><ul>"] + [f"<li>{e(n)}</li>" for n in c.notes] + ["</ul>"]
     parts.append("</body></html>")
@@ -227,12 +256,15 @@ def _latex(bg: BondGraph, c: _Content) -> str:
         parts += [t(i) + r"\\" for i in issues]
     parts.append(r"\subsection*{Analytical redundancy relations}")
     for arr in c.arrs:
-        signals = t(", ".join(arr.signals))
-        parts += [rf"\paragraph{{{t(arr.name)}}} Junction {t(str(arr.junction))}; signals: {signals}.",
+        details = " ".join(t(line) + "." for line in _arr_details(arr))
+        parts += [rf"\paragraph{{{t(arr.name)}}} {details}",
                   r"\begin{align*}", "r_n &= " + latex(arr.nominal) + r" \\",
                   r"\Psi_2 &= " + latex(arr.uncertain), r"\end{align*}"]
     header, rows = _signature_rows(c.signatures)
     parts += [r"\subsection*{Fault signatures}", _tex_table(header, rows)]
+    if c.unreached:
+        parts += [r"\subsection*{Beyond these ARRs}", r"\begin{itemize}"] + [rf"\item {t(n)}" for n in c.unreached]
+        parts.append(r"\end{itemize}")
     if c.notes:
         parts += [r"\subsection*{Notes}", r"\begin{itemize}"] + [rf"\item {t(n)}" for n in c.notes] + [r"\end{itemize}"]
     parts.append(r"\end{document}")

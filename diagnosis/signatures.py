@@ -1,8 +1,10 @@
 """Structural fault signatures of a set of ARRs.
 
-The fault signature matrix has a row per parameter (fault candidate) and a
-column per ARR; entry 1 when the ARR's nominal part depends on the parameter.
-A parameter is *detectable* (Mb = 1) when some ARR is sensitive to it and
+The fault signature matrix has a row per fault candidate and a column per ARR.
+The candidates are the element parameters (entry 1 when the ARR's nominal part
+depends on the parameter) and, by default, the sensors (``sensor <signal>``:
+entry 1 when the ARR reads the signal, on which a sensor bias or drift acts).
+A fault is *detectable* (Mb = 1) when some ARR is sensitive to it and
 *isolable* (Ib = 1) when, moreover, no other row has the same signature.
 
 Example
@@ -10,12 +12,23 @@ Example
 >>> from bondgraph.library import dc_motor
 >>> from diagnosis import derive_arrs
 >>> print(signature_matrix(derive_arrs(dc_motor())))
-     ARR_1_e  ARR_1_m  Mb  Ib
-R_a        1        0   1   0
-L_a        1        0   1   0
-k_m        1        1   1   1
-J          0        1   1   0
-b          0        1   1   0
+              ARR_1_e  ARR_1_m  Mb  Ib
+R_a                 1        0   1   0
+L_a                 1        0   1   0
+k_m                 1        1   1   0
+J                   0        1   1   0
+b                   0        1   1   0
+sensor i            1        1   1   0
+sensor omega        1        1   1   0
+>>> print(signature_matrix(derive_arrs(dc_motor(), max_order=2)))   # two ARRs of second order isolate k_m
+              ARR_1_e  ARR_1_m  ARR_MSO_1  ARR_MSO_2  Mb  Ib
+R_a                 1        0          1          1   1   0
+L_a                 1        0          1          1   1   0
+k_m                 1        1          1          1   1   1
+J                   0        1          1          1   1   0
+b                   0        1          1          1   1   0
+sensor i            1        1          0          1   1   1
+sensor omega        1        1          1          0   1   1
 """
 
 from __future__ import annotations
@@ -25,6 +38,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .structural import sensor_fault
+
 
 @dataclass(frozen=True)
 class SignatureMatrix:
@@ -33,11 +48,11 @@ class SignatureMatrix:
     Attributes
     ----------
     rows : tuple of str
-        Fault candidates (parameters).
+        Fault candidates: parameters, then sensors (``sensor <signal>``).
     columns : tuple of str
         ARR names.
     matrix : ndarray of int (rows, columns)
-        1 where the ARR's nominal part depends on the parameter.
+        1 where the ARR's nominal part depends on the parameter, or reads the sensor's signal.
 
     Examples
     --------
@@ -47,9 +62,9 @@ class SignatureMatrix:
     >>> from diagnosis import derive_arrs
     >>> signatures = signature_matrix(derive_arrs(rlc_circuit()))
     >>> signatures.rows, signatures.columns, signatures.matrix.tolist()
-    (('R', 'L', 'C'), ('ARR_J1', 'ARR_J0'), [[1, 0], [1, 0], [0, 1]])
-    >>> signatures.detectable.tolist(), signatures.isolable.tolist()   # R and L share a signature
-    ([1, 1, 1], [0, 0, 1])
+    (('R', 'L', 'C', 'sensor i', 'sensor v_C'), ('ARR_J1', 'ARR_J0'), [[1, 0], [1, 0], [0, 1], [1, 1], [1, 1]])
+    >>> signatures.detectable.tolist(), signatures.isolable.tolist()   # R and L share a signature, so do the sensors
+    ([1, 1, 1, 1, 1], [0, 0, 1, 0, 0])
     >>> signatures.row("C")
     {'ARR_J1': 0, 'ARR_J0': 1}
     """
@@ -88,15 +103,19 @@ class SignatureMatrix:
         return "\n".join(lines)
 
 
-def signature_matrix(arrs: Sequence, rows: Sequence[str] | None = None) -> SignatureMatrix:
+def signature_matrix(arrs: Sequence, rows: Sequence[str] | None = None, *, sensor_faults: bool = True
+                     ) -> SignatureMatrix:
     """The fault signature matrix of ``arrs``.
 
     Parameters
     ----------
     arrs : sequence of ARR
     rows : sequence of str, optional
-        Parameters to list; default: every element parameter of the model, in
-        model order, so that a fault no ARR can see shows as ``Mb = 0``.
+        Faults to list: parameters, and sensors as ``"sensor <signal>"``; default: every element
+        parameter of the model, in model order, so that a fault no ARR can see shows as ``Mb = 0``,
+        then every sensor.
+    sensor_faults : bool
+        List the sensors in the default rows (on by default); False assumes healthy sensors.
 
     Returns
     -------
@@ -116,6 +135,10 @@ def signature_matrix(arrs: Sequence, rows: Sequence[str] | None = None) -> Signa
     """
     if rows is None:
         rows = list(dict.fromkeys(p for arr in arrs for p in arr.candidates))
-    matrix = np.array([[int(p in arr.parameters) for arr in arrs] for p in rows], dtype=int)
+        if sensor_faults:
+            rows += list(dict.fromkeys(sensor_fault(s) for arr in arrs for s in arr.sensors))
+    read = [{sensor_fault(s) for s in arr.signals} for arr in arrs]
+    matrix = np.array([[int(p in arr.parameters or p in signals) for arr, signals in zip(arrs, read)] for p in rows],
+                      dtype=int)
     matrix = matrix.reshape(len(rows), len(arrs))
     return SignatureMatrix(tuple(rows), tuple(arr.name for arr in arrs), matrix)

@@ -43,6 +43,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from functools import cached_property
 
 import networkx as nx
 import sympy as sp
@@ -72,7 +73,7 @@ class StructuralModel:
         The unknowns of each equation (bond variables ``e_k``, ``f_k`` and energy variables).
     faults : dict
         Fault name -> the indices of the equations it acts on: an element parameter by its name,
-        a sensor as ``"sensor <detector>"``.
+        a sensor as ``"sensor <signal>"`` (:func:`sensor_fault`).
     """
 
     equations: tuple[ModelEquation, ...]
@@ -87,10 +88,8 @@ class StructuralModel:
     def overdetermined(self, equations: Iterable[int] | None = None) -> frozenset:
         """``M+``: the structurally overdetermined part of ``equations`` (all of them by default)."""
         equations = self.all if equations is None else frozenset(equations)
-        graph = nx.Graph()
+        graph = self._bipartite(equations)
         rows = [("equation", i) for i in equations]
-        graph.add_nodes_from(rows)
-        graph.add_edges_from((("equation", i), ("unknown", x)) for i in equations for x in self.unknowns[i])
         matching = nx.bipartite.hopcroft_karp_matching(graph, top_nodes=rows)
         # alternating paths from the unmatched equations: any edge to an unknown, the matched edge back
         reached = {row for row in rows if row not in matching}
@@ -112,18 +111,20 @@ class StructuralModel:
         """Equations minus unknowns of a set that is already its own overdetermined part."""
         return len(part) - len(frozenset().union(*(self.unknowns[i] for i in part)))
 
-    def mso_sets(self, limit: int = MSO_SEARCH_LIMIT) -> list[frozenset]:
-        """Every minimal structurally overdetermined set, as sorted equation indices (smallest sets first).
+    def mso_sets(self, equations: Iterable[int] | None = None, *, keep: frozenset | None = None,
+                 limit: int = MSO_SEARCH_LIMIT) -> list[frozenset]:
+        """Every minimal structurally overdetermined subset of ``equations`` (all by default), smallest first.
 
         Each overdetermined set of redundancy above one is reduced by removing one equation at a
         time and taking the overdetermined part of the rest; sets already seen are not explored
-        again.  Raises :class:`StructuralLimitError` after ``limit`` sets.
+        again.  With ``keep``, only sets holding one of those equations are explored.  Raises
+        :class:`StructuralLimitError` after ``limit`` sets.
         """
         found, seen = set(), set()
-        stack = [self.overdetermined()]
+        stack = [self.overdetermined(equations)]
         while stack:
             current = stack.pop()
-            if current in seen or not current:
+            if current in seen or not current or (keep is not None and not current & keep):
                 continue
             seen.add(current)
             if len(seen) > limit:
@@ -137,16 +138,114 @@ class StructuralModel:
 
     def detectable(self) -> set:
         """The faults whose equations reach the overdetermined part of the whole model."""
-        part = self.overdetermined()
+        part = self._whole
         return {fault for fault, rows in self.faults.items() if rows & part}
 
     def isolable(self, fault: str, other: str) -> bool:
         """Whether ``fault`` can be told from ``other``: it acts on ``M+`` of the model without ``other``."""
-        return bool(self.faults[fault] & self.overdetermined(self.all - self.faults[other]))
+        return self.reaches(self.faults[fault], self.faults[other])
 
     def isolability(self) -> dict:
         """Fault -> the faults it can be told from (every pair of :meth:`isolable`)."""
         return {a: {b for b in self.faults if b != a and self.isolable(a, b)} for a in self.faults}
+
+    def reaches(self, rows: frozenset, removed: frozenset = frozenset()) -> bool:
+        """Whether one of ``rows`` lies in ``M+`` of the model without the equations ``removed``.
+
+        Local: the maximum matching of the whole model is repaired where ``removed`` freed an unknown
+        (an augmenting path to a spare equation), then an alternating path is sought backwards from
+        ``rows`` to an unmatched equation.  On a long chain both stay near ``rows``, where a fresh
+        Dulmage-Mendelsohn decomposition would visit the whole model.
+        """
+        row_of, unknown_of = dict(self._matching[0]), dict(self._matching[1])
+        for r in removed:
+            x = unknown_of.pop(r, None)
+            if x is not None:
+                del row_of[x]
+                self._augment(x, row_of, unknown_of, removed)
+        seen, stack = set(), [r for r in rows if r not in removed]
+        while stack:
+            r = stack.pop()
+            if r in seen:
+                continue
+            seen.add(r)
+            x = unknown_of.get(r)
+            if x is None:
+                return True
+            stack.extend(e for e in self._holders[x] if e not in removed and e not in seen)
+        return False
+
+    def _augment(self, free: str, row_of: dict, unknown_of: dict, removed: frozenset) -> None:
+        """Match the unknown ``free`` by an augmenting path to an unmatched equation, if there is one."""
+        found_by = {}   # equation -> the unknown whose equations were being scanned when it was reached
+        queue, queued = [free], {free}
+        for x in queue:
+            for r in self._holders[x]:
+                if r in removed or r in found_by:
+                    continue
+                found_by[r] = x
+                y = unknown_of.get(r)
+                if y is None:  # r is spare: shift the matching along the path back to ``free``
+                    while x is not None:
+                        previous = row_of.get(x)
+                        row_of[x], unknown_of[r] = r, x
+                        r, x = previous, (found_by[previous] if previous is not None else None)
+                    return
+                if y not in queued:
+                    queued.add(y)
+                    queue.append(y)
+
+    @cached_property
+    def _holders(self) -> dict:
+        """Unknown -> the equations that hold it."""
+        holders: dict = {}
+        for i, unknowns in enumerate(self.unknowns):
+            for x in unknowns:
+                holders.setdefault(x, []).append(i)
+        return holders
+
+    @cached_property
+    def _matching(self) -> tuple[dict, dict]:
+        """A maximum matching of the whole model: (unknown -> equation, equation -> unknown)."""
+        graph = self._bipartite(self.all)
+        matching = nx.bipartite.hopcroft_karp_matching(graph, top_nodes=[("equation", i) for i in self.all])
+        pairs = [(x, i) for (kind, x), (_, i) in matching.items() if kind == "unknown"]
+        return {x: i for x, i in pairs}, {i: x for x, i in pairs}
+
+    @cached_property
+    def _whole(self) -> frozenset:
+        return self.overdetermined()
+
+    def _bipartite(self, equations: frozenset) -> nx.Graph:
+        graph = nx.Graph()
+        graph.add_nodes_from(("equation", i) for i in equations)
+        graph.add_edges_from((("equation", i), ("unknown", x)) for i in equations for x in self.unknowns[i])
+        return graph
+
+    def msos_through(self, rows: frozenset, removed: frozenset = frozenset(), limit: int = 200) -> list[frozenset]:
+        """Minimal overdetermined sets that hold one of ``rows`` and none of ``removed``, found near ``rows``.
+
+        The search looks in the equations within a growing distance of ``rows`` until one of them is
+        overdetermined there, then one step further, and reduces that neighbourhood to minimal sets
+        keeping one of ``rows`` (at most ``limit`` subsets explored).  Smallest sets first.
+        """
+        rows = frozenset(rows) - removed
+        ball, part = set(rows), frozenset()
+        grown_after = None
+        for _ in range(len(self.equations)):
+            part = self.overdetermined(ball)
+            if part & rows and grown_after is None:
+                grown_after = 0
+            if grown_after is not None:
+                if grown_after == 1:
+                    break
+                grown_after += 1
+            wider = {e for r in ball for x in self.unknowns[r] for e in self._holders[x]} - removed
+            if wider <= ball:
+                break
+            ball |= wider
+        part = self.overdetermined(ball)
+        return self.mso_sets(part, keep=rows, limit=limit) if part & rows else []
 
     def describe(self, rows: Iterable[int]) -> list[str]:
         """``"node role"`` of each equation in ``rows``: which junctions and elements a set uses."""
@@ -178,17 +277,29 @@ def structural_model(bg, *, sensor_faults: bool = True) -> StructuralModel:
     variables = {v for b in bonds for v in (effort(b.label), flow(b.label))}
     states = {energy_variable(e): e.name for e in structure.elements.values() if e.kind in ("C", "I")}
     unknowns = tuple(_unknowns(m.equation, variables, states) for m in equations)
+    holding: dict = {}  # symbol -> the equations that hold it, indexed once
+    for i, m in enumerate(equations):
+        for symbol in m.equation.free_symbols:
+            holding.setdefault(symbol, set()).add(i)
     faults = {}
-    for name, element in structure.elements.items():
+    for element in structure.elements.values():
         if element.param is not None:
-            symbol = sp.Symbol(element.param)
-            rows = frozenset(i for i, m in enumerate(equations) if symbol in m.equation.free_symbols)
+            rows = frozenset(holding.get(sp.Symbol(element.param), ()))
             faults[element.param] = faults.get(element.param, frozenset()) | rows
     if sensor_faults:
         for i, m in enumerate(equations):
             if m.role == "sensor":
-                faults[f"sensor {m.node}"] = frozenset({i})
+                faults[sensor_fault(m.equation.lhs.func.__name__)] = frozenset({i})
     return StructuralModel(tuple(equations), unknowns, faults)
+
+
+def sensor_fault(signal: str) -> str:
+    """The name of the fault of the sensor that reads ``signal``: a row of a signature matrix.
+
+    >>> sensor_fault("omega_m")
+    'sensor omega_m'
+    """
+    return f"sensor {signal}"
 
 
 def _unknowns(equation: sp.Eq, variables: set, states: dict) -> frozenset:

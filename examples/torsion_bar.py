@@ -246,7 +246,7 @@ def detection_setup(case: Case, scenario: Scenario, seed: int):
     Returns ``(arrs, arr, detection options, nominal record, degraded record)``.
     """
     _, monitorable = case.bond_graphs()
-    arrs = derive_arrs(monitorable)
+    arrs = derive_arrs(monitorable, complete=False, integrals="keep")
     arr = next(a for a in arrs if a.junction == "1_1")
     calibration, nominal, degraded = (add_noise(as_record(record), NOISE, seed=3 * seed + i) for i, record in
                                       enumerate((scenario.clean_nominal, scenario.clean_nominal,

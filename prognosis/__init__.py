@@ -20,7 +20,7 @@ Three method families sit beside it as subpackages:
 >>> from bondgraph.library import torsion_bar_monitorable
 >>> from diagnosis import derive_arrs
 >>> from prognosis import observation_model
->>> observation_model(derive_arrs(torsion_bar_monitorable())[0], "b_Md").coefficient
+>>> observation_model(derive_arrs(torsion_bar_monitorable(), complete=False, integrals="keep")[0], "b_Md").coefficient
 -omega_m(t)/k_belt**2
 """
 

@@ -46,7 +46,7 @@ class ObservationModel:
 
     >>> from bondgraph.library import rlc_circuit
     >>> from diagnosis import derive_arrs
-    >>> arr = derive_arrs(rlc_circuit())[0]
+    >>> arr = derive_arrs(rlc_circuit(), complete=False, integrals="keep")[0]
     >>> h = observation_model(arr, "R")
     >>> h.candidate, h.nominal, h.expression, h.coefficient
     ('R', 10.0, -(R - 10.0)*i(t), -i(t))
@@ -122,7 +122,7 @@ def observation_model(arr, candidate: str) -> ObservationModel:
     --------
     >>> from bondgraph.library import torsion_bar_monitorable
     >>> from diagnosis import derive_arrs
-    >>> arr = derive_arrs(torsion_bar_monitorable())[0]
+    >>> arr = derive_arrs(torsion_bar_monitorable(), complete=False, integrals="keep")[0]
     >>> observation_model(arr, "b_Md").expression
     -(b_Md - 0.005025)*omega_m(t)/k_belt**2
     """

@@ -143,6 +143,7 @@ def test_overdetermined_part_is_where_removing_an_equation_lowers_the_redundancy
     assert model.redundancy() == phi
 
 
+@pytest.mark.slow
 def test_current_arrs_are_no_more_than_the_structure_allows():
     """Every fault our ARRs see, the structure sees too (the structural route is the upper bound)."""
     from diagnosis import derive_arrs, signature_matrix
