@@ -218,8 +218,8 @@ def _closing_arr(shared: _Shared, fault: str, other: str | None, max_order: int 
     candidates = model.msos_through(model.faults[fault], removed)
     estimates = {rows: shared.estimated_order(rows) for rows in candidates}
     for rows in sorted(candidates, key=lambda rows: (estimates[rows] is None, estimates[rows] or 0, len(rows))):
-        if max_order is not None and estimates[rows] is not None and estimates[rows] > max_order + 1:
-            break   # the estimate may overshoot by one (a derivative that cancels), not more
+        if max_order is not None and estimates[rows] is not None and estimates[rows] > max_order:
+            break   # the sets are sorted by their estimate: every other one needs more
         arr = shared.cached(rows, unrealizable)
         if arr is None or (max_order is not None and arr.order > max_order):
             continue
