@@ -26,7 +26,7 @@ import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from .signals import Record, RecordError, as_record, cumulative_integral, derivative
+from .signals import Record, RecordError, as_record, cumulative_integral, default_window, derivative
 
 
 @dataclass
@@ -99,8 +99,8 @@ class CompiledARR:
             if key in exact:
                 values[symbol] = derivative(record, name, order=order, method="exact", exact=exact[key], name=name)
             else:
-                values[symbol] = derivative(record, name, order=order, method=method, window=window,
-                                            polyorder=polyorder, name=name)
+                values[symbol] = _trusted(derivative(record, name, order=order, method=method, window=window,
+                                                     polyorder=polyorder, name=name), order, method, window, polyorder)
         for symbol, integrand in self.integrals.items():
             direct = _from_antiderivatives(integrand, record, antiderivatives or {})
             if direct is not None:
@@ -116,6 +116,22 @@ class CompiledARR:
         """The nominal residual ``r_n`` at every sample."""
         return np.broadcast_to(np.asarray(self.function("nominal", self.nominal)(*points), float),
                                points[0].shape if points else ()).copy()
+
+
+def _trusted(values: np.ndarray, order: int, method: str, window: int | None, polyorder: int) -> np.ndarray:
+    """A derivative of order 2 or more, NaN (undecided) where its stencil leaves the record.
+
+    At the ends of a record the estimate extrapolates a one-sided fit; a first derivative stays close,
+    a second one does not (a start-up transient's curvature, and noise, come out tens of times too
+    large), so those samples are left undecided rather than compared with a threshold.
+    """
+    if order < 2 or method not in ("savgol", "central"):
+        return values
+    edge = (window or default_window(polyorder)) // 2 if method == "savgol" else order
+    trusted = np.array(values, dtype=float, copy=True)
+    trusted[:edge] = np.nan
+    trusted[len(trusted) - edge:] = np.nan
+    return trusted
 
 
 def _from_antiderivatives(integrand: sp.Expr, record: Record, antiderivatives: Mapping) -> np.ndarray | None:
