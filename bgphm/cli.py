@@ -106,7 +106,7 @@ def cmd_detect(args, progress: Progress) -> int:
     the record (``--calibrate``).  With ``--out``: ``detection.json``, ``residuals.csv`` and residual plots.
     """
     spec = load_model(args.model)
-    arrs = _arrs(spec, progress, args.arr)
+    arrs = _arrs(spec, progress, args.arr, args.integrals)
     record = _record(args.data, arrs, progress)
     evaluations = _detect(arrs, record, args, progress)
     summary = {"model": spec.model.name, "data": str(args.data), "samples": len(record),
@@ -146,7 +146,7 @@ def cmd_prognose(args, progress: Progress) -> int:
     from prognosis.monitor import HealthMonitor
 
     spec = load_model(args.model)
-    arrs = _arrs(spec, progress, None)
+    arrs = _arrs(spec, progress, None, args.integrals)
     parameters = spec.model.parameters
     if args.candidate not in parameters:
         raise UsageError(f"--candidate {args.candidate!r}: the model has no such parameter "
@@ -235,13 +235,13 @@ def cmd_demo(args, progress: Progress) -> int:
 
 # ------------------------------------------------------------------------------------------- helpers
 
-def _arrs(spec: ModelSpec, progress: Progress, name: str | None) -> list:
+def _arrs(spec: ModelSpec, progress: Progress, name: str | None, integrals: str = "avoid") -> list:
     from diagnosis.arrs import ARRWarning, derive_arrs
 
     progress(f"deriving the ARRs of {spec.model.name!r}")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ARRWarning)
-        arrs = derive_arrs(spec.model)
+        arrs = derive_arrs(spec.model, integrals=integrals)
     for w in caught:
         progress(f"warning: {w.message}")
     if not arrs:
@@ -530,6 +530,10 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--k", type=float, default=4.0, help="margin = k robust std of the residual (default 4)")
         p.add_argument("--persistence", type=int, default=5, help="consecutive violations for an alarm (default 5)")
         p.add_argument("--window", type=int, help="Savitzky-Golay window for derivatives (odd; default 11)")
+        p.add_argument("--integrals", choices=("avoid", "keep"), default="avoid",
+                       help="avoid: differentiate an ARR that would integrate measured signals (default); keep: "
+                            "keep the integrals (better on long records sampled fast, where a second derivative "
+                            "of the noise is larger than the integral's random walk)")
         p.add_argument("--out", help="output directory")
         p.set_defaults(run=cmd_detect if name == "detect" else cmd_prognose)
     p.add_argument("--candidate", required=True, help="the degrading parameter (a model parameter)")

@@ -293,9 +293,16 @@ def compile_interval(
     return _evaluator(node, points, expr)
 
 
+#: The largest derivative (sympy operations) :func:`affine_range` expands to collect it: nested non-linear
+#: laws expand without bound, and the natural extension is sound for them anyway.
+EXPAND_LIMIT = 200
+
+
 def _coefficient(expr: sp.Expr, delta: sp.Symbol, deltas: set) -> sp.Expr:
     """``d expr / d delta``, which must be free of every interval symbol."""
     g = sp.diff(expr, delta)
+    if g.free_symbols & deltas and sp.count_ops(g) > EXPAND_LIMIT:
+        raise ValueError(f"expression is too large to collect in {delta} ({sp.count_ops(g)} operations)")
     if g.free_symbols & deltas:
         g = sp.expand(g)
     if g.free_symbols & deltas:
