@@ -149,3 +149,12 @@ def test_integrals_of_measured_signals_are_differentiated_away_unless_kept():
 def test_bad_options_are_named(option, value, match):
     with pytest.raises(ValueError, match=match):
         derive_arrs(lib.dc_motor(), **{option: value})
+
+
+def test_with_sensor_faults_the_three_tank_still_isolates_az1_and_az3():
+    signatures = signature_matrix(quiet(derive_arrs, lib.three_tank()))
+    assert {"sensor h1", "sensor h2", "sensor h3"} <= set(signatures.rows)
+    junction_only = signature_matrix(junction_arrs(lib.three_tank()))
+    for valve in ("az1", "az3"):
+        assert not junction_only.isolable[junction_only.rows.index(valve)]   # a sensor fault shares its signature
+        assert signatures.isolable[signatures.rows.index(valve)]
