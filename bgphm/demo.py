@@ -221,7 +221,9 @@ def _write_model(demo: Demo, ex: Example, out: Path) -> Path:
 def _commands(demo: Demo, model_path: Path, data_path: Path, fail: float, out: Path, seed: int) -> list[list[str]]:
     """The ``bgphm`` command lines of the demo, as a user would type them."""
     model, data = str(model_path), str(data_path)
-    detection = ["--calibrate", f"{demo.calibrate:g}", "--integrals", demo.integrals]
+    detection = ["--calibrate", f"{demo.calibrate:g}"]
+    if demo.integrals != "avoid":  # the CLI's default
+        detection += ["--integrals", demo.integrals]
     if demo.persistence is not None:
         detection += ["--persistence", str(demo.persistence)]
     return [
