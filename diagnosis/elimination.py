@@ -50,8 +50,8 @@ from bondgraph.laws import signed_power_inverse, solve_for
 from bondgraph.structure import T
 
 from .junctions import junction_arrs
-from .relation import (INTEGRAL_FORMS, ARR, ARRWarning, candidate_parameters, parameter_intervals, split_relation,
-                       uncertain_structure, written_without_integrals)
+from .relation import (INTEGRAL_FORMS, ARR, ARRWarning, candidate_parameters, measured_signals, parameter_intervals,
+                       split_relation, uncertain_structure, written_without_integrals)
 from .structural import StructuralModel, sensor_fault, structural_model
 
 #: The default bound on the derivatives an ARR added for isolation may need: as high as the ARRs the model
@@ -121,14 +121,20 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
     """
     if integrals not in INTEGRAL_FORMS:
         raise ValueError(f"option integrals: {integrals!r} is not one of {', '.join(INTEGRAL_FORMS)}")
+    if max_order is not None and max_order != "auto" and not (isinstance(max_order, int) and max_order >= 0):
+        raise ValueError(f"option max_order: {max_order!r} is not a non-negative integer, 'auto' or None")
     existing = junction_arrs(bg, integrals=integrals) if existing is None else list(existing)
+    structure = bg.structure()
+    faults = set(candidate_parameters(structure))
+    faults |= {sensor_fault(s) for s in measured_signals(structure)} if sensor_faults else set()
+    if isolation is None:
+        isolation = len(faults) <= ISOLATION_LIMIT
+    seen = {p for arr in existing for p in arr.parameters} | {sensor_fault(s) for arr in existing for s in arr.signals}
+    if not isolation and faults <= seen:
+        return []   # every fault detected and no isolation asked: the structure has nothing to add
     model = structural_model(bg, sensor_faults=sensor_faults)
     shared = _Shared(bg, model, integrals == "avoid")   # lazy: built for the first gap
     supports = [faults_of_arr(model, arr) for arr in existing]
-    if max_order is not None and max_order != "auto" and not (isinstance(max_order, int) and max_order >= 0):
-        raise ValueError(f"option max_order: {max_order!r} is not a non-negative integer, 'auto' or None")
-    if isolation is None:
-        isolation = len(model.faults) <= ISOLATION_LIMIT
     added, unrealizable, too_high = [], set(), []
     for fault, other in _gaps(model, supports, isolation=isolation):
         if _told_apart(supports, fault, other):

@@ -43,8 +43,8 @@ from bondgraph.causality import diagnosis_causality
 from bondgraph.equations import causal_equations, substitute
 from bondgraph.structure import Structure, T, signal_function
 
-from .relation import (INTEGRAL_FORMS, ARR, ARRWarning, candidate_parameters, parameter_intervals, split_relation,
-                       uncertain_structure, written_without_integrals)
+from .relation import (INTEGRAL_FORMS, ARR, ARRWarning, candidate_parameters, measured_signals, parameter_intervals,
+                       split_relation, uncertain_structure, written_without_integrals)
 
 def junction_arrs(bg, *, integrals: str = "avoid") -> list[ARR]:
     """The I-ARRs of a bond graph along causal paths, one per junction carrying a sensor.
@@ -89,6 +89,7 @@ def junction_arrs(bg, *, integrals: str = "avoid") -> list[ARR]:
     candidates = candidate_parameters(structure)
     nominal_integrals, true_integrals = _integrals(nominal), _integrals(true)
     uncertainties = parameter_intervals(structure)
+    sensors, users = measured_signals(structure), _users(structure)
 
     arrs = []
     sources = [(junction, None, nominal.balances[junction], true.balances[junction]) for junction in nominal.balances]
@@ -106,26 +107,34 @@ def junction_arrs(bg, *, integrals: str = "avoid") -> list[ARR]:
             warnings.warn(f"{name}: cannot be expressed in known variables ({exc})", ARRWarning, stacklevel=2)
             continue
         r_n, r_true, form = written_without_integrals(r_n, r_true, "balance", avoid=integrals == "avoid")
-        origin = _origin(structure, junction, detector, r_n)
+        origin = _origin(users, junction, detector, r_n)
         arrs.append(split_relation(name, junction, detector, r_n, r_true, blocked_by, structure, candidates,
-                                   uncertainties, origin=origin, form=form))
+                                   uncertainties, origin=origin, form=form, sensors=sensors))
     return arrs
 
 
-def _origin(structure: Structure, junction, detector, r_n: sp.Expr) -> tuple:
+def _users(structure: Structure) -> dict:
+    """Parameter or signal name -> the ``"<node> <role>"`` of each element that holds it, indexed once."""
+    users: dict = {}
+    for name, element in structure.elements.items():
+        if element.kind in el.DETECTORS:
+            users.setdefault(("signal", element.signal), []).append(f"{name} sensor")
+        elif element.kind in el.SOURCES:
+            users.setdefault(("signal", element.signal), []).append(f"{name} source")
+        elif element.param is not None:
+            role = "transformer" if element.kind in el.TWO_PORTS else "law"
+            users.setdefault(("parameter", element.param), []).append(f"{name} {role}")
+    return users
+
+
+def _origin(users: dict, junction, detector, r_n: sp.Expr) -> tuple:
     """The equations a junction's ARR uses: its balance (or read-out), the elements whose parameters
     it holds, the sources and sensors whose signals it reads."""
-    names = {s.name for s in r_n.free_symbols}
-    signals = {f.func.__name__ for f in r_n.atoms(AppliedUndef)}
-    used = [f"{detector} sensor" if detector is not None else f"{junction} balance"]
-    for name, element in structure.elements.items():
-        if element.kind in el.DETECTORS and element.signal in signals and name != detector:
-            used.append(f"{name} sensor")
-        elif element.kind in el.SOURCES and element.signal in signals:
-            used.append(f"{name} source")
-        elif element.param is not None and element.param in names:
-            used.append(f"{name} {'transformer' if element.kind in el.TWO_PORTS else 'law'}")
-    return (used[0], *sorted(used[1:], key=_by_role))
+    keys = [("parameter", s.name) for s in r_n.free_symbols]
+    keys += [("signal", f.func.__name__) for f in r_n.atoms(AppliedUndef)]
+    first = f"{detector} sensor" if detector is not None else f"{junction} balance"
+    used = {entry for key in keys for entry in users.get(key, ())} - {first}
+    return (first, *sorted(used, key=_by_role))
 
 
 def _by_role(entry: str) -> tuple:

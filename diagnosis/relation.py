@@ -263,7 +263,8 @@ def split_relation(name, junction, detector, r_n, r_true, blocked_by, structure,
 
     Psi_2 is ``r_true - r_n`` split into one term per delta (BG-LFT), plus the products of deltas if
     an addend holds two.  ``parameters``: parameter -> multiplicative interval of the structure;
-    ``details``: further fields of the :class:`ARR` (``origin``, ``form``).
+    ``details``: further fields of the :class:`ARR` (``origin``, ``form``, ``sensors`` when the caller
+    has them already).
     """
     deltas = sorted((s for s in r_true.free_symbols if delta_parameter(s) is not None), key=str)
     # r_true - r_n vanishes with every delta, so each delta's term comes from the addends of r_true
@@ -299,8 +300,7 @@ def split_relation(name, junction, detector, r_n, r_true, blocked_by, structure,
         detector=detector,
         implicit=bool(blocked_by),
         blocked_by=blocked_by,
-        sensors=measured_signals(structure),
-        **details,
+        **{"sensors": measured_signals(structure), **details},
     )
 
 
