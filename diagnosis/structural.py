@@ -230,20 +230,15 @@ class StructuralModel:
         keeping one of ``rows`` (at most ``limit`` subsets explored).  Smallest sets first.
         """
         rows = frozenset(rows) - removed
-        ball, part = set(rows), frozenset()
-        grown_after = None
-        for _ in range(len(self.equations)):
-            part = self.overdetermined(ball)
-            if part & rows and grown_after is None:
-                grown_after = 0
-            if grown_after is not None:
-                if grown_after == 1:
-                    break
-                grown_after += 1
+        ball, found = set(rows), False
+        while True:
+            found = found or bool(self.overdetermined(ball) & rows)
             wider = {e for r in ball for x in self.unknowns[r] for e in self._holders[x]} - removed
             if wider <= ball:
                 break
             ball |= wider
+            if found:   # one step past the first neighbourhood where a row is overdetermined
+                break
         part = self.overdetermined(ball)
         return self.mso_sets(part, keep=rows, limit=limit) if part & rows else []
 
