@@ -83,7 +83,7 @@ def test_torsion_bar_dependent_inertia_is_reflected_through_the_belt():
     assert sp.simplify(eqs.efforts[bond.label] - s["J_Md"] * domega / s["k_belt"]) == 0
 
 
-def test_three_tank_state_equations_match_seed_001():
+def test_three_tank_state_equations_match_du_et_al():
     eqs = three_tank().state_equations()
     q1, q2, q3, A1, A2, A3, a1, a2, a3, S, g = sp.symbols("q_A_1 q_A_2 q_A_3 A_1 A_2 A_3 az1 az2 az3 S_n g")
     h1, h2, h3 = q1 / A1, q2 / A2, q3 / A3

@@ -47,7 +47,7 @@ def test_torsion_bar_arr_at_1_2_is_the_load_disk_balance():
     assert sp.simplify(arr.nominal - expected) == 0
 
 
-def test_three_tank_arrs_are_the_seed_001_mass_balances():
+def test_three_tank_arrs_are_the_mass_balances_of_du_et_al():
     arrs = {arr.junction: arr for arr in derive_arrs(three_tank(), complete=False, integrals="keep")}
     assert set(arrs) == {"0_1", "0_2", "0_3"}
     h1, h2, h3, Q1, Q2 = (fn(n) for n in ["h1", "h2", "h3", "Q1", "Q2"])
