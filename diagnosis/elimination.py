@@ -50,8 +50,8 @@ from bondgraph.laws import signed_power_inverse, solve_for
 from bondgraph.structure import T
 
 from .junctions import junction_arrs
-from .relation import (INTEGRAL_FORMS, ARR, ARRWarning, candidate_parameters, measured_signals, parameter_intervals,
-                       split_relation, uncertain_structure, written_without_integrals)
+from .relation import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
+                       parameter_intervals, split_relation, uncertain_structure, written_without_integrals)
 from .structural import StructuralModel, sensor_fault, structural_model
 
 #: The default bound on the derivatives an ARR added for isolation may need: as high as the ARRs the model
@@ -119,8 +119,7 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
     eliminated (a law without explicit inverse, a loop only an ODE of the set closes) are named in one
     :class:`ARRWarning`; gaps that only sets above ``max_order`` close are named in another.
     """
-    if integrals not in INTEGRAL_FORMS:
-        raise ValueError(f"option integrals: {integrals!r} is not one of {', '.join(INTEGRAL_FORMS)}")
+    check_integral_form(integrals)
     if max_order is not None and max_order != "auto" and not (isinstance(max_order, int) and max_order >= 0):
         raise ValueError(f"option max_order: {max_order!r} is not a non-negative integer, 'auto' or None")
     existing = junction_arrs(bg, integrals=integrals) if existing is None else list(existing)
@@ -129,8 +128,7 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
     faults |= {sensor_fault(s) for s in measured_signals(structure)} if sensor_faults else set()
     if isolation is None:
         isolation = len(faults) <= ISOLATION_LIMIT
-    seen = {p for arr in existing for p in arr.parameters} | {sensor_fault(s) for arr in existing for s in arr.signals}
-    if not isolation and faults <= seen:
+    if not isolation and faults <= set().union(*(_seen(arr, faults) for arr in existing)):
         return []   # every fault detected and no isolation asked: the structure has nothing to add
     model = structural_model(bg, sensor_faults=sensor_faults)
     shared = _Shared(bg, model, integrals == "avoid")   # lazy: built for the first gap
@@ -190,8 +188,13 @@ def arr_from_set(bg, rows, *, model: StructuralModel | None = None, name: str = 
 
 def faults_of_arr(model: StructuralModel, arr: ARR) -> set:
     """The faults of ``model`` an ARR sees: its parameters and the sensors of the signals it reads."""
-    seen = {p for p in arr.parameters if p in model.faults}
-    return seen | {sensor_fault(s) for s in arr.signals if sensor_fault(s) in model.faults}
+    return _seen(arr, model.faults)
+
+
+def _seen(arr: ARR, faults) -> set:
+    """The ``faults`` (names) an ARR sees: its parameters and the sensors of the signals it reads."""
+    sensors = {sensor_fault(s) for s in arr.signals}
+    return {p for p in arr.parameters if p in faults} | {s for s in sensors if s in faults}
 
 
 def _gaps(model: StructuralModel, supports: list, *, isolation: bool = True):
@@ -473,9 +476,6 @@ def _eliminate(model: StructuralModel, equations: list, assigned: dict, residual
 def _solve_one(equation: sp.Eq, target, where: str) -> sp.Expr:
     """One equation solved for one unknown: linearly, as a signed power (an orifice), or by sympy."""
     expression = equation.lhs - equation.rhs
-    slope = sp.diff(expression, target)
-    if slope != 0 and not slope.has(target):
-        return -expression.xreplace({target: 0}) / slope
     inverse = signed_power_inverse(expression, target)
     if inverse is not None:
         return inverse
@@ -508,12 +508,12 @@ def _symbols_of(equation: sp.Eq) -> dict:
 
 def _substituted(equation: sp.Eq, solution: dict) -> sp.Eq:
     """``equation`` with solved unknowns replaced, a state's derivative by the derivative of its value."""
-    derivatives = {d: _rate(solution[d.expr], d.derivative_count)
+    derivatives = {d: _time_derivative(solution[d.expr], d.derivative_count)
                    for d in equation.atoms(sp.Derivative) if d.expr in solution}
     return equation.xreplace(derivatives).xreplace(solution)
 
 
-def _rate(expression: sp.Expr, count: int) -> sp.Expr:
+def _time_derivative(expression: sp.Expr, count: int) -> sp.Expr:
     """The ``count``-th time derivative; the Dirac pulses of a sign's derivative dropped (zero almost everywhere)."""
     rate = sp.diff(expression, T, count)
     return rate.xreplace({d: 0 for d in rate.atoms(sp.DiracDelta)})

@@ -43,8 +43,8 @@ from bondgraph.causality import diagnosis_causality
 from bondgraph.equations import causal_equations, substitute
 from bondgraph.structure import Structure, T, signal_function
 
-from .relation import (INTEGRAL_FORMS, ARR, ARRWarning, candidate_parameters, measured_signals, parameter_intervals,
-                       split_relation, uncertain_structure, written_without_integrals)
+from .relation import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
+                       parameter_intervals, split_relation, uncertain_structure, written_without_integrals)
 
 def junction_arrs(bg, *, integrals: str = "avoid") -> list[ARR]:
     """The I-ARRs of a bond graph along causal paths, one per junction carrying a sensor.
@@ -80,8 +80,7 @@ def junction_arrs(bg, *, integrals: str = "avoid") -> list[ARR]:
     >>> [(arr.form, arr.order) for arr in junction_arrs(torsion_bar_monitorable())]
     [('differentiated balance', 2), ('differentiated balance', 2)]
     """
-    if integrals not in INTEGRAL_FORMS:
-        raise ValueError(f"option integrals: {integrals!r} is not one of {', '.join(INTEGRAL_FORMS)}")
+    check_integral_form(integrals)
     structure = bg.structure()
     causality = diagnosis_causality(bg)
     nominal = causal_equations(bg, causality, structure, keep_blocked=True)

@@ -207,6 +207,12 @@ def parameter_intervals(structure: Structure) -> dict:
 INTEGRAL_FORMS = ("avoid", "keep")
 
 
+def check_integral_form(integrals: str) -> None:
+    """Raise a ValueError naming the option unless ``integrals`` is one of :data:`INTEGRAL_FORMS`."""
+    if integrals not in INTEGRAL_FORMS:
+        raise ValueError(f"option integrals: {integrals!r} is not one of {', '.join(INTEGRAL_FORMS)}")
+
+
 def written_without_integrals(r_n: sp.Expr, r_true: sp.Expr, form: str, *, avoid: bool = True) -> tuple:
     """``(r_n, r_true, form)``: the relation differentiated once when that removes every integral.
 
