@@ -5,7 +5,7 @@
     bgphm arr MODEL [--format md|html|tex] [--out FILE]
     bgphm simulate MODEL [--t-end T] [--samples N] [--set PARAM=VALUE ...] [--out CSV]
     bgphm detect MODEL DATA.csv [--margin M | --calibrate T] [--persistence N] [--out DIR]
-    bgphm prognose MODEL DATA.csv --candidate PARAM --degradation exponential|linear --fail VALUE [--out DIR]
+    bgphm prognose MODEL DATA.csv --fail PARAM=VALUE [--fail ...] [--candidate P] [--degradation LAW] [--out DIR]
     bgphm demo [dc-motor|torsion-bar|three-tank] [--out DIR] [--seed N]
 
 MODEL is a JSON file (networkx node-link form), a Python file defining ``model``, or a built-in example
@@ -133,78 +133,62 @@ def cmd_detect(args, progress: Progress) -> int:
 
 
 def cmd_prognose(args, progress: Progress) -> int:
-    """``bgphm prognose``: detect, then estimate ``--candidate`` with a particle filter and predict its RUL.
+    """``bgphm prognose``: detect, find the degrading parameter and its law by evidence, predict the RUL.
 
-    Uses the first ARR sensitive to the candidate (or ``--arr``); the filter starts at the first alarm and
-    the RUL is the time until the candidate reaches ``--fail``.  Prints the last estimate; with ``--out``
-    writes ``prognosis.json``, ``estimates.csv``, ``rul.csv`` and plots.  Returns 0.
+    ``--fail PARAM=VALUE`` (repeatable) gives the failure value of each parameter that can fail; the
+    candidates are those whose fault signature matches the ARRs that fired, each with each law
+    (linear, exponential), weighed in one particle filter from the first alarm
+    (:class:`~prognosis.isolation.IsolatingMonitor`).  ``--candidate`` and ``--degradation`` restrict
+    them.  Prints the decision and the last RUL; with ``--out`` writes ``prognosis.json``,
+    ``estimates.csv``, ``rul.csv`` and plots.  Returns 0.
     """
     from diagnosis.detection import robust_std
-    from diagnosis.signatures import signature_matrix
-    from prognosis.degradation import degradation_model
-    from prognosis.particle_filter import VarianceAdaptation
-    from prognosis.monitor import HealthMonitor
+    from diagnosis.signals import default_window
+    from prognosis.isolation import IsolatingMonitor
 
     spec = load_model(args.model)
-    arrs = _arrs(spec, progress, None, args.integrals)
+    arrs = _arrs(spec, progress, args.arr, args.integrals)
     parameters = spec.model.parameters
-    if args.candidate not in parameters:
-        raise UsageError(f"--candidate {args.candidate!r}: the model has no such parameter "
-                         f"(parameters: {', '.join(parameters)})")
-    sensitive = [a for a in arrs if args.candidate in a.parameters]
-    if not sensitive:
-        rows = signature_matrix(arrs)
-        raise UsageError(f"--candidate {args.candidate!r}: no ARR is sensitive to it, so it cannot be monitored "
-                         f"(detectable parameters: {[r for r, d in zip(rows.rows, rows.detectable) if d]})")
-    arr = sensitive[0] if args.arr is None else _named(sensitive, args.arr)
-    nominal = float(parameters[args.candidate])
-    direction = _direction(args, nominal)
-    record = _record(args.data, [arr], progress)
-    (evaluation,) = _detect([arr], record, args, progress)
-    # the filter's measurement noise comes from the healthy stretch even when --margin is given
-    residual_std = robust_std(evaluation.residual[record.t <= _calibration_end(record, args, otherwise="")])
+    failures = _failures(args, parameters)
+    candidates = _candidates(args, arrs, failures, parameters)
+    laws = [args.degradation] if args.degradation else ["linear", "exponential"]
+    record = _record(args.data, arrs, progress)
+    evaluations = _detect(arrs, record, args, progress)
+    until = _calibration_end(record, args, otherwise="")
+    # each residual's noise on the healthy stretch, even when --margin is given
+    noise = {e.name: max(robust_std(e.residual[record.t <= until]), 1e-300) for e in evaluations}
     step = float(np.median(np.diff(record.t)))
-    per_step = max(1, round((record.t[-1] - record.t[0]) / 2000 / step))  # about 2000 filter steps
-    dt = args.dt if args.dt is not None else float(f"{step * per_step:.12g}")  # 0.01, not 0.010000000000000009
+    window = args.window or default_window(3)
+    # one filter step per derivative window: the residuals it reads are then nearly independent
+    dt = args.dt if args.dt is not None else float(f"{step * window:.12g}")
     if args.dt is not None and abs(round(dt / step) * step - dt) > 1e-6 * dt:
         raise UsageError(f"--dt {dt:g}: the filter step must be a multiple of the record's step {step:g} s")
-    duration = float(record.t[-1] - record.t[0])
-    band = _rate_band(args, nominal, duration)
-    model = degradation_model(args.degradation)
-    detection = {"margin": evaluation.margin, "persistence": args.persistence}
-    if args.window:
-        detection["window"] = args.window
-    monitor = HealthMonitor(arr, args.candidate, model, theta_fail=args.fail, direction=direction, dt=dt,
-                            n_particles=args.particles, noise_std=max(residual_std, 1e-300), inflation=4.0,
-                            gamma_std=0.2 * max(abs(band[0]), abs(band[1])),
-                            adaptation=VarianceAdaptation(band=band, reference=0.02, gain=0.01, floor=1e-3),
-                            gamma_bounds=band, start="residual", prediction_walk=0.0, rul_every=args.rul_every,
-                            horizon=10.0 * duration if args.horizon is None else args.horizon, detection=detection,
-                            seed=args.seed)
-    progress(f"particle filter on {arr.name} for {args.candidate} ({args.degradation}, {args.particles} particles, "
-             f"dt = {dt:g} s)")
-    result = monitor.run(record, progress=_filter_progress(progress))
-    if result.detection_time is None:
-        print(f"{arr.name}: no alarm, so no prognosis (the filter starts at the first alarm)")
-        summary = {"candidate": args.candidate, "arr": arr.name, "detection_time": None}
-    else:
-        summary = _prognosis_summary(args, arr, result, nominal, direction, band, dt, residual_std)
-        last = summary["last"]
-        print(f"{arr.name}: alarm at t = {result.detection_time:g} s; at t = {last['t']:g} s {args.candidate} = "
-              f"{last['theta_mean']:.4g} (nominal {nominal:.4g}, failure at {args.fail:g}); RUL median "
-              f"{_fmt(last['rul_median'])} s, 5-95 % [{_fmt(last['rul_p5'])}, {_fmt(last['rul_p95'])}] s")
+    detection = {e.name: {"margin": e.margin, "persistence": args.persistence,
+                          **({"window": args.window} if args.window else {})} for e in evaluations}
+    if args.rate is not None and not (all(math.isfinite(v) for v in args.rate) and args.rate[0] < args.rate[1]):
+        raise UsageError(f"--rate {args.rate[0]:g} {args.rate[1]:g}: need two finite numbers with lo < hi")
+    monitor = IsolatingMonitor(arrs, failures, noise_std=noise, laws=laws, candidates=candidates, dt=dt,
+                               n_particles=args.particles, rate=None if args.rate is None else tuple(args.rate),
+                               rul_every=args.rul_every, horizon=args.horizon, detection=detection,
+                               healthy_until=until, seed=args.seed)
+    progress(f"particle filter from the first alarm after t = {until:g} s: {len(laws)} law(s) per candidate, "
+             f"{args.particles} particles each, dt = {dt:g} s")
+    result = monitor.run(record, evaluations=evaluations, progress=_filter_progress(progress))
+    summary = _prognosis_summary(args, result, failures, dt, noise)
+    print(_prognosis_line(result, summary))
     if args.out:
         out = _directory(args.out)
         (out / "prognosis.json").write_text(json.dumps(summary, indent=2, default=_json_value))
         written = [out / "prognosis.json"]
         if result.t.size:
-            columns = {"t": result.t, "theta_mean": result.theta["mean"], "gamma_mean": result.gamma["mean"]}
-            (out / "estimates.csv").write_text(csv_text(columns))
-            p = result.rul_percentiles((5, 50, 95))
-            (out / "rul.csv").write_text(csv_text({"t": result.rul_t, "rul_mean": result.rul_mean,
+            (out / "estimates.csv").write_text(csv_text(_estimate_columns(result)))
+            p = result.monitor_result().rul_percentiles((5, 50, 95))
+            (out / "rul.csv").write_text(csv_text({"t": result.rul_t, "rul_mean": result.monitor_result().rul_mean,
                                                     "rul_p5": p[:, 0], "rul_median": p[:, 1], "rul_p95": p[:, 2]}))
             written += [out / "estimates.csv", out / "rul.csv"]
-        written += _plots("prognosis", out, (evaluation, result), progress)
+        primary = next((e for e in result.evaluations if e.name in result.fired), result.evaluations[0])
+        best = result.monitor_result() if result.t.size else None
+        written += _plots("prognosis", out, (primary, best), progress)
         for path in written:
             print(f"wrote {path}")
     return EXIT_OK
@@ -338,58 +322,114 @@ def _filter_progress(progress: Progress, every: float = 2.0):
     return report
 
 
-def _direction(args, nominal: float) -> str:
-    fail = args.fail
-    if not math.isfinite(fail):
-        raise UsageError(f"--fail must be a finite number, got {fail}")
-    if fail == nominal:
-        raise UsageError(f"--fail {fail:g} equals the nominal value of {args.candidate!r}: the failure value must "
-                         "differ from it")
-    inferred = "up" if fail > nominal else "down"
+def _failures(args, parameters: dict) -> dict:
+    """``--fail`` as {parameter: failure value}: ``PARAM=VALUE`` items, or one VALUE for ``--candidate``."""
+    if args.candidate is not None and args.candidate not in parameters:
+        raise UsageError(f"--candidate {args.candidate!r}: the model has no such parameter "
+                         f"(parameters: {', '.join(parameters)})")
+    named = [item for item in args.fail if "=" in item]
+    bare = [item for item in args.fail if "=" not in item]
+    failures = _assignments(named, parameters, "--fail")
+    if bare:
+        if args.candidate is None or len(bare) > 1:
+            raise UsageError(f"--fail {bare[0]}: give PARAM=VALUE (repeatable), or one VALUE with --candidate")
+        failures.update(_assignments([f"{args.candidate}={bare[0]}"], parameters, "--fail"))
+    for name, value in failures.items():
+        if value == parameters[name]:
+            raise UsageError(f"--fail {name}={value:g} equals the nominal value of {name!r}: the failure value must "
+                             "differ from it")
+    return failures
+
+
+def _candidates(args, arrs: list, failures: dict, parameters: dict) -> list | None:
+    """``--candidate`` checked against the model, the failure values, the ARRs and ``--direction``; None without it."""
+    from diagnosis.signatures import signature_matrix
+
+    for name, value in failures.items():
+        if args.degradation == "exponential" and value * parameters[name] <= 0:
+            raise UsageError(f"--fail {name}={value:g}: an exponential degradation keeps the sign of {name!r} "
+                             f"(nominal {parameters[name]:g}); the failure value must have the same sign")
+    if args.candidate is None:
+        if args.direction is not None:
+            raise UsageError("--direction checks the failure value of --candidate: give --candidate too")
+        return None
+    name = args.candidate
+    if not any(name in a.parameters for a in arrs):
+        rows = signature_matrix(arrs)
+        raise UsageError(f"--candidate {name!r}: no ARR is sensitive to it, so it cannot be monitored "
+                         f"(detectable parameters: {[r for r, d in zip(rows.rows, rows.detectable) if d]})")
+    if name not in failures:
+        raise UsageError(f"--candidate {name!r}: give its failure value (--fail {name}=VALUE)")
+    inferred = "up" if failures[name] > parameters[name] else "down"
     if args.direction is not None and args.direction != inferred:
-        raise UsageError(f"--fail {fail:g} is on the wrong side of the nominal value {nominal:g} of "
-                         f"{args.candidate!r} for --direction {args.direction} (a failure value "
+        raise UsageError(f"--fail {failures[name]:g} is on the wrong side of the nominal value {parameters[name]:g} of "
+                         f"{name!r} for --direction {args.direction} (a failure value "
                          f"{'above' if args.direction == 'up' else 'below'} it is needed)")
-    if args.degradation == "exponential" and fail * nominal <= 0:
-        raise UsageError(f"--fail {fail:g}: an exponential degradation keeps the sign of {args.candidate!r} "
-                         f"(nominal {nominal:g}); the failure value must have the same sign")
-    return inferred
+    return [name]
 
 
-def _rate_band(args, nominal: float, duration: float) -> tuple[float, float]:
-    """Prior interval of the degradation rate gamma: --rate, or from reaching the failure value."""
-    if args.rate is not None:
-        lo, hi = args.rate
-        if not (math.isfinite(lo) and math.isfinite(hi) and lo < hi):
-            raise UsageError(f"--rate {lo:g} {hi:g}: need two finite numbers with lo < hi")
-        return (lo, hi)
-    # fast enough to reach the failure value within a tenth of the record, at the most
-    if args.degradation == "exponential":
-        fastest = abs(math.log(args.fail / nominal)) / (0.1 * duration)
-    else:
-        fastest = abs(args.fail - nominal) / (0.1 * duration)
-    return (0.0, fastest) if args.fail > nominal else (-fastest, 0.0)
-
-
-def _prognosis_summary(args, arr, result, nominal, direction, band, dt, residual_std) -> dict:
-    rows = []
-    percentiles = result.rul_percentiles((5, 50, 95))
+def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> dict:
+    """What ``prognosis.json`` holds: the decision, the evidence, the predictions and the settings."""
+    decision = result.decision
+    summary = {"detection_time": result.detection_time, "fired": result.fired, "candidates": result.candidates,
+               "indistinguishable": [g for g in result.groups if len(g) > 1], "arrs": result.arrs,
+               "candidate": None if decision is None else decision.candidate,
+               "status": "no alarm" if result.detection_time is None else (
+                   "no candidate" if decision is None else decision.status),
+               "degradation": None if decision is None else decision.degradation,
+               "failure_values": failures, "filter_step": dt, "particles_per_hypothesis": args.particles,
+               "residual_noise_std": noise, "seed": args.seed, "evidence": {}, "predictions": [], "decisions": []}
+    if decision is None:
+        return summary
+    summary.update({"candidate_ratio": _finite(min(decision.candidate_ratio, 1e300)),
+                    "degradation_decided": decision.degradation_decided,
+                    "degradation_ratio": _finite(min(decision.degradation_ratio, 1e300))})
+    for row, h in enumerate(result.hypotheses):
+        summary["evidence"][h.name] = {"log_evidence": _finite(result.log_evidence[-1, row]),
+                                       "probability": decision.probabilities[h.name],
+                                       "rejected": result.rejected.get(h.name),
+                                       "theta_mean": float(result.theta["mean"][-1, row]),
+                                       "gamma_mean": float(result.gamma["mean"][-1, row])}
+    best = result.monitor_result()
+    percentiles = best.rul_percentiles((5, 50, 95))
     for k, t in enumerate(result.rul_t):
-        rows.append({"t": float(t), "rul_mean": _finite(result.rul_mean[k]), "rul_p5": _finite(percentiles[k, 0]),
-                     "rul_median": _finite(percentiles[k, 1]), "rul_p95": _finite(percentiles[k, 2]),
-                     "censored": float(result.rul[k].censored_weight[0])})
-    last = rows[-1] if rows else {"t": float(result.t[-1]), "rul_mean": None, "rul_p5": None, "rul_median": None,
-                                  "rul_p95": None, "censored": None}
-    last = {**last, "theta_mean": float(result.theta["mean"][-1]), "gamma_mean": float(result.gamma["mean"][-1])}
-    final = result.rul[-1] if result.rul else None
-    return {"candidate": args.candidate, "arr": arr.name, "degradation": args.degradation,
-            "nominal": nominal, "failure_value": args.fail, "direction": direction,
-            "detection_time": result.detection_time, "filter_step": dt, "particles": args.particles,
-            "rate_band": list(band), "residual_noise_std": residual_std, "seed": args.seed,
-            "last": last, "predictions": rows,
-            "rul_samples_last": None if final is None else [_finite(v) for v in final.samples[0]],
-            "rul_weights_last": None if final is None else final.weights[0].tolist(),
-            "degenerate_steps": list(map(float, result.degenerate_steps))}
+        summary["predictions"].append({
+            "t": float(t), "rul_mean": _finite(best.rul_mean[k]), "rul_p5": _finite(percentiles[k, 0]),
+            "rul_median": _finite(percentiles[k, 1]), "rul_p95": _finite(percentiles[k, 2]),
+            "censored": float(result.rul[k].censored_weight[0])})
+        d = result.decisions[k]
+        summary["decisions"].append({"t": float(t), "candidate": d.candidate, "status": d.status,
+                                     "degradation": d.degradation})
+    top = result.index(max(decision.probabilities, key=decision.probabilities.get))
+    summary["last"] = {**(summary["predictions"][-1] if summary["predictions"] else {"t": float(result.t[-1])}),
+                       "hypothesis": result.hypotheses[top].name,
+                       "theta_mean": float(result.theta["mean"][-1, top]),
+                       "gamma_mean": float(result.gamma["mean"][-1, top])}
+    return summary
+
+
+def _prognosis_line(result, summary: dict) -> str:
+    if result.detection_time is None:
+        return "no alarm, so no prognosis (the filter starts at the first alarm)"
+    head = f"alarm at t = {result.detection_time:g} s ({', '.join(result.fired)})"
+    if summary["candidate"] is None:
+        why = ("no parameter with a failure value is sensitive to every ARR that fired" if not result.candidates
+               else "every hypothesis was rejected: " + "; ".join(result.rejected.values()))
+        return f"{head}; {why}"
+    last = summary["last"]
+    law = summary["degradation"] + ("" if summary["degradation_decided"] else " (undecided)")
+    return (f"{head}; candidate {summary['candidate']} ({summary['status']}), degradation {law}; at t = "
+            f"{last['t']:g} s RUL median {_fmt(last['rul_median'])} s, 5-95 % [{_fmt(last['rul_p5'])}, "
+            f"{_fmt(last['rul_p95'])}] s")
+
+
+def _estimate_columns(result) -> dict:
+    columns = {"t": result.t}
+    for row, h in enumerate(result.hypotheses):
+        columns[f"{h.name}.theta_mean"] = result.theta["mean"][:, row]
+        columns[f"{h.name}.gamma_mean"] = result.gamma["mean"][:, row]
+        columns[f"{h.name}.log_evidence"] = result.log_evidence[:, row]
+    return columns
 
 
 def _plots(kind: str, out: Path, payload, progress: Progress) -> list[Path]:
@@ -415,7 +455,7 @@ def _plots(kind: str, out: Path, payload, progress: Progress) -> list[Path]:
         fig, ax = plt.subplots(figsize=(8, 3.5))
         plotting.plot_evaluation(evaluation, ax=ax, title=evaluation.name)
         paths.append(plotting.save_figure(fig, out / f"residual_{evaluation.name}.png"))
-        if result.t.size:
+        if result is not None and result.t.size:
             fig, ax = plt.subplots(figsize=(8, 3.5))
             plotting.plot_estimate(result, ax=ax)
             paths.append(plotting.save_figure(fig, out / "estimate.png"))
@@ -536,16 +576,22 @@ def build_parser() -> argparse.ArgumentParser:
                             "of the noise is larger than the integral's random walk)")
         p.add_argument("--out", help="output directory")
         p.set_defaults(run=cmd_detect if name == "detect" else cmd_prognose)
-    p.add_argument("--candidate", required=True, help="the degrading parameter (a model parameter)")
-    p.add_argument("--degradation", required=True, choices=("exponential", "linear"), help="degradation model")
-    p.add_argument("--fail", type=float, required=True, help="failure value of the candidate")
-    p.add_argument("--direction", choices=("up", "down"), help="check that --fail lies on this side of nominal")
+    p.add_argument("--fail", action="append", required=True, metavar="PARAM=VALUE",
+                   help="failure value of a parameter that can fail (repeatable); the candidates are those whose "
+                        "signature matches the ARRs that fired")
+    p.add_argument("--candidate", help="only this candidate (it needs a failure value; a bare --fail VALUE is its)")
+    p.add_argument("--degradation", choices=("exponential", "linear"),
+                   help="only this law (default: linear and exponential compete on evidence)")
+    p.add_argument("--direction", choices=("up", "down"), help="check that --candidate's failure value lies on "
+                   "this side of nominal")
     p.add_argument("--rate", type=float, nargs=2, metavar=("LO", "HI"),
-                   help="prior interval of the degradation rate (default: from --fail and the record length)")
-    p.add_argument("--particles", type=int, default=500, help="particles (default 500)")
-    p.add_argument("--dt", type=float, help="filter step in s, a multiple of the record's (default: ~2000 steps)")
+                   help="uniform prior interval of the rate (default: the life from nominal to failure "
+                        "log-uniform over 10 to 1e5 filter steps)")
+    p.add_argument("--particles", type=int, default=500, help="particles per hypothesis (default 500)")
+    p.add_argument("--dt", type=float, help="filter step in s, a multiple of the record's (default: one "
+                   "derivative window of samples)")
     p.add_argument("--rul-every", type=int, default=10, help="predict the RUL every N filter steps (default 10)")
-    p.add_argument("--horizon", type=float, help="RUL horizon cap in s (default 10 x the record length)")
+    p.add_argument("--horizon", type=float, help="RUL horizon cap in s (default 2000 filter steps)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
 
     from bgphm.demo import DEMOS

@@ -71,6 +71,7 @@ class Demo:
     inputs: dict = field(default_factory=dict)  # overrides of the example's inputs (numbers)
     persistence: int | None = None  # consecutive violations for an alarm (None: the CLI's default)
     integrals: str = "avoid"  # the CLI's --integrals
+    dt: float | None = None  # the CLI's --dt (None: its default, one derivative window of samples)
     description: str = ""
 
     def theta(self, nominal: float):
@@ -95,7 +96,7 @@ DEMOS = {
                         noise={"omega_m": 1e-3, "omega_Ld": 1e-3}, calibrate=9.5, particles=200,
                         # the paper's form (eq. 45): at 1 kHz a second derivative of 1e-3 rad/s noise is about
                         # 30 rad/s^3, while over 90 s the integral's random walk stays near 3e-4 rad
-                        integrals="keep",
+                        integrals="keep", dt=0.1,  # the filter step of Jha et al. (2016)
                         description="load-disk bearing friction b_Ld x90, PI speed loop, rate of Jha et al. (2016)"),
     "three-tank": Demo("three-tank", "az2", rate=2e-3, onset=200.0, fail_factor=2.0, t_end=500.0, samples=501,
                        noise={"h1": 2e-4, "h2": 2e-4, "h3": 2e-4}, calibrate=190.0, particles=500,
@@ -229,8 +230,8 @@ def _commands(demo: Demo, model_path: Path, data_path: Path, fail: float, out: P
     return [
         ["arr", model, "--format", "html", "--out", str(out / "report.html")],
         ["detect", model, data, *detection, "--out", str(out / "detect")],
-        ["prognose", model, data, "--candidate", demo.candidate, "--degradation", "exponential",
-         "--fail", f"{fail:.6g}", *detection, "--particles", str(demo.particles), "--seed", str(seed),
+        ["prognose", model, data, "--fail", f"{demo.candidate}={fail:.6g}", *detection,
+         "--particles", str(demo.particles), *(["--dt", f"{demo.dt:g}"] if demo.dt else []), "--seed", str(seed),
          "--out", str(out / "prognose")],
     ]
 

@@ -200,6 +200,7 @@ def simulate_case(case: Case, t_end: float | None = None) -> Scenario:
     t_end = case.t_end if t_end is None else t_end
     every = 10
     t_eval = np.arange(0.0, t_end + DT_RECORD / (2 * every), DT_RECORD / every)
+    t_end = max(t_end, float(t_eval[-1]))  # the last point may overshoot by a rounding error
     runs = [simulate(equations, (0.0, t_end), {"U": torsion_bar_controller()}, t_eval=t_eval, parameters=parameters)
             for parameters in ({}, {case.candidate: case.truth})]
     k_belt = TORSION_BAR["k_belt"][0]

@@ -79,6 +79,10 @@ class VarianceAdaptation:
         """Forget the stored means of gamma, so that the moving average (eq. 36) starts afresh."""
         self._means = deque(maxlen=self.window + 1)
 
+    def shrink(self, gamma: np.ndarray) -> np.ndarray:
+        """``gamma`` unchanged: the random walk of Table III moves no particle toward the mean."""
+        return gamma
+
     def __call__(self, gamma: np.ndarray, weights: np.ndarray, variance: np.ndarray,
                  initial: np.ndarray) -> np.ndarray:
         """New variance (A, G) from particles ``gamma`` (A, N, G) and their weights (A, N)."""
@@ -93,6 +97,68 @@ class VarianceAdaptation:
         factor = 1.0 - self.gain * (spread - self.reference) / self.reference
         adapted = np.clip(variance * np.nan_to_num(factor, nan=1.0), self.floor * initial, initial)
         return np.where(inside, adapted, initial)
+
+
+@dataclass
+class KernelSmoothing:
+    """Kernel shrinkage of the constant rate gamma (Liu and West (2001)), the default adaptation.
+
+    A degradation law with a constant rate makes gamma a static parameter; a plain random walk on it
+    widens its posterior at every step, and Table III's band control resets the walk to its initial
+    variance whenever the mean of gamma leaves the band, so it can oscillate (a true rate on or
+    beyond the band's edge).  Kernel smoothing keeps the particles' mean and variance instead:
+    before each move, every particle is pulled toward the weighted mean, then jittered,
+
+        gamma_i <- a gamma_i + (1 - a) mean + N(0, (1 - a^2) var),   a = (3 delta - 1) / (2 delta),
+
+    so the cloud's variance is unchanged by the move (no artificial growth, no reset, nothing to
+    oscillate), while the jitter keeps the resampled particles distinct.  ``discount`` (delta,
+    0.95-0.99 in Liu and West (2001)) sets how much of the spread is renewed per step.  ``floor``
+    keeps the jitter's standard deviation at least that fraction of ``|mean|``, so that a
+    collapsed cloud can still move.
+
+    Examples
+    --------
+    The move keeps the mean (0.5) and shrinks each particle a tenth of the way toward it
+    (discount 0.9 gives a = 0.944):
+
+    >>> smoothing = KernelSmoothing(discount=0.9)
+    >>> gamma, weights = np.array([[[0.4], [0.5], [0.6]]]), np.full((1, 3), 1 / 3)
+    >>> variance = smoothing(gamma, weights, None, None)   # after a filter step: the jitter's variance
+    >>> smoothing.shrink(gamma).round(4).ravel().tolist()
+    [0.4056, 0.5, 0.5944]
+    >>> bool(np.isclose(variance[0, 0], (1 - smoothing.shrinkage**2) * np.var(gamma)))
+    True
+    """
+
+    discount: float = 0.98
+    floor: float = 1e-3
+    _mean: np.ndarray = field(default=None, init=False, repr=False)
+
+    def __post_init__(self):
+        if not 1 / 3 < self.discount <= 1:
+            raise ValueError(f"discount must lie in (1/3, 1], got {self.discount}")
+
+    @property
+    def shrinkage(self) -> float:
+        """``a = (3 delta - 1) / (2 delta)``."""
+        return (3 * self.discount - 1) / (2 * self.discount)
+
+    def reset(self) -> None:
+        """Forget the stored mean (the first move uses the initial particles' plain mean)."""
+        self._mean = None
+
+    def shrink(self, gamma: np.ndarray) -> np.ndarray:
+        """Particles ``gamma`` (A, N, G) pulled toward the mean of the last :meth:`__call__`."""
+        mean = np.mean(gamma, axis=1) if self._mean is None else self._mean
+        a = self.shrinkage
+        return a * gamma + (1 - a) * mean[:, None, :]
+
+    def __call__(self, gamma: np.ndarray, weights: np.ndarray, variance, initial) -> np.ndarray:
+        """The jitter's variance (A, G) for the next move; ``variance`` and ``initial`` are not used."""
+        self._mean = np.einsum("an,ang->ag", weights, gamma)
+        spread = np.einsum("an,ang->ag", weights, np.square(gamma - self._mean[:, None, :]))
+        return np.maximum((1 - self.shrinkage**2) * spread, np.square(self.floor * self._mean))
 
 
 def _spread(values: np.ndarray, weights: np.ndarray) -> np.ndarray:
@@ -197,7 +263,7 @@ class ParticleFilter:
         self.resample = get_scheme(resampling)
         self.resample_below = resample_below
         self.rng = np.random.default_rng(seed)
-        self.theta = self.gamma = self.log_weights = self.variance = None
+        self.theta = self.gamma = self.log_weights = self.variance = self.log_evidence = None
 
     def initialize(self, theta_bounds, gamma0=0.0, assets: int = 1, gamma_bounds=None) -> None:
         """Particles at detection: theta ~ U(lo, hi) per asset (eq. 39), gamma = gamma0.
@@ -210,15 +276,15 @@ class ParticleFilter:
             raise ValueError(f"theta bounds have lo > hi: {theta_bounds}")
         self.theta = lo[:, None] + (hi - lo)[:, None] * self.rng.random((assets, self.n))
         shape = (assets, self.n, self.model.n_gamma)
-        if gamma_bounds is None:
-            gamma0 = np.broadcast_to(np.asarray(gamma0, float), (self.model.n_gamma,))
-            self.gamma = np.broadcast_to(gamma0, shape).copy()
+        if gamma_bounds is None:  # gamma0: a value per gamma (G,), or the particles themselves (A, N, G)
+            self.gamma = np.broadcast_to(np.asarray(gamma0, float), shape).copy()
         else:
             g_lo, g_hi = (np.broadcast_to(np.asarray(b, float), (self.model.n_gamma,)) for b in gamma_bounds)
             if np.any(g_lo > g_hi):
                 raise ValueError(f"gamma bounds have lo > hi: {gamma_bounds}")
             self.gamma = g_lo + (g_hi - g_lo) * self.rng.random(shape)
         self.log_weights = np.full((assets, self.n), -np.log(self.n))
+        self.log_evidence = np.zeros(assets)
         self.variance = np.broadcast_to(self.initial_variance, (assets, self.model.n_gamma)).copy()
         if self.adaptation is not None:
             self.adaptation.reset()
@@ -240,17 +306,25 @@ class ParticleFilter:
         return self.theta
 
     def step(self, y, points=()) -> StepDiagnostics:
-        """One predict-update-resample-adapt cycle with measurement ``y`` (A,) and point values."""
+        """One predict-update-resample-adapt cycle with measurement ``y`` and point values.
+
+        ``y`` is one measurement per asset (A,), or M per asset (A, M) when the observation returns
+        (A, N, M) (several residuals; ``noise_std`` then (M,) or (A, M)).  NaN entries are skipped.
+        The log of the evidence increment p(y_k | y_1..k-1), summed into :attr:`log_evidence`, is
+        the log of the sum of the updated weights (the stored weights are normalized), with the
+        Gaussian's normalizing constant.
+        """
         self._initialized()
-        y = np.broadcast_to(np.asarray(y, float), (self.assets,))
+        y = np.asarray(y, float)
+        y = y if y.ndim == 2 else np.broadcast_to(y, (self.assets,))
         self._predict()
-        updated = np.isfinite(y)
+        finite = np.isfinite(y)
+        updated = finite.any(axis=1) if y.ndim == 2 else finite
         if updated.any():
-            predicted = self.observation(self.theta, points)
-            variance = self.inflation * np.square(np.broadcast_to(np.asarray(self.noise_std, float), (self.assets,)))
-            log_likelihood = -0.5 * np.square(y[:, None] - predicted) / variance[:, None]
+            log_likelihood = self._log_likelihood(y, finite, self.observation(self.theta, points))
             self.log_weights = np.where(updated[:, None], self.log_weights + log_likelihood, self.log_weights)
-        weights, _, degenerate = normalize_log_weights(self.log_weights)
+        weights, log_sum, degenerate = normalize_log_weights(self.log_weights)
+        self.log_evidence = self.log_evidence + np.where(updated, log_sum + self._log_constant(y, finite), 0.0)
         ess = effective_sample_size(weights)
         resampled = (ess < self.resample_below * self.n) | (self.resample_below >= 1.0) | degenerate
         if resampled.any():
@@ -261,10 +335,29 @@ class ParticleFilter:
             self.variance = self.adaptation(self.gamma, weights, self.variance, self.initial_variance)
         return StepDiagnostics(updated, ess, resampled, degenerate)
 
+    def _log_likelihood(self, y: np.ndarray, finite: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        """Gaussian log-likelihood (A, N) of each particle, with inflated variance c sigma_w^2."""
+        variance = self.inflation * np.square(np.broadcast_to(np.asarray(self.noise_std, float), y.shape))
+        gap = np.where(finite, y, 0.0)[:, None, ...] - predicted
+        terms = -0.5 * np.square(gap) / variance[:, None, ...]
+        if y.ndim == 2:
+            return np.sum(np.where(finite[:, None, :], terms, 0.0), axis=-1)
+        return terms
+
+    def _log_constant(self, y: np.ndarray, finite: np.ndarray) -> np.ndarray:
+        """The Gaussian's normalizing constant, log of 1 / sqrt(2 pi c sigma_w^2) per used measurement, (A,).
+
+        Kept out of the weights (it is the same for every particle of an asset), added to the evidence.
+        """
+        variance = self.inflation * np.square(np.broadcast_to(np.asarray(self.noise_std, float), y.shape))
+        constant = np.where(finite, -0.5 * np.log(2 * np.pi * variance), 0.0)
+        return constant.sum(axis=1) if y.ndim == 2 else constant
+
     def _predict(self) -> None:
         noise = self.rng.standard_normal(self.theta.shape) * self.model.process_noise
         theta = self.model.step(self.theta, self.gamma, self.dt) + noise  # uses gamma_{k-1}
-        self.gamma = self.gamma + self.rng.standard_normal(self.gamma.shape) * np.sqrt(self.variance)[:, None, :]
+        gamma = self.gamma if self.adaptation is None else self.adaptation.shrink(self.gamma)
+        self.gamma = gamma + self.rng.standard_normal(self.gamma.shape) * np.sqrt(self.variance)[:, None, :]
         self.theta = theta
 
     def _resample(self, weights: np.ndarray, rows: np.ndarray) -> None:

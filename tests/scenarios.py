@@ -50,8 +50,8 @@ def torsion_bar_sensors(result, bg, every: int = 1) -> dict:
     return {name: values[::every] for name, values in columns.items()}
 
 
-def torsion_bar_b_md(t_end: float = 30.0) -> dict:
-    """Noise-free sensor record of the full torsion bar under PI control with b_Md degrading (``b_md_truth``).
+def torsion_bar_b_md(t_end: float = 30.0, truth=b_md_truth) -> dict:
+    """Noise-free sensor record of the full torsion bar under PI control with b_Md following ``truth(t)``.
 
     The solver output is taken every ``TORSION_DT / 10`` so that the encoder angles come from an accurate
     integral of the speeds; the record is then sampled every ``TORSION_DT``.
@@ -60,9 +60,16 @@ def torsion_bar_b_md(t_end: float = 30.0) -> dict:
     equations = full.state_equations(full.assign_causality("integral"))
     every = 10
     t_eval = np.arange(0.0, t_end + TORSION_DT / (2 * every), TORSION_DT / every)
+    t_end = max(t_end, float(t_eval[-1]))  # the last point may overshoot by a rounding error
     run = simulate(equations, (0.0, t_end), {"U": torsion_bar_controller()}, t_eval=t_eval,
-                   parameters={"b_Md": b_md_truth})
+                   parameters={"b_Md": truth})
     return torsion_bar_sensors(run, full, every)
+
+
+def b_md_linear(gamma: float, onset: float):
+    """b_Md,n + gamma (t - onset) from ``onset`` (the linear law of Jha et al. (2016), eq. 60, on b_Md)."""
+    nominal = TORSION_BAR["b_Md"][0]
+    return lambda t: nominal + gamma * max(0.0, float(t) - onset)
 
 
 # -- the three tanks of Du et al. ---------------------------------------------------------------------------

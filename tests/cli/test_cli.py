@@ -344,7 +344,8 @@ def test_demo_runs_the_chain_and_predicts_the_injected_end_of_life(tmp_path, cap
     truth = json.loads((tmp_path / "truth.json").read_text())
     summary = json.loads((tmp_path / "prognose" / "prognosis.json").read_text())
     assert truth["onset"] < summary["detection_time"] < truth["eol"]
-    assert summary["filter_step"] == 0.002  # 2 record steps of 1 ms, written without float dust
+    assert summary["filter_step"] == 0.011  # a derivative window of 11 samples of 1 ms, without float dust
+    assert summary["candidate"] == "b" and summary["degradation"] in ("linear", "exponential")
     last = summary["last"]
     true_rul = truth["eol"] - last["t"]
     assert last["rul_p5"] <= true_rul <= last["rul_p95"]

@@ -1,0 +1,232 @@
+"""Fault hypotheses for prognosis: which parameter is degrading, by which law, and what tells them apart.
+
+A user knows the model, the data, a fault-free stretch and when each parameter counts as failed
+(its *failure value*).  From that alone:
+
+* :func:`signature_candidates`: the parameters with a failure value that every fired ARR is
+  sensitive to (single fault: an ARR that fired and is blind to a parameter rules it out);
+* :func:`indistinguishable_groups`: candidates whose effect on every residual is the same up to a
+  constant factor (for example a viscous friction before and after a belt, ``f_m omega_m`` and
+  ``b_Md omega_m / k_belt^2``): no record can tell them apart, so they are reported together;
+* :class:`Hypothesis`: a candidate, a degradation law and the failure value, with its physical
+  domain (:func:`physical_domain`) and a prior on its rate that needs nothing of the truth
+  (:func:`rate_prior`);
+* :class:`HypothesisObservation`: what each hypothesis predicts for every residual, batched over
+  hypotheses (rows) and particles, so that one particle filter weighs them all.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Iterable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from .observation import observation_model
+
+__all__ = ["Hypothesis", "HypothesisObservation", "indistinguishable_groups", "physical_domain", "rate_prior",
+           "sensitivity", "signature_candidates"]
+
+LIFE_PRIOR = (10.0, 1e5)  # filter steps: the life from nominal to failure, log-uniform between these
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    """``candidate`` degrades by the law ``law`` and fails at ``failure``.
+
+    Examples
+    --------
+    >>> h = Hypothesis("b_Md", "linear", failure=0.3, nominal=0.005)
+    >>> h.name, h.direction, h.domain
+    ('b_Md/linear', 'up', (0.0, inf))
+    """
+
+    candidate: str
+    law: str
+    failure: float
+    nominal: float
+
+    @property
+    def name(self) -> str:
+        return f"{self.candidate}/{self.law}"
+
+    @property
+    def direction(self) -> str:
+        """``"up"`` when the failure value lies above the nominal value, else ``"down"``."""
+        return "up" if self.failure > self.nominal else "down"
+
+    @property
+    def domain(self) -> tuple[float, float]:
+        return physical_domain(self.nominal)
+
+
+def physical_domain(nominal: float) -> tuple[float, float]:
+    """Where a parameter can lie: it keeps the sign of its nominal value.
+
+    Masses, inertias, compliances, frictions, resistances and moduli are positive; a parameter
+    whose nominal value is negative stays negative; a zero nominal value leaves it free.
+
+    >>> physical_domain(1.5e-3), physical_domain(-2.0), physical_domain(0.0)
+    ((0.0, inf), (-inf, 0.0), (-inf, inf))
+    """
+    if nominal > 0:
+        return (0.0, math.inf)
+    if nominal < 0:
+        return (-math.inf, 0.0)
+    return (-math.inf, math.inf)
+
+
+def rate_prior(hypothesis: Hypothesis, dt: float, particles: int, rng: np.random.Generator,
+               life: tuple[float, float] = LIFE_PRIOR) -> np.ndarray:
+    """Initial rate particles (particles,): the life from nominal to failure log-uniform over ``life`` steps.
+
+    The rate is the one that takes the parameter from its nominal value to its failure value in
+    that life: ``(failure - nominal) / T`` for the linear law, ``log(failure / nominal) / T`` for the
+    exponential one, so both laws get the same prior on the life, and nothing comes from the
+    simulated truth or the record's length.  Other laws get the linear law's rate.
+
+    >>> h = Hypothesis("R", "exponential", failure=2.0, nominal=1.0)
+    >>> gamma = rate_prior(h, dt=0.1, particles=1000, rng=np.random.default_rng(0))
+    >>> bool(np.all(gamma > 0)), bool(gamma.min() >= np.log(2) / 1e4), bool(gamma.max() <= np.log(2) / 1.0)
+    (True, True, True)
+    """
+    lo, hi = life
+    steps = np.exp(rng.uniform(np.log(lo), np.log(hi), particles))
+    distance = (math.log(hypothesis.failure / hypothesis.nominal) if hypothesis.law == "exponential"
+                else hypothesis.failure - hypothesis.nominal)
+    return distance / (steps * dt)
+
+
+def signature_candidates(arrs: Sequence, failures: Mapping[str, float], fired: Iterable[str]) -> list[str]:
+    """Parameters with a failure value that every fired ARR is sensitive to, in the order of ``failures``.
+
+    Under a single fault, an ARR that fired and does not contain a parameter rules that parameter
+    out; an ARR that stayed quiet rules nothing out by itself (a weak effect may stay within the
+    thresholds), but the estimation then weighs it (:class:`HypothesisObservation` predicts every
+    residual).
+
+    >>> from bondgraph.library import torsion_bar_monitorable
+    >>> from diagnosis import derive_arrs
+    >>> arrs = derive_arrs(torsion_bar_monitorable())
+    >>> signature_candidates(arrs, {"b_Md": 0.3, "b_Ld": 1e-3, "k_s": 1.0}, fired=["ARR_MSO_1"])
+    ['b_Md', 'b_Ld']
+    """
+    fired = set(fired)
+    by_name = {a.name: a for a in arrs}
+    unknown = sorted(fired - set(by_name))
+    if unknown:
+        raise ValueError(f"no ARR named {unknown[0]!r} (ARRs: {', '.join(by_name)})")
+    return [p for p in failures if all(p in by_name[name].parameters for name in fired)]
+
+
+def indistinguishable_groups(arrs: Sequence, candidates: Sequence[str], *, rtol: float = 1e-5,
+                             probes: int = 8, seed: int = 0) -> list[list[str]]:
+    """Candidates grouped when their effect on every residual is the same up to one constant factor.
+
+    Two parameters are indistinguishable (at their nominal values) when the sensitivities of the
+    residuals to them, ``d r_n / d theta``, are proportional with one constant ratio over every ARR:
+    any change of one is then explained, sample by sample, by a change of the other.  The
+    sensitivities are compared at ``probes`` random values of each ARR's signals, derivatives and
+    integrals (central differences), not on a record, so the answer does not depend on how much a
+    record excites the system: two analytic functions whose ratio is the same at random points
+    have a constant ratio.
+
+    Examples
+    --------
+    The motor's viscous friction before the belt (``f_m``) and the motor disk's after it (``b_Md``)
+    act through ``omega_m`` alone, as do the two inertias:
+
+    >>> from bondgraph.library import torsion_bar_monitorable
+    >>> from diagnosis import derive_arrs
+    >>> arrs = derive_arrs(torsion_bar_monitorable())
+    >>> indistinguishable_groups(arrs, ["b_Md", "J_Md", "f_m", "J_m", "b_Ld"])
+    [['b_Md', 'f_m'], ['J_Md', 'J_m'], ['b_Ld']]
+    """
+    rng = np.random.default_rng(seed)
+    sensitivities = {c: [] for c in candidates}
+    for arr in arrs:
+        points = [rng.uniform(0.5, 2.0, probes) for _ in arr.compiled.points]
+        for c in candidates:
+            slope = (sensitivity(observation_model(arr, c), points) if c in arr.parameters else np.zeros(probes))
+            sensitivities[c].append(slope)
+    vectors = {c: np.concatenate(v) for c, v in sensitivities.items()}
+    groups: list[list[str]] = []
+    for candidate in candidates:
+        for group in groups:
+            if _proportional(vectors[group[0]], vectors[candidate], rtol):
+                group.append(candidate)
+                break
+        else:
+            groups.append([candidate])
+    return groups
+
+
+def sensitivity(observation, points: list) -> np.ndarray:
+    """``d y / d theta`` at the nominal value at each of the points (central difference).
+
+    ``observation`` is an :class:`~prognosis.observation.ObservationModel`; ``points`` its ARR's point
+    values, one array (K,) per point.
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> from prognosis.observation import observation_model
+    >>> h = observation_model(derive_arrs(rlc_circuit(), complete=False, integrals="keep")[0], "R")
+    >>> sensitivity(h, [np.ones(2), np.array([0.5, 2.0]), np.zeros(2), np.zeros(2)]).round(6).tolist()   # -i
+    [-0.5, -2.0]
+    """
+    nominal = observation.nominal
+    step = 1e-6 * (abs(nominal) or 1.0)
+    at = np.array([nominal - step, nominal + step])
+    values = [np.asarray(p, float)[:, None] for p in points]
+    size = len(np.atleast_1d(points[0])) if points else 1
+    y = np.broadcast_to(np.asarray(observation.function()(at[None, :], *values), float), (size, 2))
+    return (y[:, 1] - y[:, 0]) / (2 * step)
+
+
+def _proportional(first: np.ndarray, second: np.ndarray, rtol: float) -> bool:
+    """One constant ratio between two sensitivity vectors (zero exactly where the other is zero)."""
+    if not (np.all(np.isfinite(first)) and np.all(np.isfinite(second))):
+        return False
+    scale = max(np.max(np.abs(first)), 1e-300)
+    zero_a, zero_b = np.abs(first) <= 1e-12 * scale, np.abs(second) <= 1e-12 * max(np.max(np.abs(second)), 1e-300)
+    if np.any(zero_a != zero_b) or np.all(zero_a):
+        return False
+    ratio = second[~zero_a] / first[~zero_a]
+    return bool(np.all(np.abs(ratio - ratio[0]) <= rtol * abs(ratio[0])))
+
+
+class HypothesisObservation:
+    """What each hypothesis predicts for every residual: ``y_m = h_m(theta)`` for row ``h``, ARR ``m``.
+
+    Row ``h`` of the particles is hypothesis ``hypotheses[h]``; an ARR blind to its candidate
+    predicts 0 (the residual stays at its healthy level), so an ARR that stays quiet counts
+    against a hypothesis that would move it.  Called with ``theta`` (H, N) and ``points``, one
+    list of point values per ARR (the order of each ARR's compiled points), it returns (H, N, M).
+
+    Examples
+    --------
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> arrs = derive_arrs(rlc_circuit(), complete=False, integrals="keep")[:1]   # the loop's ARR
+    >>> h = HypothesisObservation(arrs, [Hypothesis("R", "linear", 20.0, 10.0)])
+    >>> h(np.array([[9.0, 11.0]]), [[1.0, 0.5, 0.0, 0.0]]).tolist()   # y = -(R - R_n) i, i = 0.5 A
+    [[[0.5], [-0.5]]]
+    """
+
+    def __init__(self, arrs: Sequence, hypotheses: Sequence[Hypothesis]):
+        self.arrs, self.hypotheses = list(arrs), list(hypotheses)
+        models = {}
+        for h in self.hypotheses:
+            if h.candidate not in models:
+                models[h.candidate] = [observation_model(a, h.candidate) if h.candidate in a.parameters else None
+                                       for a in self.arrs]
+        self.models = [models[h.candidate] for h in self.hypotheses]
+
+    def __call__(self, theta: np.ndarray, points) -> np.ndarray:
+        out = np.zeros((*np.shape(theta), len(self.arrs)))
+        for row, models in enumerate(self.models):
+            for m, model in enumerate(models):
+                if model is not None:
+                    out[row, :, m] = model(theta[row], points[m])
+        return out

@@ -1,0 +1,501 @@
+"""Isolation by estimation: which parameter degrades, by which law, and its RUL, weighed by evidence.
+
+:class:`IsolatingMonitor` needs what a user knows: the ARRs, the record, the residuals' noise on a
+fault-free stretch, and the failure value of each parameter that can fail.  At the first alarm
+
+1. the candidates are the parameters with a failure value that every fired ARR is sensitive to
+   (:func:`~prognosis.hypotheses.signature_candidates`);
+2. every candidate with every degradation law is a hypothesis; all of them run as the rows of one
+   vectorized particle filter (:class:`~prognosis.particle_filter.ParticleFilter`), each
+   predicting every residual an ARR sensitive to a candidate gives
+   (:class:`~prognosis.hypotheses.HypothesisObservation`), its rate drawn from a prior on the life
+   (:func:`~prognosis.hypotheses.rate_prior`) and kept by kernel smoothing
+   (:class:`~prognosis.particle_filter.KernelSmoothing`);
+3. each hypothesis accumulates its evidence, the filter's estimate of log p(y_1..k); a hypothesis
+   whose estimate leaves its physical domain (a negative inertia) is rejected with the reason;
+4. :func:`decide` ranks them: a candidate (and a law) is declared when its evidence beats every
+   other by ``min_ratio``; candidates with the same effect on every residual
+   (:func:`~prognosis.hypotheses.indistinguishable_groups`) are reported together;
+5. the RUL is the mixture of the hypotheses' predictions weighted by their posterior probability
+   (Bayesian model averaging), so an undecided law or candidate widens the prediction instead of
+   being chosen at random.
+
+The decision can change while data come in: it is made again at every RUL prediction.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .degradation import PerAssetDegradation, degradation_model
+from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, rate_prior,
+                         sensitivity, signature_candidates)
+from .monitor import MonitorResult
+from .observation import observation_model
+from .particle_filter import KernelSmoothing, ParticleFilter
+from .rul import RULDistribution, RULPredictor
+
+__all__ = ["Decision", "IsolatingMonitor", "IsolationResult", "decide"]
+
+EVIDENCE_RATIO = 100.0  # "decisive" on Jeffreys' scale: a hypothesis is declared beyond this ratio
+MIXTURE_FLOOR = 1e-3  # hypotheses less probable than this are left out of the RUL mixture
+PROCESS_NOISE = 0.1  # sigma_v per filter step, as a fraction of the candidate's resolution per sample
+HORIZON_STEPS = 2000  # RUL horizon cap in filter steps, unless given
+
+
+@dataclass(frozen=True)
+class Decision:
+    """What the evidence says at one time.
+
+    Attributes
+    ----------
+    candidate : str, list of str or None
+        The isolated parameter; a list when several are indistinguishable (``status``
+        ``"indistinguishable"``) or not yet told apart (``"undecided"``); None if every hypothesis
+        was rejected.
+    status : {"isolated", "indistinguishable", "undecided", "rejected"}
+    candidate_ratio : float
+        Evidence ratio of the reported candidate(s) over the best other one (inf when alone).
+    degradation : str or None
+        The law with the most evidence for the reported candidate(s).
+    degradation_decided : bool
+        Its ratio over the next law reaches the minimum ratio.
+    degradation_ratio : float
+    probabilities : dict
+        Posterior probability of each hypothesis (``"candidate/law"``), uniform prior.
+    """
+
+    candidate: str | list | None
+    status: str
+    candidate_ratio: float
+    degradation: str | None
+    degradation_decided: bool
+    degradation_ratio: float
+    probabilities: dict
+
+    def as_dict(self) -> dict:
+        return {"candidate": self.candidate, "status": self.status, "candidate_ratio": _finite(self.candidate_ratio),
+                "degradation": self.degradation, "degradation_decided": self.degradation_decided,
+                "degradation_ratio": _finite(self.degradation_ratio), "probabilities": self.probabilities}
+
+
+def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: Sequence[Sequence[str]],
+           rejected: Mapping[str, str] = {}, min_ratio: float = EVIDENCE_RATIO) -> Decision:
+    """Rank hypotheses by evidence: the candidate, then the law, each declared beyond ``min_ratio``.
+
+    A candidate's evidence sums its laws' (uniform prior over hypotheses).  The best candidate is
+    isolated when it beats every candidate outside its group of indistinguishable ones by
+    ``min_ratio``; its group is reported when it has several members; otherwise every candidate
+    within the ratio of the best is reported, undecided.
+
+    Examples
+    --------
+    >>> hs = [Hypothesis(c, law, 2.0, 1.0) for c in ("a", "b", "c") for law in ("linear", "exponential")]
+    >>> log_z = np.array([0.0, -9.0, -1.0, -10.0, -20.0, -20.0])
+    >>> d = decide(hs, log_z, [["a", "b"], ["c"]])
+    >>> d.candidate, d.status, d.degradation, d.degradation_decided
+    (['a', 'b'], 'indistinguishable', 'linear', True)
+    >>> decide(hs, log_z, [["a"], ["b"], ["c"]]).status   # e^1 is not decisive
+    'undecided'
+    """
+    log_z = np.array([-np.inf if h.name in rejected else float(v) for h, v in zip(hypotheses, log_evidence)])
+    probabilities = _softmax(log_z)
+    named = {h.name: float(p) for h, p in zip(hypotheses, probabilities)}
+    if not np.isfinite(log_z).any():
+        return Decision(None, "rejected", math.nan, None, False, math.nan, named)
+    candidates = list(dict.fromkeys(h.candidate for h in hypotheses))
+    by_candidate = {c: _logsumexp(log_z[[h.candidate == c for h in hypotheses]]) for c in candidates}
+    best = max(candidates, key=by_candidate.get)
+    group = next((list(g) for g in groups if best in g), [best])
+    members = [c for c in group if np.isfinite(by_candidate.get(c, -np.inf))]
+    others = [by_candidate[c] for c in candidates if c not in group]
+    margin = by_candidate[best] - max(others, default=-np.inf)
+    if margin >= math.log(min_ratio):
+        reported, status = members, ("isolated" if len(members) == 1 else "indistinguishable")
+    else:
+        close = [c for c in candidates if by_candidate[c] >= by_candidate[best] - math.log(min_ratio)]
+        reported = list(dict.fromkeys(c for c in close for g in groups if c in g for c in g
+                                      if np.isfinite(by_candidate.get(c, -np.inf)))) or close
+        status = "undecided"
+    laws = list(dict.fromkeys(h.law for h in hypotheses))
+    by_law = {law: _logsumexp(log_z[[h.law == law and h.candidate in reported for h in hypotheses]]) for law in laws}
+    ranked = sorted(laws, key=by_law.get, reverse=True)
+    law_margin = by_law[ranked[0]] - (by_law[ranked[1]] if len(ranked) > 1 else -np.inf)
+    return Decision(reported[0] if len(reported) == 1 else reported, status, math.exp(min(margin, 700.0)),
+                    ranked[0], bool(law_margin >= math.log(min_ratio)), math.exp(min(law_margin, 700.0)), named)
+
+
+@dataclass
+class IsolationResult:
+    """What :class:`IsolatingMonitor` found on a record.
+
+    Attributes
+    ----------
+    detection_time : float or None
+        First alarm of any ARR.
+    fired : list of str
+        The ARRs alarming at that time (the signature the candidates come from).
+    candidates, groups : list
+        Candidates from the signature; their groups of indistinguishable ones.
+    hypotheses : list of Hypothesis
+    arrs : list of str
+        The ARRs whose residuals the hypotheses are weighed on.
+    t : ndarray (K,)
+        Filter steps.
+    log_evidence : ndarray (K, H)
+    theta, gamma : dict
+        Per hypothesis: ``mean`` (K, H) and ``quantiles`` (K, H, 3) (5, 50, 95 %).
+    rul_t : ndarray
+    rul : list of RULDistribution
+        The mixture of the hypotheses' predictions at each ``rul_t``.
+    decisions : list of Decision
+        The decision at each ``rul_t``.
+    rejected : dict
+        Hypothesis name -> why it was rejected.
+    evaluations : list
+        The detection :class:`~diagnosis.detection.Evaluation` of every ARR.
+    """
+
+    detection_time: float | None
+    fired: list = field(default_factory=list)
+    candidates: list = field(default_factory=list)
+    groups: list = field(default_factory=list)
+    hypotheses: list = field(default_factory=list)
+    arrs: list = field(default_factory=list)
+    t: np.ndarray = field(default_factory=lambda: np.empty(0))
+    log_evidence: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    theta: dict = field(default_factory=dict)
+    gamma: dict = field(default_factory=dict)
+    rul_t: np.ndarray = field(default_factory=lambda: np.empty(0))
+    rul: list = field(default_factory=list)
+    decisions: list = field(default_factory=list)
+    rejected: dict = field(default_factory=dict)
+    evaluations: list = field(default_factory=list)
+    min_ratio: float = EVIDENCE_RATIO
+
+    @property
+    def decision(self) -> Decision | None:
+        """The decision on all the data (None without an alarm or a candidate)."""
+        if not self.t.size:
+            return None
+        return decide(self.hypotheses, self.log_evidence[-1], self.groups, self.rejected, self.min_ratio)
+
+    def index(self, name: str) -> int:
+        """Row of the hypothesis ``"candidate/law"``."""
+        names = [h.name for h in self.hypotheses]
+        if name not in names:
+            raise ValueError(f"no hypothesis {name!r} (hypotheses: {', '.join(names)})")
+        return names.index(name)
+
+    def monitor_result(self, hypothesis: str | None = None) -> MonitorResult:
+        """The estimates of one hypothesis (default: the most probable at the end) with the mixture's RUL.
+
+        A :class:`~prognosis.monitor.MonitorResult`, so its metrics, frames and plots apply.
+        """
+        if hypothesis is None:
+            probabilities = self.decision.probabilities
+            hypothesis = max(probabilities, key=probabilities.get)
+        h = self.index(hypothesis)
+
+        def pick(estimate):
+            return {"mean": estimate["mean"][:, h], "rmad": estimate["rmad"][:, h],
+                    "quantiles": estimate["quantiles"][:, h]}
+        return MonitorResult(self.detection_time, t=self.t, theta=pick(self.theta), gamma=pick(self.gamma),
+                             rul_t=self.rul_t, rul=self.rul,
+                             evaluation=self.evaluations[0] if self.evaluations else None)
+
+
+class IsolatingMonitor:
+    """Detection, then candidates, laws and rates weighed in one filter, then the RUL.
+
+    Parameters
+    ----------
+    arrs : sequence of ARR
+    failures : mapping
+        Failure value of each parameter that can fail, e.g. ``{"b_Md": 0.3, "J_Md": 1.8e-3}``.
+    noise_std : mapping
+        Standard deviation of each ARR's residual on healthy data (by ARR name).
+    laws : sequence of str or mapping
+        Competing degradation laws: names of built-in ones, or ``{name: model}`` (any model of
+        :mod:`prognosis.degradation`, e.g. a :class:`~prognosis.degradation.CustomDegradation`).
+    candidates : sequence of str, optional
+        Only these candidates (each needs a failure value), instead of those of the signature.
+    dt : float
+        Filter step (s), a multiple of the record's step.
+    n_particles : int
+        Particles per hypothesis.
+    inflation : float
+        Multiplier of the residual noise variance in the likelihood (Jha et al. (2016): 4).
+    life : (float, float)
+        Prior of the life from nominal to failure, in filter steps (log-uniform).
+    rate : (float, float), optional
+        A prior interval of the rate instead (uniform; the same for every hypothesis).
+    process_noise : float
+        sigma_v per step as a fraction of the candidate's resolution per sample (the residual
+        noise over the sensitivity of the residual to it at the alarm).
+    discount : float
+        Kernel smoothing of the rate (:class:`~prognosis.particle_filter.KernelSmoothing`).
+    rul_every : int
+        Predict the RUL every this many filter steps.
+    horizon : float, optional
+        RUL horizon cap (s); default 2000 filter steps.
+    detection : mapping
+        Options of :func:`diagnosis.evaluate` (``margin``, ``persistence``...); a mapping per ARR
+        name is used for that ARR.
+    min_ratio : float
+        Evidence ratio before a candidate or a law is declared.
+    healthy_until : float, optional
+        End of the stretch the user declares fault-free (the one the noise was calibrated on):
+        alarms there are not faults (a start-up transient) and start nothing.
+    seed : int
+
+    Examples
+    --------
+    The RLC circuit's resistance drifting up linearly from t = 0.5 s; the monitor is told only
+    that R fails at 20 ohm and L at 2 H:
+
+    >>> from bondgraph import simulate
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> bg = rlc_circuit()
+    >>> t = np.linspace(0.0, 3.0, 3001)
+    >>> drift = lambda t: 10.0 + 4.0 * max(0.0, t - 0.5)
+    >>> record = simulate(bg, (0.0, 3.0), {"V": lambda t: 5 + np.sin(7 * t)}, t_eval=t,
+    ...                   parameters={"R": drift}).record()
+    >>> arrs = derive_arrs(bg)
+    >>> monitor = IsolatingMonitor(arrs, {"R": 20.0, "L": 2.0}, noise_std={a.name: 1e-3 for a in arrs},
+    ...                            dt=0.01, n_particles=200, detection={"margin": 0.01})
+    >>> result = monitor.run(record)
+    >>> d = result.decision
+    >>> d.candidate, d.status, d.degradation
+    ('R', 'isolated', 'linear')
+    """
+
+    def __init__(self, arrs: Sequence, failures: Mapping[str, float], *, noise_std: Mapping[str, float],
+                 laws: Sequence[str] | Mapping = ("linear", "exponential"), candidates: Sequence[str] | None = None,
+                 dt: float = 0.1, n_particles: int = 500, inflation: float = 4.0, life: tuple = LIFE_PRIOR,
+                 rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
+                 rul_every: int = 10, horizon: float | None = None, detection: Mapping | None = None,
+                 min_ratio: float = EVIDENCE_RATIO, healthy_until: float | None = None, seed: int = 0):
+        self.arrs = list(arrs)
+        self.failures = {str(k): float(v) for k, v in failures.items()}
+        parameters = {p: a.values[p] for a in self.arrs for p in a.parameters}
+        for name in self.failures:
+            if name not in parameters:
+                raise ValueError(f"failure value for {name!r}: no ARR contains that parameter "
+                                 f"(parameters the ARRs see: {', '.join(sorted(parameters))})")
+        self.nominal = {p: float(parameters[p]) for p in self.failures}
+        for name, value in self.failures.items():
+            if value == self.nominal[name]:
+                raise ValueError(f"failure value of {name!r} equals its nominal value {value:g}")
+        missing = [a.name for a in self.arrs if a.name not in noise_std]
+        if missing:
+            raise ValueError(f"noise_std has no value for the ARR(s) {missing}")
+        self.noise_std = {k: float(v) for k, v in noise_std.items()}
+        self.laws = dict(laws) if isinstance(laws, Mapping) else {name: None for name in laws}
+        if not self.laws:
+            raise ValueError("laws: give at least one degradation law")
+        if candidates is not None:
+            unknown = [c for c in candidates if c not in self.failures]
+            if unknown:
+                raise ValueError(f"candidate {unknown[0]!r} has no failure value (failure values: "
+                                 f"{', '.join(self.failures)})")
+        self.candidates = None if candidates is None else list(candidates)
+        self.dt, self.n_particles, self.inflation = float(dt), int(n_particles), float(inflation)
+        self.life, self.rate, self.process_noise, self.discount = life, rate, process_noise, discount
+        if isinstance(rul_every, bool) or int(rul_every) != rul_every or rul_every < 1:
+            raise ValueError(f"rul_every must be a positive whole number of filter steps, got {rul_every!r}")
+        self.rul_every = int(rul_every)
+        self.horizon = HORIZON_STEPS * self.dt if horizon is None else float(horizon)
+        self.detection = dict(detection or {})
+        self.min_ratio, self.seed = float(min_ratio), int(seed)
+        self.healthy_until = -math.inf if healthy_until is None else float(healthy_until)
+
+    # -- the pipeline ------------------------------------------------------------------------
+    def run(self, record, *, evaluations: Sequence | None = None,
+            progress: Callable[[int, int, float], None] | None = None) -> IsolationResult:
+        """Process a whole record (mapping or DataFrame with ``t`` and the ARRs' signals).
+
+        ``evaluations``: the ARRs' detection on this record, if already computed (one per ARR, in
+        order).  ``progress(done, total, t)`` is called after every 1 % of the filter steps.
+        """
+        if evaluations is None:
+            evaluations = [a.evaluate(record, **self._options(a)) for a in self.arrs]
+        elif len(evaluations) != len(self.arrs):
+            raise ValueError(f"evaluations: {len(evaluations)} given for {len(self.arrs)} ARRs")
+        result = IsolationResult(None, evaluations=evaluations, min_ratio=self.min_ratio)
+        t = evaluations[0].t
+        alarms = [np.flatnonzero(e.alarm & (t > self.healthy_until)) for e in evaluations]
+        firsts = [a[0] for a in alarms if a.size]
+        if not firsts:
+            return result
+        k = min(firsts)
+        result.detection_time = float(t[k])
+        result.fired = [a.name for a, e in zip(self.arrs, evaluations) if e.alarm[k]]
+        result.candidates = (self.candidates if self.candidates is not None
+                             else signature_candidates(self.arrs, self.failures, result.fired))
+        if not result.candidates:
+            return result
+        used = [i for i, a in enumerate(self.arrs) if any(c in a.parameters for c in result.candidates)]
+        arrs = [self.arrs[i] for i in used]
+        result.arrs = [a.name for a in arrs]
+        result.groups = indistinguishable_groups(arrs, result.candidates)
+        result.hypotheses, result.rejected = self._hypotheses(result.candidates)
+        self._filter(result, [evaluations[i] for i in used], arrs, k, progress)
+        return result
+
+    def _options(self, arr) -> dict:
+        options = self.detection.get(arr.name, self.detection)
+        return {k: v for k, v in options.items() if not isinstance(v, Mapping)}
+
+    def _hypotheses(self, candidates: list) -> tuple[list, dict]:
+        hypotheses, rejected = [], {}
+        for c in candidates:
+            for law in self.laws:
+                h = Hypothesis(c, law, self.failures[c], self.nominal[c])
+                hypotheses.append(h)
+                if law == "exponential" and h.failure * h.nominal <= 0:
+                    rejected[h.name] = (f"an exponential law keeps the sign of {c} (nominal {h.nominal:g}), "
+                                        f"so it never reaches {h.failure:g}")
+        return hypotheses, rejected
+
+    def _filter(self, result: IsolationResult, evaluations: list, arrs: list, k0: int, progress) -> None:
+        hypotheses = result.hypotheses
+        rng = np.random.default_rng([self.seed, 1])
+        noise = np.array([self.noise_std[a.name] for a in arrs])
+        starts = [self._start(h, evaluations, arrs, k0, noise) for h in hypotheses]
+        # a model per row: sigma_v is on the scale of each candidate
+        models = tuple(self._law(h.law, s[2]) for h, s in zip(hypotheses, starts))
+        model = PerAssetDegradation(models, tuple(range(len(models))))
+        pf = ParticleFilter(model, HypothesisObservation(arrs, hypotheses), n_particles=self.n_particles, dt=self.dt,
+                            noise_std=noise, inflation=self.inflation, gamma_std=0.0,
+                            adaptation=KernelSmoothing(self.discount), seed=self.seed)
+        gamma0 = np.stack([self._rate_particles(h, rng) for h in hypotheses])[..., None]
+        pf.initialize((np.array([s[0] for s in starts]), np.array([s[1] for s in starts])), gamma0=gamma0,
+                      assets=len(hypotheses))
+        t = evaluations[0].t
+        stride = _stride(t, self.dt)
+        steps = range(k0, t.size, stride)
+        every = -(-len(steps) // 100)
+        rows, rul_t, rul, decisions = [], [], [], []
+        predictors = {}
+        for done, k in enumerate(steps, 1):
+            y = np.array([-e.residual[k] for e in evaluations])
+            points = [[p[k] for p in e.points] for e in evaluations]
+            pf.step(np.broadcast_to(y, (len(hypotheses), y.size)), points)
+            estimate = pf.estimate()
+            self._reject(result, hypotheses, estimate, float(t[k]))
+            rows.append((float(t[k]), pf.log_evidence.copy(), estimate))
+            if (done - 1) % self.rul_every == 0:
+                decision = decide(hypotheses, pf.log_evidence, result.groups, result.rejected, self.min_ratio)
+                rul.append(self._mixture(pf, hypotheses, decision, predictors, models, key=done))
+                rul_t.append(float(t[k]))
+                decisions.append(decision)
+            if progress is not None and (done % every == 0 or done == len(steps)):
+                progress(done, len(steps), float(t[k]))
+        result.t = np.array([r[0] for r in rows])
+        result.log_evidence = np.array([r[1] for r in rows])
+        for name, key in (("theta", "theta"), ("gamma", "gamma")):
+            mean = np.array([r[2][f"{key}_mean"] for r in rows]).reshape(len(rows), -1)
+            rmad = np.array([r[2][f"{key}_rmad"] for r in rows]).reshape(len(rows), -1)
+            quantiles = np.array([r[2][f"{key}_quantiles"] for r in rows]).reshape(len(rows), -1, 3)
+            setattr(result, name, {"mean": mean, "rmad": rmad, "quantiles": quantiles})
+        result.rul_t, result.rul, result.decisions = np.array(rul_t), rul, decisions
+
+    def _start(self, h: Hypothesis, evaluations: list, arrs: list, k: int, noise: np.ndarray):
+        """(lo, hi) of theta at the alarm and sigma_v, for one hypothesis.
+
+        The uncertainty interval widened to the values of theta that explain the residual on the
+        samples that raised the alarm (as :class:`~prognosis.monitor.HealthMonitor` does with
+        ``start="residual"``), inverting the observation equation of the ARR that resolves the
+        candidate best there: the largest sensitivity ``|d y / d theta|`` over the residual's noise.
+        """
+        window = slice(max(0, k - evaluations[0].persistence + 1), k + 1)
+        seeing = [m for m, a in enumerate(arrs) if h.candidate in a.parameters]
+        models = {m: observation_model(arrs[m], h.candidate) for m in seeing}
+        points = {m: [p[window] for p in evaluations[m].points] for m in seeing}
+        # information per sample: (sensitivity / noise)^2, summed over the ARRs
+        information = {m: float(np.nanmedian(np.square(sensitivity(models[m], points[m]) / noise[m])))
+                       for m in seeing}
+        best = max(seeing, key=lambda m: information[m] if np.isfinite(information[m]) else -1.0)
+        arr, evaluation = arrs[best], evaluations[best]
+        lo, hi = arr.uncertainties.get(h.candidate, (0.0, 0.0))
+        box = sorted((h.nominal * (1 + lo), h.nominal * (1 + hi)))
+        bracket = (min(box[0], h.failure), max(box[1], h.failure))
+        explained = models[best].invert(-evaluation.residual[window], points[best], bracket)
+        explained = np.clip(explained[np.isfinite(explained)], *bracket)
+        start = (min(box[0], float(explained.min())), max(box[1], float(explained.max()))) if explained.size else box
+        total = sum(v for v in information.values() if np.isfinite(v))
+        distance = abs(h.failure - h.nominal)
+        resolution = min(1.0 / math.sqrt(total), distance) if total > 0 else distance
+        return start[0], start[1], self.process_noise * resolution
+
+    def _law(self, name: str, process_noise: float):
+        model = self.laws[name]
+        return degradation_model(name, process_noise) if model is None else model
+
+    def _rate_particles(self, h: Hypothesis, rng: np.random.Generator) -> np.ndarray:
+        if self.rate is not None:
+            return rng.uniform(*self.rate, self.n_particles)
+        return rate_prior(h, self.dt, self.n_particles, rng, self.life)
+
+    def _reject(self, result: IsolationResult, hypotheses: list, estimate: dict, time: float) -> None:
+        """Reject the hypotheses whose median estimate left the candidate's physical domain."""
+        median = estimate["theta_quantiles"][:, 1]
+        for h, value in zip(hypotheses, median):
+            lo, hi = h.domain
+            if h.name not in result.rejected and not lo < value < hi:
+                result.rejected[h.name] = (f"at t = {time:g} s the estimate of {h.candidate} is {value:.3g}, "
+                                           f"outside its physical domain ({lo:g}, {hi:g})")
+
+    def _mixture(self, pf: ParticleFilter, hypotheses: list, decision: Decision, predictors: dict, models: tuple,
+                 key: int) -> RULDistribution:
+        """The RUL of every hypothesis with posterior probability above MIXTURE_FLOOR, mixed by probability."""
+        weights = pf.weights
+        samples, mixed = [], []
+        for row, h in enumerate(hypotheses):
+            p = decision.probabilities[h.name]
+            if p < MIXTURE_FLOOR:
+                continue
+            if row not in predictors:
+                predictors[row] = RULPredictor(models[row], dt=self.dt, theta_fail=h.failure,
+                                               direction=h.direction, horizon=self.horizon, seed=self.seed + 1 + row)
+            prediction = predictors[row].predict(pf.theta[row:row + 1], pf.gamma[row:row + 1], weights[row:row + 1],
+                                                 0.0, key=key)
+            samples.append(prediction.samples[0])
+            mixed.append(p * weights[row])
+        if not samples:  # every hypothesis rejected
+            return RULDistribution(np.full((1, 1), np.inf), np.ones((1, 1)), self.horizon)
+        return RULDistribution(np.concatenate(samples)[None, :], np.concatenate(mixed)[None, :], self.horizon)
+
+
+def _stride(t: np.ndarray, dt: float) -> int:
+    step = float(np.median(np.diff(t)))
+    stride = int(round(dt / step))
+    if stride < 1 or abs(stride * step - dt) > 1e-6 * dt:
+        raise ValueError(f"the filter step dt = {dt} s is not a multiple of the record's step {step} s")
+    return stride
+
+
+def _softmax(log_z: np.ndarray) -> np.ndarray:
+    if not np.isfinite(log_z).any():
+        return np.zeros(log_z.shape)
+    p = np.exp(log_z - log_z.max())
+    return p / p.sum()
+
+
+def _logsumexp(values: np.ndarray) -> float:
+    values = np.asarray(values, float)
+    if not values.size or not np.isfinite(values).any():
+        return -np.inf
+    top = values.max()
+    return float(top + np.log(np.sum(np.exp(values - top))))
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+

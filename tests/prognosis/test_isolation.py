@@ -1,0 +1,165 @@
+"""Prognosis without being told the answer: candidates, laws, evidence, truth-free priors (issue 21)."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from bgphm.cli import main
+from bgphm.files import csv_text
+from bondgraph.io import to_json
+from bondgraph.library import TORSION_BAR, torsion_bar_monitorable
+from diagnosis import derive_arrs
+from diagnosis.signals import add_noise, as_record
+from prognosis.degradation import LinearDegradation
+from prognosis.hypotheses import Hypothesis, indistinguishable_groups, rate_prior, signature_candidates
+from prognosis.isolation import decide
+from prognosis.particle_filter import KernelSmoothing, ParticleFilter, VarianceAdaptation
+from tests.scenarios import b_md_linear, torsion_bar_b_md
+
+
+@pytest.fixture(scope="module")
+def torsion_arrs():
+    return derive_arrs(torsion_bar_monitorable())
+
+
+def test_candidates_must_be_seen_by_every_fired_arr(torsion_arrs):
+    failures = {"b_Md": 0.3, "k_s": 1.0, "b_Ld": 1e-3, "J_Md": 2e-3}
+    assert signature_candidates(torsion_arrs, failures, ["ARR_MSO_1"]) == ["b_Md", "b_Ld", "J_Md"]
+    assert signature_candidates(torsion_arrs, failures, ["ARR_MSO_1", "ARR_1_2"]) == ["b_Ld"]
+    with pytest.raises(ValueError, match="no ARR named 'ARR_9'"):
+        signature_candidates(torsion_arrs, failures, ["ARR_9"])
+
+
+def test_frictions_before_and_after_the_belt_are_indistinguishable(torsion_arrs):
+    groups = indistinguishable_groups(torsion_arrs, ["f_m", "b_Md", "J_Md", "b_Ld", "k_s", "b_s"])
+    assert ["f_m", "b_Md"] in groups and ["J_Md"] in groups and ["b_Ld"] in groups
+    assert all(len(g) == 1 for g in groups if "k_s" in g or "b_s" in g)  # the shaft's two act differently
+
+
+def test_decision_reports_groups_and_waits_for_the_evidence():
+    hs = [Hypothesis(c, law, 2.0, 1.0) for c in ("a", "b", "c") for law in ("linear", "exponential")]
+    log_z = np.array([0.0, -2.0, -50.0, -50.0, -50.0, -60.0])
+    isolated = decide(hs, log_z, [["a"], ["b"], ["c"]])
+    assert (isolated.candidate, isolated.status, isolated.degradation) == ("a", "isolated", "linear")
+    assert not isolated.degradation_decided and isolated.degradation_ratio == pytest.approx(math.exp(2.0))
+    assert math.isclose(sum(isolated.probabilities.values()), 1.0)
+    grouped = decide(hs, log_z, [["a", "c"], ["b"]])
+    assert grouped.candidate == ["a", "c"] and grouped.status == "indistinguishable"
+    rejected = decide(hs, log_z, [["a"], ["b"], ["c"]], rejected={"a/linear": "negative", "a/exponential": "x"})
+    assert rejected.status == "undecided" and set(rejected.candidate) == {"b", "c"}
+    assert rejected.probabilities["a/linear"] == 0.0
+    nothing = decide(hs, log_z, [["a"], ["b"], ["c"]], rejected={h.name: "r" for h in hs})
+    assert nothing.candidate is None and nothing.status == "rejected"
+
+
+def test_rate_prior_gives_both_laws_the_same_life():
+    rng = np.random.default_rng(0)
+    linear = rate_prior(Hypothesis("b", "linear", 0.3, 0.005), 0.1, 4000, np.random.default_rng(1))
+    exponential = rate_prior(Hypothesis("b", "exponential", 0.3, 0.005), 0.1, 4000, np.random.default_rng(1))
+    life_linear, life_exponential = 0.295 / linear, math.log(0.3 / 0.005) / exponential
+    assert np.allclose(life_linear, life_exponential)
+    assert life_linear.min() >= 1.0 - 1e-9 and life_linear.max() <= 1e4 + 1e-6  # 10 to 1e5 steps of 0.1 s
+    down = rate_prior(Hypothesis("R", "linear", 0.5, 1.0), 0.1, 100, rng)
+    assert np.all(down < 0)
+
+
+def test_vector_measurement_weighs_like_one_with_the_combined_noise():
+    """Two residuals reading the same theta with noise 0.1 each weigh particles like one with 0.1 / sqrt(2)."""
+    def run(observation, y, noise):
+        pf = ParticleFilter(LinearDegradation(), observation, n_particles=50, dt=1.0, noise_std=noise, inflation=1.0,
+                            gamma_std=0.0, resample_below=0.0, seed=3)
+        pf.initialize((0.0, 2.0))
+        pf.step(y)
+        return pf.weights
+    pair = run(lambda theta, points: np.stack([theta, theta], axis=-1), np.array([[1.0, 1.0]]), np.array([0.1, 0.1]))
+    single = run(lambda theta, points: theta, np.array([1.0]), 0.1 / math.sqrt(2))
+    assert np.allclose(pair, single)
+
+
+def test_evidence_of_a_point_hypothesis_is_its_likelihood():
+    """With every particle at the same theta the evidence is the Gaussian likelihood of the data, exactly."""
+    pf = ParticleFilter(LinearDegradation(), lambda theta, points: theta, n_particles=10, dt=1.0, noise_std=0.2,
+                        inflation=1.0, gamma_std=0.0, seed=0)
+    pf.initialize((1.0, 1.0), gamma0=0.5)
+    y = np.array([1.4, 2.1, 2.6])
+    for value in y:
+        pf.step(value)
+    predicted = np.array([1.5, 2.0, 2.5])
+    expected = np.sum(-0.5 * ((y - predicted) / 0.2) ** 2 - 0.5 * math.log(2 * math.pi * 0.04))
+    assert pf.log_evidence[0] == pytest.approx(expected, rel=1e-9)
+
+
+@pytest.mark.parametrize("rate", [0.03, 0.08])
+def test_kernel_smoothing_does_not_need_a_band_around_the_truth(rate):
+    """A rate outside Table III's band: the band control keeps resetting, kernel smoothing converges."""
+    steps, dt = 60, 0.1
+    truth = 1.0 + rate * dt * np.arange(1, steps + 1)
+    y = truth + np.random.default_rng(5).normal(0.0, 2e-3, steps)
+
+    def final(adaptation):
+        pf = ParticleFilter(LinearDegradation(), lambda theta, points: theta, n_particles=400, dt=dt,
+                            noise_std=2e-3, gamma_std=0.02, adaptation=adaptation, seed=1)
+        pf.initialize((0.99, 1.01), gamma_bounds=(0.0, 0.15))
+        resets = 0
+        for value in y:
+            pf.step(value)
+            resets += bool(np.all(pf.variance == pf.initial_variance))
+        return abs(pf.estimate()["gamma_mean"][0, 0] / rate - 1), resets
+    band_error, band_resets = final(VarianceAdaptation(band=(0.04, 0.07), reference=0.02, gain=0.01, floor=1e-3))
+    kernel_error, _ = final(KernelSmoothing())
+    assert band_resets > steps // 2  # the mean of gamma sits outside the band: the walk never adapts
+    assert kernel_error < 0.1 and kernel_error < band_error
+
+
+# -- acceptance: bgphm prognose with failure values only, on torsion-bar records ending at 90 % of life ------
+
+FAILURES = ["--fail", "b_Md=0.3", "--fail", "J_Md=1.8e-3", "--fail", "b_Ld=2.5e-4"]
+PAPER_NOISE = {"omega_m": 0.01, "omega_Ld": 0.01, "tau_m": 0.01}  # N.m on the torque, as Jha et al. (2016)
+
+
+def _write_case(tmp_path, gamma, onset, seed):
+    """model.json and data.csv of a linear b_Md degradation, the record ending at 90 % of the life."""
+    b_n, fail = TORSION_BAR["b_Md"][0], 0.3
+    eol = onset + (fail - b_n) / gamma
+    record = torsion_bar_b_md(t_end=onset + 0.9 * (eol - onset), truth=b_md_linear(gamma, onset))
+    columns = {k: record[k] for k in ("t", "omega_m", "omega_Ld", "tau_m")}
+    noisy = add_noise(as_record(columns), PAPER_NOISE, seed=seed)
+    (tmp_path / "model.json").write_text(to_json(torsion_bar_monitorable()))
+    (tmp_path / "data.csv").write_text(csv_text({"t": noisy.t, **noisy.columns}))
+    return eol
+
+
+def _prognose(tmp_path, capsys, *extra):
+    code = main(["--quiet", "prognose", str(tmp_path / "model.json"), str(tmp_path / "data.csv"), *extra,
+                 "--calibrate", "8", "--out", str(tmp_path / "out")])
+    capsys.readouterr()
+    assert code == 0
+    return json.loads((tmp_path / "out" / "prognosis.json").read_text())
+
+
+@pytest.mark.slow  # simulates the torsion bar and runs the filter: about 4 s a case
+@pytest.mark.parametrize("gamma, onset, seed", [(0.03, 10.0, 1), (0.05, 25.0, 2), (0.08, 10.0, 3)])
+def test_prognose_finds_b_md_and_the_linear_law_from_failure_values_only(tmp_path, capsys, gamma, onset, seed):
+    eol = _write_case(tmp_path, gamma, onset, seed)
+    summary = _prognose(tmp_path, capsys, *FAILURES, "--rul-every", "1")
+    assert summary["candidate"] == "b_Md" and summary["status"] == "isolated"
+    assert summary["degradation"] == "linear"
+    assert all("physical domain" in summary["evidence"][f"J_Md/{law}"]["rejected"] for law in ("linear", "exponential"))
+    second_half = [p for p in summary["predictions"] if p["t"] >= onset + 0.5 * (eol - onset)]
+    assert len(second_half) >= 2
+    true = np.array([eol - p["t"] for p in second_half])
+    median = np.array([np.inf if p["rul_median"] is None else p["rul_median"] for p in second_half])
+    low = np.array([p["rul_p5"] for p in second_half], float)
+    high = np.array([np.inf if p["rul_p95"] is None else p["rul_p95"] for p in second_half])
+    assert np.mean(np.abs(median - true) <= 0.2 * true) >= 0.9
+    assert np.mean((low <= true) & (true <= high)) >= 0.8
+
+
+@pytest.mark.slow  # simulates the torsion bar and runs the filter
+def test_frictions_that_act_alike_are_reported_as_indistinguishable(tmp_path, capsys):
+    _write_case(tmp_path, 0.05, 10.0, 4)
+    summary = _prognose(tmp_path, capsys, "--fail", "b_Md=0.3", "--fail", "f_m=1e-4", "--rul-every", "50")
+    assert summary["status"] == "indistinguishable"
+    assert sorted(summary["candidate"]) == ["b_Md", "f_m"] and summary["indistinguishable"] == [["b_Md", "f_m"]]
