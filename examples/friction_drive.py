@@ -21,7 +21,24 @@
    restart (prediction scenario 1) and at 5.0 h with restart (scenario 2);
 6. from 5.0 h, lets the RUL controller (eqs. 47-53) lower the speed reference so
    that Pr(RUL <= RUL_ref) <= eta, re-deciding every 30 min, and runs the
-   controlled drive to its end of life (scenario 3).
+   controlled drive to its end of life (scenario 3);
+7. on a second truth whose m is random (``RANDOM_M``), runs the same EKF with
+   restart, unchanged (dm/dt = 0 in its model), and predicts the RUL at 5.0 h
+   as in scenario 2 (scenario 4).
+
+Scenario 4's truth (the paper says only that m is "a random variable with a
+normal distribution", with its mean in the estimated interval): every 10 min
+of story time m is drawn anew, independently, from N(mu(t), (0.25 mu(t))^2),
+mu = 1e-6 before 4 h and 2e-6 after as in the estimation scenario, and
+clipped at 0.1 mu so that it stays positive (the clip lies 3.6 standard
+deviations below the mean: about one draw in 6000).  Why this law: a rate drawn
+anew at every 1 s sample would be averaged away by the contact within seconds
+and the scenario would not differ from scenario 2; 10 min is the supervisor's
+window, long enough for a draw to move alpha by about its own estimation
+error, short enough for about 40 draws per life.  A quarter of the mean keeps
+m's excursions inside the bounds the restart gives m (+-2e-6), so the
+EKF's box can follow them.  The draws have their own random stream, the
+measurement noise another, both from the seed.
 
 Failure (Definition 2): alpha reaches 0 or D reaches D_max = 5e6 J (the paper
 does not give D_max).  Sampling: 1 s; the EKF's Euler step runs in 10
@@ -73,6 +90,8 @@ MONTE_CARLO = {"n_samples": 1000, "dt": 30.0, "horizon": 12 * HOUR}
 CONTROL = {"rul_ref": 3.0 * HOUR, "eta": 0.05, "gain": 1e-3, "lower": -15.0, "period": 0.5 * HOUR, "tolerance": 36.0}
 MONITOR = {"window": 600, "threshold": 5.0, "persistence": 30}
 RESTART_BOUNDS = {"alpha": 2.0, "m": 2e-6}   # new expected bounds after a model change (eq. 44)
+# Scenario 4's truth: m drawn anew every period from N(mu, (std_fraction mu)^2), at least floor_fraction mu
+RANDOM_M = {"period": 600.0, "std_fraction": 0.25, "floor_fraction": 0.1}
 STATES = ("omega1", "omega2", "alpha", "m", "D")
 
 
@@ -92,6 +111,7 @@ class Scenario:
     monitor_window: int = MONITOR["window"]
     monitor_persistence: int = MONITOR["persistence"]
     d_max: float = D_MAX
+    m_period: float = RANDOM_M["period"]
     speedup: float = 1.0
 
     @property
@@ -107,7 +127,12 @@ class Scenario:
                        predict_with_restart=self.predict_with_restart / k, control_start=self.control_start / k,
                        control_period=self.control_period / k, rul_ref=self.rul_ref / k, end=self.end / k,
                        monitor_window=max(30, int(self.monitor_window / k)),
-                       monitor_persistence=max(3, int(self.monitor_persistence / k)), speedup=k)
+                       monitor_persistence=max(3, int(self.monitor_persistence / k)),
+                       m_period=self.m_period / k, speedup=k)
+
+    def m_mean(self, t):
+        """The mean of m at time(s) ``t``: m_initial before the change, m_after from it on."""
+        return np.where(np.asarray(t) < self.change - 0.5 * DT, self.m_initial, self.m_after)
 
 
 # -- model ------------------------------------------------------------------------------------------------
@@ -169,12 +194,18 @@ def predict_rul(mean, covariance, t, omega2_star, seed, keep=0, d_max=D_MAX):
 
 
 class Drive:
-    """The plant, its PI speed loop, the EKF (restartable) and an optional twin EKF without restart."""
+    """The plant, its PI speed loop, the EKF (restartable) and an optional twin EKF without restart.
 
-    def __init__(self, scenario: Scenario, seed: int, twin: bool = True):
+    ``random_m``: a generator for scenario 4, whose true m is redrawn every ``scenario.m_period`` from
+    ``RANDOM_M``'s law around ``scenario.m_mean(t)``; without it m jumps once, at ``scenario.change``.
+    """
+
+    def __init__(self, scenario: Scenario, seed, twin: bool = True, random_m: np.random.Generator | None = None):
         ekf_model, truth_model = models()
         self.scenario, self.truth_model = scenario, truth_model
         self.rng = np.random.default_rng(seed)
+        self.m_rng = random_m
+        self.m_draws: list[tuple[float, float, bool]] = []  # (t, m, clipped) of scenario 4's truth
         self.x = X0_TRUE.copy()
         self.x[3] = scenario.m_initial
         estimate = X0_ESTIMATE.copy()
@@ -187,6 +218,8 @@ class Drive:
         self.twin = self.ekf.copy() if twin else None
         self.monitor = InnovationMonitor(scenario.monitor_window, MONITOR["threshold"], scenario.monitor_persistence)
         self.t, self.integral, self.torque, self.theta = 0.0, 0.0, 0.0, 0.0
+        if random_m is not None:
+            self._draw_m()
         self.restarts: list[float] = []
         self.ekf_seconds, self.ekf_steps = 0.0, 0
         self.log: dict[str, list] = {k: [] for k in ("t", "truth", "mean", "half", "twin_mean", "twin_half",
@@ -199,7 +232,10 @@ class Drive:
         s = self.scenario
         self.x = self.truth_model.transition(self.x, [self.torque])
         self.t += DT
-        if abs(self.t - s.change) < 0.5 * DT:
+        if self.m_rng is not None:
+            if self._redraw_due():
+                self._draw_m()
+        elif abs(self.t - s.change) < 0.5 * DT:
             self.x[3] = s.m_after
         y = self.x[:2] + self.rng.normal(0.0, np.sqrt(np.diag(self.scenario.measurement_noise)))
         started = time.perf_counter()
@@ -214,6 +250,19 @@ class Drive:
         self.integral += error * DT
         self.torque = -PI_GAINS[0] * error - PI_GAINS[1] * self.integral  # eq. 59
         self._record(innovation)
+
+    def _redraw_due(self) -> bool:
+        """Scenario 4: a new m at every multiple of the period, and at the change of its mean."""
+        s = self.scenario
+        return abs(self.t - s.m_period * round(self.t / s.m_period)) < 0.5 * DT or abs(self.t - s.change) < 0.5 * DT
+
+    def _draw_m(self) -> None:
+        """Scenario 4: the true m from N(mu, (std_fraction mu)^2), clipped to stay positive."""
+        mu = float(self.scenario.m_mean(self.t))
+        value = self.m_rng.normal(mu, RANDOM_M["std_fraction"] * mu)
+        floor = RANDOM_M["floor_fraction"] * mu
+        self.x[3] = max(value, floor)
+        self.m_draws.append((self.t, float(self.x[3]), bool(value < floor)))
 
     def restart(self) -> None:
         """New P_0 for alpha and m from the restart bounds (eq. 44); omega and D keep theirs."""
@@ -247,8 +296,10 @@ class Drive:
         """An independent copy (its own noise from here on) for the controlled scenario."""
         other = copy.copy(self)  # models and scalars are shared or immutable; the mutable parts are copied
         other.ekf, other.twin, other.monitor = self.ekf.copy(), None, copy.deepcopy(self.monitor)
-        other.x, other.restarts = self.x.copy(), list(self.restarts)
+        other.x, other.restarts, other.m_draws = self.x.copy(), list(self.restarts), list(self.m_draws)
         other.rng = np.random.default_rng(self.rng.integers(2 ** 63))
+        if self.m_rng is not None:  # its own m draws too, not the parent's stream
+            other.m_rng = np.random.default_rng(self.m_rng.integers(2 ** 63))
         other.log = {k: [] for k in self.log}
         return other
 
@@ -287,8 +338,52 @@ def rul_control(drive: Drive, seed: int) -> list[dict]:
 # -- one seed ---------------------------------------------------------------------------------------------
 
 
+def random_m_truth(seed: int, s: Scenario) -> Drive:
+    """Scenario 4's drive at t = 0: a random true m and the EKF with restart, no twin.
+
+    Parameters
+    ----------
+    seed : int
+        The measurement noise and the m draws get their own streams, both derived from it and apart
+        from the stream of scenarios 1-3.
+    s : Scenario
+
+    Returns
+    -------
+    Drive
+    """
+    noise, draws = np.random.SeedSequence([seed, 4]).spawn(2)
+    return Drive(s, noise, twin=False, random_m=np.random.default_rng(draws))
+
+
+def random_m_drive(seed: int, s: Scenario, keep_paths: int = 0):
+    """Scenario 4: the drive with a random true m, its EKF with restart, and the RUL predicted at 5.0 h.
+
+    The prediction is scenario 2's: m drawn per trajectory from the estimate's normal law and held
+    (dm/dt = 0), with the Monte Carlo seed of scenario 2 (common random numbers: the two predictions
+    differ by their estimates only).
+
+    Parameters
+    ----------
+    seed : int
+    s : Scenario
+    keep_paths : int
+        Monte Carlo trajectories kept for the plots.
+
+    Returns
+    -------
+    (Drive, RULDistribution)
+        The drive run to its end of life (or ``s.end``), and the prediction made at 5.0 h.
+    """
+    drive = random_m_truth(seed, s)
+    drive.run_until(s.predict_with_restart)
+    state = (drive.ekf.mean, drive.ekf.covariance)
+    drive.run_until(s.end)
+    return drive, predict_rul(*state, s.predict_with_restart, OMEGA2_REF, seed, keep_paths, s.d_max)
+
+
 def run_seed(seed: int, scenario: Scenario = Scenario(), keep: bool = False) -> dict:
-    """Scenarios 1-3 of section 6 on one noise seed."""
+    """Scenarios 1-4 of section 6 on one seed."""
     started = time.perf_counter()
     s = scenario
     hours = HOUR / s.speedup  # one (unscaled) hour in scenario seconds
@@ -310,6 +405,7 @@ def run_seed(seed: int, scenario: Scenario = Scenario(), keep: bool = False) -> 
     first = decisions[0]
     prediction_3 = predict_rul(*restarted_state, s.control_start, OMEGA2_REF + first["theta"], seed, keep_paths,
                                s.d_max)
+    random_drive, prediction_4 = random_m_drive(seed, s, keep_paths)
 
     log, clog = drive.arrays(), controlled.arrays()
     before = log["t"] < s.change
@@ -339,12 +435,14 @@ def run_seed(seed: int, scenario: Scenario = Scenario(), keep: bool = False) -> 
         "scenario_3": {**_summary(prediction_3, h, s), "theta": first["theta"],
                        "omega2_star": OMEGA2_REF + first["theta"],
                        "decisions": decisions},
+        "scenario_4": random_m_figures(random_drive, prediction_4, h, s),
         "ekf_us_per_step": drive.ekf_seconds / max(drive.ekf_steps, 1) * 1e6,
         "seconds": time.perf_counter() - started,
     }
     if keep:
-        result["logs"] = {"uncontrolled": log, "controlled": clog}
+        result["logs"] = {"uncontrolled": log, "controlled": clog, "random_m": random_drive.arrays()}
         result["predictions"] = (prediction_1, prediction_2, prediction_3)
+        result["prediction_4"] = prediction_4
     return result
 
 
@@ -355,6 +453,90 @@ def _summary(prediction, h, s: Scenario) -> dict:
             "eol_std_h": h(np.std(finite)) if finite.size else None,
             "eol_q05_h": h(np.quantile(eol, 0.05)), "survive_horizon": float(np.mean(~np.isfinite(eol))),
             "p_eol_before_8h": float(np.mean(eol <= 8.0 * HOUR / s.speedup))}
+
+
+def random_m_figures(drive: Drive, prediction, h, s: Scenario) -> dict:
+    """Scenario 4 on one seed: the random truth, the EKF's box and m error, the prediction against the truth.
+
+    The box is read per state (alpha, m, D; Chebyshev with c = 10, at least 99 % per state by eq. 37) and,
+    for m, against both the current draw and the law's mean.  The m error is relative to the law's mean
+    (and to the current draw), averaged over the last hour of each regime: the hour before the change of
+    the mean, and the last hour of the run if the EKF was restarted after the change.
+
+    Parameters
+    ----------
+    drive : Drive
+        Scenario 4's drive, run to its end.
+    prediction : RULDistribution
+        The prediction made at 5.0 h.
+    h : callable
+        Scenario seconds to story hours.
+    s : Scenario
+
+    Returns
+    -------
+    dict
+        ``_summary``'s figures of the prediction, with the true EoL, the error of the predicted mean EoL,
+        whether the true EoL lies in the predicted 5-95 % range, the restarts, the spread of the m draws,
+        the box coverage and the m error.
+    """
+    log = drive.arrays()
+    t, truth, mean, half = log["t"], log["truth"], log["mean"], log["half"]
+    law = s.m_mean(t)
+    hour = HOUR / s.speedup
+    later = [r for r in drive.restarts if r >= s.change - 0.5 * DT]
+    regimes = {"before_change": t < s.change - 0.5 * DT,
+               "after_restart": t >= later[0] if later else np.zeros(t.size, bool)}
+    windows = {"before_change": (t >= s.change - hour) & regimes["before_change"],
+               "before_end": (t >= t[-1] - hour) & regimes["after_restart"]}
+    draws = np.array([m for _, m, _ in drive.m_draws])
+    draw_means = s.m_mean(np.array([d for d, _, _ in drive.m_draws]))
+    true_eol = h(drive.t) if drive.failed() else None
+    summary = _summary(prediction, h, s)
+    q05, q95 = (h(q) for q in np.quantile(prediction.eol, [0.05, 0.95]))
+    return {
+        **summary,
+        "true_eol_h": true_eol,
+        "eol_error_h": None if true_eol is None or summary["eol_mean_h"] is None
+        else summary["eol_mean_h"] - true_eol,
+        "true_eol_in_90": None if true_eol is None else bool(q05 <= true_eol <= q95),
+        "m_at_prediction": _m_at(prediction.origin, t, truth, mean, half, s),
+        "restart_h": [h(r) for r in drive.restarts],
+        "restarts_before_change": sum(r < s.change - 0.5 * DT for r in drive.restarts),
+        "m_truth": {"draws": int(draws.size), "clipped": sum(c for _, _, c in drive.m_draws),
+                    "relative_std": float(np.std(draws / draw_means - 1.0)),
+                    "relative_range": [float(np.min(draws / draw_means - 1.0)),
+                                       float(np.max(draws / draw_means - 1.0))]},
+        "box_coverage": {name: _box(mask, truth, mean, half, law) for name, mask in regimes.items()},
+        "m_relative_error": {name: None if not mask.any() else
+                             {"vs_mean": float(np.mean(np.abs(mean[mask, 3] - law[mask]) / law[mask])),
+                              "vs_draw": float(np.mean(np.abs(mean[mask, 3] - truth[mask, 3]) / truth[mask, 3]))}
+                             for name, mask in windows.items()},
+    }
+
+
+def _m_at(origin: float, t, truth, mean, half, s: Scenario) -> dict:
+    """m at the prediction time: the EKF's estimate and its bound, both also relative to the law's mean.
+
+    With them, the true m's time average from then to the end, relative to the law's mean: roughly the
+    constant m a prediction would have needed, which the draws still to come decide.
+    """
+    k = int(np.argmin(np.abs(t - origin)))
+    mu = float(s.m_mean(origin))
+    return {"estimate": float(mean[k, 3]), "half_width": float(half[k, 3]),
+            "estimate_relative_to_mean": float(mean[k, 3] / mu - 1.0),
+            "true_average_after_relative_to_mean": float(np.mean(truth[k:, 3]) / mu - 1.0)}
+
+
+def _box(mask, truth, mean, half, law) -> dict | None:
+    """Fraction of the samples in ``mask`` whose Chebyshev box holds alpha, m (its draw, its mean), D, all."""
+    if not mask.any():
+        return None
+    inside = np.abs(truth[mask] - mean[mask]) <= half[mask]
+    figures = {name: float(inside[:, STATES.index(name)].mean()) for name in ("alpha", "m", "D")}
+    figures["m_mean"] = float(np.mean(np.abs(law[mask] - mean[mask, 3]) <= half[mask, 3]))
+    figures["all"] = float(np.all(inside, axis=1).mean())
+    return figures
 
 
 # -- report -----------------------------------------------------------------------------------------------
@@ -387,9 +569,43 @@ def summarize(results: list[dict]) -> dict:
         "omega2_star": stat(r["scenario_3"]["omega2_star"] for r in results),
         "m_without_restart_at_eol": stat(r["m_estimate_at_eol"]["without_restart"] for r in results),
         "m_with_restart_at_eol": stat(r["m_estimate_at_eol"]["with_restart"] for r in results),
+        "scenario_4": summarize_random_m([r["scenario_4"] for r in results], [r["seed"] for r in results], stat),
         "ekf_us_per_step": stat(r["ekf_us_per_step"] for r in results),
         "seconds_per_seed": stat(r["seconds"] for r in results),
     }
+
+
+def summarize_random_m(rows: list[dict], seeds: list[int], stat) -> dict:
+    """Scenario 4 over the seeds: each figure's statistics (``stat``), restarts before the change by seed."""
+    def over(*keys):
+        return stat(_nested(row, keys) for row in rows)
+
+    early = [seed for seed, row in zip(seeds, rows) if row["restarts_before_change"]]
+    return {
+        "true_eol_h": over("true_eol_h"), "eol_mean_h": over("eol_mean_h"), "eol_error_h": over("eol_error_h"),
+        "abs_eol_error_h": stat(None if row["eol_error_h"] is None else abs(row["eol_error_h"]) for row in rows),
+        "of": len(rows), "true_eol_in_90_in": sum(bool(row["true_eol_in_90"]) for row in rows),
+        "restarts": stat(len(row["restart_h"]) for row in rows),
+        "seeds_restarted_before_change": early,
+        "first_restart_after_change_h": stat(next((t for t in row["restart_h"] if t >= 4.0), None) for row in rows),
+        "m_relative_std": over("m_truth", "relative_std"), "m_clipped": sum(row["m_truth"]["clipped"] for row in rows),
+        "box_coverage": {regime: {name: over("box_coverage", regime, name)
+                                  for name in ("alpha", "m", "m_mean", "D", "all")}
+                         for regime in ("before_change", "after_restart")},
+        "m_relative_error": {window: {name: over("m_relative_error", window, name) for name in ("vs_mean", "vs_draw")}
+                             for window in ("before_change", "before_end")},
+        "m_at_prediction": {name: over("m_at_prediction", name)
+                            for name in ("estimate_relative_to_mean", "true_average_after_relative_to_mean")},
+    }
+
+
+def _nested(row, keys):
+    """``row[k1][k2]...``, None as soon as a level is None."""
+    for key in keys:
+        if row is None:
+            return None
+        row = row[key]
+    return row
 
 
 def report(summary: dict) -> str:
@@ -412,20 +628,55 @@ def report(summary: dict) -> str:
         f"  scenario 3 (5.0 h, RUL control): omega2* {f('omega2_star', 'rad/s')}, predicted EoL "
         f"{f('scenario_3_eol_mean_h')}, Pr(EoL <= 8 h) {f('scenario_3_p_eol_before_8h', '', 3)}, "
         f"true EoL {f('controlled_true_eol_h')}",
+        *report_random_m(summary["scenario_4"]),
         f"  EKF {f('ekf_us_per_step', 'us/step', 0)}, {f('seconds_per_seed', 's', 1)} per seed",
     ]
     return "\n".join(lines)
 
 
+def report_random_m(s4: dict) -> list[str]:
+    """Scenario 4's lines: mean over the seeds and the worst seed (lowest coverage, largest error)."""
+    def mw(v, worst="min", digits=3, unit=""):
+        return "n/a" if v is None else f"{v['mean']:.{digits}f}{unit} (worst {v[worst]:.{digits}f}{unit})"
+
+    def span(v):
+        return "n/a" if v is None else f"{v['mean']:.2f} h ({v['min']:.2f}-{v['max']:.2f})"
+
+    def span_signed(v):
+        return "n/a" if v is None else f"{v['mean']:+.3f} ({v['min']:+.3f} to {v['max']:+.3f})"
+
+    box = s4["box_coverage"]
+    error = s4["m_relative_error"]
+    at = s4["m_at_prediction"]
+    early = s4["seeds_restarted_before_change"]
+    return [
+        f"  scenario 4 (random m, 5.0 h, restarted): true m drawn every {RANDOM_M['period'] / 60:g} min, relative std "
+        f"{mw(s4['m_relative_std'], 'max')}, {s4['m_clipped']} clipped; EKF restarts per run "
+        f"{mw(s4['restarts'], 'max', 1)}, first after the change at {mw(s4['first_restart_after_change_h'], 'max', 2)}"
+        f" h; seeds restarted before the change: {', '.join(map(str, early)) or 'none'}",
+        "    Chebyshev box holds (before the change / after the restart): "
+        + "; ".join(f"{name} {mw(box['before_change'][name])} / {mw(box['after_restart'][name])}"
+                    for name in ("alpha", "m_mean", "m", "D", "all")),
+        f"    m error relative to its mean: {mw(error['before_change']['vs_mean'], 'max')} in the hour before the "
+        f"change, {mw(error['before_end']['vs_mean'], 'max')} in the last hour (to the current draw: "
+        f"{mw(error['before_change']['vs_draw'], 'max')}, {mw(error['before_end']['vs_draw'], 'max')})",
+        f"    predicted EoL {span(s4['eol_mean_h'])}, true EoL {span(s4['true_eol_h'])}, "
+        f"|error| {mw(s4['abs_eol_error_h'], 'max', 2, ' h')}; true EoL inside the predicted 5-95 % range in "
+        f"{s4['true_eol_in_90_in']}/{s4['of']} seeds",
+        f"    m at 5.0 h relative to its mean: estimate {span_signed(at['estimate_relative_to_mean'])}, true m "
+        f"averaged from 5.0 h to the end {span_signed(at['true_average_after_relative_to_mean'])}",
+    ]
+
+
 def write(out: Path, summary: dict, results: list[dict], first: dict, scenario: Scenario) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     written = [out / "results.json"]
-    clean = [{k: v for k, v in r.items() if k not in ("logs", "predictions")} for r in results]
+    clean = [{k: v for k, v in r.items() if k not in ("logs", "predictions", "prediction_4")} for r in results]
     written[0].write_text(json.dumps({"summary": summary, "seeds": clean,
                                       "settings": {"dt_s": DT, "substeps": SUBSTEPS, "c": C, "d_max_J": D_MAX,
                                                    "monte_carlo": MONTE_CARLO, "control": CONTROL,
                                                    "monitor": MONITOR, "restart_bounds": RESTART_BOUNDS,
-                                                   "speedup": scenario.speedup}}, indent=2))
+                                                   "random_m": RANDOM_M, "speedup": scenario.speedup}}, indent=2))
     return written + write_figures(_plots, out, first, scenario)
 
 
@@ -508,7 +759,46 @@ def _plots(out: Path, first: dict, s: Scenario) -> list[Path]:
     axes[2].set_ylim(0, 4 * s.m_initial)
     axes[0].legend(fontsize=8)
     save(fig, "fig12_controlled.png")
+    paths += _random_m_plots(plt, out, first, s)
     return paths
+
+
+def _random_m_plots(plt, out: Path, first: dict, s: Scenario) -> list[Path]:
+    """Scenario 4 (the paper's Figs. 14-15): m, alpha and D estimated, and 10 predicted trajectories from 5.0 h."""
+    hours = HOUR / s.speedup
+    log, prediction = first["logs"]["random_m"], first["prediction_4"]
+    t = log["t"] / hours
+    shown = min(10, prediction.trajectories.shape[2])
+    paths = []
+    for name, states in (("fig14_m_random.png", ("m",)), ("fig15_alpha_D_random.png", ("alpha", "D"))):
+        fig, axes = plt.subplots(1, len(states), figsize=(6 * len(states), 4), squeeze=False)
+        for ax, state in zip(axes[0], states):
+            i = STATES.index(state)
+            ax.plot(t, log["truth"][:, i], "k", lw=0.8, label="true", zorder=3)  # above the estimate it tracks
+            if state == "m":
+                ax.plot(t, s.m_mean(log["t"]), "k:", lw=1, label="mean of the true m")
+            ax.plot(t, log["mean"][:, i], "C0", lw=1, label="EKF estimate (restart)")
+            band(ax, t, log["mean"][:, i] - log["half"][:, i], log["mean"][:, i] + log["half"][:, i], color="C0",
+                 alpha=0.2, label="Chebyshev bounds (c = 10)")
+            _predicted_paths(ax, prediction, i - 2, shown, hours)
+            if state == "D":
+                ax.axhline(s.d_max, color="r", ls=":", label="D_max")
+            if state == "m":
+                ax.set_ylim(0, 4 * s.m_initial)
+            ax.set_xlabel("time (h)")
+            ax.set_ylabel(state)
+        axes[0][0].legend(fontsize=8)
+        axes[0][0].set_title(f"scenario 4: random m, prediction at {s.predict_with_restart / hours:.1f} h")
+        paths.append(save_figure(fig, out / name))
+    return paths
+
+
+def _predicted_paths(ax, prediction, j: int, shown: int, hours: float) -> None:
+    """The first ``shown`` Monte Carlo trajectories of deterioration state ``j``, each up to its own failure."""
+    for k in range(shown):
+        alive = prediction.times <= prediction.eol[k]
+        ax.plot(prediction.times[alive] / hours, prediction.trajectories[alive, j, k], color="C1", lw=0.6,
+                alpha=0.7, label="predicted (10 draws)" if k == 0 else None)
 
 
 def _progress(quiet: bool, done: int, total: int) -> None:

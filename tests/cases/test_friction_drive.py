@@ -1,7 +1,8 @@
-"""examples/friction_drive.py, the friction drive of Rodriguez Obando et al. (2021): three scenarios, fast run."""
+"""examples/friction_drive.py, the friction drive of Rodriguez Obando et al. (2021): four scenarios, fast run."""
 
 import json
 
+import numpy as np
 import pytest
 
 from tests.cases.conftest import load_example
@@ -41,3 +42,36 @@ def test_example_scenario_2_predicts_after_the_restart(example_run):
     _, data = example_run
     seed = data["seeds"][0]
     assert seed["restart_h"] and 4.0 < seed["restart_h"][0] < seed["scenario_2"]["origin_h"] == pytest.approx(5.0)
+
+
+def test_scenario_4_truth_is_random_and_differs_between_seeds(fd):
+    """Scenario 4 (m random): each seed draws its own m sequence and its own measurement noise."""
+    s = fd.Scenario().scaled(10)
+    drives = [fd.random_m_truth(seed, s) for seed in (0, 1)]
+    for drive in drives:
+        drive.run_until(3 * s.m_period)
+    draws = [np.array([m for _, m, _ in drive.m_draws]) for drive in drives]
+    assert [d.size for d in draws] == [4, 4]  # at 0 and after each of the 3 periods
+    assert not np.allclose(draws[0], draws[1]) and np.ptp(draws[0]) > 0  # m changes, and not as the other seed
+    floor = fd.RANDOM_M["floor_fraction"] * s.m_initial
+    assert all(np.all(d >= floor) for d in draws)  # m stays positive
+    noises = [drive.rng.standard_normal(3) for drive in drives]
+    assert not np.allclose(noises[0], noises[1])
+    assert not np.allclose(noises[0], fd.Drive(s, 0, twin=False).rng.standard_normal(3))  # apart from scenarios 1-3
+
+
+def test_example_scenario_4_tracks_the_mean_of_a_random_m(fd, example_run):
+    """The EKF, whose model keeps m constant, follows the mean of the random m and keeps D in its box."""
+    summary, data = example_run
+    s4 = data["seeds"][0]["scenario_4"]
+    spread = s4["m_truth"]["relative_std"]
+    assert s4["m_truth"]["draws"] >= 30 and spread > 0.5 * fd.RANDOM_M["std_fraction"]  # the truth does vary
+    for window in ("before_change", "before_end"):
+        assert s4["m_relative_error"][window]["vs_mean"] < spread  # closer to the mean than the draws are
+    box = s4["box_coverage"]
+    assert box["before_change"]["m_mean"] >= 0.95 and box["before_change"]["alpha"] >= 0.95
+    for regime in ("before_change", "after_restart"):
+        assert box[regime]["D"] >= 0.95  # eqs. 37-43 with c = 10
+    assert s4["restarts_before_change"] == 0 and s4["restart_h"][0] > 4.0  # restarted after the mean changes
+    assert s4["origin_h"] == pytest.approx(5.0) and s4["true_eol_h"] is not None
+    assert summary["scenario_4"]["true_eol_h"]["n"] == 1

@@ -2,13 +2,51 @@
 
 import json
 
+import numpy as np
 import pytest
 
 from tests.cases.conftest import load_example
 
-pytestmark = pytest.mark.slow  # runs of an example script
+
+@pytest.fixture(scope="module")
+def gearbox():
+    return load_example("gearbox")
 
 
+def test_divergence_flags_impossible_predictions_only(gearbox):
+    """A negative sideband energy or an overflow is a failure; growth, however fast, is a fault trend."""
+    leads = np.arange(504)
+    growing = 1.0 + 0.05 * 1.003 ** leads  # the true damage pole: admissible
+    assert gearbox.divergence(growing, np.full(504, 1.0)) is None
+    # an unstable complex pair: an oscillation of growing amplitude that swings below zero
+    swinging = 1.0 + 1.011 ** leads * np.cos(0.006 * leads + 1.0)
+    reason = gearbox.divergence(np.full(504, 1.0), swinging)
+    assert reason is not None and reason.startswith("below FEATURE_MIN")
+    assert gearbox.divergence(np.array([1.0, np.nan])) == "non-finite"
+    assert gearbox.divergence(np.array([1.0, np.inf])) == "non-finite"
+    assert gearbox.divergence(np.array([gearbox.FEATURE_MIN])) is None  # the bound itself is admissible
+
+
+def test_change_statistics_leave_out_and_name_the_divergent_windows(gearbox):
+    """The statistics of the change are over the admissible windows; the divergent ones are counted by seed."""
+    changes = [9.5, 14.7, -429.3, 13.9, 43.4]
+    reasons = [None, None, "below FEATURE_MIN (min -428)", None, "non-finite"]
+    rows = [{"constant_load_change": c, "divergent": r} for c, r in zip(changes, reasons)]
+    out = gearbox.change_statistics(rows, [10, 11, 12, 13, 14])
+    kept = [9.5, 14.7, 13.9]
+    assert (out["n"], out["of"], out["divergent"], out["divergent_seeds"]) == (3, 5, 2, [12, 14])
+    assert out["median"] == pytest.approx(np.median(kept)) and out["mean"] == pytest.approx(np.mean(kept))
+    assert (out["min"], out["max"]) == (min(kept), max(kept))
+    text = gearbox._change_text(out)
+    assert "over 3 of 5 windows" in text and "2 divergent windows (seeds 12, 14)" in text
+    none_left = gearbox.change_statistics(rows[2:3], [12])
+    assert none_left["n"] == 0 and none_left["median"] is None and none_left["divergent_seeds"] == [12]
+    assert "no admissible window" in gearbox._change_text(none_left)
+    clean = gearbox.change_statistics(rows[:2], [10, 11])
+    assert clean["divergent"] == 0 and "divergent" not in gearbox._change_text(clean)
+
+
+@pytest.mark.slow  # a run of the example script
 def test_gearbox_example_smoke(tmp_path):
     """examples/gearbox.py on a 90 h record (one seed): results.json figures in sensible bands."""
     gearbox = load_example("gearbox")
@@ -22,6 +60,11 @@ def test_gearbox_example_smoke(tmp_path):
     assert set(seed["predictions"]) == {"44h", "78h"}
     assert not seed["alarm_before_onset"] and seed["max_radius_before_onset"] < 1.0
     before, after = seed["predictions"]["44h"], seed["predictions"]["78h"]
+    assert before["divergent"] is None  # a stable model's prediction stays a possible energy
+    for name, entry in payload["summary"]["predictions"].items():
+        change = entry["constant_load_change"]
+        assert change["n"] + change["divergent"] == change["of"] == 1
+        assert change["divergent_seeds"] == ([0] if seed["predictions"][name]["divergent"] else [])
     assert not before["fault_trend"] and abs(before["constant_load_change"]) < 0.1  # predicted stable at 44 h
     assert after["horizon_h"] == pytest.approx(12.0 - 1 / 12)  # the record ends at 89.92 h
     for p in (before, after):
