@@ -349,8 +349,11 @@ class IsolatingMonitor:
         return result
 
     def _options(self, arr) -> dict:
-        options = self.detection.get(arr.name, self.detection)
-        return {k: v for k, v in options.items() if not isinstance(v, Mapping)}
+        """This ARR's detection options: its own entry when ``detection`` is keyed by ARR name, else the shared ones."""
+        names = {a.name for a in self.arrs}
+        if self.detection and set(self.detection) <= names:
+            return dict(self.detection.get(arr.name, {}))
+        return dict(self.detection)
 
     def _hypotheses(self, candidates: list) -> tuple[list, dict]:
         hypotheses, rejected = [], {}

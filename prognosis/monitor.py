@@ -146,10 +146,17 @@ class MonitorResult:
         }
 
     def _rul_arrays(self) -> tuple[np.ndarray, np.ndarray]:
-        """RUL samples and weights of the single asset, (K, N) each."""
+        """RUL samples and weights of the single asset, (K, N) each.
+
+        A mixture over hypotheses may hold more samples at one prediction than at another: the
+        shorter rows are padded with censored samples of weight 0.
+        """
         k = len(self.rul)
-        samples = np.array([p.samples[0] for p in self.rul]).reshape(k, -1)
-        weights = np.array([p.weights[0] for p in self.rul]).reshape(k, -1)
+        n = max((np.size(p.samples[0]) for p in self.rul), default=0)
+        samples, weights = np.full((k, n), np.inf), np.zeros((k, n))
+        for row, p in enumerate(self.rul):
+            size = np.size(p.samples[0])
+            samples[row, :size], weights[row, :size] = p.samples[0], p.weights[0]
         return samples, weights
 
 

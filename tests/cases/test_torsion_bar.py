@@ -4,6 +4,7 @@ Jha et al. (2016)."""
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -32,20 +33,25 @@ def test_torsion_bar_example_reproduces_the_degradation_scenario(example, b_md):
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_torsion_bar_detection_without_false_alarms(example, b_md, seed):
     """Issue 3: no false alarm on a 100 s nominal run; the b_Md degradation from t = 10 s is detected."""
-    figures = example.run("b-md", seed=seed, scenario=b_md, n_particles=20, workers=1).figures
+    figures = example.run("b-md", seed=seed, scenario=b_md, n_particles=20, workers=1, noise="quiet").figures
     assert figures["arrs"] == ["ARR_1_1", "ARR_1_2"]
     assert figures["false_alarms_nominal"] == 0
     # b_Md must leave its [0, +20 %] box plus the noise margin: about 4.4 s after onset at 112.5 rad/s
     assert 3.0 < figures["detection_delay_s"] < 6.0
+    # with the paper's 0.01 N.m on the torque the margin is about ten times wider: b_Md must grow further
+    loud = example.run("b-md", seed=seed, scenario=b_md, n_particles=20, workers=1).figures
+    assert loud["false_alarms_nominal"] == 0 and 10.0 < loud["detection_delay_s"] < 20.0
     assert figures["interval_never_wider_than_bglft"]
     assert figures["interval_width_median"] < figures["bglft_width_median"]
 
 
 def test_b_md_prognosis_figures_on_a_short_run(example):
     """The whole chain with fewer particles and a 65 s horizon: the figures land within loose bounds."""
-    figures = example.run("b-md", seed=3, t_end=65.0, n_particles=100, workers=1).figures
+    figures = example.run("b-md", seed=3, t_end=65.0, n_particles=100, workers=1, noise="quiet").figures
     assert figures["filter_steps"] == pytest.approx((65.0 - figures["detection_time_s"]) / 0.1, abs=1.5)
-    assert figures["rmse_theta"] < 0.05 and figures["rmse_gamma"] < 0.15
+    # gamma starts from a prior over four decades of life, not from a band around the true rate: its error
+    # over the whole run is larger than with the first round's band, while theta and the RUL stay close
+    assert figures["rmse_theta"] < 0.05 and figures["rmse_gamma"] < 0.35
     assert figures["ra"] > 0.9 and figures["alpha_lambda_pass_rate"] > 0.7
     assert 0 < figures["rmad_rul"] < 0.3 and figures["prognostic_horizon_s"] > 40.0
 
@@ -66,7 +72,7 @@ def test_mass_cases_simulate_the_load_and_estimate_it(example, case, law):
     """Section 7 as simulations: the load M follows its law to M_fail and the chain estimates it."""
     spec = example.CASES[case]
     assert spec.law == law and spec.truth(spec.eol) == pytest.approx(spec.theta_fail)
-    r = example.run(case, seed=0, n_particles=50, workers=1)
+    r = example.run(case, seed=0, n_particles=50, workers=1, noise="quiet")
     f = r.figures
     assert f["false_alarms_nominal"] == 0 and f["detection_time_s"] < spec.after
     assert f["rmse_theta"] < 0.1 and f["ra"] > 0.85
@@ -92,18 +98,42 @@ def test_main_writes_results_csv_and_plots_over_runs(example, tmp_path, capsys):
     assert "RMSE theta (%)" in printed and "Jha et al. (2016)" in printed
 
 
-def test_sweep_ladder_ends_at_the_default_preset_and_runs_a_group(example):
+def test_sweep_ladder_ends_at_the_named_preset_and_runs_a_group(example):
     from tests.cases.conftest import load_example
 
     sweep = load_example("torsion_bar_sweep")
     case = example.CASES["mass-linear"]
-    default = example.tuning(case, "default", residual_std=6e-4)
+    named = example.tuning(case, "named", residual_std=6e-4)
     last = sweep.ladder(case, residual_std=6e-4)[-1][2]
-    for key in ("noise_std", "inflation", "gamma_std", "start", "gamma_bounds", "prediction_walk"):
-        assert last[key] == default[key], key
-    assert last["adaptation"] == default["adaptation"]
+    for key in ("noise_std", "inflation", "gamma_std", "start", "prediction_walk"):
+        assert last[key] == named[key], key
+    assert (last["gamma0"] == named["gamma0"]).all() and last["adaptation"] == named["adaptation"]
     rows = sweep.sweep("mass-linear", seeds=1, n_particles=20, workers=1, quiet=True, parameters=["band"])
     assert [r["value"] for r in rows] == ["[0.0224, 0.0336]", "[0.0168, 0.0392]", "[0.0056, 0.0504]"]
     assert all(0.0 <= r["alpha_lambda_pass_rate"] <= 1.0 and r["rmse_theta"] > 0 for r in rows)
     with pytest.raises(ValueError, match="unknown sweep parameter"):
         sweep.sweep("mass-linear", seeds=1, n_particles=20, workers=1, quiet=True, parameters=["gain"])
+
+
+@pytest.mark.parametrize("name", ["b-md", "mass-linear", "mass-exponential", "linear-0.05"])
+def test_no_preset_setting_comes_from_the_simulated_truth(example, name):
+    """Every preset gives the same settings whatever the true rate and onset (the truth the simulation uses).
+
+    Where each value comes from: ``paper``, the numbers Jha et al. (2016) print; ``named``, the failure
+    value and nominal value (rate prior), the calibrated residual noise, and the constants of
+    prognosis.hypotheses / prognosis.isolation (life prior 10 to 1e5 steps, kernel discount 0.98,
+    inflation 4); ``auto``, the same plus the other failure values a user declares (``OTHER_FAILURES``).
+    """
+    import dataclasses
+
+    case = example.CASES[name]
+    other = dataclasses.replace(case, gamma=case.gamma * 1.7, onset=case.onset + 3.0)
+    for preset in ("paper", "named"):
+        a, b = example.tuning(case, preset, 1e-3, 100), example.tuning(other, preset, 1e-3, 100)
+        assert a.keys() == b.keys()
+        for key in a:
+            if isinstance(a[key], np.ndarray):
+                assert np.array_equal(a[key], b[key]), key
+            else:
+                assert a[key] == b[key], key
+    assert case.other_failures == other.other_failures
