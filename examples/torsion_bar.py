@@ -57,6 +57,7 @@ from diagnosis.signals import add_noise, as_record
 from prognosis import ExponentialDegradation, HealthMonitor, LinearDegradation, VarianceAdaptation
 from prognosis.hypotheses import Hypothesis, rate_prior
 from prognosis.isolation import IsolatingMonitor
+from prognosis.monitor import MonitorResult
 from prognosis.particle_filter import KernelSmoothing
 
 DT_RECORD = 0.01  # s, sampling of the simulated sensors
@@ -363,7 +364,7 @@ def _isolate(case: Case, arrs: list, calibration, degraded, n: int, seed: int):
                  for a in arrs}
     failures = {case.candidate: case.theta_fail, **case.other_failures}
     monitor = IsolatingMonitor(arrs, failures, noise_std=noise, dt=DT_FILTER, n_particles=n, rul_every=1,
-                               horizon=2 * case.t_end, detection=detection, seed=seed)
+                               detection=detection, seed=seed)  # its default horizon: nothing from the true life
     isolation = monitor.run(degraded)
     decision = isolation.decision
     if decision is None:
@@ -380,8 +381,6 @@ def _isolate(case: Case, arrs: list, calibration, degraded, n: int, seed: int):
 
 
 def _empty(isolation):
-    from prognosis.monitor import MonitorResult
-
     return MonitorResult(isolation.detection_time, evaluation=isolation.evaluations[0])
 
 

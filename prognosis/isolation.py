@@ -34,7 +34,7 @@ import numpy as np
 from .degradation import PerAssetDegradation, degradation_model
 from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, rate_prior,
                          sensitivity, signature_candidates)
-from .monitor import MonitorResult
+from .monitor import MonitorResult, filter_stride
 from .observation import observation_model
 from .particle_filter import KernelSmoothing, ParticleFilter
 from .rul import RULDistribution, RULPredictor
@@ -381,7 +381,7 @@ class IsolatingMonitor:
         pf.initialize((np.array([s[0] for s in starts]), np.array([s[1] for s in starts])), gamma0=gamma0,
                       assets=len(hypotheses))
         t = evaluations[0].t
-        stride = _stride(t, self.dt)
+        stride = filter_stride(t, self.dt)
         steps = range(k0, t.size, stride)
         every = -(-len(steps) // 100)
         rows, rul_t, rul, decisions = [], [], [], []
@@ -474,14 +474,6 @@ class IsolatingMonitor:
         if not samples:  # every hypothesis rejected
             return RULDistribution(np.full((1, 1), np.inf), np.ones((1, 1)), self.horizon)
         return RULDistribution(np.concatenate(samples)[None, :], np.concatenate(mixed)[None, :], self.horizon)
-
-
-def _stride(t: np.ndarray, dt: float) -> int:
-    step = float(np.median(np.diff(t)))
-    stride = int(round(dt / step))
-    if stride < 1 or abs(stride * step - dt) > 1e-6 * dt:
-        raise ValueError(f"the filter step dt = {dt} s is not a multiple of the record's step {step} s")
-    return stride
 
 
 def _softmax(log_z: np.ndarray) -> np.ndarray:

@@ -160,6 +160,19 @@ class MonitorResult:
         return samples, weights
 
 
+def filter_stride(t: np.ndarray, dt: float) -> int:
+    """Record samples per filter step ``dt``; raises ValueError unless ``dt`` is a multiple of the record's step.
+
+    >>> filter_stride(np.arange(0.0, 1.0, 0.01), 0.1)
+    10
+    """
+    step = float(np.median(np.diff(t)))
+    stride = int(round(dt / step))
+    if stride < 1 or abs(stride * step - dt) > 1e-6 * dt:
+        raise ValueError(f"the filter step dt = {dt} s is not a multiple of the record's step {step} s")
+    return stride
+
+
 def _number(value) -> float | None:
     return None if value is None or not np.isfinite(value) else float(value)
 
@@ -339,11 +352,7 @@ class HealthMonitor:
         return min(lo, float(explained.min())), max(hi, float(explained.max()))
 
     def _stride(self, t: np.ndarray) -> int:
-        step = float(np.median(np.diff(t)))
-        stride = int(round(self.dt / step))
-        if stride < 1 or abs(stride * step - self.dt) > 1e-6 * self.dt:
-            raise ValueError(f"the filter step dt = {self.dt} s is not a multiple of the record's step {step} s")
-        return stride
+        return filter_stride(t, self.dt)
 
     def _filter_step(self, time: float, y: float, points: list) -> None:
         diagnostics = self.filter.step(np.array([y]), points)
