@@ -151,6 +151,7 @@ def test_bad_options_are_named(option, value, match):
         derive_arrs(lib.dc_motor(), **{option: value})
 
 
+@pytest.mark.slow  # isolation search on the three-tank with sensor faults: about 3 s
 def test_with_sensor_faults_the_three_tank_still_isolates_az1_and_az3():
     signatures = signature_matrix(quiet(derive_arrs, lib.three_tank()))
     assert {"sensor h1", "sensor h2", "sensor h3"} <= set(signatures.rows)

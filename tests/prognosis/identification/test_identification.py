@@ -224,6 +224,7 @@ def test_em_log_likelihood_never_decreases(cross, inputs, missing):
     assert np.any(fit.model.S) == cross
 
 
+@pytest.mark.slow  # EM on a simulated record: about 1.5 s
 def test_em_recovers_eigenvalues_and_markov_parameters():
     """State basis is not identifiable: compare eig(A), D and the Markov parameters C A^k B only."""
     truth = LinearGaussianModel(A=[[0.9, 0.15], [0.0, 0.5]], B=[[1.0, 0.0], [0.5, 1.0]], C=[[1.0, 0.6]],
