@@ -217,6 +217,7 @@ def test_output_is_deterministic():
         assert layout(build(), "integral") == layout(build(), "integral")
 
 
+@pytest.mark.slow
 def test_output_does_not_depend_on_the_hash_seed():
     code = "from bondgraph.drawing import to_svg; from bondgraph.library import torsion_bar; " \
            "import sys; sys.stdout.write(to_svg(torsion_bar(), 'derivative'))"

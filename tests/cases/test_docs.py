@@ -70,6 +70,7 @@ DEMOS = {"4-command-line.md"}
 
 @pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in DEMOS else n
                                   for n in sorted(MIN_EXAMPLES)])
+@pytest.mark.slow
 def test_tutorial_runs(name):
     for package in NEEDS.get(name, ()):
         pytest.importorskip(package)

@@ -193,6 +193,7 @@ def test_rul_distribution_reports_the_censored_fraction(monitored):
     assert ax.lines[0].get_xdata()[0] == pytest.approx(prediction.mean[0])
 
 
+@pytest.mark.slow
 def test_importing_the_packages_does_not_import_matplotlib_or_pandas():
     code = ("import sys, bondgraph, diagnosis, prognosis, bgphm.plotting\n"
             "print(sorted(m for m in ('matplotlib', 'pandas') if m in sys.modules))")

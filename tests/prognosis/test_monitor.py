@@ -77,6 +77,7 @@ def test_gamma_prior_over_an_interval_and_prediction_walk(scenario):
             monitor(arr, rul_every=every)
 
 
+@pytest.mark.slow
 def test_sample_by_sample_equals_the_whole_record(scenario):
     arr, record = scenario
     whole = monitor(arr, seed=4).run(record)

@@ -276,6 +276,7 @@ def test_downward_failure_and_censoring():
     assert rul.median[0] == pytest.approx(2.0)
 
 
+@pytest.mark.slow
 def test_stepwise_and_closed_form_predictions_agree_in_distribution():
     rng = np.random.default_rng(5)
     theta = np.full((1, 4000), 0.05)

@@ -275,6 +275,7 @@ def test_rational_operations_contain_the_exact_value(a, b, op):
     interval_and_point(st.floats(min_value=-1e3, max_value=1e3, allow_nan=False)),
     st.integers(min_value=-6, max_value=9),
 )
+@pytest.mark.slow
 def test_integer_power_contains_the_exact_value(a, n):
     X, x = a
     if n < 0 and X.contains(0.0):

@@ -145,6 +145,7 @@ def expected_complete_log_likelihood(model, res, y, u):
     return total
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("cross", [True, False])
 def test_m_step_maximizes_the_expected_complete_data_log_likelihood(cross):
     """No random perturbation of the new parameters does better on eq. (17) (the M-step is exact)."""
@@ -288,6 +289,7 @@ def test_simulate_draws_the_joint_noise_and_initial_state():
     assert np.array_equal(CORRELATED.simulate(u[:50], 1)[1], CORRELATED.simulate(u[:50], 1)[1])
 
 
+@pytest.mark.slow
 def test_predict_feature_interval_covers_95_percent_of_futures():
     """Monte Carlo over independent records: filter y_1..y_T, predict y_{T+1..T+H}, count hits per lead (S != 0)."""
     rng = np.random.default_rng(12)
@@ -355,6 +357,7 @@ def drifting_record(seed, steps=700, onset=350):
     return y, u[:, None], onset
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("seed", [0, 1])
 def test_online_identification_detects_the_instability_after_the_onset_only(seed):
     y, u, onset = drifting_record(seed)

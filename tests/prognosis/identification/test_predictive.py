@@ -113,6 +113,7 @@ def test_the_posterior_concentrates_on_the_true_poles():
     assert np.unique(post.theta, axis=0).shape[0] > 400
 
 
+@pytest.mark.slow
 def test_same_seed_same_particles():
     y, u, *_ = _window()
     one = sample_posterior(y, u, 2, particles=200, seed=7)
