@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from bgphm.errors import UsageError
-from bgphm.files import csv_text
+from bgphm.files import check_output, csv_text, input_files, write_text
 from bondgraph.errors import PHMError
 from bondgraph.io import ModelSpec, load_model
 from diagnosis.signals import Record, RecordError, RecordWarning, gaps, read_csv
@@ -39,6 +39,7 @@ from diagnosis.signals import Record, RecordError, RecordWarning, gaps, read_csv
 __all__ = ["main"]
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
+MAX_PARTICLES = 100_000  # per hypothesis: the filter holds (hypotheses, particles) arrays at every step
 
 
 class Progress:
@@ -63,10 +64,11 @@ def cmd_arr(args, progress: Progress) -> int:
     """
     from diagnosis.report import arr_report
 
+    out = _output_file(args)
     spec = load_model(args.model)
     progress(f"deriving the ARRs of {spec.model.name!r}")
     text = arr_report(spec.model, format=args.format)
-    _emit(text, args.out, progress)
+    _emit(text, out)
     return EXIT_OK
 
 
@@ -79,6 +81,7 @@ def cmd_simulate(args, progress: Progress) -> int:
     """
     from bondgraph.simulation import simulate
 
+    out = _output_file(args)
     spec = load_model(args.model)
     t_end = args.t_end if args.t_end is not None else (spec.t_end or 1.0)
     if not (math.isfinite(t_end) and t_end > 0):
@@ -93,9 +96,7 @@ def cmd_simulate(args, progress: Progress) -> int:
     progress(f"simulating {spec.model.name!r} over [0, {t_end:g}] s")
     result = simulate(spec.model, (0.0, t_end), spec.inputs, x0=spec.x0, parameters=parameters,
                       t_eval=np.linspace(0.0, t_end, args.samples))
-    columns = result.record()
-    text = csv_text(columns)
-    _emit(text, args.out, progress)
+    _emit(csv_text(result.record()), out)
     return EXIT_OK
 
 
@@ -105,6 +106,7 @@ def cmd_detect(args, progress: Progress) -> int:
     The noise margin is ``--margin`` or ``--k`` robust standard deviations of the residual on the start of
     the record (``--calibrate``).  With ``--out``: ``detection.json``, ``residuals.csv`` and residual plots.
     """
+    out = _output_directory(args)
     spec = load_model(args.model)
     arrs = _arrs(spec, progress, args.arr, args.integrals)
     record = _record(args.data, arrs, progress)
@@ -117,15 +119,14 @@ def cmd_detect(args, progress: Progress) -> int:
     for e in evaluations:
         when = "no alarm" if e.detection_time is None else f"alarm at t = {e.detection_time:g} s"
         print(f"{e.name}: {when} (margin {e.margin:.3g}, persistence {e.persistence})")
-    if args.out:
-        out = _directory(args.out)
-        (out / "detection.json").write_text(json.dumps(summary, indent=2))
+    if out is not None:
+        write_text(out / "detection.json", json.dumps(summary, indent=2))
         columns = {"t": record.t}
         for e in evaluations:
             # the threshold holds -r_n in [lower - margin, upper + margin]; written as the band on r_n itself
             columns.update({f"{e.name}.residual": e.residual, f"{e.name}.lower": -(e.upper + e.margin),
                             f"{e.name}.upper": -(e.lower - e.margin), f"{e.name}.alarm": e.alarm.astype(float)})
-        (out / "residuals.csv").write_text(csv_text(columns))
+        write_text(out / "residuals.csv", csv_text(columns))
         written = [out / "detection.json", out / "residuals.csv"] + _plots("detection", out, evaluations, progress)
         for path in written:
             print(f"wrote {path}")
@@ -146,6 +147,7 @@ def cmd_prognose(args, progress: Progress) -> int:
     from diagnosis.signals import default_window
     from prognosis.isolation import IsolatingMonitor
 
+    out = _output_directory(args)
     spec = load_model(args.model)
     arrs = _arrs(spec, progress, args.arr, args.integrals)
     parameters = spec.model.parameters
@@ -161,8 +163,12 @@ def cmd_prognose(args, progress: Progress) -> int:
     window = args.window or default_window(3)
     # one filter step per derivative window: the residuals it reads are then nearly independent
     dt = args.dt if args.dt is not None else float(f"{step * window:.12g}")
+    span = float(record.t[-1] - record.t[0])
+    if dt >= span:
+        raise UsageError(f"--dt {dt:g}: the filter step is not shorter than the record ({span:g} s)")
     if args.dt is not None and abs(round(dt / step) * step - dt) > 1e-6 * dt:
         raise UsageError(f"--dt {dt:g}: the filter step must be a multiple of the record's step {step:g} s")
+    _check_horizon(args, dt, len(failures) * len(laws))
     detection = {e.name: {"margin": e.margin, "persistence": args.persistence,
                           **({"window": args.window} if args.window else {})} for e in evaluations}
     if args.rate is not None and not (all(math.isfinite(v) for v in args.rate) and args.rate[0] < args.rate[1]):
@@ -174,17 +180,18 @@ def cmd_prognose(args, progress: Progress) -> int:
     progress(f"particle filter from the first alarm after t = {until:g} s: {len(laws)} law(s) per candidate, "
              f"{args.particles} particles each, dt = {dt:g} s")
     result = monitor.run(record, evaluations=evaluations, progress=_filter_progress(progress))
+    if result.decision is not None and result.decision.status == "rejected":  # no answer: said even with --quiet
+        print(f"bgphm: warning: every hypothesis was rejected: {'; '.join(_first_reasons(result))}", file=sys.stderr)
     summary = _prognosis_summary(args, result, failures, dt, noise)
     print(_prognosis_line(result, summary))
-    if args.out:
-        out = _directory(args.out)
-        (out / "prognosis.json").write_text(json.dumps(summary, indent=2, default=_json_value))
+    if out is not None:
+        write_text(out / "prognosis.json", json.dumps(summary, indent=2, default=_json_value))
         written = [out / "prognosis.json"]
         if result.t.size:
-            (out / "estimates.csv").write_text(csv_text(_estimate_columns(result)))
+            write_text(out / "estimates.csv", csv_text(_estimate_columns(result)))
             p = result.monitor_result().rul_percentiles((5, 50, 95))
-            (out / "rul.csv").write_text(csv_text({"t": result.rul_t, "rul_mean": result.monitor_result().rul_mean,
-                                                    "rul_p5": p[:, 0], "rul_median": p[:, 1], "rul_p95": p[:, 2]}))
+            write_text(out / "rul.csv", csv_text({"t": result.rul_t, "rul_mean": result.monitor_result().rul_mean,
+                                                  "rul_p5": p[:, 0], "rul_median": p[:, 1], "rul_p95": p[:, 2]}))
             written += [out / "estimates.csv", out / "rul.csv"]
         primary = next((e for e in result.evaluations if e.name in result.fired), result.evaluations[0])
         best = result.monitor_result() if result.t.size else None
@@ -204,7 +211,8 @@ def cmd_demo(args, progress: Progress) -> int:
     """
     from bgphm.demo import prepare_demo
 
-    plan = prepare_demo(args.name, Path(args.out), progress, seed=args.seed)
+    out = check_output(args.out, kind="directory", force=args.force)
+    plan = prepare_demo(args.name, out, progress, seed=args.seed)
     quiet = ["--quiet"] if progress.quiet else []
     for command in plan.commands:
         print("$ bgphm " + " ".join(command))
@@ -262,6 +270,9 @@ def _record(path, arrs: list, progress: Progress) -> Record:
 def _calibration_end(record: Record, args, *, otherwise: str = " (or give --margin)") -> float:
     """End of the healthy stretch that calibrates the residual noise: --calibrate (default: the first 20 %)."""
     t0, t1 = float(record.t[0]), float(record.t[-1])
+    if args.calibrate is not None and args.calibrate >= t1:
+        raise UsageError(f"--calibrate {args.calibrate:g}: at or past the end of the record (t = {t1:g} s); the "
+                         "calibration stretch must be fault-free and leave data to monitor")
     until = args.calibrate if args.calibrate is not None else t0 + 0.2 * (t1 - t0)
     count = int(np.count_nonzero(record.t <= until))
     if count < 20:
@@ -283,13 +294,63 @@ def _detect(arrs: list, record: Record, args, progress: Progress) -> list:
             else:
                 from diagnosis.detection import noise_margin
 
-                nominal = record.between(end=_calibration_end(record, args))
-                margin = noise_margin(arr, nominal, k=args.k, **options)
-            evaluations.append(arr.evaluate(record, margin=margin, **options))
+                until = _calibration_end(record, args)
+                margin = noise_margin(arr, record.between(end=until), k=args.k, **options)
+            evaluation = arr.evaluate(record, margin=margin, **options)
         for w in caught:
             progress(f"warning: {w.message}")
+        if args.margin is None:
+            _check_calibration(arr, record, evaluation, until, args, options)
+        evaluations.append(evaluation)
         progress(f"{arr.name}: evaluated with margin {margin:.3g}")
     return evaluations
+
+
+def _check_horizon(args, dt: float, hypotheses: int) -> None:
+    """``--horizon`` (default 2000 filter steps) within the predictor's limits, before the filter runs."""
+    from prognosis.isolation import HORIZON_STEPS
+    from prognosis.rul import BANK_BYTES_PER_STEP, MAX_BANK_BYTES, MAX_HORIZON_STEPS
+
+    horizon = args.horizon if args.horizon is not None else HORIZON_STEPS * dt
+    steps = horizon / dt
+    if steps > MAX_HORIZON_STEPS:
+        raise UsageError(f"--horizon {horizon:g}: {steps:.3g} filter steps of {dt:g} s; at most {MAX_HORIZON_STEPS}")
+    need = hypotheses * args.particles * math.ceil(steps) * BANK_BYTES_PER_STEP
+    if need > MAX_BANK_BYTES:
+        raise UsageError(f"--horizon {horizon:g} with --particles {args.particles}: the RUL predictions of "
+                         f"{hypotheses} hypotheses would need {need / 2**30:.3g} GiB of random numbers, more than "
+                         f"{MAX_BANK_BYTES / 2**30:g} GiB; shorten --horizon or use fewer --particles")
+
+
+def _check_calibration(arr, record: Record, evaluation, until: float, args, options: dict) -> None:
+    """Refuse a calibration stretch that holds a fault: split-half validation.
+
+    A margin calibrated on a stretch that holds a fault absorbs it, and the alarm comes late or never.
+    A degradation, once there, stays: a fault in the stretch is in its second half.  So the margin is
+    calibrated again on the first half alone, and the stretch is refused if the ARR is in alarm in its
+    second half, with that margin or with the whole stretch's.  Alarms in the first half (a start-up
+    transient, say) are left to the user, as the monitors ignore alarms before the stretch's end.  A
+    first half under 20 samples is not checked.
+    """
+    from diagnosis.detection import noise_margin
+
+    t0 = float(record.t[0])
+    half = t0 + 0.5 * (until - t0)
+    second = (record.t > half) & (record.t <= until)
+    stretch = (f"--calibrate {until:g}" if args.calibrate is not None
+               else f"the default calibration stretch (the first 20 % of the record, t <= {until:g} s)")
+    hint = "give a shorter --calibrate (or --margin)"
+    if evaluation.alarm[second].any():
+        when = float(record.t[second][evaluation.alarm[second]][0])
+        raise UsageError(f"{stretch} is not fault-free: {evaluation.name} is in alarm at t = {when:g} s within it; "
+                         + hint)
+    if np.count_nonzero(record.t <= half) < 20:
+        return
+    check = arr.evaluate(record, margin=noise_margin(arr, record.between(end=half), k=args.k, **options), **options)
+    if check.alarm[second].any():
+        when = float(record.t[second][check.alarm[second]][0])
+        raise UsageError(f"{stretch} is not fault-free: calibrated on its first half (t <= {half:g} s), "
+                         f"{evaluation.name} is in alarm at t = {when:g} s within it; {hint}")
 
 
 def _evaluation_summary(e) -> dict:
@@ -414,13 +475,22 @@ def _prognosis_line(result, summary: dict) -> str:
     head = f"alarm at t = {result.detection_time:g} s ({', '.join(result.fired)})"
     if summary["candidate"] is None:
         why = ("no parameter with a failure value is sensitive to every ARR that fired" if not result.candidates
-               else "every hypothesis was rejected: " + "; ".join(result.rejected.values()))
+               else "every hypothesis was rejected: " + "; ".join(_first_reasons(result)))
         return f"{head}; {why}"
     last = summary["last"]
     law = summary["degradation"] + ("" if summary["degradation_decided"] else " (undecided)")
     return (f"{head}; candidate {summary['candidate']} ({summary['status']}), degradation {law}; at t = "
             f"{last['t']:g} s RUL median {_fmt(last['rul_median'])} s, 5-95 % [{_fmt(last['rul_p5'])}, "
             f"{_fmt(last['rul_p95'])}] s")
+
+
+def _first_reasons(result) -> list[str]:
+    """The first rejection reason of each candidate (its laws are often rejected for the same reason)."""
+    reasons = {}
+    for h in result.hypotheses:
+        if h.name in result.rejected:
+            reasons.setdefault(h.candidate, f"{h.name}: {result.rejected[h.name]}")
+    return list(reasons.values())
 
 
 def _estimate_columns(result) -> dict:
@@ -493,23 +563,25 @@ def _has_value(model, signal: str) -> bool:
     return any(e.signal == signal and e.value is not None for e in model.elements.values())
 
 
-def _emit(text: str, out: str | None, progress: Progress) -> None:
-    if out in (None, "-"):
+def _output_file(args) -> Path | None:
+    """``--out`` of a command writing one file, checked before any work; None for stdout."""
+    if args.out in (None, "-"):
+        return None
+    return check_output(args.out, kind="file", inputs=input_files(args.model), force=args.force)
+
+
+def _output_directory(args) -> Path | None:
+    """``--out`` of a command writing a directory of files, checked before any work; None without it."""
+    if args.out is None:
+        return None
+    return check_output(args.out, kind="directory", inputs=input_files(args.model, args.data), force=args.force)
+
+
+def _emit(text: str, out: Path | None) -> None:
+    if out is None:
         sys.stdout.write(text)
         return
-    path = Path(out)
-    if path.parent and not path.parent.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text, encoding="utf-8")
-    print(f"wrote {path}")
-
-
-def _directory(out) -> Path:
-    path = Path(out)
-    if path.exists() and not path.is_dir():
-        raise UsageError(f"--out {path}: exists and is not a directory")
-    path.mkdir(parents=True, exist_ok=True)
-    return path
+    print(f"wrote {write_text(out, text)}")
 
 
 def _finite(value) -> float | None:
@@ -548,6 +620,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("model", metavar="MODEL", help=model_help)
     p.add_argument("--format", choices=("md", "html", "tex"), default="md", help="report format (default md)")
     p.add_argument("--out", help="output file (default: stdout)")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file (never an input)")
     p.set_defaults(run=cmd_arr)
 
     p = sub.add_parser("simulate", help="simulate the model and write its signals as CSV")
@@ -556,6 +629,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--samples", type=int, default=501, help="output samples (default 501)")
     p.add_argument("--set", action="append", metavar="PARAM=VALUE", help="override a parameter (repeatable)")
     p.add_argument("--out", help="CSV file (default: stdout)")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file (never an input)")
     p.set_defaults(run=cmd_simulate)
 
     for name, helptext in (("detect", "residuals, robust thresholds and alarms on recorded data"),
@@ -574,7 +648,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="avoid: differentiate an ARR that would integrate measured signals (default); keep: "
                             "keep the integrals (better on long records sampled fast, where a second derivative "
                             "of the noise is larger than the integral's random walk)")
-        p.add_argument("--out", help="output directory")
+        p.add_argument("--out", help="output directory (new or empty, unless --force)")
+        p.add_argument("--force", action="store_true",
+                       help="write into a non-empty --out directory, replacing files of the same names")
         p.set_defaults(run=cmd_detect if name == "detect" else cmd_prognose)
     p.add_argument("--fail", action="append", required=True, metavar="PARAM=VALUE",
                    help="failure value of a parameter that can fail (repeatable); the candidates are those whose "
@@ -604,7 +680,10 @@ def build_parser() -> argparse.ArgumentParser:
                        f"it can be\nrerun by hand with the same results).\n\ndemos:\n{listing}")
     p.add_argument("name", nargs="?", default="dc-motor", metavar="NAME",
                    help=f"demo to run: {', '.join(DEMOS)} (default dc-motor)")
-    p.add_argument("--out", default="results/demo", help="output directory (default results/demo)")
+    p.add_argument("--out", default="results/demo", help="output directory (default results/demo; new or "
+                   "empty, unless --force)")
+    p.add_argument("--force", action="store_true",
+                   help="write into a non-empty --out directory, replacing files of the same names")
     p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
     p.set_defaults(run=cmd_demo)
     return parser
@@ -635,19 +714,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)  # exits with 2 on bad usage
     progress = Progress(args.quiet)
     try:
-        if getattr(args, "persistence", 1) < 1:
-            raise UsageError(f"--persistence must be at least 1, got {args.persistence}")
-        if getattr(args, "margin", None) is not None and not (math.isfinite(args.margin) and args.margin >= 0):
-            raise UsageError(f"--margin must be a finite non-negative number, got {args.margin}")
-        if getattr(args, "particles", 2) < 2:
-            raise UsageError(f"--particles must be at least 2, got {args.particles}")
-        if getattr(args, "rul_every", 1) < 1:
-            raise UsageError(f"--rul-every must be at least 1 filter step, got {args.rul_every}")
-        for option in ("horizon", "dt"):
-            value = getattr(args, option, None)
-            if value is not None and not (math.isfinite(value) and value > 0):
-                raise UsageError(f"--{option} must be a positive number of seconds, got {value}")
-        return args.run(args, progress)
+        with warnings.catch_warnings():
+            warnings.simplefilter("default")  # each distinct warning once, as one line without a source path
+            warnings.showwarning = _warning_line
+            _check_options(args)
+            return args.run(args, progress)
     except PHMError as exc:  # bad usage or bad input: a model, a record, equations, a simulation
         print(f"bgphm: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE
@@ -659,6 +730,33 @@ def main(argv: Sequence[str] | None = None) -> int:
             raise
         print(f"bgphm: {type(exc).__name__}: {_one_line(exc)} (run with --debug for the traceback)", file=sys.stderr)
         return EXIT_FAILURE
+
+
+def _check_options(args) -> None:
+    """The checks of single options that need no file: a UsageError naming the option."""
+    if getattr(args, "persistence", 1) < 1:
+        raise UsageError(f"--persistence must be at least 1, got {args.persistence}")
+    if getattr(args, "margin", None) is not None and not (math.isfinite(args.margin) and args.margin >= 0):
+        raise UsageError(f"--margin must be a finite non-negative number, got {args.margin}")
+    if not (math.isfinite(getattr(args, "k", 1.0)) and getattr(args, "k", 1.0) > 0):
+        raise UsageError(f"--k must be a positive number of standard deviations, got {args.k}")
+    if getattr(args, "calibrate", None) is not None and not math.isfinite(args.calibrate):
+        raise UsageError(f"--calibrate must be a finite time in s, got {args.calibrate}")
+    if not 0 <= getattr(args, "seed", 0) < 2**63:
+        raise UsageError(f"--seed must be an integer in [0, 2**63), got {args.seed}")
+    if not 2 <= getattr(args, "particles", 2) <= MAX_PARTICLES:
+        raise UsageError(f"--particles must be in [2, {MAX_PARTICLES}], got {args.particles}")
+    if getattr(args, "rul_every", 1) < 1:
+        raise UsageError(f"--rul-every must be at least 1 filter step, got {args.rul_every}")
+    for option in ("horizon", "dt"):
+        value = getattr(args, option, None)
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise UsageError(f"--{option} must be a positive number of seconds, got {value}")
+
+
+def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """``warnings.showwarning`` for the commands: ``bgphm: warning: ...`` on one line, no source path."""
+    print(f"bgphm: warning: {_one_line(message)}", file=sys.stderr, flush=True)
 
 
 def _one_line(exc: BaseException) -> str:

@@ -41,7 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from bgphm.errors import UsageError
-from bgphm.files import csv_text
+from bgphm.files import csv_text, write_text
 from bondgraph.io import to_json
 from bondgraph.library import Example, example
 from diagnosis.signals import add_noise, as_record
@@ -168,7 +168,7 @@ def prepare_demo(name: str, out: Path, progress: Callable[[str], None], *, seed:
     truth = {"candidate": demo.candidate, "nominal": nominal, "degradation": "exponential", "rate": demo.rate,
              "onset": demo.onset, "failure_value": nominal * demo.fail_factor, "eol": demo.eol(nominal),
              "noise_std": demo.noise, "seed": seed}
-    (out / "truth.json").write_text(json.dumps(truth, indent=2))
+    write_text(out / "truth.json", json.dumps(truth, indent=2))
     print(f"wrote {model_path}, {data_path} and {out / 'truth.json'} (true end of life {truth['eol']:.4g} s)")
     commands = _commands(demo, model_path, data_path, truth["failure_value"], out, seed)
     return DemoPlan(demo, commands, truth, out)
@@ -183,24 +183,20 @@ def _write_record(demo: Demo, ex: Example, nominal: float, path: Path, seed: int
                       parameters={demo.candidate: demo.theta(nominal)}, t_eval=t,
                       max_step=demo.t_end / demo.samples * 5)
     record = add_noise(as_record(result.record(), name=demo.example), demo.noise, seed=seed)
-    path.write_text(csv_text({"t": record.t, **record.columns}))
-    return path
+    return write_text(path, csv_text({"t": record.t, **record.columns}))
 
 
 def _write_model(demo: Demo, ex: Example, out: Path) -> Path:
     """``model.json`` when every input is a number, else ``model.py`` (see the module docstring)."""
     inputs = {**ex.inputs, **demo.inputs}
     if all(_is_number(v) for v in inputs.values()):
-        path = out / "model.json"
-        path.write_text(to_json(ex.model, inputs=inputs, t_end=demo.t_end, x0=ex.x0))
-        return path
+        return write_text(out / "model.json", to_json(ex.model, inputs=inputs, t_end=demo.t_end, x0=ex.x0))
     bad = [k for k, v in demo.inputs.items() if not _is_number(v)]
     if bad:  # a model.py can only rebuild the example's own functions of time
         raise ValueError(f"demo {demo.example!r}: input overrides {bad} must be numbers")
     overrides = {k: float(v) for k, v in demo.inputs.items()}
     inputs_line = f"inputs = {{**_example.inputs, **{overrides!r}}}" if overrides else "inputs = _example.inputs"
-    path = out / "model.py"
-    path.write_text("\n".join([
+    return write_text(out / "model.py", "\n".join([
         f'"""The model of ``bgphm demo {demo.example}``: the library example with its inputs.',
         "",
         "Python rather than JSON because an input is a function of time or a controller, which JSON",
@@ -216,11 +212,14 @@ def _write_model(demo: Demo, ex: Example, out: Path) -> Path:
         f"t_end = {float(demo.t_end)!r}",
         "",
     ]))
-    return path
 
 
 def _commands(demo: Demo, model_path: Path, data_path: Path, fail: float, out: Path, seed: int) -> list[list[str]]:
-    """The ``bgphm`` command lines of the demo, as a user would type them."""
+    """The ``bgphm`` command lines of the demo, as a user would type them.
+
+    Each writes into the demo's own directory, which the demo has checked (new, empty or
+    ``--force``), so each has ``--force``: rerun by hand, it replaces its own outputs.
+    """
     model, data = str(model_path), str(data_path)
     detection = ["--calibrate", f"{demo.calibrate:g}"]
     if demo.integrals != "avoid":  # the CLI's default
@@ -228,11 +227,11 @@ def _commands(demo: Demo, model_path: Path, data_path: Path, fail: float, out: P
     if demo.persistence is not None:
         detection += ["--persistence", str(demo.persistence)]
     return [
-        ["arr", model, "--format", "html", "--out", str(out / "report.html")],
-        ["detect", model, data, *detection, "--out", str(out / "detect")],
+        ["arr", model, "--format", "html", "--out", str(out / "report.html"), "--force"],
+        ["detect", model, data, *detection, "--out", str(out / "detect"), "--force"],
         ["prognose", model, data, "--fail", f"{demo.candidate}={fail:.6g}", *detection,
          "--particles", str(demo.particles), *(["--dt", f"{demo.dt:g}"] if demo.dt else []), "--seed", str(seed),
-         "--out", str(out / "prognose")],
+         "--out", str(out / "prognose"), "--force"],
     ]
 
 

@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from bgphm.files import write_with
 from bondgraph._optional import import_optional
 
 if TYPE_CHECKING:  # annotations only: matplotlib stays optional
@@ -116,7 +117,8 @@ def save_figure(fig: Figure, path: str | Path, dpi: int = 110) -> Path:
     plt = pyplot()
     path = Path(path)
     fig.tight_layout()
-    fig.savefig(path, dpi=dpi)
+    # the format follows the suffix of path, which the temporary file keeps
+    write_with(path, lambda temporary: fig.savefig(temporary, dpi=dpi, format=path.suffix.lstrip(".") or None))
     plt.close(fig)
     return path
 

@@ -45,6 +45,7 @@ EVIDENCE_RATIO = 100.0  # "decisive" on Jeffreys' scale: a hypothesis is declare
 MIXTURE_FLOOR = 1e-3  # hypotheses less probable than this are left out of the RUL mixture
 PROCESS_NOISE = 0.1  # sigma_v per filter step, as a fraction of the candidate's resolution per sample
 HORIZON_STEPS = 2000  # RUL horizon cap in filter steps, unless given
+DRIFT_AWAY_STEPS = 5  # consecutive filter steps beyond the healthy box, away from failure, that reject a hypothesis
 
 
 @dataclass(frozen=True)
@@ -385,13 +386,15 @@ class IsolatingMonitor:
         steps = range(k0, t.size, stride)
         every = -(-len(steps) // 100)
         rows, rul_t, rul, decisions = [], [], [], []
-        predictors = {}
+        predictors, away = {}, np.zeros(len(hypotheses), int)
+        boxes = np.array([self._box(h, arrs) for h in hypotheses])
         for done, k in enumerate(steps, 1):
             y = np.array([-e.residual[k] for e in evaluations])
             points = [[p[k] for p in e.points] for e in evaluations]
             pf.step(np.broadcast_to(y, (len(hypotheses), y.size)), points)
             estimate = pf.estimate()
             self._reject(result, hypotheses, estimate, float(t[k]))
+            away = self._reject_drift_away(result, hypotheses, estimate, float(t[k]), boxes, away)
             rows.append((float(t[k]), pf.log_evidence.copy(), estimate))
             if (done - 1) % self.rul_every == 0:
                 decision = decide(hypotheses, pf.log_evidence, result.groups, result.rejected, self.min_ratio)
@@ -436,6 +439,37 @@ class IsolatingMonitor:
         distance = abs(h.failure - h.nominal)
         resolution = min(1.0 / math.sqrt(total), distance) if total > 0 else distance
         return start[0], start[1], self.process_noise * resolution
+
+    @staticmethod
+    def _box(h: Hypothesis, arrs: list) -> tuple[float, float]:
+        """The candidate's healthy values: its uncertainty box around nominal (the nominal alone without one)."""
+        lo, hi = next((a.uncertainties[h.candidate] for a in arrs if h.candidate in a.uncertainties), (0.0, 0.0))
+        return tuple(sorted((h.nominal * (1 + lo), h.nominal * (1 + hi))))
+
+    def _reject_drift_away(self, result: IsolationResult, hypotheses: list, estimate: dict, time: float,
+                           boxes: np.ndarray, away: np.ndarray) -> np.ndarray:
+        """Reject the hypotheses whose estimate drifts away from their failure value.
+
+        A hypothesis says its candidate moves from nominal toward the failure value.  When the whole
+        5-95 % band of the estimate lies beyond the healthy box on the other side, for
+        DRIFT_AWAY_STEPS filter steps in a row, the data contradict it (a failure value on the wrong
+        side of the observed drift): its evidence alone would not say so, since the filter follows
+        the drift either way.  Returns the updated counts of consecutive steps.
+        """
+        q = estimate["theta_quantiles"]
+        up = np.array([h.direction == "up" for h in hypotheses])
+        wrong = np.where(up, q[:, 2] < boxes[:, 0], q[:, 0] > boxes[:, 1])
+        away = np.where(wrong, away + 1, 0)
+        for row in np.flatnonzero(away >= DRIFT_AWAY_STEPS):
+            h = hypotheses[row]
+            if h.name not in result.rejected:
+                side = "below" if up[row] else "above"
+                result.rejected[h.name] = (
+                    f"at t = {time:g} s the estimate of {h.candidate} is {q[row, 1]:.3g}, {side} its healthy values "
+                    f"[{boxes[row, 0]:.3g}, {boxes[row, 1]:.3g}], while its failure value {h.failure:g} is "
+                    f"{'above' if up[row] else 'below'} them: the drift goes away from failure (a failure value "
+                    "on the wrong side?)")
+        return away
 
     def _law(self, name: str, process_noise: float):
         model = self.laws[name]

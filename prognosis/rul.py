@@ -23,6 +23,10 @@ import numpy as np
 from .degradation import LinearDegradation
 from .metrics import weighted_quantiles
 
+MAX_HORIZON_STEPS = 1_000_000  # a horizon longer than this many filter steps is refused
+BANK_BYTES_PER_STEP = 16  # per particle and horizon step: four float32 banks (Z, CW, V, CV)
+MAX_BANK_BYTES = 2**31  # the random-number bank of one predictor (rows x steps x 16 bytes) stays under 2 GiB
+
 
 @dataclass(frozen=True)
 class RULDistribution:
@@ -220,8 +224,11 @@ class RULPredictor:
                  seed: int = 0, chunk: int = 512):
         if direction not in ("up", "down"):
             raise ValueError(f"direction must be 'up' or 'down', got {direction!r}")
-        if horizon <= 0 or dt <= 0:
-            raise ValueError(f"horizon and dt must be positive, got horizon={horizon}, dt={dt}")
+        if not (np.isfinite(horizon) and np.isfinite(dt) and horizon > 0 and dt > 0):
+            raise ValueError(f"horizon and dt must be positive and finite, got horizon={horizon}, dt={dt}")
+        if horizon / dt > MAX_HORIZON_STEPS:
+            raise ValueError(f"horizon {horizon:g} s is {horizon / dt:.3g} steps of dt = {dt:g} s; at most "
+                             f"{MAX_HORIZON_STEPS} (prognosis.rul.MAX_HORIZON_STEPS)")
         self.model, self.dt, self.theta_fail, self.direction = model, dt, theta_fail, direction
         self.horizon, self.chunk = horizon, chunk
         self.steps = int(np.ceil(horizon / dt - 1e-9))
@@ -235,6 +242,11 @@ class RULPredictor:
 
     def _bank_rows(self, rows: int):
         if self._bank is None or self._bank["Z"].shape[0] < rows:
+            if rows * self.steps * BANK_BYTES_PER_STEP > MAX_BANK_BYTES:
+                raise ValueError(f"horizon: {rows} particles x {self.steps} steps would need "
+                                 f"{rows * self.steps * BANK_BYTES_PER_STEP / 2**30:.3g} GiB of random numbers, more "
+                                 f"than {MAX_BANK_BYTES / 2**30:g} GiB (prognosis.rul.MAX_BANK_BYTES); shorten the "
+                                 "horizon or use fewer particles")
             z = self.rng.standard_normal((rows, self.steps), dtype=np.float32)
             walk = np.cumsum(z, axis=1)
             v = self.rng.standard_normal((rows, self.steps), dtype=np.float32)
