@@ -603,12 +603,19 @@ def _json_value(value):
 
 # ------------------------------------------------------------------------------------------- parser
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line error: ``bgphm: error: argument --k: invalid float value: 'x' (see ...)``."""
+
+    def error(self, message: str):
+        self.exit(EXIT_USAGE, f"bgphm: error: {_one_line(message)} (see {self.prog} --help)\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``bgphm`` argument parser: ``--quiet``, ``--debug`` and the commands arr, simulate, detect, prognose, demo.
 
     Each command's parser sets ``run`` to its ``cmd_*`` function, which :func:`main` calls.
     """
-    parser = argparse.ArgumentParser(prog="bgphm", description="Bond-graph modelling, robust fault diagnosis and "
+    parser = _Parser(prog="bgphm", description="Bond-graph modelling, robust fault diagnosis and "
                                      "prognosis: ARR reports, simulation, detection and RUL prediction.")
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
     parser.add_argument("--debug", action="store_true", help="show the traceback of an unexpected error")
