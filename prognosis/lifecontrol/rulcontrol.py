@@ -276,7 +276,8 @@ infeasible at 0); using theta = -0.25, the largest feasible setting found
                         "the largest feasible setting found")
         return self._decision(low, NOT_CONVERGED, history)
 
-    def _iterate(self, evaluate: Callable, low: _Point | None, high: _Point, theta: float):
+    def _iterate(self, evaluate: Callable, low: _Point | None, high: _Point,
+                 theta: float) -> tuple[_Point | None, _Point, bool]:
         """Eq. (53) on the bracket ``[low, high)``: ``(low, high, converged)`` when it stops.
 
         The next step bisects (or, while no feasible point is known, searches downwards) when the
