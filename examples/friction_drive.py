@@ -21,7 +21,8 @@
    restart (prediction scenario 1) and at 5.0 h with restart (scenario 2);
 6. from 5.0 h, lets the RUL controller (eqs. 47-53) lower the speed reference so
    that Pr(RUL <= RUL_ref) <= eta, re-deciding every 30 min, and runs the
-   controlled drive to its end of life (scenario 3);
+   controlled drive to its end of life (scenario 3); a decision the controller
+   could not converge on (its fallback applied) is counted and reported;
 7. on a second truth whose m is random (``RANDOM_M``), runs the same EKF with
    restart, unchanged (dm/dt = 0 in its model), and predicts the RUL at 5.0 h
    as in scenario 2 (scenario 4).
@@ -87,7 +88,8 @@ PI_GAINS = (0.0048, 0.0048)   # eq. 59
 D_MAX = 5e6                   # J, maximal admissible deterioration (not given in the paper)
 ALPHA_MIN = 0.0
 MONTE_CARLO = {"n_samples": 1000, "dt": 30.0, "horizon": 12 * HOUR}
-CONTROL = {"rul_ref": 3.0 * HOUR, "eta": 0.05, "gain": 1e-3, "lower": -15.0, "period": 0.5 * HOUR, "tolerance": 36.0}
+CONTROL = {"rul_ref": 3.0 * HOUR, "eta": 0.05, "gain": 1e-3, "lower": -15.0, "period": 0.5 * HOUR, "tolerance": 36.0,
+           "max_iterations": 60}
 MONITOR = {"window": 600, "threshold": 5.0, "persistence": 30}
 RESTART_BOUNDS = {"alpha": 2.0, "m": 2e-6}   # new expected bounds after a model change (eq. 44)
 # Scenario 4's truth: m drawn anew every period from N(mu, (std_fraction mu)^2), at least floor_fraction mu
@@ -308,10 +310,18 @@ class Drive:
 
 
 def rul_control(drive: Drive, seed: int) -> list[dict]:
-    """Scenario 3: the RUL controller re-decides theta every period until the end of life."""
+    """Scenario 3: the RUL controller re-decides theta every period until the end of life.
+
+    Each decision is recorded with the controller's status: ``"converged"``, or a fallback
+    (``"not converged"``: the largest feasible theta met; ``"no feasible setting found"``: theta =
+    CONTROL["lower"], the slowest admissible speed), which is applied as the controller returned it
+    and reported by :func:`controller_fallbacks`; ``"mission met"`` once 8 h has passed (theta = 0, no
+    decision taken).
+    """
     s = drive.scenario
     controller = RULController(rul_ref=s.rul_ref, eta=CONTROL["eta"], gain=CONTROL["gain"] * s.speedup,
-                               lower=CONTROL["lower"], tolerance=CONTROL["tolerance"] / s.speedup)
+                               lower=CONTROL["lower"], tolerance=CONTROL["tolerance"] / s.speedup,
+                               max_iterations=CONTROL["max_iterations"])
     decisions, k = [], 0
     while not drive.failed() and drive.t < s.end:
         origin = drive.t
@@ -319,7 +329,7 @@ def rul_control(drive: Drive, seed: int) -> list[dict]:
         if required <= 0:  # mission accomplished: back to the nominal reference
             drive.theta = 0.0
             decisions.append({"t_h": origin / HOUR * s.speedup, "theta": 0.0, "feasible": True,
-                              "probability": None, "evaluations": 0})
+                              "status": "mission met", "probability": None, "evaluations": 0})
         else:
             controller.rul_ref = required
             mean, covariance = drive.ekf.mean, drive.ekf.covariance
@@ -328,11 +338,32 @@ def rul_control(drive: Drive, seed: int) -> list[dict]:
                                          theta0=drive.theta)
             drive.theta = decision.theta
             decisions.append({"t_h": origin / HOUR * s.speedup, "theta": decision.theta,
-                              "feasible": decision.feasible, "probability": decision.probability,
-                              "evaluations": len(decision.history)})
+                              "feasible": decision.feasible, "status": decision.status,
+                              "probability": decision.probability, "evaluations": len(decision.history)})
         drive.run_until(origin + s.control_period)
         k += 1
     return decisions
+
+
+def controller_fallbacks(results: list[dict]) -> dict:
+    """Every scenario 3 decision over the seeds where the RUL controller did not converge, and what it applied.
+
+    Parameters
+    ----------
+    results : list of dict
+        ``run_seed``'s results.
+
+    Returns
+    -------
+    dict
+        ``decisions`` (the controller's decisions, "mission met" left out), ``count`` (the fallbacks
+        among them) and ``at``: per fallback the seed, the time (h), the status, the theta applied
+        (rad/s) and its Pr(RUL <= RUL_ref).
+    """
+    taken = [(r["seed"], d) for r in results for d in r["scenario_3"]["decisions"] if d["status"] != "mission met"]
+    at = [{"seed": seed, "t_h": d["t_h"], "status": d["status"], "theta": d["theta"],
+           "probability": d["probability"]} for seed, d in taken if d["status"] != "converged"]
+    return {"decisions": len(taken), "count": len(at), "at": at}
 
 
 # -- one seed ---------------------------------------------------------------------------------------------
@@ -567,6 +598,7 @@ def summarize(results: list[dict]) -> dict:
         "scenario_3_p_eol_before_8h": stat(r["scenario_3"]["p_eol_before_8h"] for r in results),
         "scenario_2_p_eol_before_8h": stat(r["scenario_2"]["p_eol_before_8h"] for r in results),
         "omega2_star": stat(r["scenario_3"]["omega2_star"] for r in results),
+        "controller_fallbacks": controller_fallbacks(results),
         "m_without_restart_at_eol": stat(r["m_estimate_at_eol"]["without_restart"] for r in results),
         "m_with_restart_at_eol": stat(r["m_estimate_at_eol"]["with_restart"] for r in results),
         "scenario_4": summarize_random_m([r["scenario_4"] for r in results], [r["seed"] for r in results], stat),
@@ -628,10 +660,21 @@ def report(summary: dict) -> str:
         f"  scenario 3 (5.0 h, RUL control): omega2* {f('omega2_star', 'rad/s')}, predicted EoL "
         f"{f('scenario_3_eol_mean_h')}, Pr(EoL <= 8 h) {f('scenario_3_p_eol_before_8h', '', 3)}, "
         f"true EoL {f('controlled_true_eol_h')}",
+        report_fallbacks(summary["controller_fallbacks"]),
         *report_random_m(summary["scenario_4"]),
         f"  EKF {f('ekf_us_per_step', 'us/step', 0)}, {f('seconds_per_seed', 's', 1)} per seed",
     ]
     return "\n".join(lines)
+
+
+def report_fallbacks(fallbacks: dict) -> str:
+    """One line: how many of scenario 3's decisions fell back, and when, why and what was applied then."""
+    head = f"  RUL controller: {fallbacks['count']} of {fallbacks['decisions']} decisions fell back"
+    if not fallbacks["count"]:
+        return head + " (every decision converged)"
+    return head + ": " + "; ".join(f"seed {f['seed']} at {f['t_h']:.2f} h {f['status']}, applied omega2* = "
+                                   f"{OMEGA2_REF + f['theta']:.2f} rad/s (Pr(RUL <= RUL_ref) {f['probability']:.3f})"
+                                   for f in fallbacks["at"])
 
 
 def report_random_m(s4: dict) -> list[str]:

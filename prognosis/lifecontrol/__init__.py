@@ -20,10 +20,10 @@ True
 from .chebyshev import chebyshev_bounds, chebyshev_intervals, chebyshev_level, chebyshev_scale, covariance_from_bounds
 from .deterioration import DeteriorationEquations, energy_deterioration
 from .montecarlo import monte_carlo_rul, sample_gaussian
-from .rulcontrol import RULController, RULDecision
+from .rulcontrol import RULControlWarning, RULController, RULDecision
 
 __all__ = [
-    "DeteriorationEquations", "RULController", "RULDecision", "chebyshev_bounds", "chebyshev_intervals",
-    "chebyshev_level", "chebyshev_scale", "covariance_from_bounds", "energy_deterioration", "monte_carlo_rul",
-    "sample_gaussian",
+    "DeteriorationEquations", "RULControlWarning", "RULController", "RULDecision", "chebyshev_bounds",
+    "chebyshev_intervals", "chebyshev_level", "chebyshev_scale", "covariance_from_bounds", "energy_deterioration",
+    "monte_carlo_rul", "sample_gaussian",
 ]

@@ -5,6 +5,7 @@ import json
 import numpy as np
 import pytest
 
+from prognosis.lifecontrol import RULControlWarning
 from tests.cases.conftest import load_example
 
 pytestmark = pytest.mark.slow  # runs of an example script
@@ -35,6 +36,38 @@ def test_example_runs_the_three_scenarios(example_run):
     assert seed["controlled_true_eol_h"] is not None and seed["controlled_true_eol_h"] > true_eol
     assert seed["scenario_3"]["p_eol_before_8h"] <= 0.05 + 1e-9
     assert seed["scenario_3"]["omega2_star"] < 20.0
+    # every decision of the controller is recorded with its status, and the fallbacks are counted
+    decisions = seed["scenario_3"]["decisions"]
+    statuses = {"converged", "not converged", "no feasible setting found", "mission met"}
+    assert {d["status"] for d in decisions} <= statuses
+    fallbacks = data["summary"]["controller_fallbacks"]
+    assert fallbacks["decisions"] == sum(d["status"] != "mission met" for d in decisions) >= 1
+    assert fallbacks["count"] == len(fallbacks["at"]) == sum(d["status"] not in ("converged", "mission met")
+                                                            for d in decisions)
+    assert data["settings"]["control"]["max_iterations"] == 60
+
+
+def test_example_records_and_reports_each_decision_the_controller_did_not_converge_on(fd, monkeypatch):
+    """Issue 22: a budget of one iteration cannot locate the boundary; the example applies the controller's
+    fallback (the largest feasible theta met), records when and what, and prints it."""
+    monkeypatch.setitem(fd.CONTROL, "max_iterations", 1)
+    s = fd.Scenario().scaled(10)
+    drive = fd.Drive(s, 0, twin=False)
+    drive.run_until(s.control_start)
+    with pytest.warns(RULControlWarning, match="did not converge in 1 iterations") as caught:
+        decisions = fd.rul_control(drive, 0)
+    fell_back = [d for d in decisions if d["status"] == "not converged"]
+    assert fell_back and all(d["feasible"] and d["probability"] <= 0.05 for d in fell_back)
+    assert len(caught) == len(fell_back)
+    first_warning = str(caught[0].message)
+    assert f"at t = {fell_back[0]['t_h'] * fd.HOUR / 10:g}:" in first_warning  # scenario seconds
+    assert f"using theta = {fell_back[0]['theta']:.6g}" in first_warning
+    fallbacks = fd.controller_fallbacks([{"seed": 0, "scenario_3": {"decisions": decisions}}])
+    assert fallbacks["count"] == len(fell_back) and fallbacks["at"][0]["t_h"] == pytest.approx(5.0)
+    line = fd.report_fallbacks(fallbacks)
+    assert f"{len(fell_back)} of {fallbacks['decisions']} decisions fell back" in line
+    assert "seed 0 at 5.00 h not converged, applied omega2* = " in line
+    assert fd.report_fallbacks({"decisions": 3, "count": 0, "at": []}).endswith("(every decision converged)")
 
 
 def test_example_scenario_2_predicts_after_the_restart(example_run):

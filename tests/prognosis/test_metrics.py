@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from prognosis.metrics import (
-    MetricWarning, alpha_lambda, convergence, cumulative_relative_accuracy, mean_relative_accuracy, mean_rmad,
-    prognostic_horizon, relative_accuracy, relative_rmse, rmad, weighted_median,
+    MetricWarning, alpha_lambda, convergence, cumulative_relative_accuracy, format_ranking, mean_relative_accuracy,
+    mean_rmad, prognostic_horizon, rank_with_ties, relative_accuracy, relative_rmse, rmad, weighted_median,
 )
 
 
@@ -228,3 +228,56 @@ def test_convergence_degenerate_inputs():
         convergence([0.0], [1.0])
     with pytest.raises(ValueError, match="increasing"):
         convergence([0.0, 2.0, 1.0], [1.0, 1.0, 1.0])
+
+
+# ---------------------------------------------------------------- ranking with ties (issue 22)
+
+def _three_tank_like():
+    """Per-seed MAEs shaped like examples/three_tank.py's: three strong-tracking filters 1e-9 and 2e-6 apart in
+    every seed, a PF clearly between, three plain filters 2e-7 apart."""
+    rng = np.random.default_rng(3)
+    strong = 0.0284 + 0.003 * rng.standard_normal(20)
+    plain = 0.1478 + 0.0008 * rng.standard_normal(20)
+    return {"SCKF": plain, "STUKF": strong + 1.6e-9, "STSCKF": strong, "EKF": plain + 1.7e-7,
+            "PF": 0.0747 + 0.0195 * rng.standard_normal(20), "UKF": plain - 1e-8, "STEKF": strong + 2.1e-6}
+
+
+def test_rank_with_ties_prints_differences_of_1e_9_as_ties():
+    scores = _three_tank_like()
+    groups = rank_with_ties(scores)
+    assert groups == [["STSCKF", "STUKF", "STEKF"], ["PF"], ["UKF", "SCKF", "EKF"]]
+    assert format_ranking(groups) == "STSCKF = STUKF = STEKF < PF < UKF = SCKF = EKF"
+    # the old ranking, by the mean alone, claimed an order from differences the runs show in every seed
+    assert " < ".join(sorted(scores, key=lambda n: scores[n].mean())).startswith("STSCKF < STUKF < STEKF")
+    # with no resolution left, those consistent differences are resolved by the paired t-interval
+    assert rank_with_ties(scores, rtol=0.0)[0] == ["STSCKF"]
+
+
+def test_rank_with_ties_needs_the_runs_to_resolve_a_difference():
+    a = np.array([1.0, 2.0, 3.0, 4.0])
+    noisy = a + np.array([0.3, -0.2, 0.25, -0.15])  # 5 % apart in the mean, but the sign changes between runs
+    assert rank_with_ties({"A": a, "B": noisy}) == [["A", "B"]]
+    assert rank_with_ties({"B": a + 0.05, "A": a}) == [["A"], ["B"]]  # 2 % apart in every run
+    # a single run: only the resolution applies
+    assert rank_with_ties({"A": 1.0, "B": 1.0005}) == [["A", "B"]]
+    assert rank_with_ties({"A": 1.0, "B": 1.002}) == [["A"], ["B"]]
+    assert rank_with_ties({"B": 1.0, "A": 1.0}) == [["B", "A"]]  # equal: tied, in the given order
+
+
+def test_rank_with_ties_chains_ties_between_neighbours():
+    # A-B and B-C are each within 0.1 %, A-C is not: "<" never separates neighbours that are not told apart
+    groups = rank_with_ties({"C": 1.0016, "A": 1.0, "B": 1.0008})
+    assert groups == [["A", "B", "C"]] and format_ranking(groups) == "A = B = C"
+
+
+def test_rank_with_ties_rejects_what_it_cannot_rank():
+    with pytest.raises(ValueError, match="'PF'.*finite"):
+        rank_with_ties({"EKF": [0.1, 0.2], "PF": [0.1, np.nan]})
+    with pytest.raises(ValueError, match="'B'.*3 runs.*2 for 'A'"):
+        rank_with_ties({"A": [0.1, 0.2], "B": [0.1, 0.2, 0.3]})
+    with pytest.raises(ValueError, match="no methods"):
+        rank_with_ties({})
+    with pytest.raises(ValueError, match="confidence"):
+        rank_with_ties({"A": [1.0]}, confidence=1.0)
+    with pytest.raises(ValueError, match="rtol"):
+        rank_with_ties({"A": [1.0]}, rtol=-1e-3)

@@ -4,16 +4,19 @@ bounds, innovation consistency, Monte Carlo RUL, RUL control (examples/friction_
 Expected values come from the paper's equations written by hand, closed forms or brute force.
 """
 
+import warnings
+
 import numpy as np
 import pytest
 import sympy as sp
 from scipy import stats
 
+from bondgraph.errors import PHMWarning
 from bondgraph.library import friction_drive, rlc_circuit
 from prognosis import RULDistribution
-from prognosis.lifecontrol import (RULController, chebyshev_bounds, chebyshev_intervals, chebyshev_level,
-                                   chebyshev_scale, covariance_from_bounds, energy_deterioration, monte_carlo_rul,
-                                   sample_gaussian)
+from prognosis.lifecontrol import (RULController, RULControlWarning, chebyshev_bounds, chebyshev_intervals,
+                                   chebyshev_level, chebyshev_scale, covariance_from_bounds, energy_deterioration,
+                                   monte_carlo_rul, sample_gaussian)
 from prognosis.statespace import (ExtendedKalmanFilter, InnovationMonitor, StrongTracking, discretize,
                                   innovation_consistency, whiten)
 from tests.scenarios import FrictionDriveRUL
@@ -604,13 +607,56 @@ def test_rul_controller_keeps_theta_zero_when_feasible_and_reports_infeasible():
     assert decision.theta == 0.0 and decision.feasible and len(decision.history) == 1
     assert decision.probability == np.mean(base_life <= 3.0) == 0.0
     # even theta = -1 (lives / 0.9) cannot give Pr(RUL <= 10) <= 5 %
-    infeasible = RULController(rul_ref=10.0, eta=0.05, lower=-1.0).decide(predict)
-    assert not infeasible.feasible and infeasible.theta == -1.0
+    with pytest.warns(RULControlWarning, match="no feasible setting found"):
+        infeasible = RULController(rul_ref=10.0, eta=0.05, lower=-1.0).decide(predict)
+    assert not infeasible.feasible and infeasible.theta == -1.0 and infeasible.status == "no feasible setting found"
     assert infeasible.probability == np.mean(base_life / 0.9 <= 10.0) > 0.05
     with pytest.raises(ValueError):
         RULController(rul_ref=1.0, eta=1.5)
     with pytest.raises(ValueError):
         RULController(rul_ref=1.0, lower=1.0)
+
+
+def _crawl_life(theta):
+    """Lives 10 / (1 + theta), origin 7: Pr(RUL <= 12) <= 5 % needs theta <= -1/6."""
+    return RULDistribution(np.full(100, 10.0 / (1.0 + theta)), origin=7.0)
+
+
+def test_rul_controller_crawling_from_the_infeasible_side_still_converges():
+    """Issue 22: with a small gain, eq. 53 from just above the boundary converges to it from the infeasible side
+    (each step multiplies the distance by 1 - K |dq/dtheta| = 0.86) and never crosses it; the bracket stayed
+    [lower, ~theta*] and the lower bound came back after 60 iterations (theta = -15 on the friction drive)."""
+    controller = RULController(rul_ref=12.0, eta=0.05, gain=0.01, lower=-0.9)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RULControlWarning)
+        decision = controller.decide(_crawl_life, theta0=-0.1)
+    assert decision.status == "converged" and decision.converged and decision.feasible
+    assert decision.theta == pytest.approx(-1.0 / 6.0, abs=1e-3) and decision.quantile > 12.0
+    assert len(decision.history) < 40  # the safeguard bisects: well inside the budget of 60
+
+
+def test_rul_controller_out_of_iterations_says_so_and_keeps_the_largest_feasible_setting():
+    controller = RULController(rul_ref=12.0, eta=0.05, gain=0.01, lower=-0.9, max_iterations=3)
+    with pytest.warns(RULControlWarning, match=r"at t = 7: .*did not converge in 3 iterations.*using theta = -0\.") \
+            as caught:
+        decision = controller.decide(_crawl_life, theta0=-0.1)
+    assert issubclass(caught[0].category, PHMWarning)
+    assert decision.status == "not converged" and not decision.converged
+    # the setting returned meets the constraint (lives 10 / (1 + theta) > 12) and is the largest such one met
+    assert decision.feasible and 10.0 / (1.0 + decision.theta) > 12.0
+    met = [theta for theta, q in decision.history if q > 12.0]
+    assert decision.theta == max(met) and decision.theta > -0.9  # not the bracket's lower bound
+    assert f"{decision.theta:.6g}" in str(caught[0].message)
+
+
+def test_rul_controller_with_no_feasible_setting_falls_back_to_the_most_life_extending_one():
+    with pytest.warns(RULControlWarning, match=r"at t = 7: no feasible setting found.*using theta = -0\.1, the most "
+                                               "life-extending admissible setting"):
+        decision = RULController(rul_ref=12.0, eta=0.05, lower=-0.1).decide(_crawl_life)
+    assert decision.status == "no feasible setting found" and not decision.feasible and not decision.converged
+    assert decision.theta == -0.1 and decision.probability == 1.0
+    with pytest.raises(ValueError, match="max_iterations"):
+        RULController(rul_ref=1.0, max_iterations=0)
 
 
 def test_friction_drive_predictor_matches_the_closed_form(fd):
@@ -667,6 +713,28 @@ def test_rul_controller_on_the_friction_drive(fd, estimate):
     assert predict(decision.theta).probability_before(ref) <= 0.05
     # lives scale as 1/omega^2: the required speed is about 20 / sqrt(1.2)
     assert 20.0 + decision.theta == pytest.approx(20.0 / np.sqrt(1.2), abs=0.05)
+
+
+@pytest.mark.slow  # about 1 s: a dozen Monte Carlo predictions of 1000 draws over 1 h
+def test_rul_controller_on_seed_2_at_7_hours_finds_the_boundary_not_the_lower_bound(fd):
+    """Issue 22, the case reported: examples/friction_drive.py, seed 2, the decision at 7.0 h (RUL_ref = 1 h, from
+    theta0 = -2.895).  The EKF's (alpha, m, D) estimate then, as the example had it; the controller used to crawl
+    to theta* = -2.999 from above for 60 iterations and return theta = -15, applied for 30 min."""
+    mean = np.array([416.6, 17.10, 4.2640583403589662, 2.0063625341882931e-06, 3.8849438543091100e+06])
+    covariance = np.zeros((5, 5))
+    covariance[2:, 2:] = [[6.0865917907219113e-05, -6.2601345885228054e-11, -3.4139858486346614e-01],
+                          [-6.2601345885228054e-11, 1.0096101212019218e-16, -2.0102670657348255e-06],
+                          [-3.4139858486346614e-01, -2.0102670657348255e-06, 2.5009896688421607e+09]]
+
+    def predict(theta):
+        return fd.predict_rul(mean, covariance, 25200.0, 20.0 + theta, seed=2 + 7919 * 4)
+
+    controller = RULController(rul_ref=3600.0, eta=0.05, gain=1e-3, lower=-15.0, tolerance=36.0)
+    decision = controller.decide(predict, theta0=-2.8952952206151576)
+    assert decision.status == "converged" and decision.feasible
+    # the boundary, theta* = -2.999, to the tolerance of 36 s on the quantile (about 0.06 rad/s)
+    assert -3.1 < decision.theta < -2.99 and 3600.0 < decision.quantile <= 3636.0
+    assert decision.probability <= 0.05 < predict(decision.theta + 0.1).probability_before(3600.0)
 
 
 def test_rul_distribution_moments_are_over_the_failed_draws_with_the_censored_weight_beside():
