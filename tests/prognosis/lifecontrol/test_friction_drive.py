@@ -699,6 +699,7 @@ def test_friction_drive_predictor_is_monotone_in_the_speed(fd, estimate):
     assert np.all(initial >= np.maximum(lo, 0.0)[:, None]) and np.all(initial <= hi[:, None])
 
 
+@pytest.mark.slow  # about 1-2 s
 def test_rul_controller_on_the_friction_drive(fd, estimate):
     mean, covariance = estimate
 
