@@ -138,7 +138,7 @@ MAX_SAMPLES = 10_000_000
 #: iterations a handful each).
 STALL_EVALUATIONS = 10_000
 #: The default most evaluations of the model in one simulation (``max_evaluations``): minutes of work
-#: for a small model; the examples need at most about 10 000.
+#: for a small model; the examples and tests need at most about 25 000.
 MAX_EVALUATIONS = 5_000_000
 
 
