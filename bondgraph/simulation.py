@@ -26,8 +26,9 @@ what would hang, exhaust memory or silently give a wrong answer:
 * An input or parameter given as a constant must be a finite real number, not a string.
 * The integration stops with an error when a derivative is NaN or infinite (a zero inertia,
   capacitance or inductance divides by zero), when :data:`STALL_EVALUATIONS` evaluations in a row
-  do not take the time past the furthest point reached (the solver's step has collapsed), and after
-  ``max_evaluations`` (default :data:`MAX_EVALUATIONS`) evaluations of the model in all.
+  are at the same time (the solver's step has collapsed below the spacing of floats: LSODA then
+  retries forever), and after ``max_evaluations`` (default :data:`MAX_EVALUATIONS`) evaluations of
+  the model in all (a step so small that the time crawls).
 """
 
 from __future__ import annotations
@@ -133,9 +134,9 @@ SPAN_RTOL = 1e-9
 #: The most output times (``t_eval``) of one simulation: each trajectory (one per state, bond effort,
 #: bond flow and signal) of that many samples takes 80 MB.
 MAX_SAMPLES = 10_000_000
-#: Evaluations of the model in a row that do not take the time past the furthest point reached before
-#: the integration is declared stalled (a Jacobian estimate takes one per state, a few Newton
-#: iterations a handful each).
+#: Evaluations of the model in a row at the same time (within 4 units in the last place) before the
+#: integration is declared stalled: a Jacobian estimate takes one per state and Newton iterations a
+#: handful, while a solver whose step no longer moves the time in floating point calls forever.
 STALL_EVALUATIONS = 10_000
 #: The default most evaluations of the model in one simulation (``max_evaluations``): minutes of work
 #: for a small model; the examples and tests need at most about 25 000.
@@ -321,8 +322,8 @@ class _Guard:
     """The model's derivatives for ``solve_ivp``, stopping an integration that cannot succeed.
 
     Counts the evaluations; raises a SimulationError at a NaN or infinite derivative, after
-    :data:`STALL_EVALUATIONS` evaluations in a row short of the furthest time reached, and after
-    ``limit`` evaluations in all.  Without it LSODA calls the model forever once its step collapses.
+    :data:`STALL_EVALUATIONS` evaluations in a row at the same time, and after ``limit`` evaluations
+    in all.  Without it LSODA calls the model forever once its step collapses.
     """
 
     def __init__(self, plan: "_Plan", limit: int, t_end: float):
@@ -333,18 +334,19 @@ class _Guard:
                            for k in range(controller.n_states)]
         self.evaluations = 0
         self.furthest = -math.inf
-        self.stalled = 0
+        self.anchor, self.stalled = math.nan, 0  # the time of the current run of evaluations, its length
 
     def __call__(self, t: float, z: np.ndarray) -> np.ndarray:
         self.evaluations += 1
-        if t > self.furthest:
-            self.furthest, self.stalled = t, 0
-        else:
+        self.furthest = max(self.furthest, t)
+        if abs(t - self.anchor) <= 4 * math.ulp(self.anchor):
             self.stalled += 1
+        else:
+            self.anchor, self.stalled = t, 0
         if self.stalled >= STALL_EVALUATIONS:
-            raise SimulationError(f"the integration makes no progress at t = {float(self.furthest)!r}: "
-                                  f"{STALL_EVALUATIONS} evaluations of the model without advancing (the solver's "
-                                  "step has collapsed; a stiff or degenerate model? check the parameters or try "
+            raise SimulationError(f"the integration makes no progress at t = {float(t)!r}: {STALL_EVALUATIONS} "
+                                  "evaluations of the model in a row at that time (the solver's step has "
+                                  "collapsed; a stiff or degenerate model? check the parameters or try "
                                   "method='BDF')")
         if self.evaluations > self.limit:
             raise SimulationError(f"max_evaluations: the integration evaluated the model {self.limit} times and "
