@@ -10,11 +10,32 @@ Inputs are given per signal name as
 
 Parameters may be overridden by numbers or by callables of time (a degrading
 parameter, say).  The result holds every effort, flow, state and signal.
+
+Limits
+------
+:func:`simulate` refuses, with a :class:`~bondgraph.errors.SimulationError` naming the argument,
+what would hang, exhaust memory or silently give a wrong answer:
+
+* ``t_span`` must be a pair of finite numbers with ``t_end > t_start`` and a span of at least
+  :data:`MIN_SPAN` seconds and at least :data:`SPAN_RTOL` times ``max(|t_start|, |t_end|)``: below
+  that the solver cannot advance the time in floating point (LSODA then calls the model forever)
+  and the output times are no longer distinct.
+* ``t_eval`` must hold finite, strictly increasing times within ``t_span``, at most
+  :data:`MAX_SAMPLES` of them (:func:`check_sample_count`, which a caller can use before it builds
+  the time grid).
+* An input or parameter given as a constant must be a finite real number, not a string.
+* The integration stops with an error when a derivative is NaN or infinite (a zero inertia,
+  capacitance or inductance divides by zero), when :data:`STALL_EVALUATIONS` evaluations in a row
+  are at the same time (the solver's step has collapsed below the spacing of floats: LSODA then
+  retries forever), and after ``max_evaluations`` (default :data:`MAX_EVALUATIONS`) evaluations of
+  the model in all (a step so small that the time crawls).
 """
 
 from __future__ import annotations
 
 import inspect
+import math
+import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
@@ -105,6 +126,23 @@ class SimulationResult:
         return pd.DataFrame(columns)
 
 
+#: The shortest simulated span (s): nothing a bond graph in seconds models happens faster than a picosecond.
+MIN_SPAN = 1e-12
+#: The shortest span relative to ``max(|t_start|, |t_end|)``: about 4.5e6 floating-point steps, so the
+#: solver can advance and 501 default output times stay distinct.
+SPAN_RTOL = 1e-9
+#: The most output times (``t_eval``) of one simulation: each trajectory (one per state, bond effort,
+#: bond flow and signal) of that many samples takes 80 MB.
+MAX_SAMPLES = 10_000_000
+#: Evaluations of the model in a row at the same time (within 4 units in the last place) before the
+#: integration is declared stalled: a Jacobian estimate takes one per state and Newton iterations a
+#: handful, while a solver whose step no longer moves the time in floating point calls forever.
+STALL_EVALUATIONS = 10_000
+#: The default most evaluations of the model in one simulation (``max_evaluations``): minutes of work
+#: for a small model; the examples and tests need at most about 25 000.
+MAX_EVALUATIONS = 5_000_000
+
+
 def simulate(
     model: BondGraph | StateEquations,
     t_span: tuple[float, float],
@@ -117,6 +155,7 @@ def simulate(
     rtol: float = 1e-8,
     atol: float = 1e-10,
     max_step: float = np.inf,
+    max_evaluations: int = MAX_EVALUATIONS,
 ) -> SimulationResult:
     """Simulate a bond graph from its state equations.
 
@@ -124,6 +163,8 @@ def simulate(
     ----------
     model : BondGraph or StateEquations
     t_span : (t0, t1)
+        Finite, ``t1 > t0``, a span of at least :data:`MIN_SPAN` and :data:`SPAN_RTOL` times
+        ``max(|t0|, |t1|)``.
     inputs : mapping, optional
         Signal name -> number, ``u(t)``, ``u(t, y)`` or controller.  Sources
         with a constant ``value`` need no entry.
@@ -132,9 +173,18 @@ def simulate(
     parameters : mapping, optional
         Parameter name -> value or callable of t, overriding nominal values.
     t_eval : array, optional
-        Output times; default 501 points over ``t_span``.
+        Output times, strictly increasing within ``t_span``, at most :data:`MAX_SAMPLES`;
+        default 501 points over ``t_span``.
     method, rtol, atol, max_step
         Passed to :func:`scipy.integrate.solve_ivp`.
+    max_evaluations : int, optional
+        The most evaluations of the model's derivatives before the integration is stopped.
+
+    Raises
+    ------
+    SimulationError
+        Naming the argument at fault (see the module's Limits), or when the integration fails, stalls,
+        meets a NaN or infinite derivative or exceeds ``max_evaluations``.
 
     Examples
     --------
@@ -142,25 +192,172 @@ def simulate(
     >>> result = simulate(rlc_circuit(), (0.0, 0.5), {"V": 1.0})
     >>> round(float(result["v_C"][-1]), 3)
     1.0
+    >>> simulate(rlc_circuit(), (0.5, 0.0), {"V": 1.0})
+    Traceback (most recent call last):
+    ...
+    bondgraph.errors.SimulationError: t_span: t_end = 0.0 is not after t_start = 0.5
     """
+    t0, t1 = _checked_span(t_span)
     equations = model.state_equations() if isinstance(model, BondGraph) else model
     sources = model.elements if isinstance(model, BondGraph) else {}
     plan = _Plan(equations, inputs or {}, parameters or {}, sources)
     x0_vector = _initial_state(equations, x0 or {})
     z0 = np.concatenate([x0_vector] + [np.asarray(c.initial_state(), float) for c in plan.controllers.values()])
-    if t_eval is None:
-        t_eval = np.linspace(t_span[0], t_span[1], 501)
+    t_eval = np.linspace(t0, t1, 501) if t_eval is None else _checked_times(t_eval, t0, t1)
+    limit = _checked_count(max_evaluations, "max_evaluations")
+    _check_max_step(max_step, t1 - t0, limit)
+    guard = _Guard(plan, limit, t1)
     with np.errstate(invalid="ignore", divide="ignore"):  # Piecewise laws evaluate unselected branches too
-        solution = solve_ivp(plan.derivative, t_span, z0, method=method, t_eval=t_eval,
+        solution = solve_ivp(guard, (t0, t1), z0, method=method, t_eval=t_eval,
                              rtol=rtol, atol=atol, max_step=max_step)
     if not solution.success:
-        failed_at = solution.t[-1] if solution.t.size else t_span[0]
+        failed_at = solution.t[-1] if solution.t.size else t0
         raise SimulationError(f"integration failed at t = {failed_at}: {solution.message}")
     if not np.all(np.isfinite(solution.y)):
         k = int(np.argmax(~np.all(np.isfinite(solution.y), axis=0)))
         raise SimulationError(f"the state became NaN or infinite at t = {solution.t[k]:g}; "
                               "check the laws and parameters")
     return plan.result(solution)
+
+
+def check_sample_count(count: object, option: str = "t_eval") -> int:
+    """The number of output samples ``count`` as an int, or a SimulationError naming ``option``.
+
+    At least 1 and at most :data:`MAX_SAMPLES`; a caller that builds the time grid (a command line's
+    ``--samples``, say) checks the count first, so a typo does not allocate gigabytes.
+
+    Examples
+    --------
+    >>> check_sample_count(1001)
+    1001
+    >>> check_sample_count(10**8, "--samples")
+    Traceback (most recent call last):
+    ...
+    bondgraph.errors.SimulationError: --samples: 100000000 samples is more than the limit of 10000000 (MAX_SAMPLES)
+    """
+    if isinstance(count, bool) or not isinstance(count, numbers.Real) or count != int(count) or count < 1:
+        raise SimulationError(f"{option}: the number of samples must be a whole number >= 1, got {count!r}")
+    if count > MAX_SAMPLES:
+        raise SimulationError(f"{option}: {int(count)} samples is more than the limit of {MAX_SAMPLES} (MAX_SAMPLES)")
+    return int(count)
+
+
+def _checked_span(t_span: object) -> tuple[float, float]:
+    """``(t0, t1)`` as floats: a pair of finite numbers, long enough for the solver to advance."""
+    if isinstance(t_span, (str, bytes)) or not hasattr(t_span, "__len__") or len(t_span) != 2:
+        raise SimulationError(f"t_span: expected a pair (t_start, t_end) of numbers, got {t_span!r}")
+    t0, t1 = (_real(value, f"t_span[{i}]") for i, value in enumerate(t_span))
+    if t1 <= t0:
+        raise SimulationError(f"t_span: t_end = {t1!r} is not after t_start = {t0!r}")
+    shortest = max(MIN_SPAN, SPAN_RTOL * max(abs(t0), abs(t1)))
+    if t1 - t0 < shortest:
+        raise SimulationError(f"t_span: the span {t1 - t0:g} s from t = {t0:g} is shorter than {shortest:g} s "
+                              f"(MIN_SPAN = {MIN_SPAN:g} s, SPAN_RTOL = {SPAN_RTOL:g} of |t|): the solver "
+                              "cannot advance the time in floating point")
+    return t0, t1
+
+
+def _checked_times(t_eval: object, t0: float, t1: float) -> np.ndarray:
+    """The output times as a float array: finite, strictly increasing, within the span, not too many."""
+    try:
+        times = np.asarray(t_eval, dtype=float)
+    except (TypeError, ValueError):
+        raise SimulationError(f"t_eval: expected an array of times, got {type(t_eval).__name__}") from None
+    if times.ndim != 1:
+        raise SimulationError(f"t_eval: expected a one-dimensional array of times, got shape {times.shape}")
+    check_sample_count(times.size, "t_eval")
+    bad = np.flatnonzero(~np.isfinite(times))
+    if bad.size:
+        raise SimulationError(f"t_eval: t_eval[{bad[0]}] = {times[bad[0]]} is not finite")
+    outside = np.flatnonzero((times < t0) | (times > t1))
+    if outside.size:
+        i = int(outside[0])
+        raise SimulationError(f"t_eval: t_eval[{i}] = {float(times[i])!r} is outside t_span [{t0!r}, {t1!r}]")
+    back = np.flatnonzero(np.diff(times) <= 0)
+    if back.size:
+        i = int(back[0]) + 1
+        raise SimulationError(f"t_eval: not strictly increasing: t_eval[{i}] = {float(times[i])!r} follows "
+                              f"t_eval[{i - 1}] = {float(times[i - 1])!r}")
+    return times
+
+
+def _checked_count(value: object, option: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+        raise SimulationError(f"{option}: expected a whole number >= 1, got {value!r}")
+    return int(value)
+
+
+def _check_max_step(max_step: object, span: float, limit: int) -> None:
+    """A positive ``max_step`` that does not need more steps than ``limit`` evaluations allow."""
+    if isinstance(max_step, (bool, np.bool_)) or not isinstance(max_step, numbers.Real) or not max_step > 0:
+        raise SimulationError(f"max_step: expected a positive number of seconds (or inf), got {max_step!r}")
+    if span / max_step > limit:
+        raise SimulationError(f"max_step: {max_step:g} s needs at least {span / max_step:.3g} steps over the span "
+                              f"of {span:g} s, more than max_evaluations = {limit}")
+
+
+def _real(value: object, what: str) -> float:
+    """A finite real number (a numpy scalar or 0-d array too, never a string or a bool) as a float."""
+    if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
+        value = value.item()
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real):
+        raise SimulationError(f"{what}: expected a number, got {value!r} ({type(value).__name__})")
+    number = float(value)
+    if not math.isfinite(number):
+        raise SimulationError(f"{what}: {number} is not a finite number")
+    return number
+
+
+def _constant(value: object, what: str, expected: str) -> float:
+    """A constant given for ``what`` as a float, or a SimulationError saying what was ``expected``."""
+    try:
+        return _real(value, what)
+    except SimulationError as exc:
+        if "finite" in str(exc):
+            raise
+        raise SimulationError(f"{what}: expected {expected}, got {value!r} ({type(value).__name__})") from None
+
+
+class _Guard:
+    """The model's derivatives for ``solve_ivp``, stopping an integration that cannot succeed.
+
+    Counts the evaluations; raises a SimulationError at a NaN or infinite derivative, after
+    :data:`STALL_EVALUATIONS` evaluations in a row at the same time, and after ``limit`` evaluations
+    in all.  Without it LSODA calls the model forever once its step collapses.
+    """
+
+    def __init__(self, plan: "_Plan", limit: int, t_end: float):
+        self.plan, self.limit, self.t_end = plan, limit, t_end
+        self.names = [f"d{x}/dt" for x in plan.equations.states]
+        for name, controller in plan.controllers.items():
+            self.names += [f"the derivative of state {k} of the controller of {name!r}"
+                           for k in range(controller.n_states)]
+        self.evaluations = 0
+        self.furthest = -math.inf
+        self.anchor, self.stalled = math.nan, 0  # the time of the current run of evaluations, its length
+
+    def __call__(self, t: float, z: np.ndarray) -> np.ndarray:
+        self.evaluations += 1
+        self.furthest = max(self.furthest, t)
+        if abs(t - self.anchor) <= 4 * math.ulp(self.anchor):
+            self.stalled += 1
+        else:
+            self.anchor, self.stalled = t, 0
+        if self.stalled >= STALL_EVALUATIONS:
+            raise SimulationError(f"the integration makes no progress at t = {float(t)!r}: {STALL_EVALUATIONS} "
+                                  "evaluations of the model in a row at that time (the solver's step has "
+                                  "collapsed; a stiff or degenerate model? check the parameters or try "
+                                  "method='BDF')")
+        if self.evaluations > self.limit:
+            raise SimulationError(f"max_evaluations: the integration evaluated the model {self.limit} times and "
+                                  f"reached only t = {self.furthest:g} of {self.t_end:g}; pass a larger "
+                                  "max_evaluations or check the model for stiffness")
+        dz = self.plan.derivative(t, z)
+        if not np.all(np.isfinite(dz)):
+            k = int(np.flatnonzero(~np.isfinite(dz))[0])
+            raise SimulationError(f"{self.names[k]} is {dz[k]} at t = {t:g}; check the laws and parameters "
+                                  "(a parameter that divides, such as an inertia or a capacitance, set to zero?)")
+        return dz
 
 
 def _initial_state(equations: StateEquations, x0: Mapping) -> np.ndarray:
@@ -171,7 +368,7 @@ def _initial_state(equations: StateEquations, x0: Mapping) -> np.ndarray:
         index = names.index(str(key)) if str(key) in names else by_element.get(str(key))
         if index is None:
             raise SimulationError(f"x0: {key!r} is not a state; states are {names} (or elements {list(by_element)})")
-        vector[index] = float(value)
+        vector[index] = _constant(value, f"x0[{key!r}]", "a number")
     return vector
 
 
@@ -207,18 +404,16 @@ class _Plan:
             elif callable(spec):
                 (self.feedback if _arity(spec) >= 2 else self.open_loop)[name] = spec
             else:
-                try:
-                    value = float(spec)
-                except (TypeError, ValueError):
-                    raise SimulationError(f"input {name!r}: {spec!r} is not a number, a callable "
-                                          "or a controller") from None
+                value = _constant(spec, f"input {name!r}", "a number, a callable u(t) or u(t, y), or a controller")
                 self.open_loop[name] = lambda t, v=value: v
         unknown = set(parameters) - set(equations.parameters)
         if unknown:
             raise SimulationError(f"parameters {sorted(unknown)} are not in the model; "
                                   f"it has {sorted(equations.parameters)}")
         self.parameter_names = list(equations.parameters)
-        self.parameter_values = {**equations.parameters, **parameters}
+        overrides = {k: v if callable(v) else _constant(v, f"parameter {k!r}", "a number or a callable of t")
+                     for k, v in parameters.items()}
+        self.parameter_values = {**equations.parameters, **overrides}
         self.input_names = names
         self._compile()
 

@@ -13,12 +13,13 @@ from .detection import Evaluation, evaluate, noise_margin, robust_std
 from .elimination import structural_arrs, unreached
 from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, compile_interval
 from .signals import Record, RecordError, RecordWarning, add_noise, as_record, read_csv
+from .resampling import resample
 from .signatures import SignatureMatrix, signature_matrix
 from .structural import StructuralLimitError, StructuralModel, structural_model
 
 __all__ = [
     "ARR", "ARRWarning", "Evaluation", "Interval", "IntervalArray", "IntervalWarning", "Record", "RecordError",
     "RecordWarning", "SignatureMatrix", "StructuralLimitError", "StructuralModel", "add_noise", "affine_range",
-    "as_record", "compile_interval", "delta", "derive_arrs", "evaluate", "noise_margin", "read_csv", "robust_std",
-    "signature_matrix", "structural_arrs", "structural_model", "unreached",
+    "as_record", "compile_interval", "delta", "derive_arrs", "evaluate", "noise_margin", "read_csv", "resample",
+    "robust_std", "signature_matrix", "structural_arrs", "structural_model", "unreached",
 ]

@@ -29,6 +29,8 @@ False
 
 from __future__ import annotations
 
+import math
+import numbers
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
@@ -37,6 +39,7 @@ import numpy as np
 from bondgraph._optional import pandas_for
 
 from .residuals import read_record
+from .signals import RecordError
 from .thresholds import bglft_threshold, interval_threshold
 
 
@@ -174,12 +177,16 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     >>> evaluate(capacitor, faulty, margin=1e-3, persistence=3).detection_time is None
     True
     """
+    check_arr(arr, "evaluate")
     if threshold not in ("interval", "bglft"):
         raise ValueError(f"threshold must be 'interval' or 'bglft', got {threshold!r}")
-    if persistence < 1:
-        raise ValueError(f"persistence must be at least 1 sample, got {persistence}")
-    if not np.isfinite(margin) or margin < 0:
-        raise ValueError(f"noise margin must be a finite non-negative number, got {margin}")
+    if isinstance(persistence, bool) or not isinstance(persistence, numbers.Integral) or persistence < 1:
+        raise ValueError(f"persistence must be a whole number of samples >= 1, got {persistence!r}")
+    if isinstance(margin, bool) or not isinstance(margin, numbers.Real) or not math.isfinite(margin) or margin < 0:
+        raise ValueError(f"margin: the noise margin must be a finite number >= 0, got {margin!r}")
+    if method not in ("savgol", "central"):
+        raise RecordError(f"{arr.name}: unknown derivative method {method!r}; choose 'savgol' or 'central' "
+                          "(known derivatives go in exact_derivatives=)")
     data = read_record(arr, record, extra=tuple((antiderivatives or {}).values()))
     compiled = arr.compiled
     points = compiled.point_values(data, method=method, window=window, polyorder=polyorder,
@@ -191,8 +198,24 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     with np.errstate(invalid="ignore"):
         violation = (-residual < lo - margin) | (-residual > hi + margin)
     alarm = persistent(violation, persistence)
-    return Evaluation(arr.name, data.t, residual, lower, upper, bglft, float(margin), persistence, violation, alarm,
-                      points)
+    return Evaluation(arr.name, data.t, residual, lower, upper, bglft, float(margin), int(persistence), violation,
+                      alarm, points)
+
+
+def check_arr(arr: object, caller: str) -> None:
+    """Raise a TypeError naming ``caller`` unless ``arr`` is an ARR (anything with a name and a compiled form).
+
+    >>> check_arr("ARR_1_m", "noise_margin")
+    Traceback (most recent call last):
+    ...
+    TypeError: noise_margin: arr must be an ARR from diagnosis.derive_arrs, got the str 'ARR_1_m' (look the ARR up ...
+    """
+    if hasattr(arr, "compiled") and hasattr(arr, "name"):
+        return
+    shown = repr(arr) if len(repr(arr)) <= 60 else repr(arr)[:57] + "..."
+    hint = " (look the ARR up by its name in the list derive_arrs returns)" if isinstance(arr, str) else ""
+    raise TypeError(f"{caller}: arr must be an ARR from diagnosis.derive_arrs, got the {type(arr).__name__} "
+                    f"{shown}{hint}")
 
 
 def persistent(violation: np.ndarray, samples: int) -> np.ndarray:
@@ -257,9 +280,12 @@ def noise_margin(arr, nominal_record, k: float = 3.0, **options) -> float:
     >>> 0.5 < found < 0.52
     True
     """
+    check_arr(arr, "noise_margin")
+    if isinstance(k, bool) or not isinstance(k, numbers.Real) or not math.isfinite(k) or k <= 0:
+        raise ValueError(f"k: the number of standard deviations must be a finite number > 0, got {k!r}")
     result = evaluate(arr, nominal_record, **options)
     if np.isfinite(result.residual).sum() < 2:
-        raise ValueError(f"{arr.name}: the nominal record gives fewer than 2 finite residual values")
+        raise RecordError(f"{arr.name}: the nominal record gives fewer than 2 finite residual values")
     return k * robust_std(result.residual)
 
 

@@ -21,7 +21,8 @@ need not be uniform.
   first (last) window is used (scipy's ``mode="interp"``), which is less
   accurate than the interior.  It needs uniform sampling (every step within
   a relative 1e-6 of the median step) and refuses an uneven grid with a
-  :class:`RecordError` suggesting ``method="central"``.
+  :class:`RecordError` suggesting ``method="central"`` or
+  :func:`diagnosis.resampling.resample`, which puts a record on a uniform grid.
 * ``derivative(method="central")`` uses :func:`numpy.gradient` with
   second-order differences in the interior and at the ends, second-order
   accurate on uneven grids too.  Order 2 applies it twice: exact for
@@ -69,6 +70,7 @@ from __future__ import annotations
 
 import math
 import numbers
+import re
 import warnings
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass
@@ -81,6 +83,7 @@ from scipy.signal import savgol_filter
 from bondgraph.errors import PHMError, PHMWarning
 
 __all__ = [
+    "MAX_MAGNITUDE",
     "Record",
     "RecordError",
     "RecordWarning",
@@ -95,6 +98,12 @@ __all__ = [
 TIME = "t"
 METHODS = ("savgol", "central", "exact")
 UNIFORM_RTOL = 1e-6
+#: The largest magnitude of a recorded value.  A residual multiplies signals by each other (squares
+#: them, in a quadratic law) and by parameters, and divides them by the sampling step to estimate
+#: derivatives: 1e150 squared is 1e300, still below the largest double (1.8e308), where 1e200 squared
+#: is infinite and a value near 1e308 overflows in a single difference, leaving every sample it
+#: touches silently undecided.  No physical signal in SI units comes near it.
+MAX_MAGNITUDE = 1e150
 
 
 class RecordError(PHMError, ValueError):
@@ -218,7 +227,8 @@ def as_record(data: object, signals: Iterable[str] = (), *, name: str = "record"
         (first bad row and value; booleans count as non-numeric), columns of
         different lengths, fewer than 3 samples, NaN or inf in ``t``, ``t``
         not strictly increasing (first offending index and times), inf in a
-        signal.  NaN in a signal is a gap and is allowed.
+        signal, a value larger in magnitude than :data:`MAX_MAGNITUDE`.  NaN in
+        a signal is a gap and is allowed.
 
     Examples
     --------
@@ -238,21 +248,37 @@ def as_record(data: object, signals: Iterable[str] = (), *, name: str = "record"
     _check_lengths(arrays, name)
     t = arrays.pop(TIME)
     _check_time(t, name)
+    _check_magnitude(t, TIME, t, name)
     for col, x in arrays.items():
         _check_no_inf(x, col, t, name)
+        _check_magnitude(x, col, t, name)
     return Record(t=t, columns=arrays, name=name)
 
 
 MISSING_CELLS = frozenset({"", "nan", "NaN", "NAN", "NA", "N/A", "null"})
+#: A number in a CSV cell: decimal digits with an optional sign, point and exponent.  Python's
+#: ``float()`` also takes ``1_000``, other scripts' digits and surrounding words; a data file should not.
+CSV_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+#: Words ``float()`` reads as infinite or NaN, with an optional sign, in any case.
+_SPECIAL_NUMBER = re.compile(r"[+-]?(?:inf|infinity|nan)", re.IGNORECASE)
+#: Separators a CSV file written with another convention uses instead of the comma.
+_OTHER_SEPARATORS = ((";", "';'"), ("\t", "tabs"), ("|", "'|'"))
 
 
 def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None) -> Record:
     r"""Read a CSV file with a header row and a time column ``t`` into a :class:`Record`.
 
-    Cells are parsed as numbers, never evaluated; an empty cell or ``nan``/``NA``/``null`` is a gap
-    (NaN).  Errors name the file, the line (1 = the header) and the column: a missing ``t`` or signal
-    column, a duplicate column, a row with too many or too few cells, a non-numeric or infinite cell,
-    a gap or a step back in ``t``.  ``signals`` and the rest of the checks are as in :func:`as_record`.
+    Cells are parsed as numbers, never evaluated: decimal digits with an optional sign, point and
+    exponent (:data:`CSV_NUMBER`; ``1_000`` is refused although Python's ``float()`` reads it), of
+    magnitude at most :data:`MAX_MAGNITUDE`.  An empty cell or ``nan``/``NA``/``null`` is a gap
+    (NaN); ``inf`` is an error (leave the cell empty for a gap).
+
+    Only ``t`` and the ``signals`` (default: every column) are read.  A column that is not
+    among them is ignored; if it holds text, one :class:`RecordWarning` names it (and every other
+    such column).  Errors name the file, the line (1 = the header) and the column: a missing ``t``
+    or signal column, a duplicate column, a row with too many or too few cells, a file separated by
+    ``;``, tabs or ``|`` instead of commas, a non-numeric, infinite or too large cell, a gap or a
+    step back in ``t``.  ``signals`` and the rest of the checks are as in :func:`as_record`.
 
     Examples
     --------
@@ -266,12 +292,44 @@ def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None) -> R
     Traceback (most recent call last):
     ...
     diagnosis.signals.RecordError: ...run.csv line 3, column 'x': 'abc' is not a number
+    >>> _ = open(path, "w").write("t;x\n0;1\n0.5;2\n1;3\n")
+    >>> read_csv(path)
+    Traceback (most recent call last):
+    ...
+    diagnosis.signals.RecordError: ...run.csv line 1: the file seems to be separated by ';', but read_csv expects commas
     """
-    import csv
     from pathlib import Path
 
     path = Path(path)
     name = name or str(path)
+    rows = _csv_rows(path, name)
+    header = _csv_header(rows[0], name)
+    for line, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise RecordError(f"{name} line {line}: {len(row)} cells for {len(header)} columns"
+                              + _separator_hint(row, ", as if"))
+    signals = (signals,) if isinstance(signals, str) else tuple(signals)  # one name, not its letters
+    wanted = [c for c in header if not signals or c == TIME or c in signals]
+    data = rows[1:]
+    columns = {}
+    for column in wanted:
+        index = header.index(column)
+        columns[column] = np.array([_csv_number(row[index], name, line, column)
+                                    for line, row in enumerate(data, start=2)], dtype=float)
+    _warn_text_columns(header, wanted, data, name)
+    t = columns[TIME]
+    for i in np.flatnonzero(~np.isfinite(t)):
+        raise RecordError(f"{name} line {i + 2}, column {TIME!r}: missing time")
+    for i in np.flatnonzero(np.diff(t) <= 0):
+        raise RecordError(f"{name} line {i + 3}, column {TIME!r}: t = {t[i + 1]!r} does not increase "
+                          f"(line {i + 2} has t = {t[i]!r})")
+    return as_record(columns, signals, name=name)
+
+
+def _csv_rows(path, name: str) -> list[list[str]]:
+    """The rows of a CSV file, trailing blank lines dropped; RecordError if unreadable or empty."""
+    import csv
+
     try:
         with path.open(newline="", encoding="utf-8-sig") as handle:
             rows = list(csv.reader(handle))
@@ -285,7 +343,15 @@ def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None) -> R
         rows.pop()  # trailing blank lines
     if not rows:
         raise RecordError(f"{name}: the file is empty (expected a header row with a column {TIME!r})")
-    header = [cell.strip() for cell in rows[0]]
+    return rows
+
+
+def _csv_header(row: list[str], name: str) -> list[str]:
+    """The column names: each named once, ``t`` among them, the file comma-separated."""
+    hint = _separator_hint(row, ": the file seems to be")
+    if hint:
+        raise RecordError(f"{name} line 1{hint}")
+    header = [cell.strip() for cell in row]
     seen = set()
     for column in header:
         if not column:
@@ -297,35 +363,53 @@ def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None) -> R
         hint = [c for c in header if c.lower() in ("time", "t", "t_s", "time_s", "seconds")]
         raise RecordError(f"{name} line 1: no time column {TIME!r} (columns: {header})"
                           + (f"; rename {hint[0]!r} to 't'" if hint else ""))
-    columns = {c: np.empty(len(rows) - 1) for c in header}
-    for line, row in enumerate(rows[1:], start=2):
-        if len(row) != len(header):
-            raise RecordError(f"{name} line {line}: {len(row)} cells for {len(header)} columns")
-        for column, cell in zip(header, row):
-            columns[column][line - 2] = _csv_number(cell, name, line, column)
-    t = columns[TIME]
-    for i in np.flatnonzero(~np.isfinite(t)):
-        raise RecordError(f"{name} line {i + 2}, column {TIME!r}: missing time")
-    for i in np.flatnonzero(np.diff(t) <= 0):
-        raise RecordError(f"{name} line {i + 3}, column {TIME!r}: t = {t[i + 1]!r} does not increase "
-                          f"(line {i + 2} has t = {t[i]!r})")
-    return as_record(columns, signals, name=name)
+    return header
+
+
+def _separator_hint(row: list[str], lead: str) -> str:
+    """``"<lead> separated by ';', but read_csv expects commas"`` when a one-cell row holds another separator."""
+    if len(row) == 1:
+        for separator, label in _OTHER_SEPARATORS:
+            if separator in row[0]:
+                return f"{lead} separated by {label}, but read_csv expects commas"
+    return ""
 
 
 def _csv_number(cell: str, name: str, line: int, column: str) -> float:
+    """The number in one cell of a used column: NaN for a gap, else a RecordError naming the cell."""
     text = cell.strip()
     if text in MISSING_CELLS:
         return np.nan
-    try:
-        value = float(text)
-    except ValueError:
-        raise RecordError(f"{name} line {line}, column {column!r}: {text[:40]!r} is not a number") from None
-    if math.isinf(value):
-        raise RecordError(f"{name} line {line}, column {column!r}: {text[:40]!r} is infinite (leave the cell "
-                          "empty for a gap)")
+    where = f"{name} line {line}, column {column!r}: {text[:40]!r}"
+    if CSV_NUMBER.fullmatch(text) is None:
+        if _SPECIAL_NUMBER.fullmatch(text) is None:
+            reason = " (digit separators such as '_' are not allowed)" if "_" in text else ""
+            raise RecordError(f"{where} is not a number{reason}")
+    value = float(text)
     if math.isnan(value):
         return np.nan
+    if math.isinf(value):
+        raise RecordError(f"{where} is infinite (leave the cell empty for a gap)")
+    if abs(value) > MAX_MAGNITUDE:
+        raise RecordError(f"{where} is larger in magnitude than {MAX_MAGNITUDE:g} (MAX_MAGNITUDE): the residuals "
+                          "would overflow")
     return value
+
+
+def _is_number_or_gap(cell: str) -> bool:
+    text = cell.strip()
+    return text in MISSING_CELLS or bool(CSV_NUMBER.fullmatch(text) or _SPECIAL_NUMBER.fullmatch(text))
+
+
+def _warn_text_columns(header: list[str], wanted: list[str], rows: list[list[str]], name: str) -> None:
+    """One RecordWarning naming the columns that are not read and hold text."""
+    text = [c for i, c in enumerate(header)
+            if c not in wanted and not all(_is_number_or_gap(row[i]) for row in rows)]
+    if text:
+        listed = ", ".join(map(repr, text))
+        verb = "is" if len(text) == 1 else "are"
+        warnings.warn(f"{name}: column{'s' * (len(text) > 1)} {listed} {verb} not numeric and not among the "
+                      f"signals read: ignored", RecordWarning, stacklevel=3)
 
 
 def gaps(record: Record, signals: Iterable[str] | None = None) -> list[tuple[str, float, float, int]]:
@@ -409,6 +493,15 @@ def _check_time(t: np.ndarray, name: str) -> None:
         i = int(back[0]) + 1
         raise RecordError(f"{name}: column {TIME!r} is not strictly increasing: "
                           f"t[{i}] = {float(t[i])!r} follows t[{i - 1}] = {float(t[i - 1])!r}")
+
+
+def _check_magnitude(x: np.ndarray, column: str, t: np.ndarray, name: str) -> None:
+    with np.errstate(invalid="ignore"):
+        bad = np.flatnonzero(np.abs(x) > MAX_MAGNITUDE)
+    if bad.size:
+        i = int(bad[0])
+        raise RecordError(f"{name}: column {column!r} has a value {x[i]:g} at row {i} (t = {float(t[i])!r}) larger "
+                          f"in magnitude than {MAX_MAGNITUDE:g} (MAX_MAGNITUDE): the residuals would overflow")
 
 
 def _check_no_inf(x: np.ndarray, column: str, t: np.ndarray, name: str) -> None:
@@ -575,6 +668,7 @@ def _checked_signal(record: Record, x: object, name: str) -> np.ndarray:
         raise RecordError(f"{record.name}: signal {name!r} has {values.size} samples, "
                           f"{TIME!r} has {record.t.size}")
     _check_no_inf(values, name, record.t, record.name)
+    _check_magnitude(values, name, record.t, record.name)
     return values
 
 
@@ -608,7 +702,8 @@ def _check_savgol(record: Record, name: str, order: int, window: object, polyord
     if not record.is_uniform:
         raise RecordError(f"signal {name!r}: method='savgol' needs uniform sampling, but steps deviate from "
                           f"the median step {record.dt:g} by up to {_step_deviation(record.t):.2%}; "
-                          "use method='central', which handles uneven steps")
+                          "use method='central', which handles uneven steps, or put the record on a uniform grid "
+                          "first with diagnosis.resample(record) (bgphm: --resample)")
     if len(record) < window:
         raise RecordError(f"signal {name!r} has {len(record)} samples, fewer than the Savitzky-Golay window "
                           f"of {window}; pass a smaller odd window= or use method='central'")

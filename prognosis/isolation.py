@@ -34,7 +34,7 @@ import numpy as np
 from .degradation import PerAssetDegradation, degradation_model
 from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, rate_prior,
                          sensitivity, signature_candidates)
-from .monitor import MonitorResult, filter_stride
+from .monitor import MonitorResult, check_particles, check_positive, filter_stride
 from .observation import observation_model
 from .particle_filter import KernelSmoothing, ParticleFilter
 from .rul import RULDistribution, RULPredictor
@@ -293,10 +293,13 @@ class IsolatingMonitor:
         for name, value in self.failures.items():
             if value == self.nominal[name]:
                 raise ValueError(f"failure value of {name!r} equals its nominal value {value:g}")
+        if not isinstance(noise_std, Mapping):
+            raise ValueError(f"noise_std: give the standard deviation of each ARR's residual by ARR name, "
+                             f"got a {type(noise_std).__name__}")
         missing = [a.name for a in self.arrs if a.name not in noise_std]
         if missing:
             raise ValueError(f"noise_std has no value for the ARR(s) {missing}")
-        self.noise_std = {k: float(v) for k, v in noise_std.items()}
+        self.noise_std = {k: check_positive(v, f"noise_std[{k!r}]") for k, v in noise_std.items()}
         self.laws = dict(laws) if isinstance(laws, Mapping) else {name: None for name in laws}
         if not self.laws:
             raise ValueError("laws: give at least one degradation law")
@@ -306,12 +309,13 @@ class IsolatingMonitor:
                 raise ValueError(f"candidate {unknown[0]!r} has no failure value (failure values: "
                                  f"{', '.join(self.failures)})")
         self.candidates = None if candidates is None else list(candidates)
-        self.dt, self.n_particles, self.inflation = float(dt), int(n_particles), float(inflation)
+        self.dt, self.n_particles = check_positive(dt, "dt"), check_particles(n_particles)
+        self.inflation = check_positive(inflation, "inflation")
         self.life, self.rate, self.process_noise, self.discount = life, rate, process_noise, discount
         if isinstance(rul_every, bool) or int(rul_every) != rul_every or rul_every < 1:
             raise ValueError(f"rul_every must be a positive whole number of filter steps, got {rul_every!r}")
         self.rul_every = int(rul_every)
-        self.horizon = HORIZON_STEPS * self.dt if horizon is None else float(horizon)
+        self.horizon = HORIZON_STEPS * self.dt if horizon is None else check_positive(horizon, "horizon")
         self.detection = dict(detection or {})
         self.min_ratio, self.seed = float(min_ratio), int(seed)
         self.healthy_until = -math.inf if healthy_until is None else float(healthy_until)

@@ -12,6 +12,8 @@ the newest sample by that half window.  Results are deterministic for a seed.
 
 from __future__ import annotations
 
+import math
+import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
@@ -173,6 +175,29 @@ def filter_stride(t: np.ndarray, dt: float) -> int:
     return stride
 
 
+def check_positive(value: object, option: str) -> float:
+    """``value`` as a float; a ValueError naming ``option`` unless it is a finite number > 0.
+
+    >>> check_positive(0.01, "noise_std")
+    0.01
+    >>> check_positive(-1, "noise_std")
+    Traceback (most recent call last):
+    ...
+    ValueError: noise_std must be a finite number > 0, got -1
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) or not math.isfinite(value) \
+            or value <= 0:
+        raise ValueError(f"{option} must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def check_particles(value: object) -> int:
+    """``n_particles`` as an int; a ValueError unless it is a whole number >= 2 (a weighted cloud needs two)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral) or value < 2:
+        raise ValueError(f"n_particles must be a whole number >= 2, got {value!r}")
+    return int(value)
+
+
 def _number(value) -> float | None:
     return None if value is None or not np.isfinite(value) else float(value)
 
@@ -223,6 +248,12 @@ class HealthMonitor:
                  adaptation: VarianceAdaptation | None = None, resampling: str = "systematic",
                  resample_below: float = 1.0, prediction_walk: float = 1.0, rul_every: int = 1, horizon: float = 200.0,
                  detection: Mapping | None = None, seed: int = 0):
+        if isinstance(noise_std, Mapping):
+            raise ValueError(f"noise_std: HealthMonitor watches one ARR; give the standard deviation of its residual "
+                             f"as one number, got a {type(noise_std).__name__}")
+        noise_std = check_positive(noise_std, "noise_std")
+        n_particles = check_particles(n_particles)
+        dt, horizon = check_positive(dt, "dt"), check_positive(horizon, "horizon")
         self.arr, self.candidate, self.model = arr, candidate, model
         self.observation = observation_model(arr, candidate)
         self.theta_fail, self.direction, self.dt = theta_fail, direction, dt

@@ -21,6 +21,8 @@ start value (0 in the paper).
 
 from __future__ import annotations
 
+import math
+import numbers
 from collections import deque
 from dataclasses import dataclass, field
 
@@ -252,6 +254,9 @@ class ParticleFilter:
             raise ValueError(f"n_particles must be at least 2, got {n_particles}")
         if inflation <= 0:
             raise ValueError(f"inflation must be positive, got {inflation}")
+        _check_noise_std(noise_std)
+        if not (isinstance(dt, numbers.Real) and math.isfinite(dt) and dt > 0):
+            raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
         self.model, self.observation = model, observation
         self.n, self.dt = n_particles, dt
         self.noise_std, self.inflation = noise_std, inflation
@@ -378,3 +383,15 @@ class ParticleFilter:
             "theta_quantiles": weighted_quantiles(self.theta, weights, (0.05, 0.5, 0.95)),
             "gamma_quantiles": weighted_quantiles(gamma, weights[:, None, :], (0.05, 0.5, 0.95)),
         }
+
+
+def _check_noise_std(noise_std: object) -> None:
+    """Every entry of ``noise_std`` a finite number > 0: the likelihood divides by its square."""
+    try:
+        values = np.asarray(noise_std, dtype=float)
+    except (TypeError, ValueError):
+        raise ValueError(f"noise_std must be a number or an array of numbers, got {noise_std!r}") from None
+    bad = ~(np.isfinite(values) & (values > 0))
+    if bad.any():
+        raise ValueError(f"noise_std must be finite and > 0, got {float(values[bad].reshape(-1)[0])!r}"
+                         + (f" in {values.tolist()}" if values.ndim else ""))

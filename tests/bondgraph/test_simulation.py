@@ -131,3 +131,104 @@ def test_input_derivative_needed_is_a_clear_error():
     bg.bond("V", "j"), bg.bond("j", "C"), bg.bond("j", "R")
     with pytest.raises(SimulationError, match=r"Derivative\(V\(t\), t\)"):
         simulate(bg, (0.0, 1.0), {"V": np.sin})
+
+
+# --- argument checks and resource guards (issue 22) -------------------------------------------------
+
+@pytest.mark.parametrize(
+    "t_span, message",
+    [
+        (5, r"t_span: expected a pair \(t_start, t_end\) of numbers, got 5"),
+        ("01", "t_span: expected a pair"),
+        ((0.0, 1.0, 2.0), "t_span: expected a pair"),
+        ((0.0, "1"), r"t_span\[1\]: expected a number, got '1'"),
+        ((0.0, float("nan")), r"t_span\[1\]: nan is not a finite number"),
+        ((-np.inf, 1.0), r"t_span\[0\]: -inf is not a finite number"),
+        ((1.0, 0.0), "t_span: t_end = 0.0 is not after t_start = 1.0"),
+        ((1.0, 1.0), "t_span: t_end = 1.0 is not after t_start = 1.0"),
+        ((0.0, 1e-300), r"t_span: the span 1e-300 s from t = 0 is shorter than 1e-12 s \(MIN_SPAN"),
+        ((1e9, 1e9 + 0.5), r"t_span: the span 0.5 s from t = 1e\+09 is shorter than 1 s"),
+    ],
+)
+def test_a_bad_time_span_is_refused_before_the_solver_runs(t_span, message):
+    # reversed and too-short spans used to hang LSODA; a number gave a TypeError
+    with pytest.raises(SimulationError, match=message):
+        simulate(dc_motor(), t_span, {"U": 12.0})
+
+
+@pytest.mark.parametrize(
+    "t_eval, message",
+    [
+        ([0.0, 2.0], r"t_eval: t_eval\[1\] = 2.0 is outside t_span \[0.0, 1.0\]"),
+        ([0.0, 0.5, 0.5], r"t_eval: not strictly increasing: t_eval\[2\] = 0.5 follows t_eval\[1\] = 0.5"),
+        ([0.5, 0.2], "t_eval: not strictly increasing"),
+        ([0.0, np.nan], r"t_eval: t_eval\[1\] = nan is not finite"),
+        ([[0.0, 0.5]], r"t_eval: expected a one-dimensional array of times, got shape \(1, 2\)"),
+        ("abc", "t_eval: expected an array of times, got str"),
+        ([], "t_eval: the number of samples must be a whole number >= 1, got 0"),
+    ],
+)
+def test_bad_output_times_name_t_eval(t_eval, message):
+    with pytest.raises(SimulationError, match=message):
+        simulate(dc_motor(), (0.0, 1.0), {"U": 12.0}, t_eval=t_eval)
+
+
+def test_the_sample_limit_is_one_public_check(monkeypatch):
+    from bondgraph import simulation
+
+    assert simulation.check_sample_count(simulation.MAX_SAMPLES) == simulation.MAX_SAMPLES
+    assert simulation.check_sample_count(501.0) == 501
+    for bad in (0, -3, 2.5, True, "10"):
+        with pytest.raises(SimulationError, match="--samples: the number of samples must be a whole number"):
+            simulation.check_sample_count(bad, "--samples")
+    with pytest.raises(SimulationError, match=r"--samples: 100000000 samples is more than the limit of 10000000"):
+        simulation.check_sample_count(10**8, "--samples")
+    # simulate applies the same limit to t_eval (lowered here, so the test builds no huge array)
+    monkeypatch.setattr(simulation, "MAX_SAMPLES", 10)
+    with pytest.raises(SimulationError, match=r"t_eval: 11 samples is more than the limit of 10 \(MAX_SAMPLES\)"):
+        simulate(dc_motor(), (0.0, 1.0), {"U": 12.0}, t_eval=np.linspace(0.0, 1.0, 11))
+
+
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"inputs": {"U": "12"}}, r"input 'U': expected a number, a callable u\(t\) or u\(t, y\), or a controller, "
+                                  r"got '12' \(str\)"),
+        ({"inputs": {"U": True}}, "input 'U': expected a number"),
+        ({"inputs": {"U": np.inf}}, "input 'U': inf is not a finite number"),
+        ({"inputs": {"U": 12.0}, "parameters": {"J": "1e-4"}}, "parameter 'J': expected a number or a callable of t"),
+        ({"inputs": {"U": 12.0}, "parameters": {"J": np.nan}}, "parameter 'J': nan is not a finite number"),
+        ({"inputs": {"U": 12.0}, "x0": {"J": "1"}}, r"x0\['J'\]: expected a number, got '1'"),
+        ({"inputs": {"U": 12.0}, "max_step": 0.0}, "max_step: expected a positive number of seconds"),
+        ({"inputs": {"U": 12.0}, "max_step": 1e-20}, r"max_step: 1e-20 s needs at least 1e\+20 steps"),
+        ({"inputs": {"U": 12.0}, "max_evaluations": 0}, "max_evaluations: expected a whole number >= 1"),
+    ],
+)
+def test_bad_constants_and_solver_limits_are_named(kwargs, message):
+    with pytest.raises(SimulationError, match=message):
+        simulate(dc_motor(), (0.0, 1.0), **kwargs)
+
+
+def test_numpy_numbers_are_accepted_as_constant_inputs():
+    result = simulate(rlc_circuit(), (0.0, 0.01), {"V": np.float32(2.0)}, x0={"C": np.array(1e-3)},
+                      t_eval=[0.0, 0.01])
+    assert result["V"].tolist() == [2.0, 2.0] and result["v_C"][0] == pytest.approx(1.0)
+
+
+def test_a_nan_derivative_stops_the_integration_naming_the_state():
+    # L_a = 0 divides by zero at once; LSODA used to call the model forever on NaN derivatives
+    with pytest.raises(SimulationError, match=r"dp_L_a/dt is nan at t = 0; check the laws and parameters"):
+        simulate(dc_motor(), (0.0, 1.0), {"U": 12.0}, parameters={"L_a": 0.0})
+
+
+def test_a_stalled_or_endless_integration_ends_with_an_error(monkeypatch):
+    from bondgraph import simulation
+
+    with pytest.raises(SimulationError, match=r"max_evaluations: the integration evaluated the model 50 times "
+                                              r"and reached only t = [0-9.e-]+ of 1"):
+        simulate(dc_motor(), (0.0, 1.0), {"U": 12.0}, max_evaluations=50)
+    # a step below the spacing of floats at t = 1e6 cannot advance the time: LSODA retries forever
+    monkeypatch.setattr(simulation, "STALL_EVALUATIONS", 200)
+    with pytest.raises(SimulationError, match=r"the integration makes no progress at t = 1000000.0: 200 evaluations"):
+        simulate(dc_motor(), (1e6, 1e6 + 1e-3), {"U": 12.0}, max_step=1e-12,
+                 max_evaluations=10**10)

@@ -7,7 +7,7 @@ from bondgraph import simulate
 from bondgraph.library import rlc_circuit
 from diagnosis import derive_arrs
 from diagnosis.detection import evaluate, noise_margin, persistent
-from diagnosis.signals import RecordError
+from diagnosis.signals import RecordError, RecordWarning
 
 
 @pytest.fixture(scope="module")
@@ -93,6 +93,63 @@ def test_bad_options_are_rejected(rlc):
         evaluate(arrs[0], record, margin=-1.0)
     with pytest.raises(ValueError, match="threshold"):
         evaluate(arrs[0], record, threshold="loose")
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"margin": "x"}, r"margin: the noise margin must be a finite number >= 0, got 'x'"),
+    ({"margin": np.nan}, r"margin: the noise margin must be a finite number >= 0, got nan"),
+    ({"margin": np.inf}, r"margin: .* got inf"),
+    ({"margin": -1e-3}, r"margin: .* got -0.001"),
+    ({"margin": True}, r"margin: .* got True"),
+    ({"persistence": 2.5}, r"persistence must be a whole number of samples >= 1, got 2.5"),
+    ({"persistence": "3"}, r"persistence must be a whole number of samples >= 1, got '3'"),
+    ({"persistence": 0}, r"persistence must be a whole number .* got 0"),
+    ({"method": "spline"}, r"ARR_J1: unknown derivative method 'spline'; choose 'savgol' or 'central'"),
+])
+def test_bad_detection_settings_name_the_option(rlc, options, message):
+    # margin='x' used to fail inside numpy, persistence=2.5 inside np.ones
+    arrs, record = rlc
+    with pytest.raises(ValueError, match=message):
+        evaluate(arrs[0], record, **options)
+
+
+def test_an_arr_name_instead_of_an_arr_is_a_type_error_naming_it(rlc):
+    arrs, record = rlc
+    with pytest.raises(TypeError, match=r"noise_margin: arr must be an ARR from diagnosis.derive_arrs, got the str "
+                                        r"'ARR_J1' \(look the ARR up by its name"):
+        noise_margin("ARR_J1", record)
+    with pytest.raises(TypeError, match=r"evaluate: arr must be an ARR .* got the dict \{'name': 'ARR_J1'\}"):
+        evaluate({"name": "ARR_J1"}, record)
+
+
+@pytest.mark.parametrize("k", [-1.0, 0.0, np.nan, np.inf, "3", None])
+def test_noise_margin_needs_a_finite_positive_k(rlc, k):
+    arrs, record = rlc
+    with pytest.raises(ValueError, match=r"k: the number of standard deviations must be a finite number > 0, got"):
+        noise_margin(arrs[1], record, k=k)
+
+
+def test_noise_margin_on_a_record_without_residual_is_a_record_error(rlc):
+    arrs, record = rlc
+    empty = dict(record, i=np.full(record["i"].size, np.nan))
+    with pytest.raises(RecordError, match="ARR_J0: the nominal record gives fewer than 2 finite residual values"):
+        noise_margin(arrs[1], empty)
+
+
+def test_an_uneven_record_takes_central_differences_or_a_resampling(rlc):
+    from diagnosis import resample
+
+    arrs, _ = rlc
+    t = np.sort(np.random.default_rng(1).uniform(0.0, 0.5, 1500))
+    uneven = simulate(rlc_circuit(), (0.0, 0.5), {"V": lambda t: 1.0 + 0.5 * np.sin(40 * t)}, t_eval=t).record()
+    with pytest.raises(RecordError, match=r"method='central'.*diagnosis.resample\(record\)"):
+        evaluate(arrs[1], uneven)
+    central = evaluate(arrs[1], uneven, method="central", margin=1e-4)
+    assert central.t.size == t.size and np.isfinite(central.residual).all() and not central.alarm.any()
+    with pytest.warns(RecordWarning, match="straight-line interpolations"):  # steps far longer than the median
+        uniform = resample(uneven)
+    resampled = evaluate(arrs[1], uniform, margin=1e-2)
+    assert uniform.is_uniform and np.isfinite(resampled.residual).all()
 
 
 def test_nonlinear_uncertainty_uses_a_sound_natural_extension():

@@ -16,7 +16,9 @@ from diagnosis.signals import (
     cumulative_integral,
     default_window,
     derivative,
+    read_csv,
 )
+from diagnosis.resampling import resample
 
 DT = 0.01
 T = np.arange(0.0, 10.0 + DT / 2, DT)
@@ -123,6 +125,9 @@ def test_pandas_dataframe():
         ({"t": [0.0, 0.1, 0.2], "x": [1.0, -np.inf, 3.0]}, (),
          r"column 'x' has an infinite value -inf at row 1 \(t = 0.1\)"),
         ({"t": [0, 1, 2], "x": [1, 2, 3]}, ["t"], r"'t' is the time column"),
+        ({"t": [0.0, 0.1, 0.2], "x": [1.0, -1e200, 3.0]}, (),
+         r"column 'x' has a value -1e\+200 at row 1 \(t = 0.1\) larger in magnitude than 1e\+150 \(MAX_MAGNITUDE\)"),
+        ({"t": [0.0, 0.1, 1e300], "x": [1.0, 2.0, 3.0]}, (), r"column 't' has a value 1e\+300 at row 2"),
     ],
 )
 def test_bad_records_are_refused_with_the_column_named(data, signals, message):
@@ -232,7 +237,8 @@ def test_central_differences_are_exact_for_quadratics_on_any_grid():
 
 def test_savgol_refuses_uneven_sampling_and_suggests_central():
     t = uneven_grid(101)
-    with pytest.raises(RecordError, match="'v'.*uniform sampling.*method='central'"):
+    with pytest.raises(RecordError, match=r"'v'.*uniform sampling.*method='central'.*diagnosis.resample\(record\) "
+                                          r"\(bgphm: --resample\)"):
         derivative(t, np.sin(t), name="v")
 
 
@@ -408,3 +414,131 @@ def test_add_noise_keeps_gaps_and_refuses_unknown_signals():
         add_noise(record, {"q": 0.1, "t": 0.1, "x": 0.1}, seed=0)
     with pytest.raises(RecordError, match="std of signal 'x' must be a finite number >= 0, got -0.1"):
         add_noise(record, {"x": -0.1}, seed=0)
+
+
+def test_a_value_beyond_max_magnitude_is_refused_in_signal_arrays_too():
+    # 1e308 used to pass and overflow the residual, leaving its samples silently undecided
+    with pytest.raises(RecordError, match=r"column 'v' has a value 1e\+308 at row 1 .*MAX_MAGNITUDE"):
+        derivative([0.0, 1.0, 2.0], [0.0, 1e308, 0.0], method="central", name="v")
+    assert as_record({"t": [0, 1, 2], "x": [1e150, -1e150, 0.0]})["x"][0] == 1e150  # the limit itself is fine
+
+
+# --- read_csv -------------------------------------------------------------------------------
+
+
+def write(tmp_path, text, name="run.csv"):
+    path = tmp_path / name
+    path.write_text(text)
+    return path
+
+
+def test_read_csv_ignores_a_text_column_it_does_not_read_with_one_warning(tmp_path):
+    path = write(tmp_path, "t,x,label,note,y\n0,1,a,,5\n1,2,b,ok,6\n2,3,c,1,7\n")
+    with pytest.warns(RecordWarning) as caught:
+        record = read_csv(path, ["x"])
+    assert record.signals == ("x",) and record["x"].tolist() == [1.0, 2.0, 3.0]
+    assert len(caught) == 1  # one warning for every such column; 'y' is numeric, so not named
+    assert str(caught[0].message) == (f"{path}: columns 'label', 'note' are not numeric and not among the signals "
+                                      "read: ignored")
+    with pytest.warns(RecordWarning, match=r"column 'label' is not numeric"):
+        read_csv(write(tmp_path, "t,x,label\n0,1,a\n1,2,b\n2,3,c\n"), "x")
+
+
+def test_read_csv_numeric_columns_it_does_not_read_are_not_checked(tmp_path):
+    path = write(tmp_path, "t,x,big\n0,1,1e300\n1,2,inf\n2,3,\n")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert read_csv(path, ["x"]).signals == ("x",)
+    with pytest.raises(RecordError, match=r"line 2, column 'big': '1e300' is larger in magnitude than 1e\+150"):
+        read_csv(path)  # every column is read by default
+
+
+def test_read_csv_text_in_a_column_it_reads_stays_an_error(tmp_path):
+    path = write(tmp_path, "t,x,y\n0,1,1\n1,2,b\n2,3,3\n")
+    with pytest.raises(RecordError, match=r"run.csv line 3, column 'y': 'b' is not a number$"):
+        read_csv(path, ["x", "y"])
+    with pytest.raises(RecordError, match=r"line 3, column 'y': 'b' is not a number"):
+        read_csv(path)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("t;x\n0;1\n1;2\n2;3\n", r"line 1: the file seems to be separated by ';', but read_csv expects commas"),
+        ("t\tx\n0\t1\n1\t2\n2\t3\n", r"line 1: the file seems to be separated by tabs, but read_csv expects commas"),
+        ("t|x\n0|1\n1|2\n2|3\n", r"line 1: the file seems to be separated by '\|'"),
+        ("t,x\n0,1\n1;2\n2,3\n", r"line 3: 1 cells for 2 columns, as if separated by ';', but read_csv expects commas"),
+        ("t,x\n0,1\n1,2,3\n2,3\n", r"line 3: 3 cells for 2 columns$"),
+        ("t,x\n0,1_000\n1,2\n2,3\n", r"line 2, column 'x': '1_000' is not a number \(digit separators such as '_' "
+                                     r"are not allowed\)"),
+        ("t,x\n0,1\n1,\u0661\u0662\n2,3\n", r"line 3, column 'x': '\u0661\u0662' is not a number$"),
+        ("t,x\n0,1\n1,0x10\n2,3\n", r"line 3, column 'x': '0x10' is not a number"),
+        ("t,x\n0,1\n1,1e308\n2,3\n", r"line 3, column 'x': '1e308' is larger in magnitude than 1e\+150 "
+                                     r"\(MAX_MAGNITUDE\): the residuals would overflow"),
+        ("t,x\n0,1\n1e200,2\n2e200,3\n", r"line 3, column 't': '1e200' is larger in magnitude"),
+        ("t,x\n0,1\n1,-Infinity\n2,3\n", r"line 3, column 'x': '-Infinity' is infinite \(leave the cell empty"),
+        ("t,x\n0,1\n1,1e999\n2,3\n", r"line 3, column 'x': '1e999' is infinite"),
+    ],
+)
+def test_read_csv_bad_files_name_file_line_and_column(tmp_path, text, message):
+    path = write(tmp_path, text)
+    with pytest.raises(RecordError, match=r"run.csv " + message):
+        read_csv(path)
+
+
+def test_read_csv_number_formats_and_gaps(tmp_path):
+    path = write(tmp_path, "t,x\n0, 1.5e-3 \n1,.5\n2,3.\n3,-nan\n4,NA\n5,+2E+2\n")
+    assert read_csv(path)["x"].tolist()[:3] == [1.5e-3, 0.5, 3.0]
+    assert np.isnan(read_csv(path)["x"][3:5]).all() and read_csv(path)["x"][5] == 200.0
+
+
+# --- resample -------------------------------------------------------------------------------
+
+
+def test_resample_puts_an_uneven_record_on_its_median_step():
+    t = uneven_grid(201)
+    record = as_record({"t": t, "x": 2.0 * t + 1.0, "y": t**2}, name="jittery")
+    assert not record.is_uniform
+    uniform = resample(record)
+    assert uniform.is_uniform and uniform.name == "jittery" and uniform.signals == ("x", "y")
+    assert uniform.dt == pytest.approx(record.dt) and uniform.t[0] == t[0] and uniform.t[-1] <= t[-1]
+    assert np.allclose(uniform["x"], 2.0 * uniform.t + 1.0)  # linear interpolation is exact for lines
+    assert np.all(uniform["y"] >= uniform.t**2 - 1e-15)  # and overestimates a convex function
+    # the savgol estimator refused the record; it takes the resampled one
+    assert np.allclose(derivative(uniform, "x"), 2.0)
+
+
+def test_resample_never_interpolates_across_a_gap():
+    record = as_record({"t": np.arange(0.0, 1.01, 0.1), "x": [0, 1, 2, np.nan, 4, 5, 6, 7, 8, 9, 10]})
+    out = resample(record, 0.05)
+    # grid times 0.25 .. 0.35 touch the NaN sample at 0.3; 0.2 and 0.4 fall on samples and keep them
+    nan_times = np.round(out.t[np.isnan(out["x"])], 6).tolist()
+    assert nan_times == [0.25, 0.3, 0.35]
+    assert out["x"][4] == 2.0 and out["x"][8] == 4.0 and out["x"][1] == pytest.approx(0.5)
+
+
+def test_resample_warns_where_the_record_steps_are_much_longer():
+    t = np.concatenate([np.arange(0.0, 1.0, 0.01), np.arange(1.2, 2.0, 0.01)])  # 0.2 s without samples
+    record = as_record({"t": t, "x": np.sin(t)}, name="dropout")
+    with pytest.warns(RecordWarning, match=r"dropout: resampled to a step of 0.01 s, but the record has steps up "
+                                           r"to 0.21 s \(from t = 0.99\): values up to 0.1 s from the nearest sample"):
+        resample(record)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        resample(as_record({"t": uneven_grid(51), "x": np.zeros(51)}))  # jitter alone: no warning
+
+
+@pytest.mark.parametrize(
+    ("step", "method", "message"),
+    [
+        (0.0, "linear", r"resample step must be a finite number of seconds > 0, got 0.0"),
+        (np.nan, "linear", r"resample step must be a finite number"),
+        ("0.1", "linear", r"resample step must be a finite number"),
+        (1.5, "linear", r"resample step 1.5 s gives 2 sample\(s\) over the record's 2 s; at least 3"),
+        (1e-12, "linear", r"resample step 1e-12 s gives 2000000000001 samples .* more than the limit of 10000000"),
+        (None, "cubic", r"resample method 'cubic' is not one of \['linear'\]"),
+    ],
+)
+def test_resample_refuses_bad_settings(step, method, message):
+    with pytest.raises(RecordError, match=message):
+        resample({"t": [0.0, 1.0, 2.0], "x": [1.0, 2.0, 3.0]}, step, method=method)

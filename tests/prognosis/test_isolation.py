@@ -165,3 +165,29 @@ def test_frictions_that_act_alike_are_reported_as_indistinguishable(tmp_path, ca
     summary = _prognose(tmp_path, capsys, "--fail", "b_Md=0.3", "--fail", "f_m=1e-4", "--rul-every", "50")
     assert summary["status"] == "indistinguishable"
     assert sorted(summary["candidate"]) == ["b_Md", "f_m"] and summary["indistinguishable"] == [["b_Md", "f_m"]]
+
+
+@pytest.fixture(scope="module")
+def rlc_arrs():
+    from bondgraph.library import rlc_circuit
+
+    return derive_arrs(rlc_circuit())
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"noise_std": {"ARR_J1": 1e-3, "ARR_J0": -1.0}}, r"noise_std\['ARR_J0'\] must be a finite number > 0, got -1.0"),
+    ({"noise_std": {"ARR_J1": 0.0, "ARR_J0": 1e-3}}, r"noise_std\['ARR_J1'\] must be a finite number > 0, got 0.0"),
+    ({"noise_std": {"ARR_J1": np.nan, "ARR_J0": 1e-3}}, r"noise_std\['ARR_J1'\] must be a finite number > 0, got nan"),
+    ({"noise_std": 1e-3}, r"noise_std: give the standard deviation of each ARR's residual by ARR name, got a float"),
+    ({"n_particles": 1}, r"n_particles must be a whole number >= 2, got 1"),
+    ({"dt": 0.0}, r"dt must be a finite number > 0, got 0.0"),
+    ({"dt": np.nan}, r"dt must be a finite number > 0, got nan"),
+    ({"horizon": -5.0}, r"horizon must be a finite number > 0, got -5.0"),
+])
+def test_isolating_monitor_refuses_bad_filter_settings_by_name(rlc_arrs, options, message):
+    from prognosis.isolation import IsolatingMonitor
+
+    arrs = rlc_arrs
+    settings = {"noise_std": {a.name: 1e-3 for a in arrs}, **options}
+    with pytest.raises(ValueError, match=message):
+        IsolatingMonitor(arrs, {"R": 20.0}, **settings)

@@ -114,3 +114,30 @@ def test_a_record_without_degradation_starts_no_filter(scenario):
     record = add_noise(as_record(torsion_bar_sensors(nominal, bg)), {"omega_m": 0.01, "omega_Ld": 0.01}, seed=6)
     result = monitor(arr).run(record)
     assert result.detection_time is None and result.t.size == 0 and not result.rul
+
+
+@pytest.fixture(scope="module")
+def rlc_arr():
+    from bondgraph.library import rlc_circuit
+
+    return derive_arrs(rlc_circuit())[0]  # the loop's ARR, sensitive to R
+
+
+@pytest.mark.parametrize("options, message", [
+    ({"noise_std": -1.0}, r"noise_std must be a finite number > 0, got -1.0"),
+    ({"noise_std": 0.0}, r"noise_std must be a finite number > 0, got 0.0"),
+    ({"noise_std": np.nan}, r"noise_std must be a finite number > 0, got nan"),
+    ({"noise_std": "0.01"}, r"noise_std must be a finite number > 0, got '0.01'"),
+    ({"noise_std": {"ARR_J1": 0.01}}, r"noise_std: HealthMonitor watches one ARR; .* got a dict"),
+    ({"n_particles": 1}, r"n_particles must be a whole number >= 2, got 1"),
+    ({"n_particles": 100.5}, r"n_particles must be a whole number >= 2, got 100.5"),
+    ({"dt": 0.0}, r"dt must be a finite number > 0, got 0.0"),
+    ({"dt": -0.1}, r"dt must be a finite number > 0, got -0.1"),
+    ({"dt": np.inf}, r"dt must be a finite number > 0, got inf"),
+    ({"horizon": 0.0}, r"horizon must be a finite number > 0, got 0.0"),
+    ({"horizon": np.nan}, r"horizon must be a finite number > 0, got nan"),
+])
+def test_health_monitor_refuses_bad_filter_settings_by_name(rlc_arr, options, message):
+    # noise_std=-1 used to be accepted (a likelihood with a negative variance)
+    with pytest.raises(ValueError, match=message):
+        HealthMonitor(rlc_arr, "R", ExponentialDegradation(1e-5), theta_fail=20.0, **options)

@@ -159,6 +159,20 @@ def test_log_weights_survive_hopeless_likelihoods():
     assert np.all(np.isfinite(pf.theta))
 
 
+@pytest.mark.parametrize("options, message", [
+    ({"noise_std": -1.0}, r"noise_std must be finite and > 0, got -1.0$"),
+    ({"noise_std": 0.0}, r"noise_std must be finite and > 0, got 0.0$"),
+    ({"noise_std": [0.1, np.nan]}, r"noise_std must be finite and > 0, got nan in \[0.1, nan\]"),
+    ({"noise_std": "x"}, r"noise_std must be a number or an array of numbers, got 'x'"),
+    ({"dt": 0.0}, r"dt must be a finite number > 0, got 0.0"),
+    ({"dt": np.nan}, r"dt must be a finite number > 0, got nan"),
+])
+def test_particle_filter_refuses_a_noise_or_step_it_cannot_use(options, message):
+    # the likelihood divides by noise_std**2: 0 or NaN used to give NaN weights, -1 a silently squared sign
+    with pytest.raises(ValueError, match=message):
+        ParticleFilter(LinearDegradation(), lambda theta, points: theta, n_particles=10, **options)
+
+
 def test_degenerate_weights_are_reset_and_reported():
     pf = ParticleFilter(LinearDegradation(), lambda theta, points: np.full(theta.shape, np.nan), n_particles=50, seed=0)
     pf.initialize((0.9, 1.1))
