@@ -79,15 +79,16 @@ def cmd_simulate(args, progress: Progress) -> int:
     the CSV goes to stdout or ``args.out``.  Raises :class:`UsageError` for a bad ``--t-end``,
     ``--samples`` or ``--set``, or an input signal without a value.
     """
-    from bondgraph.simulation import simulate
+    from bondgraph.simulation import MIN_SPAN, check_sample_count, simulate
 
     out = _output_file(args)
-    spec = load_model(args.model)
-    t_end = args.t_end if args.t_end is not None else (spec.t_end or 1.0)
-    if not (math.isfinite(t_end) and t_end > 0):
-        raise UsageError(f"--t-end must be a positive number of seconds, got {t_end}")
     if args.samples < 3:
         raise UsageError(f"--samples must be at least 3, got {args.samples}")
+    check_sample_count(args.samples, "--samples")
+    spec = load_model(args.model)
+    t_end = args.t_end if args.t_end is not None else (spec.t_end or 1.0)
+    if not (math.isfinite(t_end) and t_end >= MIN_SPAN):
+        raise UsageError(f"--t-end must be a number of seconds of at least {MIN_SPAN:g}, got {t_end:g}")
     parameters = _assignments(args.set, spec.model.parameters, "--set")
     missing = [s for s in spec.model.inputs if s not in spec.inputs and not _has_value(spec.model, s)]
     if missing:
@@ -109,7 +110,7 @@ def cmd_detect(args, progress: Progress) -> int:
     out = _output_directory(args)
     spec = load_model(args.model)
     arrs = _arrs(spec, progress, args.arr, args.integrals)
-    record = _record(args.data, arrs, progress)
+    record = _record(args.data, arrs, progress, args.resample)
     evaluations = _detect(arrs, record, args, progress)
     summary = {"model": spec.model.name, "data": str(args.data), "samples": len(record),
                "arrs": {e.name: _evaluation_summary(e) for e in evaluations}}
@@ -154,7 +155,7 @@ def cmd_prognose(args, progress: Progress) -> int:
     failures = _failures(args, parameters)
     candidates = _candidates(args, arrs, failures, parameters)
     laws = [args.degradation] if args.degradation else ["linear", "exponential"]
-    record = _record(args.data, arrs, progress)
+    record = _record(args.data, arrs, progress, args.resample)
     evaluations = _detect(arrs, record, args, progress)
     until = _calibration_end(record, args, otherwise="")
     # each residual's noise on the healthy stretch, even when --margin is given
@@ -248,15 +249,24 @@ def _named(arrs: list, name: str):
     raise UsageError(f"--arr {name!r}: no such ARR (available: {', '.join(a.name for a in arrs)})")
 
 
-def _record(path, arrs: list, progress: Progress) -> Record:
+def _record(path, arrs: list, progress: Progress, resample: bool = False) -> Record:
     signals = list(dict.fromkeys(s for arr in arrs for s in arr.signals))
     try:
-        record = read_csv(path, signals)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", RecordWarning)
+            record = read_csv(path, signals)
+            if resample:
+                from diagnosis.resampling import resample as uniform
+
+                record = uniform(record)
+                progress(f"resampled {path} to a uniform step of {record.dt:g} s ({len(record)} samples)")
     except RecordError as exc:
         message = str(exc)
         if "missing column" in message:
             message += f" (the ARRs {[a.name for a in arrs]} use the signals {signals})"
         raise RecordError(message) from None
+    for w in caught:
+        progress(f"warning: {w.message}")
     for signal in signals:
         if np.isnan(record[signal]).all():
             raise RecordError(f"{path}: column {signal!r} has no value (every cell is empty or NaN)")
@@ -655,6 +665,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="avoid: differentiate an ARR that would integrate measured signals (default); keep: "
                             "keep the integrals (better on long records sampled fast, where a second derivative "
                             "of the noise is larger than the integral's random walk)")
+        p.add_argument("--resample", action="store_true",
+                       help="put a record with uneven steps on a uniform grid of its median step (linear "
+                            "interpolation within runs of data, never across a gap)")
         p.add_argument("--out", help="output directory (new or empty, unless --force)")
         p.add_argument("--force", action="store_true",
                        help="write into a non-empty --out directory, replacing files of the same names")

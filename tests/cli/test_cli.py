@@ -352,3 +352,27 @@ def test_demo_runs_the_chain_and_predicts_the_injected_end_of_life(tmp_path, cap
     assert abs(last["rul_median"] - true_rul) < 0.3 * true_rul
     b_true = truth["nominal"] * np.exp(truth["rate"] * (last["t"] - truth["onset"]))
     assert last["theta_mean"] == pytest.approx(b_true, rel=0.1)
+
+
+# ------------------------------------------------------------------------------------------- guards (issue 22)
+
+@pytest.mark.parametrize("argv, message", [
+    (["simulate", "rlc", "--samples", "100000000"], "--samples"),
+    (["simulate", "rlc", "--t-end", "1e-300"], "--t-end must be a number of seconds of at least 1e-12"),
+    (["simulate", "rlc", "--t-end", "-1"], "--t-end must be"),
+])
+def test_simulation_guards_name_the_option(capsys, argv, message):
+    code, _, err = run(capsys, "--quiet", *argv)
+    assert code == 2 and message in err and err.count("\n") == 1
+
+
+def test_uneven_sampling_is_resampled_on_request(motor_csv, tmp_path, capsys):
+    header, rows = motor_rows(motor_csv)
+    uneven = write_csv(tmp_path / "uneven.csv", header + ["operator"],
+                       [r + ["alice"] for k, r in enumerate(rows) if k % 7 != 3])  # a sample in 7 lost
+    code, _, err = run(capsys, "detect", "dc-motor", str(uneven), "--margin", "1e-3")
+    assert code == 2 and "--resample" in err
+    code, out, err = run(capsys, "detect", "dc-motor", str(uneven), "--margin", "1e-3", "--resample")
+    assert code == 0 and "ARR_1_m: no alarm" in out
+    assert "'operator'" in err and "ignored" in err  # the text column no ARR uses: a note, not an error
+    assert "resampled" in err and "uniform step of 0.001 s" in err
