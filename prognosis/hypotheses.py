@@ -40,12 +40,20 @@ class Hypothesis:
     >>> h = Hypothesis("b_Md", "linear", failure=0.3, nominal=0.005)
     >>> h.name, h.direction, h.domain
     ('b_Md/linear', 'up', (0.0, inf))
+
+    ``bounds`` is the parameter's physical domain as the model declares it
+    (:attr:`bondgraph.BondGraph.domains`); without it the domain keeps the sign of nominal
+    (:func:`physical_domain`):
+
+    >>> Hypothesis("k", "linear", failure=-1.0, nominal=2.0, bounds=(-math.inf, math.inf)).domain
+    (-inf, inf)
     """
 
     candidate: str
     law: str
     failure: float
     nominal: float
+    bounds: tuple[float, float] | None = None
 
     @property
     def name(self) -> str:
@@ -58,7 +66,8 @@ class Hypothesis:
 
     @property
     def domain(self) -> tuple[float, float]:
-        return physical_domain(self.nominal)
+        """The open interval the candidate's value must stay in."""
+        return physical_domain(self.nominal) if self.bounds is None else self.bounds
 
 
 def physical_domain(nominal: float) -> tuple[float, float]:

@@ -252,6 +252,10 @@ class IsolatingMonitor:
     healthy_until : float, optional
         End of the stretch the user declares fault-free (the one the noise was calibrated on):
         alarms there are not faults (a start-up transient) and start nothing.
+    domains : mapping, optional
+        Parameter -> open interval ``(lo, hi)`` of its physical domain, as the model declares it
+        (:attr:`bondgraph.BondGraph.domains`); a hypothesis whose estimate leaves it is rejected.
+        A parameter not given keeps the sign of its nominal value (:func:`~prognosis.hypotheses.physical_domain`).
     seed : int
 
     Examples
@@ -281,7 +285,8 @@ class IsolatingMonitor:
                  dt: float = 0.1, n_particles: int = 500, inflation: float = 4.0, life: tuple = LIFE_PRIOR,
                  rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
                  rul_every: int = 10, horizon: float | None = None, detection: Mapping | None = None,
-                 min_ratio: float = EVIDENCE_RATIO, healthy_until: float | None = None, seed: int = 0):
+                 min_ratio: float = EVIDENCE_RATIO, healthy_until: float | None = None,
+                 domains: Mapping[str, tuple] | None = None, seed: int = 0):
         self.arrs = list(arrs)
         self.failures = {str(k): float(v) for k, v in failures.items()}
         parameters = {p: a.values[p] for a in self.arrs for p in a.parameters}
@@ -318,6 +323,11 @@ class IsolatingMonitor:
         self.horizon = HORIZON_STEPS * self.dt if horizon is None else check_positive(horizon, "horizon")
         self.detection = dict(detection or {})
         self.min_ratio, self.seed = float(min_ratio), int(seed)
+        self.domains = {str(k): (float(v[0]), float(v[1])) for k, v in (domains or {}).items()}
+        for name, (lo, hi) in self.domains.items():
+            if name in self.failures and not lo <= self.failures[name] <= hi:
+                raise ValueError(f"failure value of {name!r} ({self.failures[name]:g}) lies outside its physical "
+                                 f"domain ({lo:g}, {hi:g})")
         self.healthy_until = -math.inf if healthy_until is None else float(healthy_until)
 
     # -- the pipeline ------------------------------------------------------------------------
@@ -364,7 +374,7 @@ class IsolatingMonitor:
         hypotheses, rejected = [], {}
         for c in candidates:
             for law in self.laws:
-                h = Hypothesis(c, law, self.failures[c], self.nominal[c])
+                h = Hypothesis(c, law, self.failures[c], self.nominal[c], self.domains.get(c))
                 hypotheses.append(h)
                 if law == "exponential" and h.failure * h.nominal <= 0:
                     rejected[h.name] = (f"an exponential law keeps the sign of {c} (nominal {h.nominal:g}), "

@@ -9,12 +9,12 @@ import pytest
 from bgphm.cli import main
 from bgphm.files import csv_text
 from bondgraph.io import to_json
-from bondgraph.library import TORSION_BAR, torsion_bar_monitorable
+from bondgraph.library import TORSION_BAR, rlc_circuit, torsion_bar_monitorable
 from diagnosis import derive_arrs
 from diagnosis.signals import add_noise, as_record
 from prognosis.degradation import LinearDegradation
 from prognosis.hypotheses import Hypothesis, indistinguishable_groups, rate_prior, signature_candidates
-from prognosis.isolation import decide
+from prognosis.isolation import IsolatingMonitor, decide
 from prognosis.particle_filter import KernelSmoothing, ParticleFilter, VarianceAdaptation
 from tests.scenarios import b_md_linear, torsion_bar_b_md
 
@@ -191,3 +191,15 @@ def test_isolating_monitor_refuses_bad_filter_settings_by_name(rlc_arrs, options
     settings = {"noise_std": {a.name: 1e-3 for a in arrs}, **options}
     with pytest.raises(ValueError, match=message):
         IsolatingMonitor(arrs, {"R": 20.0}, **settings)
+
+
+def test_the_models_domains_decide_what_is_rejected():
+    """A modulus declared real may change sign; a positive one may not; a failure value outside is refused."""
+    real = Hypothesis("k", "linear", failure=-1.0, nominal=2.0, bounds=(-np.inf, np.inf))
+    assert real.domain == (-np.inf, np.inf) and Hypothesis("k", "linear", -1.0, 2.0).domain == (0.0, np.inf)
+    arrs = derive_arrs(rlc_circuit())
+    noise = {a.name: 1e-3 for a in arrs}
+    with pytest.raises(ValueError, match=r"failure value of 'R' \(-5\) lies outside its physical domain"):
+        IsolatingMonitor(arrs, {"R": -5.0}, noise_std=noise, domains={"R": (0.0, np.inf)})
+    monitor = IsolatingMonitor(arrs, {"R": 20.0}, noise_std=noise, domains={"R": (0.0, 50.0)})
+    assert monitor.domains == {"R": (0.0, 50.0)}
