@@ -181,6 +181,7 @@ def with_suspended_load(bg: BondGraph, M: float = MASS_LOAD["M"], mu: float = MA
     node["law"] = "e - b_Md*f - mu*M*g*r_Md*sign(f)"
     node["params"] = {"M": M, "mu": mu, "g": MASS_LOAD["g"], "r_Md": r_Md}
     node["uncertainties"] = {"mu": MU_UNCERTAINTY}  # Table VI
+    node["domains"] = {"M": "positive", "mu": "positive", "g": "positive", "r_Md": "positive"}
     bg.validate()
     return bg
 
@@ -226,7 +227,7 @@ def three_tank(az1: float = 0.5, az2: float = 0.6, az3: float = 0.5, A_s: float 
         bg.bond(f"0_{tank}", f"h{tank}")
     for valve, value in (("az1", az1), ("az2", az2), ("az3", az3)):
         bg.add(valve, "R", value=value, uncertainty=box, params=constants,
-               law=f"f - {valve}*S_n*sign(e)*sqrt(2*g*Abs(e))")
+               domains={"S_n": "positive", "g": "positive"}, law=f"f - {valve}*S_n*sign(e)*sqrt(2*g*Abs(e))")
     bg.add("1_13", "1")
     bg.add("1_32", "1")
     for tail, head in [("Q1", "0_1"), ("Q2", "0_2"), ("0_1", "1_13"), ("1_13", "az1"), ("1_13", "0_3"),
