@@ -203,8 +203,8 @@ class BondGraph:
         and law constants by default); a nonzero parameter gives the half-line of its nominal value.
 
         >>> from bondgraph.library import dc_motor
-        >>> dc_motor().domains
-        {'R_a': (0.0, inf), 'L_a': (0.0, inf), 'k_m': (-inf, inf), 'J': (0.0, inf), 'b': (0.0, inf)}
+        >>> dc_motor().domains   # the library declares its motor constant k_m positive too
+        {'R_a': (0.0, inf), 'L_a': (0.0, inf), 'k_m': (0.0, inf), 'J': (0.0, inf), 'b': (0.0, inf)}
         """
         return self.structure().domains
 

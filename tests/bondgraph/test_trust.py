@@ -17,7 +17,8 @@ import pytest
 from bondgraph import BondGraph, ModelError, assign_causality, io, state_equations, to_json, to_svg
 from bondgraph.domains import bounds
 from bondgraph.io import MAX_FILE_BYTES, MAX_LINKS, MAX_NODES, ModelFileError, load_model, model_from_json
-from bondgraph.library import dc_motor, mass_spring_chain, rlc_circuit, three_tank, torsion_bar_with_load
+from bondgraph.library import (dc_motor, friction_drive, mass_spring_chain, rlc_circuit, three_tank, torsion_bar,
+                               torsion_bar_with_load)
 from bondgraph.names import MAX_NAME_LENGTH, NAME_PATTERN, NODE_ID_PATTERN
 from bondgraph.structure import NODE_ATTRIBUTES
 
@@ -255,13 +256,14 @@ def test_a_shared_constant_lies_in_every_domain_given_to_it():
 
 
 def test_library_models_expose_their_domains():
-    assert dc_motor().domains == {"R_a": (0.0, math.inf), "L_a": (0.0, math.inf), "k_m": (-math.inf, math.inf),
+    assert dc_motor().domains == {"R_a": (0.0, math.inf), "L_a": (0.0, math.inf), "k_m": (0.0, math.inf),
                                   "J": (0.0, math.inf), "b": (0.0, math.inf)}
+    assert friction_drive().domains["r2"] == torsion_bar().domains["k_belt"] == (0.0, math.inf)
     tanks = three_tank().domains
     assert tanks["az1"] == tanks["A_1"] == tanks["S_n"] == tanks["g"] == (0.0, math.inf)
     load = torsion_bar_with_load().domains
     assert all(load[p] == (0.0, math.inf) for p in ("M", "mu", "g", "r_Md", "b_Md"))
-    for bg in (dc_motor(), three_tank(), torsion_bar_with_load()):
+    for bg in (dc_motor(), three_tank(), torsion_bar_with_load(), friction_drive(), torsion_bar()):
         assert set(bg.domains) == set(bg.parameters)
         assert all(lo < bg.parameters[p] < hi for p, (lo, hi) in bg.domains.items())
     assert bounds("positive") == (0.0, math.inf)
