@@ -345,12 +345,15 @@ def _read_own_domain(where: str, kind: str, domain) -> str:
 def _check_domains(where, kind, data, domain, value, uncertainty, param, law) -> None:
     """The nominal value and its uncertainty box in the element's domain; a linear C, I, R never zero."""
     what = f"parameter {param!r}" if param is not None else "value"
+    if kind in el.LAW_VARIABLES and law is None and value == 0:  # whatever the domain says
+        raise ModelError(f"{where}: {what} = 0 is not allowed: its linear law divides by it "
+                         f"({_DIVIDES[kind]}); domain {describe(domain)}")
     hint = "" if data.get("domain") is not None else "set its 'domain' if another sign is meant"
     _check_box(where, what, domain, value, uncertainty, hint=hint)
-    if kind in el.LAW_VARIABLES and law is None and value == 0:
-        # e = q/C, f = p/I and, in conductance causality, f = e/R divide by the parameter
-        raise ModelError(f"{where}: {what} = 0 is not allowed in the linear law of a {kind} element, "
-                         f"which divides by it (domain {describe(domain)})")
+
+
+#: Where the linear law of a C, I or R divides by its parameter (R: in conductance causality).
+_DIVIDES = {"C": "e = q/C", "I": "f = p/I", "R": "f = e/R"}
 
 
 def _check_box(where: str, what: str, domain: str, value, box, *, hint: str = "") -> None:
