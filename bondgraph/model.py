@@ -275,6 +275,8 @@ def _read_element(name: Hashable, data: Mapping, *, strict: bool = False) -> Ele
 
     if kind in el.PARAMETRIC:
         param = _read_name(where, "parameter", data.get("param"), name, "param")
+        if param in RESERVED_NAMES:
+            raise ModelError(f"{where}: parameter name {param!r} is reserved (e, f, q, p, t)")
         value = _read_value(where, data.get("value"))
         if data.get("uncertainty") is not None:
             uncertainty = _read_uncertainty(where, data["uncertainty"])
@@ -299,9 +301,11 @@ def _read_element(name: Hashable, data: Mapping, *, strict: bool = False) -> Ele
         if sp.Symbol(param) in form.free_symbols:  # a law or modulus may not need the parameter
             raise ModelError(f"{where}: missing nominal 'value' for parameter {param!r}")
     _check_domains(where, kind, data, domain, value, uncertainty, param, law)
+    declared = data.get("domains") or {}
     for constant, number in constants.items():
         _check_box(where, f"constant {constant!r}", constant_domains[constant], number,
-                   constant_uncertainties.get(constant), hint="set its domain in 'domains'")
+                   constant_uncertainties.get(constant),
+                   hint="" if constant in declared else "set its domain in 'domains' if another sign is meant")
     return Element(name, kind, param, value, uncertainty, law, modulus, signal, constants, constant_uncertainties,
                    domain, constant_domains)
 
@@ -360,7 +364,7 @@ def _check_box(where: str, what: str, domain: str, value, box, *, hint: str = ""
     check_in_domain(domain, value, box, where=where, what=what, hint=hint)
     if box is not None and box[0] <= -1.0:
         raise ModelError(f"{where}: uncertainty {box} lets {what} reach zero or change sign (need lo > -1: "
-                         "value * (1 + delta) is divided by when a law is solved for the other variable)")
+                         "a law solved for its other variable divides by value * (1 + delta))")
 
 
 def _read_value(where: str, value) -> float | None:
