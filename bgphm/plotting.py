@@ -159,7 +159,7 @@ def plot_evaluation(evaluation: Evaluation, ax: Axes | None = None, *, bglft: bo
     bglft : bool
         Also shade the BG-LFT band.
     title : str, optional
-        Default: the ARR's name.
+        Default: the ARR's name.  Plain text: a ``$`` in it is shown, not read as mathtext.
 
     Returns
     -------
@@ -174,7 +174,9 @@ def plot_evaluation(evaluation: Evaluation, ax: Axes | None = None, *, bglft: bo
              label="BG-LFT threshold")
     if e.detection_time is not None:
         ax.axvline(e.detection_time, color="k", ls=":", label=f"alarm at t = {e.detection_time:g}")
-    ax.set(xlabel="t", ylabel=r"$-r_n$", title=e.name if title is None else title)
+    ax.set(xlabel="t", ylabel=r"$-r_n$")
+    # names come from the model and the record: shown as they are, never parsed as mathtext
+    ax.set_title(e.name if title is None else title, parse_math=False)
     ax.legend(fontsize=8)
     return ax
 
@@ -209,7 +211,7 @@ def plot_simulation(result: SimulationResult, signals: Sequence[str] | None = No
             raise ValueError(f"{len(names)} signals need {len(names)} axes, got {len(axes)}")
     for ax, name in zip(axes, names):
         ax.plot(result.t, result[name], lw=1)
-        ax.set_ylabel(name)
+        ax.set_ylabel(name, parse_math=False)  # a name, not mathtext
     axes[-1].set_xlabel("t")
     return axes[0].figure
 

@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 from . import elements as el
 from .laws import solve_for
 from .errors import LawError
-from .structure import PORT_SYMBOLS, Bond, BondGraphLike
+from .structure import PORT_SYMBOLS, Bond, BondGraphLike, require_model
 
 INTEGRAL, DERIVATIVE = "integral", "derivative"
 
@@ -187,6 +187,7 @@ def assign_causality(bg: BondGraphLike, preferred: str = INTEGRAL, *, dualize_de
     >>> assign_causality(rlc_circuit(), "derivative", dualize_detectors=["i"]).dualized
     {'i': 'SSf'}
     """
+    require_model(bg, "assign_causality")
     if preferred not in (INTEGRAL, DERIVATIVE):
         raise ValueError(f"preferred causality must be 'integral' or 'derivative', got {preferred!r}")
     if dualize_detectors is None:

@@ -41,7 +41,7 @@ import networkx as nx
 
 from . import elements as el
 from .causality import DERIVATIVE, INTEGRAL, Causality, assign_causality, diagnosis_causality
-from .structure import BondGraphLike, Element
+from .structure import BondGraphLike, Element, require_model
 
 __all__ = ["Drawing", "DrawnBond", "layout", "to_svg", "to_tikz", "display_svg", "display_html", "latex_escape"]
 
@@ -191,6 +191,7 @@ def layout(bg: BondGraphLike, causality: str | Causality | None = None) -> Drawi
     >>> x_j0 == x_c  # C hangs under (or over) its 0-junction
     True
     """
+    require_model(bg, "layout")
     structure = bg.structure()
     causal = _resolve_causality(bg, causality)
     elements = structure.elements

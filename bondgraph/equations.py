@@ -36,7 +36,7 @@ from . import elements as el
 from .causality import INTEGRAL, Causality, assign_causality
 from .errors import CausalityError, EquationError, LawError
 from .laws import solve_for
-from .structure import PORT_SYMBOLS, T, BondGraphLike, Element, signal_function
+from .structure import PORT_SYMBOLS, T, BondGraphLike, Element, require_model, signal_function
 
 E_, F_, Q_, P_ = (PORT_SYMBOLS[n] for n in "efqp")
 
@@ -114,6 +114,7 @@ def labelled_equations(bg: BondGraphLike) -> list[ModelEquation]:
     >>> first.equation, first.node, first.role
     (Eq(e_1, V(t)), 'V', 'source')
     """
+    require_model(bg, "labelled_equations")
     structure = bg.structure()
     elements, at = structure.elements, structure.at
     equations: list[ModelEquation] = []
@@ -177,6 +178,7 @@ def model_equations(bg: BondGraphLike) -> list[sp.Eq]:
     >>> model_equations(rlc_circuit())[0]
     Eq(e_1, V(t))
     """
+    require_model(bg, "model_equations")
     return [m.equation for m in labelled_equations(bg)]
 
 
@@ -650,6 +652,7 @@ def state_equations(bg: BondGraphLike, causality: Causality | None = None) -> St
     >>> eqs.states, eqs.rhs[0]
     ([p_L, q_C], V(t) - R*p_L/L - q_C/C)
     """
+    require_model(bg, "state_equations")
     if causality is None:
         causality = assign_causality(bg, INTEGRAL, dualize_detectors=False)
     if causality.dualized:

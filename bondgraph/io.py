@@ -14,8 +14,10 @@
 
 A JSON file is data: laws and moduli are strings parsed by :func:`bondgraph.laws.parse_expression`
 (arithmetic, known names and a few functions, never ``eval``), numbers must be finite JSON numbers, and
-every error names the file and the node, link or field at fault.  A Python file is code and runs as
-such: load only files you trust.
+every error names the file and the node, link or field at fault.  Node ids, labels and names follow
+:mod:`bondgraph.names`.  Before anything is built, a file larger than :data:`MAX_FILE_BYTES` or a model
+with more than :data:`MAX_NODES` nodes or :data:`MAX_LINKS` links is refused.  A Python file is code and
+runs as such: load only files you trust.
 
 Example
 -------
@@ -47,14 +49,27 @@ import sympy as sp
 
 from .errors import ModelError
 from .model import BondGraph
+from .names import check_node_id
+from .structure import BOND_ATTRIBUTES, NODE_ATTRIBUTES, require_model
 
-__all__ = ["ModelFileError", "ModelSpec", "load_model", "model_from_json", "to_json"]
+__all__ = ["ModelFileError", "ModelSpec", "load_model", "model_from_json", "to_json", "MAX_FILE_BYTES", "MAX_NODES",
+           "MAX_LINKS"]
 
-#: Node attributes a JSON node may carry (anything else is refused, so a typo is not silently ignored).
-NODE_FIELDS = frozenset({"id", "kind", "param", "value", "uncertainty", "law", "modulus", "signal", "params",
-                         "uncertainties", "label", "description"})
-LINK_FIELDS = frozenset({"source", "target", "label", "description"})
+#: Node attributes a JSON node may carry (anything else is refused, so a typo is not silently ignored):
+#: the model contract's node attributes and the ``id``.
+NODE_FIELDS = NODE_ATTRIBUTES | {"id"}
+LINK_FIELDS = BOND_ATTRIBUTES | {"source", "target"}
 GRAPH_FIELDS = frozenset({"name", "inputs", "t_end", "x0", "description"})
+
+#: The largest JSON model file (bytes; characters of a text given to :func:`model_from_json`).  A model
+#: at :data:`MAX_NODES` written by :func:`to_json` takes about 1.3 MB; parsing the limit costs about a
+#: second and 200 MB at worst (a file of empty lists).
+MAX_FILE_BYTES = 8 * 2**20
+#: The most nodes of a JSON model: four times the 2400 of the largest benchmark chain
+#: (``mass_spring_chain(400)``); a model at the limit loads in about a second.
+MAX_NODES = 10_000
+#: The most links (bonds) of a JSON model.
+MAX_LINKS = 20_000
 
 
 class ModelFileError(ModelError):
@@ -109,6 +124,13 @@ def load_model(source: str | Path) -> ModelSpec:
         raise ModelFileError(f"{path}: is a directory, not a model file")
     if path.suffix.lower() == ".json":
         try:
+            size = path.stat().st_size
+        except OSError as exc:
+            raise ModelFileError(f"{path}: cannot be read ({exc})") from None
+        if size > MAX_FILE_BYTES:  # refused before it is read: json would take all of it into memory
+            raise ModelFileError(f"{path}: {size} bytes, larger than the limit of {MAX_FILE_BYTES} bytes for a "
+                                 "JSON model (bondgraph.io.MAX_FILE_BYTES)")
+        try:
             content = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as exc:
             raise ModelFileError(f"{path}: cannot be read ({exc})") from None
@@ -119,7 +141,19 @@ def load_model(source: str | Path) -> ModelSpec:
 
 
 def model_from_json(text: str, *, where: str = "JSON model") -> ModelSpec:
-    """Parse a node-link JSON document into a :class:`ModelSpec` (no ``eval``; see the module docstring)."""
+    """Parse a node-link JSON document into a :class:`ModelSpec` (no ``eval``; see the module docstring).
+
+    A text longer than :data:`MAX_FILE_BYTES` characters, or with more than :data:`MAX_NODES` nodes or
+    :data:`MAX_LINKS` links, is refused before the model is built.
+
+    >>> model_from_json('{"nodes": [], "links": []}', where="empty.json").model.graph.number_of_nodes()
+    0
+    """
+    if not isinstance(text, (str, bytes, bytearray)):
+        raise TypeError(f"model_from_json: text must be a str, got {type(text).__name__}")
+    if len(text) > MAX_FILE_BYTES:
+        raise ModelFileError(f"{where}: {len(text)} characters, longer than the limit of {MAX_FILE_BYTES} for a "
+                             "JSON model (bondgraph.io.MAX_FILE_BYTES)")
     try:
         data = json.loads(text, parse_constant=_no_constant(where), parse_float=_finite_float(where))
     except json.JSONDecodeError as exc:
@@ -144,9 +178,16 @@ def model_from_json(text: str, *, where: str = "JSON model") -> ModelSpec:
     if "links" in data and "edges" in data:
         raise ModelFileError(f"{where}: give the bonds as 'links' or 'edges', not both")
     graph = nx.DiGraph(name=str(settings.get("name", Path(where).stem if where.endswith(".json") else "bond graph")))
-    for index, node in enumerate(_list(data, "nodes", where)):
+    nodes = _list(data, "nodes", where)
+    links = _list(data, "links" if "links" in data else "edges", where)
+    for what, items, limit, constant in (("nodes", nodes, MAX_NODES, "MAX_NODES"),
+                                         ("links", links, MAX_LINKS, "MAX_LINKS")):
+        if len(items) > limit:  # before anything is built: validation costs time per node
+            raise ModelFileError(f"{where}: {len(items)} {what}, more than the limit of {limit} "
+                                 f"(bondgraph.io.{constant})")
+    for index, node in enumerate(nodes):
         _add_node(graph, node, f"{where}: nodes[{index}]")
-    for index, link in enumerate(_list(data, "links" if "links" in data else "edges", where)):
+    for index, link in enumerate(links):
         _add_link(graph, link, f"{where}: links[{index}]")
     try:
         model = BondGraph(graph)
@@ -174,6 +215,7 @@ def to_json(bg: BondGraph, *, inputs: Mapping | None = None, t_end: float | None
     >>> back.model.parameters == rlc_circuit().parameters, back.inputs, back.t_end
     (True, {'V': 1.0}, 0.5)
     """
+    require_model(bg, "to_json")
     graph_settings: dict = {"name": bg.name}
     for key, value in (("inputs", inputs), ("x0", x0)):
         if value:
@@ -214,12 +256,15 @@ def _list(data: dict, key: str, where: str) -> list:
     return value
 
 
-def _node_id(value, where: str):
+def _node_id(value, where: str, key: str = "id"):
     if isinstance(value, bool) or not isinstance(value, (str, int)):
-        raise ModelFileError(f"{where}: 'id' must be a string or an integer, got {value!r}")
+        raise ModelFileError(f"{where}: '{key}' must be a string or an integer, got {value!r}")
     if isinstance(value, str) and not value.strip():
-        raise ModelFileError(f"{where}: 'id' is empty")
-    return value
+        raise ModelFileError(f"{where}: '{key}' is empty")
+    try:
+        return check_node_id(value, where=where, what=f"'{key}'")
+    except ModelError as exc:
+        raise ModelFileError(str(exc)) from None
 
 
 def _add_node(graph: nx.DiGraph, node, where: str) -> None:
@@ -238,9 +283,11 @@ def _add_node(graph: nx.DiGraph, node, where: str) -> None:
     for key in ("law", "modulus"):  # strings only: parsed safely by the model, never evaluated
         if key in attributes and not isinstance(attributes[key], str):
             raise ModelFileError(f"{where}: '{key}' must be a string expression, got {type(attributes[key]).__name__}")
-    for key in ("param", "signal"):
+    for key in ("param", "signal", "domain"):
         if key in attributes and not isinstance(attributes[key], str):
             raise ModelFileError(f"{where}: '{key}' must be a string, got {attributes[key]!r}")
+    if "domains" in attributes and not isinstance(attributes["domains"], dict):
+        raise ModelFileError(f"{where}: 'domains' must map law constants to a domain name")
     if "value" in attributes and (isinstance(attributes["value"], bool)
                                   or not isinstance(attributes["value"], (int, float))):
         raise ModelFileError(f"{where}: 'value' must be a number, got {attributes['value']!r}")
@@ -265,7 +312,7 @@ def _add_link(graph: nx.DiGraph, link, where: str) -> None:
     for key in ("source", "target"):
         if key not in link:
             raise ModelFileError(f"{where}: missing '{key}'")
-    tail, head = _node_id(link["source"], where), _node_id(link["target"], where)
+    tail, head = _node_id(link["source"], where, "source"), _node_id(link["target"], where, "target")
     where = f"{where} ({tail!r} -> {head!r})"
     for node in (tail, head):
         if node not in graph:
@@ -274,10 +321,7 @@ def _add_link(graph: nx.DiGraph, link, where: str) -> None:
         raise ModelFileError(f"{where}: duplicate bond")
     attributes = {}
     if link.get("label") is not None:
-        label = link["label"]
-        if isinstance(label, bool) or not isinstance(label, (str, int)):
-            raise ModelFileError(f"{where}: 'label' must be a string or an integer, got {label!r}")
-        attributes["label"] = label
+        attributes["label"] = _node_id(link["label"], where, "label")
     graph.add_edge(tail, head, **attributes)
 
 

@@ -11,7 +11,9 @@
 ========================  =====================================================
 
 Each builder returns a :class:`~bondgraph.model.BondGraph`; :func:`example`
-returns a model with the inputs and horizon of its demonstration run.
+returns a model with the inputs and horizon of its demonstration run.  Every physical parameter of
+these models is positive: the C, I, R parameters by default, the two-port moduli (motor constant,
+belt ratio, radii) and the law constants declared so (:mod:`bondgraph.domains`).
 """
 
 from __future__ import annotations
@@ -53,7 +55,7 @@ def dc_motor(R_a: float = 1.23, L_a: float = 1.34e-3, k_m: float = 3.89e-2, J: f
     bg.add("1_e", "1")
     bg.add("R_a", "R", value=R_a, uncertainty=(-0.05, 0.05))
     bg.add("L_a", "I", value=L_a, uncertainty=(-0.05, 0.05))
-    bg.add("GY", "GY", param="k_m", value=k_m, uncertainty=(-0.02, 0.02))
+    bg.add("GY", "GY", param="k_m", value=k_m, uncertainty=(-0.02, 0.02), domain="positive")
     bg.add("1_m", "1")
     bg.add("J", "I", value=J, uncertainty=(-0.1, 0.1))
     bg.add("b", "R", value=b, uncertainty=(0.0, 0.2))
@@ -97,7 +99,7 @@ def _mechanical_part(bg: BondGraph, values: dict) -> None:
     element("f_m", "R")
     bg.add("omega_m", "Df")
     value, _ = values["k_belt"]
-    bg.add("TF", "TF", param="k_belt", value=value, modulus="1/k_belt")
+    bg.add("TF", "TF", param="k_belt", value=value, modulus="1/k_belt", domain="positive")
     bg.add("1_Md", "1")
     element("J_Md", "I")
     element("b_Md", "R")
@@ -132,7 +134,7 @@ def torsion_bar(**overrides: float) -> BondGraph:
     bg.add("1_e", "1")
     bg.add("R_a", "R", value=values["R_a"][0])
     bg.add("L_a", "I", value=values["L_a"][0])
-    bg.add("GY", "GY", param="k_m", value=values["k_m"][0])
+    bg.add("GY", "GY", param="k_m", value=values["k_m"][0], domain="positive")
     for tail, head in [("U", "1_e"), ("1_e", "R_a"), ("1_e", "L_a"), ("1_e", "GY")]:
         bg.bond(tail, head)
     _mechanical_part(bg, values)
@@ -181,6 +183,7 @@ def with_suspended_load(bg: BondGraph, M: float = MASS_LOAD["M"], mu: float = MA
     node["law"] = "e - b_Md*f - mu*M*g*r_Md*sign(f)"
     node["params"] = {"M": M, "mu": mu, "g": MASS_LOAD["g"], "r_Md": r_Md}
     node["uncertainties"] = {"mu": MU_UNCERTAINTY}  # Table VI
+    node["domains"] = {"M": "positive", "mu": "positive", "g": "positive", "r_Md": "positive"}
     bg.validate()
     return bg
 
@@ -226,7 +229,7 @@ def three_tank(az1: float = 0.5, az2: float = 0.6, az3: float = 0.5, A_s: float 
         bg.bond(f"0_{tank}", f"h{tank}")
     for valve, value in (("az1", az1), ("az2", az2), ("az3", az3)):
         bg.add(valve, "R", value=value, uncertainty=box, params=constants,
-               law=f"f - {valve}*S_n*sign(e)*sqrt(2*g*Abs(e))")
+               domains={"S_n": "positive", "g": "positive"}, law=f"f - {valve}*S_n*sign(e)*sqrt(2*g*Abs(e))")
     bg.add("1_13", "1")
     bg.add("1_32", "1")
     for tail, head in [("Q1", "0_1"), ("Q2", "0_2"), ("0_1", "1_13"), ("1_13", "az1"), ("1_13", "0_3"),
@@ -254,10 +257,10 @@ def friction_drive(J1: float = 9.9225e-4, B1: float = 6.36e-3, r1: float = 0.031
     bg.add("1_1", "1")
     bg.add("J1", "I", value=J1)
     bg.add("B1", "R", value=B1)
-    bg.add("TF_1", "TF", param="r1", value=r1)
+    bg.add("TF_1", "TF", param="r1", value=r1, domain="positive")
     bg.add("0_c", "0")
     bg.add("alpha", "R", value=alpha)
-    bg.add("TF_2", "TF", param="r2", value=r2, modulus="1/r2")
+    bg.add("TF_2", "TF", param="r2", value=r2, modulus="1/r2", domain="positive")
     bg.add("1_2", "1")
     bg.add("J2", "I", value=J2)
     bg.add("B2", "R", value=B2)

@@ -4,7 +4,9 @@ A bond graph is a ``networkx.DiGraph`` (model contract in docs/design.md): node
 attribute ``kind``; ``param``, ``value``, ``uncertainty``, ``law`` on
 parametric elements; ``signal`` on sources and detectors; an edge ``u -> v`` is
 a bond whose direction is the power half-arrow, and edges into De/Df are signal
-bonds.  Extensions kept by this toolkit (other attributes are kept and ignored):
+bonds.  Extensions kept by this toolkit (docs/model.md lists them all, with the rules for names and
+physical domains; :meth:`BondGraph.add` refuses any other attribute, a graph built with networkx keeps
+and ignores foreign ones unless they look like a misspelling):
 
 ``modulus``
     TF/GY/MTF/MGY: the modulus as an expression in parameters (and, for MTF/MGY,
@@ -13,6 +15,10 @@ bonds.  Extensions kept by this toolkit (other attributes are kept and ignored):
 ``params``
     A dict of auxiliary constants a law uses besides the element's own
     parameter, e.g. ``{"S_n": 5e-5, "g": 9.81}`` for a valve.
+``domain``, ``domains``
+    The physical domain of the element's parameter (or a source's value) and of
+    its law constants: ``"positive"``, ``"negative"``, ``"nonzero"``, ``"real"``
+    (:mod:`bondgraph.domains`).
 
 The model sits on top of the analyses: its elements and bonds are read into the
 types of :mod:`bondgraph.structure`, checked by :mod:`bondgraph.validation`, and its
@@ -39,6 +45,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Hashable, Mapping
+from difflib import get_close_matches
 
 import networkx as nx
 import sympy as sp
@@ -48,10 +55,13 @@ from . import drawing
 from . import elements as el
 from .causality import Causality, assign_causality
 from .equations import StateEquations, model_equations, state_equations
+from .domains import CONSTANT_DOMAIN, DOMAINS, check_in_domain, default_domain, describe, read_domain
 from .errors import LawError, ModelError
 from .laws import parse_expression
-from .structure import PORT_SYMBOLS, RESERVED_NAMES, Bond, Element, Structure, signal_function
-from .validation import check_model
+from .names import check_name, check_node_id
+from .structure import (BOND_ATTRIBUTES, NODE_ATTRIBUTES, PORT_SYMBOLS, RESERVED_NAMES, Bond, Element, Structure,
+                        signal_function)
+from .validation import check_model, parameter_domains
 
 
 class BondGraph:
@@ -116,19 +126,27 @@ class BondGraph:
     def add(self, name: Hashable, kind: str | int, **attributes) -> Hashable:
         """Add an element; node-local attributes are checked at once.
 
-        ``bg.add("R1", "R", value=10.0, uncertainty=(-0.05, 0.05))``
+        ``bg.add("R1", "R", value=10.0, uncertainty=(-0.05, 0.05))``.  The attributes are those of
+        the model contract (docs/model.md); any other keyword is refused, so that a misspelt one is
+        not silently lost.
+
+        >>> BondGraph().add("R", "R", value=10, uncertanty=(-0.05, 0.05))
+        Traceback (most recent call last):
+        ...
+        bondgraph.errors.ModelError: R 'R': unknown attribute 'uncertanty' (did you mean 'uncertainty'?)
         """
         if name in self._graph:
             raise ModelError(f"node {name!r} already exists ({self._graph.nodes[name].get('kind')})")
         data = {"kind": kind, **attributes}
-        _read_element(name, data)  # raises with the node's name on bad input
+        _read_element(name, data, strict=True)  # raises with the node's name on bad input
         self._graph.add_node(name, **data)
         return name
 
     def bond(self, tail: Hashable, head: Hashable, *, label: Hashable | None = None, **attributes) -> tuple:
         """Add a bond with power flowing from ``tail`` to ``head``.
 
-        A bond into a De/Df node is a signal bond (a sensor on a junction).
+        A bond into a De/Df node is a signal bond (a sensor on a junction).  Its attributes are
+        ``label`` (a name, :data:`~bondgraph.names.NODE_ID_PATTERN`) and ``description``.
         """
         for node in (tail, head):
             if node not in self._graph:
@@ -136,7 +154,9 @@ class BondGraph:
         if self._graph.has_edge(tail, head):
             raise ModelError(f"bond ({tail!r} -> {head!r}) already exists")
         if label is not None:
+            check_node_id(label, where=f"bond ({tail!r} -> {head!r})", what="label")
             attributes["label"] = label
+        _check_attributes(f"bond ({tail!r} -> {head!r})", attributes, BOND_ATTRIBUTES, strict=True)
         self._graph.add_edge(tail, head, **attributes)
         return (tail, head)
 
@@ -157,7 +177,7 @@ class BondGraph:
         for bond in bonds:
             at[bond.tail].append(bond)
             at[bond.head].append(bond)
-        return Structure(elements, bonds, parameters, at)
+        return Structure(elements, bonds, parameters, at, parameter_domains(elements, parameters))
 
     @property
     def elements(self) -> dict[Hashable, Element]:
@@ -173,6 +193,20 @@ class BondGraph:
     def parameters(self) -> dict[str, float]:
         """Nominal value of every parameter (element parameters, then law constants)."""
         return self.structure().parameters
+
+    @property
+    def domains(self) -> dict[str, tuple[float, float]]:
+        """The open interval ``(lo, hi)`` each parameter of :attr:`parameters` must stay in.
+
+        From the elements' ``domain`` and ``domains`` (:mod:`bondgraph.domains`): ``(0, inf)`` for a
+        positive parameter (the default of C, I and R), ``(-inf, inf)`` for a real one (two-port moduli
+        and law constants by default); a nonzero parameter gives the half-line of its nominal value.
+
+        >>> from bondgraph.library import dc_motor
+        >>> dc_motor().domains   # the library declares its motor constant k_m positive too
+        {'R_a': (0.0, inf), 'L_a': (0.0, inf), 'k_m': (0.0, inf), 'J': (0.0, inf), 'b': (0.0, inf)}
+        """
+        return self.structure().domains
 
     @property
     def uncertainties(self) -> dict[str, tuple[float, float]]:
@@ -219,20 +253,28 @@ class BondGraph:
         return f"<BondGraph {self.name!r}: {self._graph.number_of_edges()} bonds; {summary}>"
 
 
-def _read_element(name: Hashable, data: Mapping) -> Element:
-    """Validate one node's attributes and return its :class:`Element`."""
+def _read_element(name: Hashable, data: Mapping, *, strict: bool = False) -> Element:
+    """Validate one node's attributes and return its :class:`Element`.
+
+    ``strict`` (the DSL): every attribute must be one of :data:`NODE_ATTRIBUTES`.  Otherwise (a graph
+    built with networkx) a foreign attribute is kept and ignored, unless it looks like a misspelt one.
+    """
+    check_node_id(name, where="", what="node id")
     kind = el.normalize_kind(data.get("kind"))
     if kind is None:
         raise ModelError(
             f"node {name!r}: unknown kind {data.get('kind')!r} (expected one of {', '.join(sorted(el.KINDS))})"
         )
     where = f"{kind} {name!r}"
+    _check_attributes(where, data, NODE_ATTRIBUTES, strict=strict)
     param = value = uncertainty = law = modulus = signal = None
     constants = _read_constants(where, data.get("params"))
     constant_uncertainties = _read_constant_uncertainties(where, data.get("uncertainties"), constants)
+    constant_domains = _read_constant_domains(where, data.get("domains"), constants)
+    domain = _read_own_domain(where, kind, data.get("domain"))
 
     if kind in el.PARAMETRIC:
-        param = str(data.get("param", name))
+        param = _read_name(where, "parameter", data.get("param"), name, "param")
         if param in RESERVED_NAMES:
             raise ModelError(f"{where}: parameter name {param!r} is reserved (e, f, q, p, t)")
         value = _read_value(where, data.get("value"))
@@ -241,7 +283,7 @@ def _read_element(name: Hashable, data: Mapping) -> Element:
     elif data.get("uncertainty") is not None:
         raise ModelError(f"{where}: has an uncertainty but no parameter (only C, I, R, TF, GY, MTF, MGY do)")
     if kind in el.SOURCES | el.DETECTORS | el.MODULATED_TWO_PORTS:
-        signal = str(data.get("signal", name))
+        signal = _read_name(where, "signal", data.get("signal"), name, "signal")
         if signal == "t":  # signals are functions of the time symbol t
             raise ModelError(f"{where}: signal name 't' is reserved for time")
     if kind in el.SOURCES and data.get("value") is not None:
@@ -258,7 +300,71 @@ def _read_element(name: Hashable, data: Mapping) -> Element:
         form = next((x for x in (law, modulus) if x is not None), sp.Symbol(param))
         if sp.Symbol(param) in form.free_symbols:  # a law or modulus may not need the parameter
             raise ModelError(f"{where}: missing nominal 'value' for parameter {param!r}")
-    return Element(name, kind, param, value, uncertainty, law, modulus, signal, constants, constant_uncertainties)
+    _check_domains(where, kind, data, domain, value, uncertainty, param, law)
+    declared = data.get("domains") or {}
+    for constant, number in constants.items():
+        _check_box(where, f"constant {constant!r}", constant_domains[constant], number,
+                   constant_uncertainties.get(constant),
+                   hint="" if constant in declared else "set its domain in 'domains' if another sign is meant")
+    return Element(name, kind, param, value, uncertainty, law, modulus, signal, constants, constant_uncertainties,
+                   domain, constant_domains)
+
+
+def _check_attributes(where: str, data: Mapping, known: frozenset, *, strict: bool) -> None:
+    """Refuse an unknown attribute: any (``strict``), or one that looks like a misspelt known one."""
+    for key in data:
+        if key in known or key == "kind":
+            continue
+        close = get_close_matches(key, sorted(known), n=1) if isinstance(key, str) else []
+        if strict:
+            hint = f" (did you mean {close[0]!r}?)" if close else f" (known: {', '.join(sorted(known))})"
+            raise ModelError(f"{where}: unknown attribute {key!r}{hint}")
+        close = get_close_matches(key, sorted(known), n=1, cutoff=MISSPELLING) if isinstance(key, str) else []
+        if close:  # foreign attributes (colour, pos) are kept and ignored; a misspelt field would be lost
+            raise ModelError(f"{where}: unknown attribute {key!r} (did you mean {close[0]!r}?); "
+                             "other attributes are kept and ignored, but this one looks like a misspelling")
+
+
+#: How close (difflib ratio) a foreign attribute of a networkx graph may come to a known one before it is
+#: taken for a misspelling: ``uncertanty`` (0.95), ``lable`` (0.8) are; ``name``/``domain`` (0.6) is not.
+MISSPELLING = 0.8
+
+
+def _read_name(where: str, what: str, given, name: Hashable, key: str) -> str:
+    """A parameter or signal name: ``given`` (the ``key`` attribute) or, by default, the node's id."""
+    if given is not None:
+        return check_name(given, where=where, what=what)
+    return check_name(str(name), where=where, what=what,
+                      hint=f"the node id names it by default, so give the node a '{key}' that is one")
+
+
+def _read_own_domain(where: str, kind: str, domain) -> str:
+    if domain is None:
+        return default_domain(kind)
+    if kind not in el.PARAMETRIC | el.SOURCES:
+        raise ModelError(f"{where}: has a domain but no parameter or value (only C, I, R, two-ports and sources do)")
+    return read_domain(domain, where=where)
+
+
+def _check_domains(where, kind, data, domain, value, uncertainty, param, law) -> None:
+    """The nominal value and its uncertainty box in the element's domain; a linear C, I, R never zero."""
+    what = f"parameter {param!r}" if param is not None else "value"
+    if kind in el.LAW_VARIABLES and law is None and value == 0:  # whatever the domain says
+        raise ModelError(f"{where}: {what} = 0 is not allowed: its linear law divides by it "
+                         f"({_DIVIDES[kind]}); domain {describe(domain)}")
+    hint = "" if data.get("domain") is not None else "set its 'domain' if another sign is meant"
+    _check_box(where, what, domain, value, uncertainty, hint=hint)
+
+
+#: Where the linear law of a C, I or R divides by its parameter (R: in conductance causality).
+_DIVIDES = {"C": "e = q/C", "I": "f = p/I", "R": "f = e/R"}
+
+
+def _check_box(where: str, what: str, domain: str, value, box, *, hint: str = "") -> None:
+    check_in_domain(domain, value, box, where=where, what=what, hint=hint)
+    if box is not None and box[0] <= -1.0:
+        raise ModelError(f"{where}: uncertainty {box} lets {what} reach zero or change sign (need lo > -1: "
+                         "a law solved for its other variable divides by value * (1 + delta))")
 
 
 def _read_value(where: str, value) -> float | None:
@@ -287,9 +393,6 @@ def _read_uncertainty(where: str, interval) -> tuple[float, float]:
             f"{where}: multiplicative uncertainty {interval!r} must contain 0 "
             "(true value = value * (1 + delta), delta in [lo, hi])"
         )
-    if lo <= -1.0:
-        raise ModelError(f"{where}: uncertainty {interval!r} lets the parameter reach zero or change sign "
-                         "(need lo > -1)")
     return (lo, hi)
 
 
@@ -300,10 +403,11 @@ def _read_constants(where: str, params) -> dict[str, float]:
         raise ModelError(f"{where}: 'params' must be a mapping of constant names to values, got {params!r}")
     constants = {}
     for key, value in params.items():
-        if str(key) in RESERVED_NAMES:
+        check_name(key, where=where, what="constant")
+        if key in RESERVED_NAMES:
             raise ModelError(f"{where}: constant name {key!r} is reserved (e, f, q, p, t)")
-        constants[str(key)] = _read_value(f"{where} constant {key!r}", value)
-        if constants[str(key)] is None:
+        constants[key] = _read_value(f"{where} constant {key!r}", value)
+        if constants[key] is None:
             raise ModelError(f"{where}: constant {key!r} has no value")
     return constants
 
@@ -314,11 +418,28 @@ def _read_constant_uncertainties(where: str, intervals, constants: Mapping) -> d
         return {}
     if not isinstance(intervals, Mapping):
         raise ModelError(f"{where}: 'uncertainties' must map law constants to (delta_lo, delta_hi), got {intervals!r}")
-    unknown = sorted(str(k) for k in intervals if str(k) not in constants)
+    _check_constant_keys(where, "uncertainties", intervals, constants, "the element parameter's interval goes in "
+                         "'uncertainty'")
+    return {k: _read_uncertainty(f"{where} constant {k!r}", v) for k, v in intervals.items()}
+
+
+def _read_constant_domains(where: str, domains, constants: Mapping) -> dict[str, str]:
+    """``domains={"M": "positive"}``: the domains of law constants (default :data:`CONSTANT_DOMAIN`)."""
+    if domains is None:  # the common case, kept cheap: structure() reads every element on every call
+        return dict.fromkeys(constants, CONSTANT_DOMAIN)
+    if not isinstance(domains, Mapping):
+        raise ModelError(f"{where}: 'domains' must map law constants to a domain ({', '.join(DOMAINS)}), "
+                         f"got {domains!r}")
+    _check_constant_keys(where, "domains", domains, constants, "the element parameter's domain goes in 'domain'")
+    given = {k: read_domain(v, where=f"{where} constant {k!r}") for k, v in domains.items()}
+    return {c: given.get(c, CONSTANT_DOMAIN) for c in constants}
+
+
+def _check_constant_keys(where: str, field: str, mapping: Mapping, constants: Mapping, hint: str) -> None:
+    unknown = sorted(map(str, set(mapping) - set(constants)))
     if unknown:
-        raise ModelError(f"{where}: 'uncertainties' names {unknown}, which are not law constants in 'params' "
-                         f"({sorted(constants)}); the element parameter's interval goes in 'uncertainty'")
-    return {str(k): _read_uncertainty(f"{where} constant {k!r}", v) for k, v in intervals.items()}
+        raise ModelError(f"{where}: '{field}' names {unknown}, which are not law constants in 'params' "
+                         f"({sorted(constants)}); {hint}")
 
 
 def _read_law(where: str, kind: str, law, names: dict, param: str) -> sp.Expr:
@@ -368,14 +489,18 @@ def _read_modulus(where, kind, modulus, names, param, signal) -> sp.Expr:
 def _read_bonds(graph: nx.DiGraph, elements: Mapping[Hashable, Element]) -> list[Bond]:
     power, signal, used = [], [], set()
     for tail, head, data in graph.edges(data=True):
+        where = f"bond ({tail!r} -> {head!r})"
+        _check_attributes(where, data, BOND_ATTRIBUTES, strict=False)
         is_signal = elements[head].kind in el.DETECTORS or elements[tail].kind in el.DETECTORS
         label = data.get("label")
+        if label is not None:
+            check_node_id(label, where=where, what="label")
         if is_signal:
             signal.append(Bond(tail, head, label, True))
             continue
         if label is not None:
             if str(label) in used:  # labels name the symbols e_<label>, f_<label>
-                raise ModelError(f"bond ({tail!r} -> {head!r}): label {label!r} is used by another bond")
+                raise ModelError(f"{where}: label {label!r} is used by another bond")
             used.add(str(label))
         power.append([tail, head, label])
     number = 1

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 from collections.abc import Hashable, Mapping
 from dataclasses import dataclass, field
+from pathlib import PurePath
 from typing import Protocol
 
 import sympy as sp
@@ -28,6 +29,11 @@ T = sp.Symbol("t")
 PORT_SYMBOLS = {name: sp.Symbol(name) for name in ("e", "f", "q", "p")}
 #: Names no parameter, constant or signal may take: they would clash with the port variables or time.
 RESERVED_NAMES = frozenset(PORT_SYMBOLS) | {"t"}
+#: The node attributes of the model contract (docs/model.md), what ``BondGraph.add`` and a JSON node accept.
+NODE_ATTRIBUTES = frozenset({"kind", "param", "value", "uncertainty", "law", "modulus", "signal", "params",
+                             "uncertainties", "domain", "domains", "label", "description"})
+#: The bond attributes of the model contract, what ``BondGraph.bond`` and a JSON link accept.
+BOND_ATTRIBUTES = frozenset({"label", "description"})
 
 
 def signal_function(name: str) -> sp.Expr:
@@ -53,8 +59,8 @@ class Element:
     >>> r = rlc_circuit().elements["R"]
     >>> str(r), r.kind, r.param, r.value, r.uncertainty
     ("R 'R'", 'R', 'R', 10.0, (-0.05, 0.05))
-    >>> r.law is None, r.uncertainties   # default linear law e = R f
-    (True, {'R': (-0.05, 0.05)})
+    >>> r.law is None, r.uncertainties, r.domain   # default linear law e = R f, R > 0
+    (True, {'R': (-0.05, 0.05)}, 'positive')
     >>> spring = torsion_bar_monitorable().elements["k_s"]
     >>> spring.law, spring.value
     (e - k_s*q, 1.786)
@@ -70,6 +76,8 @@ class Element:
     signal: str | None = None
     constants: Mapping[str, float] = field(default_factory=dict)
     constant_uncertainties: Mapping[str, tuple[float, float]] = field(default_factory=dict)
+    domain: str = "real"
+    constant_domains: Mapping[str, str] = field(default_factory=dict)
 
     @property
     def uncertainties(self) -> dict[str, tuple[float, float]]:
@@ -142,13 +150,15 @@ class Bond:
 class Structure:
     """A validated snapshot of a bond graph, taken once per analysis.
 
-    ``at[node]`` lists the bonds (power and signal) touching ``node``.
+    ``at[node]`` lists the bonds (power and signal) touching ``node``; ``domains`` holds the open
+    interval ``(lo, hi)`` each parameter of ``parameters`` must stay in (:mod:`bondgraph.domains`).
     """
 
     elements: dict
     bonds: list
     parameters: dict
     at: dict
+    domains: dict = field(default_factory=dict)
 
     @property
     def inputs(self) -> list[str]:
@@ -180,3 +190,24 @@ class BondGraphLike(Protocol):
     def structure(self) -> Structure:
         """Validate the model and return a snapshot of its elements, bonds and parameters."""
         ...
+
+
+def require_model(bg: object, function: str, argument: str = "bg") -> None:
+    """Raise :class:`TypeError` unless ``bg`` is a model (has a ``structure()``), naming ``function`` and ``argument``.
+
+    The analyses take a :class:`BondGraphLike`; a model name or a path given in its place would
+    otherwise fail deep inside with an ``AttributeError``.
+
+    >>> require_model("dc-motor", "derive_arrs")
+    Traceback (most recent call last):
+    ...
+    TypeError: derive_arrs: bg must be a BondGraph, got str 'dc-motor' (use bondgraph.load_model('dc-motor').model)
+    """
+    if callable(getattr(bg, "structure", None)):
+        return
+    shown = repr(bg) if len(repr(bg)) <= 60 else repr(bg)[:50] + "..."
+    got = shown if shown.startswith(type(bg).__name__) else f"{type(bg).__name__} {shown}"
+    hint = ""
+    if isinstance(bg, (str, PurePath)):  # a model name or a file: say how to load it
+        hint = f" (use bondgraph.load_model({shown if isinstance(bg, str) else repr(str(bg))}).model)"
+    raise TypeError(f"{function}: {argument} must be a BondGraph, got {got}{hint}")

@@ -12,6 +12,7 @@ from collections.abc import Hashable, Mapping
 import sympy as sp
 
 from . import elements as el
+from .domains import bounds, describe, intersect
 from .errors import ModelError
 from .structure import Bond, Element
 
@@ -119,6 +120,34 @@ def _check_parameters(elements) -> dict[str, float]:
             if values.get(name) is None:
                 raise ModelError(f"{element}: parameter {name!r} used in its law or modulus has no value")
     return {name: value for name, value in values.items() if value is not None}
+
+
+def parameter_domains(elements: Mapping[Hashable, Element], parameters: Mapping[str, float]
+                      ) -> dict[str, tuple[float, float]]:
+    """The open interval ``(lo, hi)`` of each parameter: the intersection of the domains its elements give it.
+
+    A parameter shared by several elements (a constant used by several laws) lies in all their
+    domains; :func:`bondgraph.domains.bounds` turns the domain into an interval.
+
+    Raises
+    ------
+    ModelError
+        naming the parameter and two elements whose domains share no value.
+    """
+    domains: dict[str, tuple[str, str]] = {}  # parameter -> (domain, who said so)
+    for element in elements.values():
+        declared = [(element.param, element.domain, str(element))] if element.param is not None else []
+        declared += [(c, d, f"{element} constant") for c, d in element.constant_domains.items()]
+        for name, domain, owner in declared:
+            if name not in domains:
+                domains[name] = (domain, owner)
+                continue
+            common = intersect(domains[name][0], domain)
+            if common is None:
+                raise ModelError(f"parameter {name!r} has conflicting domains: {describe(domains[name][0])} "
+                                 f"({domains[name][1]}) and {describe(domain)} ({owner})")
+            domains[name] = (common, f"{domains[name][1]} and {owner}")
+    return {name: bounds(domains[name][0], value) for name, value in parameters.items()}
 
 
 def _check_signals(elements, parameters) -> None:

@@ -27,6 +27,7 @@ from __future__ import annotations
 import warnings
 
 from bondgraph import BondGraph
+from bondgraph.structure import require_model
 
 from .elimination import MAX_ORDER, structural_arrs
 from .junctions import junction_arrs
@@ -86,6 +87,7 @@ def derive_arrs(bg: BondGraph, *, complete: bool = True, sensor_faults: bool = T
     >>> [(arr.name, arr.form, arr.derivatives) for arr in extra]
     [('ARR_MSO_1', 'elimination', {'U': 0, 'omega': 2}), ('ARR_MSO_2', 'elimination', {'U': 1, 'i': 2})]
     """
+    require_model(bg, "derive_arrs")
     if not complete:
         return junction_arrs(bg, integrals=integrals)
     with warnings.catch_warnings():

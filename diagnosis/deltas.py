@@ -18,10 +18,26 @@ Example
 
 from __future__ import annotations
 
+import html
+import re
+
 import sympy as sp
+from sympy.printing.latex import LatexPrinter
 from sympy.printing.mathml import MathMLPresentationPrinter
 
+from bondgraph.drawing import latex_escape
+
 PREFIX = "delta_"
+
+#: A symbol or function name sympy may typeset in LaTeX as it likes (split at ``_``, Greek letters): an
+#: ASCII identifier.  Any other name is printed as escaped text, so that it cannot carry markup.
+_PLAIN = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+#: The elements the MathML printer writes; anything else in its output is refused (defence in depth).
+MATHML_ELEMENTS = frozenset({"math", "mrow", "mi", "mn", "mo", "msub", "msup", "msubsup", "mfrac", "msqrt",
+                             "mroot", "mfenced", "mtext", "mspace", "munder", "mover", "munderover", "mtable",
+                             "mtr", "mtd", "mstyle", "mpadded", "mphantom", "menclose"})
+_TAG = re.compile(r"<\s*/?\s*([^\s/>]+)")
+_XML_ILLEGAL = re.compile("[\x00-\x08\x0b\x0c\x0e-\x1f\x7f\ud800-\udfff\ufffe\uffff]")
 
 
 def delta(parameter: str) -> sp.Symbol:
@@ -75,9 +91,10 @@ def latex(expression: sp.Expr) -> str:
     >>> print(latex(derive_arrs(dc_motor())[0].terms["L_a"]))
     - L_{a} \delta_{L_{a}} \frac{d}{d t} i{\left(t \right)}
     """
-    names = {s: f"\\delta_{{{sp.latex(sp.Symbol(delta_parameter(s)))}}}"
+    printer = _Latex()
+    names = {s: f"\\delta_{{{printer.doprint(sp.Symbol(delta_parameter(s)))}}}"
              for s in expression.free_symbols if delta_parameter(s) is not None}
-    return sp.latex(expression, symbol_names=names)
+    return _Latex({"symbol_names": names}).doprint(expression)
 
 
 def mathml(expression: sp.Expr) -> str:
@@ -94,8 +111,29 @@ def mathml(expression: sp.Expr) -> str:
     <msub><mi>&#948;</mi><msub><mi>L</mi><mi>a</mi></msub></msub>
     >>> print(mathml(sp.Function("omega_m")(t)))
     <mrow><msub><mi>&#969;</mi><mi>m</mi></msub><mo>(</mo><mi>t</mi><mo>)</mo></mrow>
+
+    Text is escaped (sympy alone writes a name, or the ``<`` of an inequality, raw):
+
+    >>> print(mathml(sp.Symbol("<b>x</b>")))
+    <mi>&lt;b&gt;x&lt;/b&gt;</mi>
     """
-    return _Presentation({}).doprint(expression)
+    text = _Presentation({}).doprint(expression)
+    for tag in _TAG.findall(text):  # every element must be MathML, whatever sympy printed
+        if tag not in MATHML_ELEMENTS:
+            raise ValueError(f"mathml: the printed expression holds a <{tag}> element, which is not MathML")
+    return text
+
+
+class _Latex(LatexPrinter):
+    """sympy's LaTeX printer, with names that are not ASCII identifiers escaped as ``\\text{...}``.
+
+    sympy writes a symbol's or function's name as it is: ``}\\input{x}`` would leave its group.
+    """
+
+    def _deal_with_super_sub(self, string: str, style: str = "plain") -> str:
+        if _PLAIN.fullmatch(string):
+            return super()._deal_with_super_sub(string, style)
+        return rf"\text{{{latex_escape(string)}}}"
 
 
 class _Presentation(MathMLPresentationPrinter):
@@ -109,6 +147,17 @@ class _Presentation(MathMLPresentationPrinter):
         if parameter is not None:
             return self._print(sp.IndexedBase("delta")[sp.Symbol(parameter)])
         return super()._print_Symbol(sym, style)
+
+    def doprint(self, expr) -> str:
+        """The MathML text, every text node escaped (sympy writes them raw, to keep its entities)."""
+        root = self._print(expr)
+        stack = [root]
+        while stack:
+            node = stack.pop()
+            if node.nodeType == node.TEXT_NODE:
+                node.data = _escape_text(node.data)
+            stack.extend(node.childNodes)
+        return root.toxml().encode("ascii", "xmlcharrefreplace").decode()
 
     def _print_AppliedUndef(self, signal):
         row = self.dom.createElement("mrow")
@@ -125,3 +174,18 @@ class _Presentation(MathMLPresentationPrinter):
         mark = self.dom.createElement("mo")
         mark.appendChild(self.dom.createTextNode(text))
         return mark
+
+
+#: An entity or character reference sympy writes on purpose (``&InvisibleTimes;``, ``&#948;``).
+_REFERENCE = re.compile(r"&(?:[A-Za-z][A-Za-z0-9]*|#[0-9]+|#x[0-9A-Fa-f]+);")
+
+
+def _escape_text(text: str) -> str:
+    """Text content safe in XML: ``<``, ``>`` and a bare ``&`` escaped, references kept, illegal characters replaced."""
+    parts = []
+    last = 0
+    for match in _REFERENCE.finditer(text):
+        parts += [html.escape(text[last:match.start()], quote=False), match.group()]
+        last = match.end()
+    parts.append(html.escape(text[last:], quote=False))
+    return _XML_ILLEGAL.sub("\ufffd", "".join(parts))

@@ -47,7 +47,7 @@ from sympy.core.function import AppliedUndef
 from bondgraph.equations import labelled_equations
 from bondgraph.errors import LawError
 from bondgraph.laws import signed_power_inverse, solve_for
-from bondgraph.structure import T
+from bondgraph.structure import T, require_model
 
 from .junctions import junction_arrs
 from .relation import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
@@ -119,6 +119,7 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
     eliminated (a law without explicit inverse, a loop only an ODE of the set closes) are named in one
     :class:`ARRWarning`; gaps that only sets above ``max_order`` close are named in another.
     """
+    require_model(bg, "structural_arrs")
     check_integral_form(integrals)
     if max_order is not None and max_order != "auto" and not (isinstance(max_order, int) and max_order >= 0):
         raise ValueError(f"option max_order: {max_order!r} is not a non-negative integer, 'auto' or None")
@@ -174,6 +175,7 @@ def unreached(bg, arrs: Sequence[ARR], *, sensor_faults: bool = True) -> dict:
     >>> unreached(dc_motor(), derive_arrs(dc_motor(), max_order=2))["isolate"]
     []
     """
+    require_model(bg, "unreached")
     model = structural_model(bg, sensor_faults=sensor_faults)
     supports = [faults_of_arr(model, arr) for arr in arrs]
     gaps = list(_gaps(model, supports))

@@ -41,7 +41,7 @@ from sympy.core.function import AppliedUndef
 from bondgraph import elements as el
 from bondgraph.causality import diagnosis_causality
 from bondgraph.equations import causal_equations, substitute
-from bondgraph.structure import Structure, T, signal_function
+from bondgraph.structure import Structure, T, require_model, signal_function
 
 from .relation import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
                        parameter_intervals, split_relation, uncertain_structure, written_without_integrals)
@@ -80,6 +80,7 @@ def junction_arrs(bg, *, integrals: str = "avoid") -> list[ARR]:
     >>> [(arr.form, arr.order) for arr in junction_arrs(torsion_bar_monitorable())]
     [('differentiated balance', 2), ('differentiated balance', 2)]
     """
+    require_model(bg, "junction_arrs")
     check_integral_form(integrals)
     structure = bg.structure()
     causality = diagnosis_causality(bg)

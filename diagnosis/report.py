@@ -14,6 +14,12 @@ HTML is one self-contained file: the drawings are inline SVG and the equations M
 opens offline in any browser with nothing fetched.  LaTeX is a standalone document (TikZ drawings).
 Markdown carries the drawings as data-URI SVG images and the equations as ``$$`` LaTeX.
 
+Every text from the model (its free-text name, names, laws, messages) is escaped for the format it
+lands in: HTML (:func:`html.escape`), Markdown (HTML escaped; backslash, backtick, brackets, dollar
+and bar backslashed), LaTeX (:func:`bondgraph.drawing.latex_escape`), and the equations by
+:func:`~diagnosis.deltas.mathml` and :func:`~diagnosis.deltas.latex`, which escape any name that is
+not an identifier.
+
 Example
 -------
 >>> from bondgraph.library import rlc_circuit
@@ -26,6 +32,7 @@ from __future__ import annotations
 
 import base64
 import html
+import re
 import warnings
 from dataclasses import dataclass
 
@@ -35,6 +42,7 @@ from bondgraph import BondGraph
 from bondgraph import drawing
 from bondgraph.causality import diagnosis_causality
 from bondgraph.errors import ModelError
+from bondgraph.structure import require_model
 
 from .arrs import ARR, ARRWarning, derive_arrs
 from .deltas import latex, mathml
@@ -65,6 +73,7 @@ def arr_report(bg: BondGraph, format: str = "md", *, arrs: list[ARR] | None = No
     ``arrs`` defaults to :func:`~diagnosis.arrs.derive_arrs` of the model; candidates that cannot be
     expressed in known variables are listed as notes.
     """
+    require_model(bg, "arr_report")
     if format not in FORMATS:
         raise ValueError(f"format must be one of {FORMATS}, got {format!r}")
     notes = []
@@ -185,8 +194,15 @@ def _markdown(bg: BondGraph, c: _Content) -> str:
     return "\n".join(lines)
 
 
+#: Markdown syntax a text from the model may not use: links and images (``[x](javascript:...)``), code
+#: spans and math (``$``); each is backslash-escaped (HTML is escaped by :func:`html.escape`).
+_MD_SPECIAL = {ch: "\\" + ch for ch in "\\`[]$|"}
+
+
 def _md(text: str) -> str:
-    return html.escape(str(text), quote=False).replace("|", "\\|").replace("\n", " ")
+    """Text shown as itself in Markdown: HTML escaped, link, code, math and table syntax backslashed."""
+    escaped = "".join(_MD_SPECIAL.get(ch, ch) for ch in html.escape(str(text), quote=False))
+    return re.sub(r"[\x00-\x1f\x7f]", " ", escaped)  # a newline would end the line (or the table row)
 
 
 def _md_table(header, rows) -> str:

@@ -51,7 +51,7 @@ from sympy.core.function import AppliedUndef
 
 from bondgraph.equations import ModelEquation, effort, energy_variable, flow, labelled_equations
 from bondgraph.errors import PHMError
-from bondgraph.structure import Structure
+from bondgraph.structure import Structure, require_model
 
 #: The most overdetermined subsets :meth:`StructuralModel.mso_sets` explores before it gives up.
 MSO_SEARCH_LIMIT = 20000
@@ -266,6 +266,7 @@ def structural_model(bg, *, sensor_faults: bool = True) -> StructuralModel:
     >>> model.describe(model.faults["sensor i"])
     ['i sensor']
     """
+    require_model(bg, "structural_model")
     structure: Structure = bg.structure()
     equations = labelled_equations(bg)
     bonds = {b for bonds in structure.at.values() for b in bonds}

@@ -8,7 +8,8 @@
 The reference covers every name in ``__all__`` of ``bondgraph``, ``diagnosis``, ``prognosis`` and its
 subpackages,
 the modules the tutorials use beside them (``bondgraph.library``, ``bondgraph.io``, ``bondgraph.drawing``,
-``diagnosis.signals``, ``prognosis.metrics``), ``bgphm.cli.main`` and the public functions of
+``diagnosis.signals``, ``prognosis.metrics``), the rules of a model's names and domains (``bondgraph.names``,
+``bondgraph.domains``), ``bgphm.cli.main`` and the public functions of
 ``bgphm.plotting``.  Names are grouped by the module that defines them, in source order; a class is
 followed by its public methods and properties.  Signatures come from :func:`inspect.signature`,
 docstrings are taken as they are (numpy style) and rendered as markdown: sections become bold
@@ -34,7 +35,7 @@ OUTPUT = ROOT / "docs" / "api.md"
 #: (package, title, extra modules documented in full: every public name they define, or their __all__).
 PACKAGES = [
     ("bondgraph", "model, causality, equations, simulation",
-     ["bondgraph.library", "bondgraph.io", "bondgraph.drawing"]),
+     ["bondgraph.library", "bondgraph.io", "bondgraph.drawing", "bondgraph.names", "bondgraph.domains"]),
     ("diagnosis", "ARRs, intervals, thresholds, signatures, detection", ["diagnosis.signals"]),
     ("diagnosis.intervals", "outward-rounded interval arithmetic and the sympy-to-interval compiler", []),
     ("prognosis", "degradation laws, observation model, particle filter, RUL, metrics, health monitoring",

@@ -119,6 +119,13 @@ def test_evaluation_plot_without_alarm_or_bglft_on_given_axes(healthy):
     assert ax.get_title() == "healthy"
 
 
+def test_titles_from_data_are_plain_text_not_mathtext(healthy):
+    title = r"cost $\frac{1$ in $x$"  # as mathtext, it would fail to parse at draw time
+    ax = plotting.plot_evaluation(healthy, title=title)
+    assert ax.get_title() == title and ax.title.get_parse_math() is False
+    ax.title.get_window_extent(ax.figure.canvas.get_renderer())  # laid out: the dollars are shown, not parsed
+
+
 def test_band_defaults_and_overrides():
     fig, ax = plt.subplots()
     shaded = plotting.band(ax, [0, 1, 2], [0, 1, 2], 5.0, label="b")
