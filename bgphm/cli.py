@@ -151,8 +151,8 @@ def cmd_prognose(args, progress: Progress) -> int:
     out = _output_directory(args)
     spec = load_model(args.model)
     arrs = _arrs(spec, progress, args.arr, args.integrals)
-    parameters = spec.model.parameters
-    failures = _failures(args, parameters)
+    parameters, domains = spec.model.parameters, spec.model.domains
+    failures = _failures(args, parameters, domains)
     candidates = _candidates(args, arrs, failures, parameters)
     laws = [args.degradation] if args.degradation else ["linear", "exponential"]
     record = _record(args.data, arrs, progress, args.resample)
@@ -177,7 +177,7 @@ def cmd_prognose(args, progress: Progress) -> int:
     monitor = IsolatingMonitor(arrs, failures, noise_std=noise, laws=laws, candidates=candidates, dt=dt,
                                n_particles=args.particles, rate=None if args.rate is None else tuple(args.rate),
                                rul_every=args.rul_every, horizon=args.horizon, detection=detection,
-                               healthy_until=until, seed=args.seed)
+                               healthy_until=until, domains=domains, seed=args.seed)
     progress(f"particle filter from the first alarm after t = {until:g} s: {len(laws)} law(s) per candidate, "
              f"{args.particles} particles each, dt = {dt:g} s")
     result = monitor.run(record, evaluations=evaluations, progress=_filter_progress(progress))
@@ -393,7 +393,7 @@ def _filter_progress(progress: Progress, every: float = 2.0):
     return report
 
 
-def _failures(args, parameters: dict) -> dict:
+def _failures(args, parameters: dict, domains: dict) -> dict:
     """``--fail`` as {parameter: failure value}: ``PARAM=VALUE`` items, or one VALUE for ``--candidate``."""
     if args.candidate is not None and args.candidate not in parameters:
         raise UsageError(f"--candidate {args.candidate!r}: the model has no such parameter "
@@ -406,6 +406,10 @@ def _failures(args, parameters: dict) -> dict:
             raise UsageError(f"--fail {bare[0]}: give PARAM=VALUE (repeatable), or one VALUE with --candidate")
         failures.update(_assignments([f"{args.candidate}={bare[0]}"], parameters, "--fail"))
     for name, value in failures.items():
+        lo, hi = domains.get(name, (-math.inf, math.inf))
+        if not lo <= value <= hi:
+            raise UsageError(f"--fail {name}={value:g}: outside the physical domain ({lo:g}, {hi:g}) the model "
+                             f"declares for {name!r}")
         if value == parameters[name]:
             raise UsageError(f"--fail {name}={value:g} equals the nominal value of {name!r}: the failure value must "
                              "differ from it")

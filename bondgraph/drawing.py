@@ -41,6 +41,7 @@ import networkx as nx
 
 from . import elements as el
 from .causality import DERIVATIVE, INTEGRAL, Causality, assign_causality, diagnosis_causality
+from .errors import ModelError
 from .structure import BondGraphLike, Element, require_model
 
 __all__ = ["Drawing", "DrawnBond", "layout", "to_svg", "to_tikz", "display_svg", "display_html", "latex_escape"]
@@ -193,6 +194,8 @@ def layout(bg: BondGraphLike, causality: str | Causality | None = None) -> Drawi
     """
     require_model(bg, "layout")
     structure = bg.structure()
+    if not structure.elements:
+        raise ModelError(f"{bg.name!r}: an empty bond graph has nothing to draw; add elements first")
     causal = _resolve_causality(bg, causality)
     elements = structure.elements
     order = {name: i for i, name in enumerate(elements)}

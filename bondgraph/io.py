@@ -185,6 +185,8 @@ def model_from_json(text: str, *, where: str = "JSON model") -> ModelSpec:
         if len(items) > limit:  # before anything is built: validation costs time per node
             raise ModelFileError(f"{where}: {len(items)} {what}, more than the limit of {limit} "
                                  f"(bondgraph.io.{constant})")
+    if not nodes:
+        raise ModelFileError(f"{where}: 'nodes' is empty; a model needs at least one element")
     for index, node in enumerate(nodes):
         _add_node(graph, node, f"{where}: nodes[{index}]")
     for index, link in enumerate(links):

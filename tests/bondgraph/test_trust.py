@@ -384,3 +384,12 @@ def test_other_objects_in_place_of_a_model_are_named_too():
     with pytest.raises(TypeError, match=r"got PosixPath\('m.json'\) \(use bondgraph.load_model\('m.json'\).model\)"):
         assign_causality(Path("m.json"))
     assert assign_causality(rlc_circuit()).is_valid
+
+
+def test_an_empty_model_is_refused_in_one_line():
+    from diagnosis.report import arr_report
+
+    with pytest.raises(ModelFileError, match="'nodes' is empty"):
+        model_from_json('{"nodes": [], "links": []}')
+    with pytest.raises(ModelError, match="an empty bond graph has nothing to draw"):
+        arr_report(BondGraph())

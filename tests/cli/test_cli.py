@@ -241,7 +241,7 @@ def test_unknown_candidate(motor_csv, capsys):
 @pytest.mark.parametrize("extra, message", [
     (["--fail", "1e-5", "--direction", "up"], "wrong side of the nominal value 0.0001"),
     (["--fail", "1e-4"], "equals the nominal value"),
-    (["--fail=-1e-3"], "same sign"),
+    (["--fail=-1e-3"], "outside the physical domain (0, inf)"),  # the exponential sign check comes after
 ])
 def test_failure_value_on_the_wrong_side(motor_csv, capsys, extra, message):
     code, _, err = run(capsys, "--quiet", "prognose", "dc-motor", str(motor_csv), "--candidate", "b",
@@ -376,3 +376,8 @@ def test_uneven_sampling_is_resampled_on_request(motor_csv, tmp_path, capsys):
     assert code == 0 and "ARR_1_m: no alarm" in out
     assert "'operator'" in err and "ignored" in err  # the text column no ARR uses: a note, not an error
     assert "resampled" in err and "uniform step of 0.001 s" in err
+
+
+def test_a_failure_value_outside_the_physical_domain_is_refused(motor_csv, capsys):
+    code, _, err = run(capsys, "--quiet", "prognose", "dc-motor", str(motor_csv), "--fail", "b=-1e-3")
+    assert code == 2 and "--fail b=-0.001: outside the physical domain (0, inf)" in err
