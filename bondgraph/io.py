@@ -146,8 +146,10 @@ def model_from_json(text: str, *, where: str = "JSON model") -> ModelSpec:
     A text longer than :data:`MAX_FILE_BYTES` characters, or with more than :data:`MAX_NODES` nodes or
     :data:`MAX_LINKS` links, is refused before the model is built.
 
-    >>> model_from_json('{"nodes": [], "links": []}', where="empty.json").model.graph.number_of_nodes()
-    0
+    >>> model_from_json('{"nodes": [], "links": []}', where="empty.json")
+    Traceback (most recent call last):
+    ...
+    bondgraph.io.ModelFileError: empty.json: 'nodes' is empty; a model needs at least one element
     """
     if not isinstance(text, (str, bytes, bytearray)):
         raise TypeError(f"model_from_json: text must be a str, got {type(text).__name__}")
