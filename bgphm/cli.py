@@ -317,19 +317,16 @@ def _detect(arrs: list, record: Record, args, progress: Progress) -> list:
 
 
 def _check_horizon(args, dt: float, hypotheses: int) -> None:
-    """``--horizon`` (default 2000 filter steps) within the predictor's limits, before the filter runs."""
+    """``--horizon`` (default 2000 filter steps) within the predictors' limits, before the filter runs."""
     from prognosis.isolation import HORIZON_STEPS
-    from prognosis.rul import BANK_BYTES_PER_STEP, MAX_BANK_BYTES, MAX_HORIZON_STEPS
+    from prognosis.rul import check_horizon
 
     horizon = args.horizon if args.horizon is not None else HORIZON_STEPS * dt
-    steps = horizon / dt
-    if steps > MAX_HORIZON_STEPS:
-        raise UsageError(f"--horizon {horizon:g}: {steps:.3g} filter steps of {dt:g} s; at most {MAX_HORIZON_STEPS}")
-    need = hypotheses * args.particles * math.ceil(steps) * BANK_BYTES_PER_STEP
-    if need > MAX_BANK_BYTES:
-        raise UsageError(f"--horizon {horizon:g} with --particles {args.particles}: the RUL predictions of "
-                         f"{hypotheses} hypotheses would need {need / 2**30:.3g} GiB of random numbers, more than "
-                         f"{MAX_BANK_BYTES / 2**30:g} GiB; shorten --horizon or use fewer --particles")
+    try:
+        check_horizon(horizon, dt, particles=args.particles, predictors=hypotheses)
+    except ValueError as exc:
+        raise UsageError(f"--horizon {horizon:g}: {exc} (--particles {args.particles}, {hypotheses} hypotheses)"
+                         ) from None
 
 
 def _check_calibration(arr, record: Record, evaluation, until: float, args, options: dict) -> None:

@@ -102,7 +102,7 @@ def _check_existing(path: Path, kind: str, force: bool, option: str) -> None:
             raise UsageError(f"{option} {path} is a directory; give a file name")
         if not force:
             raise UsageError(f"{option} {path} exists; give --force to replace it")
-        if not os.access(path.parent if str(path.parent) else ".", os.W_OK):
+        if not os.access(path.parent, os.W_OK):
             raise UsageError(f"{option} {path}: cannot write in {path.parent} (permission denied)")
         return
     if not path.is_dir():

@@ -34,9 +34,9 @@ import numpy as np
 from .degradation import PerAssetDegradation, degradation_model
 from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, rate_prior,
                          sensitivity, signature_candidates)
-from .monitor import MonitorResult, check_particles, check_positive, filter_stride
+from .monitor import MonitorResult, filter_stride
 from .observation import observation_model
-from .particle_filter import KernelSmoothing, ParticleFilter
+from .particle_filter import KernelSmoothing, ParticleFilter, check_particles, check_positive
 from .rul import RULDistribution, RULPredictor
 
 __all__ = ["Decision", "IsolatingMonitor", "IsolationResult", "decide"]
@@ -443,8 +443,7 @@ class IsolatingMonitor:
                        for m in seeing}
         best = max(seeing, key=lambda m: information[m] if np.isfinite(information[m]) else -1.0)
         arr, evaluation = arrs[best], evaluations[best]
-        lo, hi = arr.uncertainties.get(h.candidate, (0.0, 0.0))
-        box = sorted((h.nominal * (1 + lo), h.nominal * (1 + hi)))
+        box = self._box(h, [arr])
         bracket = (min(box[0], h.failure), max(box[1], h.failure))
         explained = models[best].invert(-evaluation.residual[window], points[best], bracket)
         explained = np.clip(explained[np.isfinite(explained)], *bracket)

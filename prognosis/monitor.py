@@ -12,8 +12,6 @@ the newest sample by that half window.  Results are deterministic for a seed.
 
 from __future__ import annotations
 
-import math
-import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
@@ -23,7 +21,7 @@ from bondgraph._optional import pandas_for
 from diagnosis.signals import default_window
 
 from . import metrics
-from .particle_filter import ParticleFilter, VarianceAdaptation
+from .particle_filter import ParticleFilter, VarianceAdaptation, check_particles, check_positive
 from .observation import observation_model
 from .rul import ParallelRUL, RULPredictor
 
@@ -173,29 +171,6 @@ def filter_stride(t: np.ndarray, dt: float) -> int:
     if stride < 1 or abs(stride * step - dt) > 1e-6 * dt:
         raise ValueError(f"the filter step dt = {dt} s is not a multiple of the record's step {step} s")
     return stride
-
-
-def check_positive(value: object, option: str) -> float:
-    """``value`` as a float; a ValueError naming ``option`` unless it is a finite number > 0.
-
-    >>> check_positive(0.01, "noise_std")
-    0.01
-    >>> check_positive(-1, "noise_std")
-    Traceback (most recent call last):
-    ...
-    ValueError: noise_std must be a finite number > 0, got -1
-    """
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) or not math.isfinite(value) \
-            or value <= 0:
-        raise ValueError(f"{option} must be a finite number > 0, got {value!r}")
-    return float(value)
-
-
-def check_particles(value: object) -> int:
-    """``n_particles`` as an int; a ValueError unless it is a whole number >= 2 (a weighted cloud needs two)."""
-    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral) or value < 2:
-        raise ValueError(f"n_particles must be a whole number >= 2, got {value!r}")
-    return int(value)
 
 
 def _number(value) -> float | None:

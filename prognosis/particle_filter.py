@@ -250,13 +250,11 @@ class ParticleFilter:
     def __init__(self, model, observation, *, n_particles: int = 500, dt: float = 0.1, noise_std=0.01,
                  inflation: float = 4.0, gamma_std=0.02, adaptation: VarianceAdaptation | None = None,
                  resampling: str = "systematic", resample_below: float = 1.0, seed: int = 0):
-        if n_particles < 2:
-            raise ValueError(f"n_particles must be at least 2, got {n_particles}")
+        n_particles = check_particles(n_particles)
         if inflation <= 0:
             raise ValueError(f"inflation must be positive, got {inflation}")
         _check_noise_std(noise_std)
-        if not (isinstance(dt, numbers.Real) and math.isfinite(dt) and dt > 0):
-            raise ValueError(f"dt must be a finite number > 0, got {dt!r}")
+        dt = check_positive(dt, "dt")
         self.model, self.observation = model, observation
         self.n, self.dt = n_particles, dt
         self.noise_std, self.inflation = noise_std, inflation
@@ -383,6 +381,29 @@ class ParticleFilter:
             "theta_quantiles": weighted_quantiles(self.theta, weights, (0.05, 0.5, 0.95)),
             "gamma_quantiles": weighted_quantiles(gamma, weights[:, None, :], (0.05, 0.5, 0.95)),
         }
+
+
+def check_positive(value: object, option: str) -> float:
+    """``value`` as a float; a ValueError naming ``option`` unless it is a finite number > 0.
+
+    >>> check_positive(0.01, "noise_std")
+    0.01
+    >>> check_positive(-1, "noise_std")
+    Traceback (most recent call last):
+    ...
+    ValueError: noise_std must be a finite number > 0, got -1
+    """
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) or not math.isfinite(value) \
+            or value <= 0:
+        raise ValueError(f"{option} must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def check_particles(value: object) -> int:
+    """``n_particles`` as an int; a ValueError unless it is a whole number >= 2 (a weighted cloud needs two)."""
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral) or value < 2:
+        raise ValueError(f"n_particles must be a whole number >= 2, got {value!r}")
+    return int(value)
 
 
 def _check_noise_std(noise_std: object) -> None:

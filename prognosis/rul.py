@@ -28,6 +28,34 @@ BANK_BYTES_PER_STEP = 16  # per particle and horizon step: four float32 banks (Z
 MAX_BANK_BYTES = 2**31  # the random-number bank of one predictor (rows x steps x 16 bytes) stays under 2 GiB
 
 
+def check_horizon(horizon: float, dt: float, particles: int = 0, predictors: int = 1) -> int:
+    """The number of steps of ``horizon``; a ValueError when it is beyond the predictors' limits.
+
+    At most :data:`MAX_HORIZON_STEPS` steps of ``dt``, and the random-number banks of ``predictors``
+    predictors of ``particles`` rows each (:data:`BANK_BYTES_PER_STEP` bytes per row and step) at most
+    :data:`MAX_BANK_BYTES` in all.
+
+    >>> check_horizon(200.0, 0.1, particles=500)
+    2000
+    >>> check_horizon(1e12, 0.1)
+    Traceback (most recent call last):
+    ...
+    ValueError: horizon 1e+12 s is 1e+13 steps of dt = 0.1 s; at most 1000000 (prognosis.rul.MAX_HORIZON_STEPS)
+    """
+    if not (np.isfinite(horizon) and np.isfinite(dt) and horizon > 0 and dt > 0):
+        raise ValueError(f"horizon and dt must be positive and finite, got horizon={horizon}, dt={dt}")
+    if horizon / dt > MAX_HORIZON_STEPS:
+        raise ValueError(f"horizon {horizon:g} s is {horizon / dt:.3g} steps of dt = {dt:g} s; at most "
+                         f"{MAX_HORIZON_STEPS} (prognosis.rul.MAX_HORIZON_STEPS)")
+    steps = int(np.ceil(horizon / dt - 1e-9))
+    need = predictors * particles * steps * BANK_BYTES_PER_STEP
+    if need > MAX_BANK_BYTES:
+        raise ValueError(f"{predictors} x {particles} particles x {steps} steps would need {need / 2**30:.3g} GiB of "
+                         f"random numbers, more than {MAX_BANK_BYTES / 2**30:g} GiB (prognosis.rul.MAX_BANK_BYTES); "
+                         "shorten the horizon or use fewer particles")
+    return steps
+
+
 @dataclass(frozen=True)
 class RULDistribution:
     """A predicted RUL distribution: weighted samples, ``inf`` where no failure came within the horizon.
@@ -224,14 +252,9 @@ class RULPredictor:
                  seed: int = 0, chunk: int = 512):
         if direction not in ("up", "down"):
             raise ValueError(f"direction must be 'up' or 'down', got {direction!r}")
-        if not (np.isfinite(horizon) and np.isfinite(dt) and horizon > 0 and dt > 0):
-            raise ValueError(f"horizon and dt must be positive and finite, got horizon={horizon}, dt={dt}")
-        if horizon / dt > MAX_HORIZON_STEPS:
-            raise ValueError(f"horizon {horizon:g} s is {horizon / dt:.3g} steps of dt = {dt:g} s; at most "
-                             f"{MAX_HORIZON_STEPS} (prognosis.rul.MAX_HORIZON_STEPS)")
+        self.steps = check_horizon(horizon, dt)
         self.model, self.dt, self.theta_fail, self.direction = model, dt, theta_fail, direction
         self.horizon, self.chunk = horizon, chunk
-        self.steps = int(np.ceil(horizon / dt - 1e-9))
         self.seed = seed
         self.rng = np.random.default_rng(seed)
         self._bank = None
@@ -242,11 +265,7 @@ class RULPredictor:
 
     def _bank_rows(self, rows: int):
         if self._bank is None or self._bank["Z"].shape[0] < rows:
-            if rows * self.steps * BANK_BYTES_PER_STEP > MAX_BANK_BYTES:
-                raise ValueError(f"horizon: {rows} particles x {self.steps} steps would need "
-                                 f"{rows * self.steps * BANK_BYTES_PER_STEP / 2**30:.3g} GiB of random numbers, more "
-                                 f"than {MAX_BANK_BYTES / 2**30:g} GiB (prognosis.rul.MAX_BANK_BYTES); shorten the "
-                                 "horizon or use fewer particles")
+            check_horizon(self.horizon, self.dt, particles=rows)
             z = self.rng.standard_normal((rows, self.steps), dtype=np.float32)
             walk = np.cumsum(z, axis=1)
             v = self.rng.standard_normal((rows, self.steps), dtype=np.float32)
