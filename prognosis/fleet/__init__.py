@@ -1,0 +1,15 @@
+"""prognosis.fleet: many assets in one vectorized filter, with results that do not depend on batching.
+
+* :class:`FleetMonitor` (:mod:`.monitor`): detection, isolation by evidence, estimation and RUL per
+  asset, each asset starting at its own alarm;
+* :class:`FleetFilter` (:mod:`.filter`): the particle arrays of every (asset, hypothesis) row and the
+  vectorized SIR step on per-asset random streams (:mod:`prognosis.streams`);
+* :mod:`.rul`: closed-form crossing times and per-asset RUL summaries;
+* :class:`FleetResult` (:mod:`.results`): the tidy tables (alarms, estimates, RUL).
+"""
+
+from .filter import FleetFilter
+from .monitor import FleetMonitor
+from .results import FleetResult
+
+__all__ = ["FleetFilter", "FleetMonitor", "FleetResult"]

@@ -1,0 +1,357 @@
+"""Monitoring a fleet: detection, estimation and RUL of many assets in one vectorized filter.
+
+:class:`FleetMonitor` is :class:`~prognosis.isolation.IsolatingMonitor` for many assets at once.  Each
+asset's records go through detection with the ARRs; at an asset's first alarm, its rows start: one
+row of particles per hypothesis (a candidate with a law, from the failure values, as in issue 11's
+isolation by evidence; a single named hypothesis is one row per asset).  From then on all started
+rows step together, each at its own filter step, on random streams keyed by (seed, asset, step)
+(:mod:`prognosis.streams`), so an asset's results are bitwise the same alone, in any batch and on
+any worker.  The RUL is predicted in closed form (:mod:`prognosis.fleet.rul`) and mixed over the
+hypotheses by posterior probability.
+
+Results are tidy tables (:class:`~prognosis.fleet.results.FleetResult`): alarms, estimates every
+``report_every`` steps, RUL every ``rul_every`` steps.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..hypotheses import LIFE_PRIOR, indistinguishable_groups, signature_candidates
+from ..isolation import DRIFT_AWAY_STEPS, EVIDENCE_RATIO, MIXTURE_FLOOR, PROCESS_NOISE, IsolatingMonitor, decide
+from ..monitor import filter_stride
+from ..observation import observation_model
+from ..rul import RULPredictor
+from ..streams import INITIAL, AssetStreams, asset_key
+from .filter import FleetFilter
+from .results import FleetResult
+from .rul import crossing_times, has_closed_form, summarize
+
+__all__ = ["FleetMonitor"]
+
+BLOCK = 1000  # assets filtered together by run(): bounds the memory of the observations held
+
+
+@dataclass
+class _Window:
+    """The residual and point values of the samples that raised an alarm (what the start needs)."""
+
+    residual: np.ndarray
+    points: list
+    persistence: int
+
+
+@dataclass
+class _Asset:
+    """One asset of a block: its observations at its filter steps (from its alarm on)."""
+
+    asset: object
+    t: np.ndarray  # (K,)
+    y: np.ndarray  # (K, M)
+    points: list  # per ARR: (K, P_m)
+    hypotheses: list  # indices of the hypotheses started at the alarm
+    starts: list  # (lo, hi, sigma_v) per started hypothesis
+
+
+class FleetMonitor:
+    """Detection, isolation by evidence, estimation and RUL for many assets.
+
+    Parameters
+    ----------
+    arrs : sequence of ARR
+    failures : mapping
+        Failure value of each parameter that can fail, e.g. ``{"b_Md": 0.45}``.
+    noise_std : mapping
+        Standard deviation of each ARR's residual on healthy data (by ARR name), the same for every
+        asset (assets of one type; calibrate on one healthy record).
+    laws : sequence of str or mapping
+        Competing degradation laws (names of built-in ones, or ``{name: model}``).
+    candidates : sequence of str, optional
+        Only these candidates, instead of those of each asset's signature at its alarm.
+    dt, n_particles, inflation, life, rate, process_noise, discount, horizon, detection, min_ratio,
+    healthy_until, domains
+        As :class:`~prognosis.isolation.IsolatingMonitor`.
+    rul_every : int
+        Predict the RUL every this many filter steps of an asset.
+    report_every : int, optional
+        Write the estimates (with quantiles) every this many steps (default ``rul_every``).
+    seed : int
+
+    Examples
+    --------
+    Three RLC circuits, two of them with a resistance drifting up from different times:
+
+    >>> from bondgraph import simulate
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> bg = rlc_circuit()
+    >>> t = np.linspace(0.0, 3.0, 3001)
+    >>> def record(onset):
+    ...     drift = (lambda t: 10.0 + 4.0 * max(0.0, t - onset)) if onset else None
+    ...     return simulate(bg, (0.0, 3.0), {"V": lambda t: 5 + np.sin(7 * t)}, t_eval=t,
+    ...                     parameters={"R": drift} if drift else {}).record()
+    >>> records = {"c1": record(0.5), "c2": record(None), "c3": record(1.0)}
+    >>> arr = derive_arrs(bg, complete=False, integrals="keep")[0]
+    >>> fleet = FleetMonitor([arr], {"R": 20.0}, laws=["linear"], noise_std={arr.name: 1e-3}, dt=0.01,
+    ...                      n_particles=200, detection={"margin": 0.01})
+    >>> result = fleet.run(records)
+    >>> sorted(set(result.alarms["asset"]))   # c2 stays healthy
+    ['c1', 'c3']
+    >>> rul = result.for_asset("c1").rul
+    >>> bool(abs(rul["t"][-1] + rul["p50"][-1] - 3.0) < 0.2)   # R reaches 20 ohm at t = 3.0 s
+    True
+    """
+
+    def __init__(self, arrs: Sequence, failures: Mapping[str, float], *, noise_std: Mapping[str, float],
+                 laws: Sequence[str] | Mapping = ("linear", "exponential"), candidates: Sequence[str] | None = None,
+                 dt: float = 0.1, n_particles: int = 500, inflation: float = 4.0, life: tuple = LIFE_PRIOR,
+                 rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
+                 rul_every: int = 10, report_every: int | None = None, horizon: float | None = None,
+                 detection: Mapping | None = None, min_ratio: float = EVIDENCE_RATIO,
+                 healthy_until: float | None = None, domains: Mapping[str, tuple] | None = None, seed: int = 0):
+        # one validation for both monitors: the settings are an IsolatingMonitor's
+        self.settings = IsolatingMonitor(arrs, failures, noise_std=noise_std, laws=laws, candidates=candidates,
+                                         dt=dt, n_particles=n_particles, inflation=inflation, life=life, rate=rate,
+                                         process_noise=process_noise, discount=discount, rul_every=rul_every,
+                                         horizon=horizon, detection=detection, min_ratio=min_ratio,
+                                         healthy_until=healthy_until, domains=domains, seed=seed)
+        s = self.settings
+        if report_every is None:
+            report_every = s.rul_every
+        if isinstance(report_every, bool) or int(report_every) != report_every or report_every < 1:
+            raise ValueError(f"report_every must be a positive whole number of filter steps, got {report_every!r}")
+        self.report_every = int(report_every)
+        self.streams = AssetStreams(s.seed)
+        candidates = s.candidates if s.candidates is not None else list(s.failures)
+        self.hypotheses, self.never = s._hypotheses(candidates)
+        self.arrs = [a for a in s.arrs if any(c in a.parameters for c in candidates)]
+        if not self.arrs:
+            raise ValueError(f"no ARR is sensitive to any of the candidates {candidates}")
+        self.groups = indistinguishable_groups(self.arrs, candidates)
+        self.noise = np.array([s.noise_std[a.name] for a in self.arrs])
+        self.options = [s._options(a) for a in self.arrs]
+        self.observations = [[observation_model(a, h.candidate) if h.candidate in a.parameters else None
+                              for a in self.arrs] for h in self.hypotheses]
+        self.boxes = np.array([s._box(h, self.arrs) for h in self.hypotheses])
+        self.up = np.array([h.direction == "up" for h in self.hypotheses])
+        self.fail = np.array([h.failure for h in self.hypotheses])
+        self._filter = None
+        self._laws = None
+
+    # -- the batch pipeline ------------------------------------------------------------------
+    def run(self, records: Mapping | Iterable, *, progress: Callable[[int, int], None] | None = None,
+            block: int = BLOCK) -> FleetResult:
+        """Process whole records, ``{asset: record}`` or an iterable of ``(asset, record)`` pairs.
+
+        Records are read one at a time and only their values at the filter steps are kept; ``block``
+        assets are filtered together.  ``progress(done, total)`` is called after each block with the
+        number of assets done (``total`` is None for an iterable of unknown length).
+        """
+        pairs = records.items() if isinstance(records, Mapping) else records
+        total = len(records) if hasattr(records, "__len__") else None
+        result, done, batch = FleetResult(), 0, []
+        for asset, record in pairs:
+            batch.append(self._prepare(asset, record, result))
+            if len(batch) == block:
+                self._filter_block(batch, result)
+                done += len(batch)
+                batch = []
+                if progress is not None:
+                    progress(done, total)
+        if batch or done == 0:
+            self._filter_block(batch, result)
+            done += len(batch)
+            if progress is not None:
+                progress(done, total)
+        return result
+
+    def _prepare(self, asset, record, result: FleetResult) -> _Asset | None:
+        """Detection on one record; its observations at the filter steps from the alarm on (None if healthy)."""
+        asset_key(asset)  # a clear error for an id that is neither an integer nor a string
+        evaluations = [a.evaluate(record, **o) for a, o in zip(self.arrs, self.options)]
+        t = evaluations[0].t
+        alarm = np.zeros(t.size, bool)
+        for e in evaluations:
+            alarm |= e.alarm
+        alarm &= t > self.settings.healthy_until
+        if not alarm.any():
+            return None
+        k = int(np.argmax(alarm))
+        fired = [a.name for a, e in zip(self.arrs, evaluations) if e.alarm[k]]
+        result.add("alarms", asset=[asset] * len(fired), t=[t[k]] * len(fired), arr=fired)
+        started, starts = self._start(evaluations, k, fired)
+        if not started:
+            return None
+        steps = np.arange(k, t.size, filter_stride(t, self.settings.dt))
+        y = np.stack([-e.residual[steps] for e in evaluations], axis=1)
+        points = [np.stack([p[steps] for p in e.points], axis=1) if e.points else np.empty((steps.size, 0))
+                  for e in evaluations]
+        return _Asset(asset, t[steps], y, points, started, starts)
+
+    def _start(self, evaluations: list, k: int, fired: list) -> tuple[list, list]:
+        """The hypotheses an alarm starts (those of the signature's candidates) and their initial boxes."""
+        s = self.settings
+        allowed = (set(s.candidates) if s.candidates is not None
+                   else set(signature_candidates(self.arrs, s.failures, fired)))
+        persistence = max(e.persistence for e in evaluations)
+        window = slice(max(0, k - persistence + 1), k + 1)
+        windows = [_Window(e.residual[window], [p[window] for p in e.points], e.persistence) for e in evaluations]
+        started, starts = [], []
+        for index, h in enumerate(self.hypotheses):
+            if h.candidate in allowed and h.name not in self.never:
+                started.append(index)
+                starts.append(s._start(h, windows, self.arrs, len(windows[0].residual) - 1, self.noise))
+        return started, starts
+
+    def _filter_block(self, batch: list, result: FleetResult) -> None:
+        assets = [a for a in batch if a is not None]
+        if not assets:
+            return
+        pf = self._new_filter()
+        rows, owner = self._add_rows(pf, assets)
+        t, y, points = _padded(assets)
+        length = np.array([a.t.size for a in assets])
+        hypotheses = pf.hypothesis[rows]
+        ids = np.array([a.asset for a in assets], dtype=object)
+        rejected = np.zeros(rows.size, bool)
+        away = np.zeros(rows.size, int)
+        for j in range(int(length.max())):
+            index = np.flatnonzero(length[owner] > j)
+            mine = owner[index]
+            step = pf.step(rows[index], y[mine, j], [[p[mine, j] for p in m] for m in points])
+            if j % self.report_every == 0:
+                self._report(pf, rows[index], hypotheses[index], ids[mine], j, t[mine, j], step.ess, result,
+                             rejected, away, index)
+            if j % self.settings.rul_every == 0:
+                self._predict(pf, rows[index], owner[index], ids, t[:, j], j, rejected[index], result)
+        pf.remove(rows)
+
+    def _new_filter(self) -> FleetFilter:
+        s = self.settings
+        if self._laws is None:
+            self._laws = [s._law(h.law, 0.0) for h in self.hypotheses]
+        return FleetFilter(self._laws, self.observations, noise_std=self.noise, n_particles=s.n_particles, dt=s.dt,
+                           inflation=s.inflation, discount=s.discount, streams=self.streams)
+
+    def _add_rows(self, pf: FleetFilter, assets: list) -> tuple[np.ndarray, np.ndarray]:
+        """Start every asset's rows; returns the rows and the index (into ``assets``) of each row's asset."""
+        s = self.settings
+        ids, hypotheses, lo, hi, sigma_v, owner = [], [], [], [], [], []
+        rates = []
+        for a, item in enumerate(assets):
+            for h, (start_lo, start_hi, noise) in zip(item.hypotheses, item.starts):
+                ids.append(item.asset)
+                hypotheses.append(h)
+                lo.append(start_lo)
+                hi.append(start_hi)
+                law = s.laws[self.hypotheses[h].law]
+                sigma_v.append(noise if law is None else law.process_noise)
+                owner.append(a)
+                rng = self.streams.generator(item.asset, 0, INITIAL, lane=h)
+                rates.append(s._rate_particles(self.hypotheses[h], rng)[None, :])
+        rows = pf.add(ids, hypothesis=hypotheses, lo=lo, hi=hi, rates=np.stack(rates), process_noise=sigma_v)
+        return rows, np.array(owner)
+
+    def _report(self, pf, rows, hypotheses, ids, j, times, ess, result, rejected, away, index) -> None:
+        """Estimates with quantiles; reject hypotheses that left their domain or drift away from failure."""
+        theta_q, gamma_q = pf.quantiles(rows)
+        result.add("estimates", asset=ids, hypothesis=[self.hypotheses[h].name for h in hypotheses],
+                   step=np.full(rows.size, j), t=times, theta_mean=pf.theta_mean(rows), theta_p5=theta_q[:, 0],
+                   theta_p50=theta_q[:, 1], theta_p95=theta_q[:, 2], gamma_mean=pf.gamma_mean(rows),
+                   gamma_p5=gamma_q[:, 0], gamma_p50=gamma_q[:, 1], gamma_p95=gamma_q[:, 2],
+                   ess=ess, log_evidence=pf.log_evidence[rows])
+        domain = np.array([self.hypotheses[h].domain for h in hypotheses]).reshape(-1, 2)
+        outside = ~((domain[:, 0] < theta_q[:, 1]) & (theta_q[:, 1] < domain[:, 1]))
+        boxes, up = self.boxes[hypotheses].reshape(-1, 2), self.up[hypotheses]
+        wrong = np.where(up, theta_q[:, 2] < boxes[:, 0], theta_q[:, 0] > boxes[:, 1])
+        away[index] = np.where(wrong, away[index] + 1, 0)
+        rejected[index] |= outside | (away[index] >= DRIFT_AWAY_STEPS)
+
+    def _predict(self, pf, rows, owner, ids, times, j, rejected, result: FleetResult) -> None:
+        """The RUL of each live asset: its hypotheses' crossing times mixed by posterior probability."""
+        order = np.unique(owner)
+        position = np.searchsorted(order, owner)
+        count = np.bincount(position, minlength=order.size)
+        width = int(count.max())
+        lane = np.arange(rows.size) - np.repeat(np.cumsum(count) - count, count)  # rank of a row in its asset
+        hypotheses = pf.hypothesis[rows]
+        log_z = np.full((order.size, width), -np.inf)
+        log_z[position, lane] = np.where(rejected, -np.inf, pf.log_evidence[rows])
+        top = np.max(log_z, axis=1, keepdims=True)
+        with np.errstate(invalid="ignore"):
+            p = np.exp(log_z - np.where(np.isfinite(top), top, 0.0))
+            p /= np.sum(p, axis=1, keepdims=True)
+        p = np.nan_to_num(p)
+        probability = p[position, lane]
+        crossing = self._crossings(pf, rows, hypotheses, ids[owner], j)
+        n = pf.n
+        samples = np.full((order.size, width * n), np.inf)
+        weights = np.zeros((order.size, width * n))
+        columns = lane[:, None] * n + np.arange(n)
+        samples[position[:, None], columns] = crossing
+        weights[position[:, None], columns] = np.where(probability >= MIXTURE_FLOOR, probability, 0.0)[:, None] / n
+        empty = np.sum(weights, axis=1) == 0  # every hypothesis rejected: one censored sample
+        weights[empty, 0] = 1.0
+        samples[empty, 0] = np.inf
+        summary = summarize(samples, weights)
+        best = np.argmax(p, axis=1)
+        best_row = np.flatnonzero(lane == 0) + best  # the rows of an asset are consecutive
+        names = [self.hypotheses[h].name if not e else "" for h, e in zip(hypotheses[best_row], empty)]
+        status = self._status(order, position, lane, hypotheses, rejected, log_z, empty)
+        result.add("rul", asset=ids[order], step=np.full(order.size, j), t=times[order], mean=summary["mean"],
+                   p5=summary["p5"], p50=summary["p50"], p95=summary["p95"], censored=summary["censored"],
+                   hypothesis=names, probability=np.where(empty, 0.0, p[np.arange(order.size), best]), status=status)
+
+    def _crossings(self, pf, rows, hypotheses, ids, j) -> np.ndarray:
+        """Crossing times (rows, N): closed form per law where it exists, else propagated paths."""
+        s = self.settings
+        times = np.empty((rows.size, pf.n))
+        for h in np.unique(hypotheses):
+            mine = hypotheses == h
+            law, hypothesis = self._laws[h], self.hypotheses[h]
+            theta, rate = pf.theta[rows[mine]], pf.gamma[rows[mine], 0]
+            if has_closed_form(law):
+                times[mine] = crossing_times(law, theta, rate, np.full(theta.shape[0], hypothesis.failure),
+                                             np.full(theta.shape[0], hypothesis.direction == "up"), s.horizon)
+                continue
+            predictor = RULPredictor(law, dt=s.dt, theta_fail=hypothesis.failure, direction=hypothesis.direction,
+                                     horizon=s.horizon, seed=s.seed)
+            for i, (row, asset) in enumerate(zip(rows[mine], np.asarray(ids, object)[mine])):
+                gamma = np.moveaxis(pf.gamma[row:row + 1], 1, -1)
+                key = (asset_key(asset) << 32) | j
+                times[np.flatnonzero(mine)[i]] = predictor.predict(
+                    pf.theta[row:row + 1], gamma, np.full((1, pf.n), 1.0 / pf.n), 0.0, key=key).samples[0]
+        return times
+
+    def _status(self, order, position, lane, hypotheses, rejected, log_z, empty) -> list:
+        """The decision's status per asset ("isolated" for a single hypothesis that stands)."""
+        if len(self.hypotheses) == 1:
+            return ["rejected" if e else "isolated" for e in empty]
+        names = {}
+        out = []
+        for a in range(order.size):
+            mine = position == a
+            hs = [self.hypotheses[h] for h in hypotheses[mine]]
+            rejected_names = {h.name: "rejected" for h, r in zip(hs, rejected[mine]) if r}
+            key = (tuple(h.name for h in hs), tuple(sorted(rejected_names)))
+            groups = names.setdefault(key, [g for g in self.groups if any(c in {h.candidate for h in hs} for c in g)])
+            out.append(decide(hs, log_z[a, :len(hs)], groups, rejected_names, self.settings.min_ratio).status)
+        return out
+
+
+def _padded(assets: list) -> tuple[np.ndarray, np.ndarray, list]:
+    """Times (A, K), measurements (A, K, M) and point values (per ARR, per point: (A, K)), NaN-padded."""
+    count, steps = len(assets), max(a.t.size for a in assets)
+    t = np.full((count, steps), np.nan)
+    y = np.full((count, steps, assets[0].y.shape[1]), np.nan)
+    points = [[np.full((count, steps), np.nan) for _ in range(p.shape[1])] for p in assets[0].points]
+    for a, item in enumerate(assets):
+        size = item.t.size
+        t[a, :size], y[a, :size] = item.t, item.y
+        for m, values in enumerate(item.points):
+            for p in range(values.shape[1]):
+                points[m][p][a, :size] = values[:, p]
+    return t, y, points

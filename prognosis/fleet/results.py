@@ -1,0 +1,122 @@
+"""Tidy tables of a fleet's results: one row per (asset, time), columns of plain numpy arrays.
+
+Three tables, each a mapping of column name to a numpy array (all of one length):
+
+* ``alarms``: ``asset``, ``t`` (the first alarm), ``arr`` (one row per ARR in alarm then);
+* ``estimates`` (every ``report_every`` filter steps): ``asset``, ``hypothesis``, ``step``, ``t``,
+  ``theta_mean``, ``theta_p5``, ``theta_p50``, ``theta_p95``, the same four of ``gamma``, ``ess``
+  and ``log_evidence``;
+* ``rul`` (every ``rul_every`` filter steps): ``asset``, ``step``, ``t``, ``mean``, ``p5``,
+  ``p50``, ``p95`` (s; censored particles count as ``+inf`` in the quantiles), ``censored`` (the
+  weight that does not fail within the horizon), ``hypothesis`` (the most probable),
+  ``probability`` and ``status`` (of :func:`~prognosis.isolation.decide`).
+
+Asset ids are written as strings.  :meth:`FleetResult.frame` gives a pandas DataFrame (pandas is
+imported on demand); ``bgphm fleet`` writes the tables to Parquet.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bondgraph._optional import pandas_for
+
+TABLES = ("alarms", "estimates", "rul")
+COLUMNS = {
+    "alarms": ("asset", "t", "arr"),
+    "estimates": ("asset", "hypothesis", "step", "t", "theta_mean", "theta_p5", "theta_p50", "theta_p95",
+                  "gamma_mean", "gamma_p5", "gamma_p50", "gamma_p95", "ess", "log_evidence"),
+    "rul": ("asset", "step", "t", "mean", "p5", "p50", "p95", "censored", "hypothesis", "probability", "status"),
+}
+TEXT = {"asset", "arr", "hypothesis", "status"}
+INTEGER = {"step"}
+
+
+def empty_table(name: str) -> dict:
+    """A table with its columns and no rows."""
+    return {c: np.empty(0, object if c in TEXT else int if c in INTEGER else float) for c in COLUMNS[name]}
+
+
+@dataclass
+class FleetResult:
+    """The tables of a fleet run (or of one :meth:`~prognosis.fleet.FleetMonitor.update`).
+
+    Examples
+    --------
+    >>> result = FleetResult()
+    >>> result.add("rul", asset=["a"], step=[0], t=[1.5], mean=[10.0], p5=[8.0], p50=[9.5], p95=[np.inf],
+    ...            censored=[0.1], hypothesis=["R/linear"], probability=[1.0], status=["isolated"])
+    >>> table = result.table("rul")
+    >>> table["asset"].tolist(), table["p95"].tolist()
+    (['a'], [inf])
+    >>> len(FleetResult.concat([result, result]).table("rul")["t"])
+    2
+    """
+
+    parts: dict = field(default_factory=lambda: {name: [] for name in TABLES})
+
+    def add(self, name: str, **columns) -> None:
+        """Append rows to table ``name`` (every column of the table, arrays of one length)."""
+        missing = set(COLUMNS[name]) - set(columns)
+        if missing:
+            raise ValueError(f"table {name!r}: columns {sorted(missing)} missing")
+        self.parts[name].append({c: _column(c, columns[c]) for c in COLUMNS[name]})
+
+    def table(self, name: str) -> dict:
+        """Table ``name`` as a mapping column -> array."""
+        if name not in TABLES:
+            raise ValueError(f"no table {name!r}; tables: {', '.join(TABLES)}")
+        parts = self.parts[name]
+        if not parts:
+            return empty_table(name)
+        if len(parts) > 1:  # join once, keep the joined table
+            self.parts[name] = parts = [{c: np.concatenate([p[c] for p in parts]) for c in COLUMNS[name]}]
+        return dict(parts[0])
+
+    @property
+    def alarms(self) -> dict:
+        return self.table("alarms")
+
+    @property
+    def estimates(self) -> dict:
+        return self.table("estimates")
+
+    @property
+    def rul(self) -> dict:
+        return self.table("rul")
+
+    def rows(self, name: str) -> int:
+        """Number of rows of table ``name``."""
+        return sum(len(p["asset"]) for p in self.parts[name])
+
+    def frame(self, name: str):
+        """Table ``name`` as a pandas DataFrame."""
+        pd = pandas_for("FleetResult.frame")
+        return pd.DataFrame(self.table(name))
+
+    def for_asset(self, asset: object) -> "FleetResult":
+        """The rows of one asset."""
+        out = FleetResult()
+        for name in TABLES:
+            table = self.table(name)
+            mine = table["asset"] == str(asset)
+            out.add(name, **{c: v[mine] for c, v in table.items()})
+        return out
+
+    @staticmethod
+    def concat(results: Iterable["FleetResult"]) -> "FleetResult":
+        """One result holding the rows of all."""
+        out = FleetResult()
+        for result in results:
+            for name in TABLES:
+                out.parts[name] += result.parts[name]
+        return out
+
+
+def _column(name: str, values) -> np.ndarray:
+    if name in TEXT:
+        return np.array([str(v) for v in values], dtype=object)
+    return np.asarray(values, dtype=int if name in INTEGER else float).reshape(-1)
