@@ -11,11 +11,11 @@ Dask (``dask[distributed]``) and pyarrow are the optional extra ``[dask]``; ``pr
 neither.  ``bgphm fleet`` is the command line of :func:`run_fleet`; ``docs/fleet.md`` is the guide.
 """
 
-from .engine import SERIAL, default_shard_size, plan, run_fleet, run_shard, shard_assets
+from .engine import SERIAL, default_shard_size, local_cluster, plan, run_fleet, run_shard, shard_assets
 from .sources import CsvDirectory, ParquetRecords, open_source
 from .spec import FleetSpec, model_reference, monitor_for
 from .store import BUCKETS, bucket_of, read_fleet
 
 __all__ = ["BUCKETS", "SERIAL", "CsvDirectory", "FleetSpec", "ParquetRecords", "bucket_of", "default_shard_size",
-           "model_reference", "monitor_for", "open_source", "plan", "read_fleet", "run_fleet", "run_shard",
-           "shard_assets"]
+           "local_cluster", "model_reference", "monitor_for", "open_source", "plan", "read_fleet", "run_fleet",
+           "run_shard", "shard_assets"]

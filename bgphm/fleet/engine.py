@@ -32,7 +32,8 @@ from .sources import open_source
 from .spec import FleetSpec, monitor_for
 from .store import BUCKETS, SUMMARY, clear_outputs, write_shard
 
-__all__ = ["SERIAL", "Task", "default_shard_size", "malloc_setting", "plan", "run_fleet", "run_shard", "shard_assets"]
+__all__ = ["SERIAL", "Task", "default_shard_size", "local_cluster", "malloc_setting", "plan", "run_fleet", "run_shard",
+           "shard_assets"]
 
 SERIAL = "serial"  # the scheduler name of the in-process run (no Dask)
 MAX_SHARD = 1000  # assets per shard by default at most: FleetMonitor filters up to 1000 assets together
@@ -239,13 +240,26 @@ def _client(dask, distributed, scheduler, workers: int) -> Iterator:
     if scheduler is not None:
         yield from _remote(distributed, str(scheduler))
         return
-    if workers < 1:
-        raise UsageError(f"workers must be at least 1 for a Dask run, got {workers}")
+    with local_cluster(workers) as client:
+        yield client, f"local cluster ({workers} workers)"
+
+
+@contextlib.contextmanager
+def local_cluster(workers: int = 2) -> Iterator:
+    """A local Dask cluster as :func:`run_fleet` starts it; yields its ``distributed.Client``.
+
+    ``workers`` processes of one thread each (the filter is vectorized: a thread per core is all it
+    uses), without the nanny's malloc setting, no dashboard, and no worker log below CRITICAL (a failed
+    shard's error reaches the driver, which raises it: a worker's log would repeat it with a traceback).
+    """
+    dask, distributed = _distributed()
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise UsageError(f"workers must be at least 1 for a Dask run, got {workers!r}")
     with _without_malloc_setting(dask):
         cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                           dashboard_address=None, silence_logs=logging.ERROR)
+                                           dashboard_address=None, silence_logs=logging.CRITICAL)
     with cluster, distributed.Client(cluster) as client:
-        yield client, f"local cluster ({workers} workers)"
+        yield client
 
 
 @contextlib.contextmanager
