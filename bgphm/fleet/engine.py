@@ -249,15 +249,17 @@ def local_cluster(workers: int = 2) -> Iterator:
     """A local Dask cluster as :func:`run_fleet` starts it; yields its ``distributed.Client``.
 
     ``workers`` processes of one thread each (the filter is vectorized: a thread per core is all it
-    uses), without the nanny's malloc setting, no dashboard, and no worker log below CRITICAL (a failed
-    shard's error reaches the driver, which raises it: a worker's log would repeat it with a traceback).
+    uses), without the nanny's malloc setting, the scheduler's HTTP server on a free port, and no
+    worker log below CRITICAL (a failed shard's error reaches the driver, which raises it: a worker's
+    log would repeat it with a traceback).
     """
     dask, distributed = _distributed()
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise UsageError(f"workers must be at least 1 for a Dask run, got {workers!r}")
     with _without_malloc_setting(dask):
+        # the scheduler's HTTP server on a free port (with None it still takes 8787, or warns that it is taken)
         cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                           dashboard_address=None, silence_logs=logging.CRITICAL)
+                                           dashboard_address=":0", silence_logs=logging.CRITICAL)
     with cluster, distributed.Client(cluster) as client:
         yield client
 
