@@ -208,7 +208,12 @@ def cmd_fleet(args, progress: Progress) -> int:
     ``summary.json`` under ``--out``.  Progress goes to stderr by assets done.
     """
     from bgphm.fleet import FleetSpec, model_reference, open_source, run_fleet
+    from bgphm.fleet.engine import require_dask
+    from bgphm.fleet.sources import pyarrow_modules
 
+    pyarrow_modules()  # the missing extra named before any work
+    if args.scheduler is not None or args.workers > 0:
+        require_dask()
     source = open_source(args.records)
     out = check_output(args.out, kind="directory", inputs=input_files(args.model) + source.inputs(),
                        force=args.force)

@@ -32,8 +32,8 @@ from .sources import open_source
 from .spec import FleetSpec, monitor_for
 from .store import BUCKETS, SUMMARY, clear_outputs, write_shard
 
-__all__ = ["SERIAL", "Task", "default_shard_size", "local_cluster", "malloc_setting", "plan", "run_fleet", "run_shard",
-           "shard_assets"]
+__all__ = ["SERIAL", "Task", "default_shard_size", "local_cluster", "malloc_setting", "plan", "require_dask",
+           "run_fleet", "run_shard", "shard_assets"]
 
 SERIAL = "serial"  # the scheduler name of the in-process run (no Dask)
 MAX_SHARD = 1000  # assets per shard by default at most: FleetMonitor filters up to 1000 assets together
@@ -207,6 +207,11 @@ def _summary(spec, source, done, where, size, buckets, seconds, notes) -> dict:
 
 
 # ------------------------------------------------------------------------------------------------ Dask
+
+def require_dask() -> None:
+    """Raise :class:`~bgphm.errors.MissingExtraError` now if a Dask run could not start (before any work)."""
+    _distributed()
+
 
 def _distributed():
     try:

@@ -156,7 +156,8 @@ class ParquetRecords:
         try:
             return pyarrow.dataset.dataset(self.path, format="parquet")
         except (pa.ArrowInvalid, OSError) as error:
-            raise RecordError(f"records {self.path}: not a readable Parquet file ({error})") from None
+            reason = " ".join(str(error).split()).rpartition(": ")[2]  # pyarrow's last clause says why
+            raise RecordError(f"records {self.path}: not a readable Parquet file ({reason})") from None
 
     def _check_columns(self, signals: Sequence[str]) -> None:
         names = self._dataset().schema.names
