@@ -9,10 +9,10 @@ The reference covers every name in ``__all__`` of ``bondgraph``, ``diagnosis``, 
 subpackages,
 the modules the tutorials use beside them (``bondgraph.library``, ``bondgraph.io``, ``bondgraph.drawing``,
 ``diagnosis.signals``, ``prognosis.metrics``), the rules of a model's names and domains (``bondgraph.names``,
-``bondgraph.domains``), ``bgphm.cli.main`` and the public functions of
-``bgphm.plotting``.  Names are grouped by the module that defines them, in source order; a class is
-followed by its public methods and properties.  Signatures come from :func:`inspect.signature`,
-docstrings are taken as they are (numpy style) and rendered as markdown: sections become bold
+``bondgraph.domains``), ``bgphm.cli.main``, the public functions of
+``bgphm.plotting`` and the fleet API of ``bgphm.fleet``.  Names are grouped by the module that defines
+them, in source order; a class is followed by its public methods and properties.  Signatures come from
+:func:`inspect.signature`, docstrings are taken as they are (numpy style) and rendered as markdown: sections become bold
 headings, parameter lists become bullet lists, ``>>>`` examples become ```` ```pycon ```` blocks.
 
 The output depends only on the code and the docstrings (no dates, no memory addresses), so
@@ -44,6 +44,7 @@ PACKAGES = [
     ("prognosis.identification", "linear Gaussian models by EM, fault trend, posterior predictive", []),
     ("prognosis.lifecontrol", "energy-driven deterioration, Chebyshev bounds, Monte Carlo RUL, RUL control", []),
     ("bgphm", "command line, plots and long runs", ["bgphm.plotting", "bgphm.runs"]),
+    ("bgphm.fleet", "fleets on Dask workers, from records to Parquet tables (guide: [docs/fleet.md](fleet.md))", []),
 ]
 #: Modules first in this order within each package (the rest follow alphabetically).
 MODULE_ORDER = ["bondgraph.model", "bondgraph.structure", "bondgraph.causality", "bondgraph.equations",

@@ -55,6 +55,19 @@ def same_tables(a, b) -> bool:
     return True
 
 
+def test_only_bgphm_imports_dask_and_pyarrow():
+    """The library packages stay free of the extra: prognosis knows nothing of Dask or Parquet."""
+    import re
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[2]
+    extra = re.compile(r"^\s*(?:import|from)\s+(?:dask|distributed|pyarrow)\b", re.M)  # a text scan: ast is slow
+    offenders = [str(path.relative_to(root)) for package in ("bondgraph", "diagnosis", "prognosis")
+                 for path in (root / package).rglob("*.py") if extra.search(path.read_text())]
+    assert not offenders
+    assert extra.search((root / "bgphm" / "fleet" / "engine.py").read_text())  # the scan does see them
+
+
 # ------------------------------------------------------------------------------------------------ the spec
 
 def test_a_spec_pickles_small_and_compares_by_value():

@@ -120,6 +120,15 @@ def test_an_unreachable_scheduler_is_one_clear_error(records, tmp_path, monkeypa
         run_fleet(spec(), records, tmp_path, scheduler="tcp://127.0.0.1:9")
 
 
+def test_a_scheduler_without_workers_is_one_clear_error(records, tmp_path, monkeypatch):
+    from bgphm.fleet import engine
+
+    monkeypatch.setattr(engine, "WORKER_TIMEOUT", 0.5)
+    with distributed.LocalCluster(n_workers=0, processes=False, dashboard_address=":0", silence_logs=50) as empty:
+        with pytest.raises(FleetError, match="no worker joined within 0.5 s"):
+            run_fleet(spec(), records, tmp_path, scheduler=empty.scheduler_address)
+
+
 def test_the_command_on_a_parquet_file_with_two_workers(client, records, serial, tmp_path, capsys):
     """bgphm fleet --scheduler on the Parquet form of the records: the tables of the CSV run."""
     parquet = parquet_of(records, tmp_path / "fleet.parquet")
