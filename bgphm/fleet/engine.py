@@ -125,7 +125,8 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
     -------
     dict
         What ``summary.json`` holds: assets, assets with an alarm, rows per table, shards, seconds
-        (wall, and summed over tasks), monitors built, the spec.
+        (wall, and summed over tasks), the monitors the tasks built (one per worker process, none
+        where a process kept it from an earlier run of the same spec), the spec.
 
     Examples
     --------
@@ -157,7 +158,8 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
     assets = source.assets()
     size = shard_size or default_shard_size(len(assets), workers)
     tasks = plan(spec, source, out, shard_size=size, buckets=buckets)
-    monitor_for(spec)  # a bad spec fails here, once, before a cluster starts (and serves the serial run)
+    if not serial:  # a bad spec fails here, once, before a cluster starts (a serial run builds it in its first shard)
+        monitor_for(spec)
     out = Path(out)
     clear_outputs(out)
     for name in ("alarms", "estimates", "rul"):

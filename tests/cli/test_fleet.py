@@ -269,3 +269,8 @@ def test_the_fast_csv_reader_reads_what_read_csv_reads_or_leaves_the_file_to_it(
     for header in ("t,x,x", " t,x", "t,,x", "time,x"):
         path.write_text(f"{header}\n0,1,1\n1,2,2\n2,3,3\n")
         assert read_csv_fast(path, ["x"]) is None, header
+
+
+def test_a_serial_run_builds_the_monitor_once(records, tmp_path):
+    summary = run_fleet(spec(seed=12), records, tmp_path, workers=0, shard_size=2)
+    assert summary["shards"] == 3 and summary["monitors_built"] == 1
