@@ -86,6 +86,8 @@ class FleetFilter:
         self.sigma_v = np.empty(0)
         self.log_evidence = np.empty(0)
         self.steps = np.empty(0, int)
+        self.rejected = np.empty(0, bool)  # the hypothesis left its domain or drifts away from failure
+        self.away = np.empty(0, int)  # consecutive reports drifting away from failure
 
     # -- rows --------------------------------------------------------------------------------
     def add(self, assets, *, hypothesis, lo, hi, rates, process_noise) -> np.ndarray:
@@ -110,6 +112,7 @@ class FleetFilter:
         self.sigma_v[rows] = np.asarray(process_noise, float)
         self.log_evidence[rows] = 0.0
         self.steps[rows] = 0
+        self.rejected[rows], self.away[rows] = False, 0
         return rows
 
     def remove(self, rows) -> None:
@@ -136,6 +139,8 @@ class FleetFilter:
         self.sigma_v = np.concatenate([self.sigma_v, np.zeros(extra)])
         self.log_evidence = np.concatenate([self.log_evidence, np.zeros(extra)])
         self.steps = np.concatenate([self.steps, np.zeros(extra, int)])
+        self.rejected = np.concatenate([self.rejected, np.zeros(extra, bool)])
+        self.away = np.concatenate([self.away, np.zeros(extra, int)])
         self.free = sorted(self.free + list(range(self.capacity, size)), reverse=True)  # pop() gives the lowest
         self.capacity = size
 

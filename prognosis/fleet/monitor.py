@@ -135,7 +135,8 @@ class FleetMonitor:
         self.options = [s._options(a) for a in self.arrs]
         self.observations = [[observation_model(a, h.candidate) if h.candidate in a.parameters else None
                               for a in self.arrs] for h in self.hypotheses]
-        self.boxes = np.array([s._box(h, self.arrs) for h in self.hypotheses])
+        self.boxes = np.array([s._box(h, self.arrs) for h in self.hypotheses]).reshape(-1, 2)
+        self.domains = np.array([h.domain for h in self.hypotheses], float).reshape(-1, 2)
         self.up = np.array([h.direction == "up" for h in self.hypotheses])
         self.fail = np.array([h.failure for h in self.hypotheses])
         self._filter = None
@@ -214,20 +215,22 @@ class FleetMonitor:
         rows, owner = self._add_rows(pf, assets)
         t, y, points = _padded(assets)
         length = np.array([a.t.size for a in assets])
-        hypotheses = pf.hypothesis[rows]
         ids = np.array([a.asset for a in assets], dtype=object)
-        rejected = np.zeros(rows.size, bool)
-        away = np.zeros(rows.size, int)
         for j in range(int(length.max())):
             index = np.flatnonzero(length[owner] > j)
             mine = owner[index]
             step = pf.step(rows[index], y[mine, j], [[p[mine, j] for p in m] for m in points])
-            if j % self.report_every == 0:
-                self._report(pf, rows[index], hypotheses[index], ids[mine], j, t[mine, j], step.ess, result,
-                             rejected, away, index)
-            if j % self.settings.rul_every == 0:
-                self._predict(pf, rows[index], owner[index], ids, t[:, j], j, rejected[index], result)
+            self._outputs(pf, rows[index], mine, ids[mine], np.full(index.size, j), t[mine, j], step.ess, result)
         pf.remove(rows)
+
+    def _outputs(self, pf, rows, owner, ids, steps, times, ess, result: FleetResult) -> None:
+        """The estimates and RUL of the rows whose step (``steps``, taken before the step) is due."""
+        report = steps % self.report_every == 0
+        if report.any():
+            self._report(pf, rows[report], ids[report], steps[report], times[report], ess[report], result)
+        due = steps % self.settings.rul_every == 0
+        if due.any():
+            self._predict(pf, rows[due], owner[due], ids[due], steps[due], times[due], result)
 
     def _new_filter(self) -> FleetFilter:
         s = self.settings
@@ -255,30 +258,32 @@ class FleetMonitor:
         rows = pf.add(ids, hypothesis=hypotheses, lo=lo, hi=hi, rates=np.stack(rates), process_noise=sigma_v)
         return rows, np.array(owner)
 
-    def _report(self, pf, rows, hypotheses, ids, j, times, ess, result, rejected, away, index) -> None:
+    def _report(self, pf, rows, ids, steps, times, ess, result: FleetResult) -> None:
         """Estimates with quantiles; reject hypotheses that left their domain or drift away from failure."""
-        theta_q, gamma_q = pf.quantiles(rows)
-        result.add("estimates", asset=ids, hypothesis=[self.hypotheses[h].name for h in hypotheses],
-                   step=np.full(rows.size, j), t=times, theta_mean=pf.theta_mean(rows), theta_p5=theta_q[:, 0],
-                   theta_p50=theta_q[:, 1], theta_p95=theta_q[:, 2], gamma_mean=pf.gamma_mean(rows),
-                   gamma_p5=gamma_q[:, 0], gamma_p50=gamma_q[:, 1], gamma_p95=gamma_q[:, 2],
-                   ess=ess, log_evidence=pf.log_evidence[rows])
-        domain = np.array([self.hypotheses[h].domain for h in hypotheses]).reshape(-1, 2)
-        outside = ~((domain[:, 0] < theta_q[:, 1]) & (theta_q[:, 1] < domain[:, 1]))
-        boxes, up = self.boxes[hypotheses].reshape(-1, 2), self.up[hypotheses]
-        wrong = np.where(up, theta_q[:, 2] < boxes[:, 0], theta_q[:, 0] > boxes[:, 1])
-        away[index] = np.where(wrong, away[index] + 1, 0)
-        rejected[index] |= outside | (away[index] >= DRIFT_AWAY_STEPS)
-
-    def _predict(self, pf, rows, owner, ids, times, j, rejected, result: FleetResult) -> None:
-        """The RUL of each live asset: its hypotheses' crossing times mixed by posterior probability."""
-        order = np.unique(owner)
-        position = np.searchsorted(order, owner)
-        count = np.bincount(position, minlength=order.size)
-        width = int(count.max())
-        lane = np.arange(rows.size) - np.repeat(np.cumsum(count) - count, count)  # rank of a row in its asset
         hypotheses = pf.hypothesis[rows]
-        log_z = np.full((order.size, width), -np.inf)
+        theta_q, gamma_q = pf.quantiles(rows)
+        result.add("estimates", asset=ids, hypothesis=[self.hypotheses[h].name for h in hypotheses], step=steps,
+                   t=times, theta_mean=pf.theta_mean(rows), theta_p5=theta_q[:, 0], theta_p50=theta_q[:, 1],
+                   theta_p95=theta_q[:, 2], gamma_mean=pf.gamma_mean(rows), gamma_p5=gamma_q[:, 0],
+                   gamma_p50=gamma_q[:, 1], gamma_p95=gamma_q[:, 2], ess=ess, log_evidence=pf.log_evidence[rows])
+        domain = self.domains[hypotheses]
+        outside = ~((domain[:, 0] < theta_q[:, 1]) & (theta_q[:, 1] < domain[:, 1]))
+        boxes, up = self.boxes[hypotheses], self.up[hypotheses]
+        wrong = np.where(up, theta_q[:, 2] < boxes[:, 0], theta_q[:, 0] > boxes[:, 1])
+        pf.away[rows] = np.where(wrong, pf.away[rows] + 1, 0)
+        pf.rejected[rows] |= outside | (pf.away[rows] >= DRIFT_AWAY_STEPS)
+
+    def _predict(self, pf, rows, owner, ids, steps, times, result: FleetResult) -> None:
+        """The RUL of each asset: its hypotheses' crossing times mixed by posterior probability.
+
+        ``owner`` labels the rows of one asset (consecutive); ``ids``, ``steps``, ``times`` are per row.
+        """
+        first = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])  # each asset's first row
+        count = np.diff(np.r_[first, rows.size])
+        position = np.repeat(np.arange(first.size), count)
+        lane = np.arange(rows.size) - first[position]  # rank of a row in its asset
+        hypotheses, rejected = pf.hypothesis[rows], pf.rejected[rows]
+        log_z = np.full((first.size, int(count.max())), -np.inf)
         log_z[position, lane] = np.where(rejected, -np.inf, pf.log_evidence[rows])
         top = np.max(log_z, axis=1, keepdims=True)
         with np.errstate(invalid="ignore"):
@@ -286,26 +291,25 @@ class FleetMonitor:
             p /= np.sum(p, axis=1, keepdims=True)
         p = np.nan_to_num(p)
         probability = p[position, lane]
-        crossing = self._crossings(pf, rows, hypotheses, ids[owner], j)
+        crossing = self._crossings(pf, rows, hypotheses, ids, steps)
         n = pf.n
-        samples = np.full((order.size, width * n), np.inf)
-        weights = np.zeros((order.size, width * n))
+        samples = np.full((first.size, log_z.shape[1] * n), np.inf)
+        weights = np.zeros(samples.shape)
         columns = lane[:, None] * n + np.arange(n)
         samples[position[:, None], columns] = crossing
         weights[position[:, None], columns] = np.where(probability >= MIXTURE_FLOOR, probability, 0.0)[:, None] / n
         empty = np.sum(weights, axis=1) == 0  # every hypothesis rejected: one censored sample
-        weights[empty, 0] = 1.0
-        samples[empty, 0] = np.inf
+        weights[empty, 0], samples[empty, 0] = 1.0, np.inf
         summary = summarize(samples, weights)
         best = np.argmax(p, axis=1)
-        best_row = np.flatnonzero(lane == 0) + best  # the rows of an asset are consecutive
-        names = [self.hypotheses[h].name if not e else "" for h, e in zip(hypotheses[best_row], empty)]
-        status = self._status(order, position, lane, hypotheses, rejected, log_z, empty)
-        result.add("rul", asset=ids[order], step=np.full(order.size, j), t=times[order], mean=summary["mean"],
+        names = ["" if e else self.hypotheses[h].name for h, e in zip(hypotheses[first + best], empty)]
+        status = self._status(position, hypotheses, rejected, log_z, empty)
+        result.add("rul", asset=ids[first], step=steps[first], t=times[first], mean=summary["mean"],
                    p5=summary["p5"], p50=summary["p50"], p95=summary["p95"], censored=summary["censored"],
-                   hypothesis=names, probability=np.where(empty, 0.0, p[np.arange(order.size), best]), status=status)
+                   hypothesis=names, probability=np.where(empty, 0.0, p[np.arange(first.size), best]),
+                   status=status)
 
-    def _crossings(self, pf, rows, hypotheses, ids, j) -> np.ndarray:
+    def _crossings(self, pf, rows, hypotheses, ids, steps) -> np.ndarray:
         """Crossing times (rows, N): closed form per law where it exists, else propagated paths."""
         s = self.settings
         times = np.empty((rows.size, pf.n))
@@ -319,20 +323,20 @@ class FleetMonitor:
                 continue
             predictor = RULPredictor(law, dt=s.dt, theta_fail=hypothesis.failure, direction=hypothesis.direction,
                                      horizon=s.horizon, seed=s.seed)
-            for i, (row, asset) in enumerate(zip(rows[mine], np.asarray(ids, object)[mine])):
+            for i, (row, asset, step) in enumerate(zip(rows[mine], ids[mine], steps[mine])):
                 gamma = np.moveaxis(pf.gamma[row:row + 1], 1, -1)
-                key = (asset_key(asset) << 32) | j
+                key = (asset_key(asset) << 32) | int(step)
                 times[np.flatnonzero(mine)[i]] = predictor.predict(
                     pf.theta[row:row + 1], gamma, np.full((1, pf.n), 1.0 / pf.n), 0.0, key=key).samples[0]
         return times
 
-    def _status(self, order, position, lane, hypotheses, rejected, log_z, empty) -> list:
+    def _status(self, position, hypotheses, rejected, log_z, empty) -> list:
         """The decision's status per asset ("isolated" for a single hypothesis that stands)."""
         if len(self.hypotheses) == 1:
             return ["rejected" if e else "isolated" for e in empty]
         names = {}
         out = []
-        for a in range(order.size):
+        for a in range(log_z.shape[0]):
             mine = position == a
             hs = [self.hypotheses[h] for h in hypotheses[mine]]
             rejected_names = {h.name: "rejected" for h, r in zip(hs, rejected[mine]) if r}
