@@ -28,6 +28,8 @@ from ..degradation import ExponentialDegradation, LinearDegradation
 from ..streams import FILTER
 
 QUANTILES = (0.05, 0.5, 0.95)
+ROW_STATE = ("theta", "gamma", "hypothesis", "mean", "variance", "sigma_v", "log_evidence", "steps", "rejected",
+             "away")  # what a row is: a checkpoint saves these
 
 
 @dataclass
@@ -96,7 +98,7 @@ class FleetFilter:
         ``rates`` (rows, G, N): the initial rate particles.  Returns the rows' indices.
         """
         count = len(assets)
-        rows = self._slots(count)
+        rows = self.allocate(count)
         hypothesis = np.asarray(hypothesis, int)
         lo, hi = np.asarray(lo, float), np.asarray(hi, float)
         u = np.empty((count, self.n))
@@ -121,7 +123,7 @@ class FleetFilter:
             self.asset[int(row)] = None
             self.free.append(int(row))
 
-    def _slots(self, count: int) -> np.ndarray:
+    def allocate(self, count: int) -> np.ndarray:
         """``count`` free rows, the lowest first; the arrays double when they are full."""
         if len(self.free) < count:
             self._grow(self.capacity + count - len(self.free))

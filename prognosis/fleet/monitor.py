@@ -26,7 +26,8 @@ from ..monitor import filter_stride
 from ..observation import observation_model
 from ..rul import RULPredictor
 from ..streams import INITIAL, AssetStreams, asset_key
-from .filter import FleetFilter
+from .filter import ROW_STATE, FleetFilter
+from .live import LiveAsset
 from .results import FleetResult
 from .rul import crossing_times, has_closed_form, summarize
 
@@ -139,8 +140,9 @@ class FleetMonitor:
         self.domains = np.array([h.domain for h in self.hypotheses], float).reshape(-1, 2)
         self.up = np.array([h.direction == "up" for h in self.hypotheses])
         self.fail = np.array([h.failure for h in self.hypotheses])
-        self._filter = None
+        self._filter = None  # the streaming filter (run() uses one per block)
         self._laws = None
+        self._live: dict = {}
 
     # -- the batch pipeline ------------------------------------------------------------------
     def run(self, records: Mapping | Iterable, *, progress: Callable[[int, int], None] | None = None,
@@ -183,7 +185,10 @@ class FleetMonitor:
         k = int(np.argmax(alarm))
         fired = [a.name for a, e in zip(self.arrs, evaluations) if e.alarm[k]]
         result.add("alarms", asset=[asset] * len(fired), t=[t[k]] * len(fired), arr=fired)
-        started, starts = self._start(evaluations, k, fired)
+        persistence = max(e.persistence for e in evaluations)
+        window = slice(max(0, k - persistence + 1), k + 1)
+        started, starts = self._start([_Window(e.residual[window], [p[window] for p in e.points], e.persistence)
+                                       for e in evaluations], fired)
         if not started:
             return None
         steps = np.arange(k, t.size, filter_stride(t, self.settings.dt))
@@ -192,14 +197,14 @@ class FleetMonitor:
                   for e in evaluations]
         return _Asset(asset, t[steps], y, points, started, starts)
 
-    def _start(self, evaluations: list, k: int, fired: list) -> tuple[list, list]:
-        """The hypotheses an alarm starts (those of the signature's candidates) and their initial boxes."""
+    def _start(self, windows: list, fired: list) -> tuple[list, list]:
+        """The hypotheses an alarm starts (those of the signature's candidates) and their initial boxes.
+
+        ``windows``: per ARR, the residual and point values of the samples that raised the alarm.
+        """
         s = self.settings
         allowed = (set(s.candidates) if s.candidates is not None
                    else set(signature_candidates(self.arrs, s.failures, fired)))
-        persistence = max(e.persistence for e in evaluations)
-        window = slice(max(0, k - persistence + 1), k + 1)
-        windows = [_Window(e.residual[window], [p[window] for p in e.points], e.persistence) for e in evaluations]
         started, starts = [], []
         for index, h in enumerate(self.hypotheses):
             if h.candidate in allowed and h.name not in self.never:
@@ -231,6 +236,143 @@ class FleetMonitor:
         due = steps % self.settings.rul_every == 0
         if due.any():
             self._predict(pf, rows[due], owner[due], ids[due], steps[due], times[due], result)
+
+    # -- streaming ---------------------------------------------------------------------------
+    def update(self, batch) -> FleetResult:
+        """Take a micro-batch of samples of any assets; the rows (alarms, estimates, RUL) it produced.
+
+        ``batch``: a mapping or DataFrame with columns ``asset``, ``t`` and the ARRs' signals (and the
+        antiderivative columns of the detection options), one row per sample; each asset's samples in
+        time order, continuing its previous ones.  Each asset's ARRs are evaluated online
+        (:class:`diagnosis.StreamingEvaluation`), so a sample is final once its centred derivative
+        window is complete and the results lag the newest sample by half a window.  The monitor keeps
+        no history: memory stays bounded however long the stream, and the returned rows are the
+        caller's to keep.
+        """
+        columns = _columns(batch)
+        result = FleetResult()
+        for asset, index in _by_asset(columns["asset"]):
+            live = self._live.get(asset)
+            if live is None:
+                asset_key(asset)
+                live = self._live[asset] = LiveAsset.start(asset, self.arrs, self.options)
+            signals = {name: values[index] for name, values in columns.items() if name not in ("asset", "t")}
+            final = live.push(np.asarray(columns["t"][index], float), signals)
+            if final is not None:
+                self._watch(live, final, result)
+        self._drain(result)
+        return result
+
+    def _watch(self, live: LiveAsset, final, result: FleetResult) -> None:
+        """Detection on the new final samples, the start at the alarm, and the filter steps they make due."""
+        first = live.count
+        if live.alarm is None:
+            alarm = final.alarm.any(axis=1) & (final.t > self.settings.healthy_until)
+            if alarm.any():
+                i = int(np.argmax(alarm))
+                fired = [a.name for a, on in zip(self.arrs, final.alarm[i]) if on]
+                result.add("alarms", asset=[live.asset] * len(fired), t=[final.t[i]] * len(fired), arr=fired)
+                window = live.window(final, i)
+                persistence = [int(o.get("persistence", 1)) for o in self.options]
+                live.hypotheses, live.starts = self._start(
+                    [_Window(-window.y[:, m], list(window.points[m].T), persistence[m]) for m in range(len(self.arrs))],
+                    fired)
+                live.alarm = first + i
+                if live.hypotheses:
+                    pf = self._streaming_filter()
+                    live.rows, _ = self._add_rows(pf, [live])
+        live.remember(final)
+        if live.rows is None or live.alarm >= live.count:
+            return
+        if live.stride is None:
+            live.stride = filter_stride(np.array([0.0, live.sample_step]), self.settings.dt)
+        index = np.arange(first, live.count)
+        due = np.flatnonzero((index >= live.alarm) & ((index - live.alarm) % live.stride == 0))
+        for i in due:
+            live.queue.append((final.t[i], final.y[i], [p[i] for p in final.points]))
+
+    def _drain(self, result: FleetResult) -> None:
+        """Step the filter until no asset has a filter step waiting, each tick one step of every waiting asset."""
+        pf = self._filter
+        while True:
+            waiting = [live for live in self._live.values() if live.queue]
+            if not waiting:
+                return
+            items = [live.queue.pop(0) for live in waiting]
+            rows = np.concatenate([live.rows for live in waiting])
+            owner = np.repeat(np.arange(len(waiting)), [live.rows.size for live in waiting])
+            y = np.stack([item[1] for item in items])[owner]
+            points = [[np.array([item[2][m][p] for item in items])[owner] for p in range(len(items[0][2][m]))]
+                      for m in range(len(self.arrs))]
+            steps = pf.steps[rows].copy()
+            times = np.array([item[0] for item in items])[owner]
+            ids = np.array([live.asset for live in waiting], dtype=object)[owner]
+            step = pf.step(rows, y, points)
+            self._outputs(pf, rows, owner, ids, steps, times, step.ess, result)
+
+    def _streaming_filter(self) -> FleetFilter:
+        if self._filter is None:
+            self._filter = self._new_filter()
+        return self._filter
+
+    def retire(self, asset) -> None:
+        """Forget an asset (replaced, or its stream ended): its rows and buffers are freed."""
+        live = self._live.pop(asset, None)
+        if live is None:
+            raise KeyError(f"no asset {asset!r} in the stream")
+        if live.rows is not None:
+            self._filter.remove(live.rows)
+
+    @property
+    def assets(self) -> list:
+        """The assets of the stream so far."""
+        return list(self._live)
+
+    # -- checkpoints -------------------------------------------------------------------------
+    def checkpoint(self) -> dict:
+        """The streaming state of every asset as plain data (numpy arrays, numbers, strings).
+
+        Particles, kernel-smoothing state, log evidence and filter step of each row (the step is
+        the whole state of an asset's random stream), the online evaluation's buffers and running
+        integrals, the alarm and the queued samples: :meth:`restore` on a monitor with the same
+        settings goes on exactly as if there had been no restart.  It pickles with the standard
+        library (``pickle.dump(monitor.checkpoint(), file)``).
+        """
+        pf = self._filter
+        assets = []
+        for live in self._live.values():
+            state = live.state()
+            state["queue"] = [(float(t), np.asarray(y), [np.asarray(p) for p in points]) for t, y, points in live.queue]
+            if live.rows is not None:
+                state["rows"] = {name: getattr(pf, name)[live.rows].copy() for name in ROW_STATE}
+            assets.append(state)
+        return {"version": 1, "settings": self._fingerprint(), "assets": assets}
+
+    def restore(self, checkpoint: Mapping) -> None:
+        """Take up the streams of a :meth:`checkpoint` (replacing this monitor's streams)."""
+        if checkpoint.get("version") != 1:
+            raise ValueError(f"checkpoint: unknown version {checkpoint.get('version')!r} (expected 1)")
+        if checkpoint.get("settings") != self._fingerprint():
+            raise ValueError("checkpoint: it was made by a monitor with other settings "
+                             f"({checkpoint.get('settings')}); this one has {self._fingerprint()}")
+        self._live, self._filter = {}, None
+        for state in checkpoint["assets"]:
+            live = LiveAsset.restore(state, self.arrs, self.options)
+            live.queue = [(t, np.asarray(y), list(points)) for t, y, points in state.get("queue", [])]
+            if "rows" in state:
+                pf = self._streaming_filter()
+                rows = pf.allocate(len(state["rows"]["theta"]))
+                for name in ROW_STATE:
+                    getattr(pf, name)[rows] = state["rows"][name]
+                for row in rows:
+                    pf.asset[row] = live.asset
+                live.rows = rows
+            self._live[live.asset] = live
+
+    def _fingerprint(self) -> dict:
+        s = self.settings
+        return {"hypotheses": [h.name for h in self.hypotheses], "arrs": [a.name for a in self.arrs],
+                "particles": s.n_particles, "dt": s.dt, "seed": s.seed}
 
     def _new_filter(self) -> FleetFilter:
         s = self.settings
@@ -359,3 +501,33 @@ def _padded(assets: list) -> tuple[np.ndarray, np.ndarray, list]:
             for p in range(values.shape[1]):
                 points[m][p][a, :size] = values[:, p]
     return t, y, points
+
+
+def _columns(batch) -> dict:
+    """A micro-batch's columns as arrays; ``asset`` and ``t`` required."""
+    if hasattr(batch, "columns") and hasattr(batch, "to_numpy"):  # a DataFrame
+        columns = {str(c): batch[c].to_numpy() for c in batch.columns}
+    elif isinstance(batch, Mapping):
+        columns = {str(c): np.asarray(v) for c, v in batch.items()}
+    else:
+        raise TypeError(f"update: give a mapping or a DataFrame of columns, got a {type(batch).__name__}")
+    for needed in ("asset", "t"):
+        if needed not in columns:
+            raise ValueError(f"update: the batch has no column {needed!r} (columns: {', '.join(columns)})")
+    sizes = {name: np.shape(values)[0] if np.ndim(values) else -1 for name, values in columns.items()}
+    if len(set(sizes.values())) > 1:
+        raise ValueError(f"update: columns of different lengths {sizes}")
+    return columns
+
+
+def _by_asset(assets: np.ndarray):
+    """(asset, indices of its samples in order) for each asset, in order of first appearance."""
+    assets = np.asarray(assets, dtype=object)
+    keys = np.array([str(a) for a in assets]) if assets.size else np.empty(0, str)
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    order = np.argsort(inverse, kind="stable")
+    bounds = np.cumsum(np.bincount(inverse))
+    groups = np.split(order, bounds[:-1])
+    for g in np.argsort(first, kind="stable"):
+        index = groups[g]
+        yield assets[index[0]], index

@@ -169,3 +169,73 @@ def test_summary_matches_rul_distribution():
     assert np.allclose(mine["mean"], theirs.mean)
     assert np.array_equal(np.stack([mine["p5"], mine["p50"], mine["p95"]], axis=1), theirs.quantile([0.05, 0.5, 0.95]))
     assert np.allclose(mine["censored"], theirs.censored_weight / weights.sum(axis=1))
+
+
+# -- streaming ----------------------------------------------------------------------------------
+
+def stream(monitor: FleetMonitor, records: dict, sizes, start: int = 0, stop: int | None = None) -> FleetResult:
+    """Feed the records interleaved, in micro-batches of the given sizes (cycled), from sample ``start``."""
+    stop = T.size if stop is None else stop
+    results, position, turn = [], start, 0
+    while position < stop:
+        size = min(sizes[turn % len(sizes)], stop - position)
+        columns = {"asset": [], "t": [], "V": [], "i": [], "v_C": []}
+        for asset, record in records.items():
+            for name in ("t", "V", "i", "v_C"):
+                columns[name] += list(np.asarray(record[name])[position:position + size])
+            columns["asset"] += [asset] * size
+        results.append(monitor.update({k: np.array(v, dtype=object if k == "asset" else float)
+                                       for k, v in columns.items()}))
+        position += size
+        turn += 1
+    return FleetResult.concat(results)
+
+
+def test_streaming_matches_the_batch_run(circuit):
+    arr, records = circuit
+    batch = fleet(arr).run(records)
+    streamed = stream(fleet(arr), records, sizes=[37, 1, 200])
+    assert sorted(set(streamed.alarms["asset"])) == ["c1", "c3", "c4"]
+    for asset in ("c1", "c3"):
+        a, b = batch.for_asset(asset), streamed.for_asset(asset)
+        assert np.array_equal(a.alarms["t"], b.alarms["t"])
+        common = min(a.rows("rul"), b.rows("rul"))  # a stream's last half window is not final yet
+        assert common >= a.rows("rul") - 2
+        for column in ("t", "mean", "p50", "p95"):
+            assert np.allclose(a.rul[column][:common], b.rul[column][:common], rtol=1e-6, equal_nan=True)
+
+
+def test_checkpoint_restore_goes_on_as_if_never_stopped(circuit):
+    import pickle
+    arr, records = circuit
+    uninterrupted = stream(fleet(arr), records, sizes=[50])
+    first = fleet(arr)
+    before = stream(first, records, sizes=[50], stop=600)
+    saved = pickle.dumps(first.checkpoint())
+    second = fleet(arr)
+    second.restore(pickle.loads(saved))
+    after = stream(second, records, sizes=[50], start=600)
+    resumed = FleetResult.concat([before, after])
+    for asset in ("c1", "c3", "c4"):
+        assert same(uninterrupted, resumed, asset)
+    with pytest.raises(ValueError, match="other settings"):
+        fleet(arr, n_particles=50).restore(pickle.loads(saved))
+
+
+def test_streaming_state_does_not_grow(circuit):
+    import pickle
+    arr, records = circuit
+    monitor = fleet(arr)
+    stream(monitor, records, sizes=[100], stop=500)
+    early = len(pickle.dumps(monitor.checkpoint()))
+    stream(monitor, records, sizes=[100], start=500)
+    late = len(pickle.dumps(monitor.checkpoint()))
+    assert late <= 1.05 * early
+
+
+def test_update_names_what_is_wrong(circuit):
+    arr, _ = circuit
+    with pytest.raises(ValueError, match="no column 'asset'"):
+        fleet(arr).update({"t": [0.0]})
+    with pytest.raises(KeyError, match="no asset"):
+        fleet(arr).retire("nobody")
