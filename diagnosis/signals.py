@@ -217,7 +217,7 @@ def as_record(data: object, signals: Iterable[str] = (), *, name: str = "record"
     name : str, optional
         The record's name, used in messages.
     min_samples : int, optional
-        The fewest samples accepted: 3 for a record, 1 for a micro-batch of a stream
+        The fewest samples accepted: 3 for a record, 0 for a micro-batch of a stream
         (:class:`diagnosis.streaming.StreamingEvaluation` checks its batches here).
 
     Returns

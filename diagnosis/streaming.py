@@ -549,6 +549,8 @@ class StreamingEvaluation:
         if state["arr"] != name:
             raise RecordError(f"restore: the state is of the stream of {state['arr']!r}, not of {name!r}")
         saved = dict(state["options"])
+        if "antiderivatives" in options:  # as the constructor keeps them: None is no antiderivative
+            options["antiderivatives"] = dict(options["antiderivatives"] or {})
         for key, value in options.items():
             if key in saved and value != saved[key]:
                 raise RecordError(f"{name}: restore: option {key}={value!r} differs from the stream's {key}="

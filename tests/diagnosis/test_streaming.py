@@ -329,7 +329,7 @@ def test_restore_refuses_another_arr_other_options_and_a_broken_state(rlc):
     evaluation = StreamingEvaluation(arrs[0], margin=1e-3)
     evaluation.push(record.t[:30], {c: record[c][:30] for c in evaluation.columns})
     saved = evaluation.state()
-    assert StreamingEvaluation.restore(arrs[0], saved, margin=1e-3).final == 25
+    assert StreamingEvaluation.restore(arrs[0], saved, margin=1e-3, antiderivatives=None, window=None).final == 25
     with pytest.raises(RecordError, match="margin=0.002 differs from the stream's margin=0.001"):
         StreamingEvaluation.restore(arrs[0], saved, margin=2e-3)
     with pytest.raises(RecordError, match="state is of the stream of 'ARR_J1', not of 'ARR_J0'"):
