@@ -63,6 +63,23 @@ class CompiledARR:
     symbols: dict = field(default_factory=dict, repr=False)
     _cache: dict = field(default_factory=dict, repr=False)
 
+    def __getstate__(self) -> dict:
+        """The state without the cached functions: lambdified code and interval evaluators do not pickle.
+
+        They are rebuilt from the expressions on first use, so a compiled ARR shipped to another
+        process (a pool or Dask worker) evaluates exactly as the original.
+
+        >>> import pickle
+        >>> from bondgraph.library import rlc_circuit
+        >>> from diagnosis import derive_arrs
+        >>> compiled = derive_arrs(rlc_circuit())[1].compiled
+        >>> nominal = compiled.function("nominal", compiled.nominal)
+        >>> copy = pickle.loads(pickle.dumps(compiled))
+        >>> copy.function("nominal", copy.nominal)(1.0, 2.0, 3.0) == nominal(1.0, 2.0, 3.0)
+        True
+        """
+        return {**self.__dict__, "_cache": {}}
+
     def cached(self, key: str, build: Callable[[], object]):
         """The value kept under ``key``, made by ``build()`` on first use (lambdified functions, evaluators).
 

@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import seeds
 from .degradation import PerAssetDegradation, degradation_model
 from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, rate_prior,
                          sensitivity, signature_candidates)
@@ -38,6 +39,7 @@ from .monitor import MonitorResult, filter_stride
 from .observation import observation_model
 from .particle_filter import KernelSmoothing, ParticleFilter, check_particles, check_positive
 from .rul import RULDistribution, RULPredictor
+from .seeds import check_seed
 
 __all__ = ["Decision", "IsolatingMonitor", "IsolationResult", "decide"]
 
@@ -256,7 +258,9 @@ class IsolatingMonitor:
         Parameter -> open interval ``(lo, hi)`` of its physical domain, as the model declares it
         (:attr:`bondgraph.BondGraph.domains`); a hypothesis whose estimate leaves it is rejected.
         A parameter not given keeps the sign of its nominal value (:func:`~prognosis.hypotheses.physical_domain`).
-    seed : int
+    seed : int or numpy.random.SeedSequence
+        The filter, the prior of the rates and each hypothesis' RUL predictor draw from streams of
+        their own spawned from it (:mod:`prognosis.seeds`), so no two seeds share a stream.
 
     Examples
     --------
@@ -286,7 +290,7 @@ class IsolatingMonitor:
                  rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
                  rul_every: int = 10, horizon: float | None = None, detection: Mapping | None = None,
                  min_ratio: float = EVIDENCE_RATIO, healthy_until: float | None = None,
-                 domains: Mapping[str, tuple] | None = None, seed: int = 0):
+                 domains: Mapping[str, tuple] | None = None, seed: int | np.random.SeedSequence = 0):
         self.arrs = list(arrs)
         self.failures = {str(k): float(v) for k, v in failures.items()}
         parameters = {p: a.values[p] for a in self.arrs for p in a.parameters}
@@ -322,7 +326,7 @@ class IsolatingMonitor:
         self.rul_every = int(rul_every)
         self.horizon = HORIZON_STEPS * self.dt if horizon is None else check_positive(horizon, "horizon")
         self.detection = dict(detection or {})
-        self.min_ratio, self.seed = float(min_ratio), int(seed)
+        self.min_ratio, self.seed = float(min_ratio), check_seed(seed)
         self.domains = {str(k): (float(v[0]), float(v[1])) for k, v in (domains or {}).items()}
         for name, (lo, hi) in self.domains.items():
             if name in self.failures and not lo <= self.failures[name] <= hi:
@@ -383,7 +387,7 @@ class IsolatingMonitor:
 
     def _filter(self, result: IsolationResult, evaluations: list, arrs: list, k0: int, progress) -> None:
         hypotheses = result.hypotheses
-        rng = np.random.default_rng([self.seed, 1])
+        rng = seeds.generator(self.seed, seeds.RATE_PRIOR)
         noise = np.array([self.noise_std[a.name] for a in arrs])
         starts = [self._start(h, evaluations, arrs, k0, noise) for h in hypotheses]
         # a model per row: sigma_v is on the scale of each candidate
@@ -391,7 +395,7 @@ class IsolatingMonitor:
         model = PerAssetDegradation(models, tuple(range(len(models))))
         pf = ParticleFilter(model, HypothesisObservation(arrs, hypotheses), n_particles=self.n_particles, dt=self.dt,
                             noise_std=noise, inflation=self.inflation, gamma_std=0.0,
-                            adaptation=KernelSmoothing(self.discount), seed=self.seed)
+                            adaptation=KernelSmoothing(self.discount), seed=seeds.spawn(self.seed, seeds.FILTER))
         gamma0 = np.stack([self._rate_particles(h, rng) for h in hypotheses])[..., None]
         pf.initialize((np.array([s[0] for s in starts]), np.array([s[1] for s in starts])), gamma0=gamma0,
                       assets=len(hypotheses))
@@ -513,7 +517,8 @@ class IsolatingMonitor:
                 continue
             if row not in predictors:
                 predictors[row] = RULPredictor(models[row], dt=self.dt, theta_fail=h.failure,
-                                               direction=h.direction, horizon=self.horizon, seed=self.seed + 1 + row)
+                                               direction=h.direction, horizon=self.horizon,
+                                               seed=seeds.spawn(self.seed, seeds.PREDICTORS, row))
             prediction = predictors[row].predict(pf.theta[row:row + 1], pf.gamma[row:row + 1], weights[row:row + 1],
                                                  0.0, key=key)
             samples.append(prediction.samples[0])
