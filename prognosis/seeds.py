@@ -28,13 +28,14 @@ import numbers
 
 import numpy as np
 
-__all__ = ["FILTER", "PREDICTORS", "RATE_PRIOR", "RUL", "check_seed", "generator", "spawn"]
+__all__ = ["ASSETS", "FILTER", "PREDICTORS", "RATE_PRIOR", "RUL", "check_seed", "generator", "spawn"]
 
 #: Spawn keys of a monitor's consumers (the first element of the key under the monitor's seed).
 FILTER = 0  # the particle filter: initial particles, moves, resampling
 RUL = 1  # the RUL predictor of a HealthMonitor
 RATE_PRIOR = 2  # the initial rate particles of an IsolatingMonitor's hypotheses
 PREDICTORS = 3  # an IsolatingMonitor's RUL predictors, one per hypothesis row: key (PREDICTORS, row)
+ASSETS = 4  # a fleet's per-asset streams (prognosis.streams): key (ASSETS, asset key)
 
 Seed = int | np.random.SeedSequence  # what a seed may be
 

@@ -25,7 +25,7 @@ import numpy as np
 from scipy.special import ndtr
 
 from ..degradation import ExponentialDegradation, LinearDegradation
-from ..streams import FILTER
+from ..streams import MOVES, STARTS
 
 QUANTILES = (0.05, 0.5, 0.95)
 ROW_STATE = ("theta", "gamma", "hypothesis", "mean", "variance", "sigma_v", "log_evidence", "steps", "rejected",
@@ -106,7 +106,7 @@ class FleetFilter:
         lo, hi = np.asarray(lo, float), np.asarray(hi, float)
         u = np.empty((count, self.n))
         for i, (asset, h) in enumerate(zip(assets, hypothesis)):
-            self.streams.generator(asset, 0, FILTER, lane=1000 + int(h)).random(out=u[i])
+            self.streams.generator(asset, 0, STARTS, lane=int(h)).random(out=u[i])
         for i, row in enumerate(rows):
             self.asset[row] = assets[i]
         self.theta[rows] = lo[:, None] + (hi - lo)[:, None] * u
@@ -190,7 +190,7 @@ class FleetFilter:
         """
         out = np.empty((rows.size, blocks * self.n + 1), np.float32)
         for i, row in enumerate(rows):
-            self.streams.generator(self.asset[row], self.steps[row] + 1, FILTER,
+            self.streams.generator(self.asset[row], self.steps[row] + 1, MOVES,
                                    lane=int(self.hypothesis[row])).standard_normal(dtype=np.float32, out=out[i])
         return out
 

@@ -25,7 +25,7 @@ from ..isolation import DRIFT_AWAY_STEPS, EVIDENCE_RATIO, MIXTURE_FLOOR, PROCESS
 from ..monitor import filter_stride
 from ..observation import observation_model
 from ..rul import RULPredictor
-from ..streams import INITIAL, AssetStreams, asset_key
+from ..streams import RATES, AssetStreams, asset_key
 from .filter import ROW_STATE, FleetFilter
 from .live import LiveAsset
 from .results import FleetResult
@@ -395,7 +395,7 @@ class FleetMonitor:
                 law = s.laws[self.hypotheses[h].law]
                 sigma_v.append(noise if law is None else law.process_noise)
                 owner.append(a)
-                rng = self.streams.generator(item.asset, 0, INITIAL, lane=h)
+                rng = self.streams.generator(item.asset, 0, RATES, lane=h)
                 rates.append(s._rate_particles(self.hypotheses[h], rng)[None, :])
         rows = pf.add(ids, hypothesis=hypotheses, lo=lo, hi=hi, rates=np.stack(rates), process_noise=sigma_v)
         return rows, np.array(owner)
