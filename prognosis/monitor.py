@@ -4,10 +4,11 @@ Detection with the candidate's I-ARR (:mod:`diagnosis`) runs until the first
 alarm; the particle filter then starts from the candidate's uncertainty
 interval (eq. 39), takes ``y = -r_n`` every ``dt`` seconds, and predicts the
 RUL every ``rul_every`` filter steps.  :meth:`HealthMonitor.run` processes a
-whole record; :meth:`HealthMonitor.update` takes one sample at a time and
-processes every filter step whose sample is at least half a derivative
-window old (the Savitzky-Golay estimate is centred), so online results lag
-the newest sample by that half window.  Results are deterministic for a seed.
+whole record; :meth:`HealthMonitor.update` takes a sample (or a micro-batch) at a
+time, evaluates it online (:class:`diagnosis.StreamingEvaluation`) and processes
+every filter step whose sample is at least half a derivative window old (the
+Savitzky-Golay estimate is centred), so online results lag the newest sample by
+that half window.  Results are deterministic for a seed.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bondgraph._optional import pandas_for
-from diagnosis.signals import default_window
+from diagnosis.streaming import StreamChunk, StreamingEvaluation
 
 from . import metrics, seeds
 from .particle_filter import ParticleFilter, VarianceAdaptation, check_particles, check_positive
@@ -174,6 +175,14 @@ def filter_stride(t: np.ndarray, dt: float) -> int:
     return stride
 
 
+def _tail(chunk: StreamChunk, count: int) -> StreamChunk:
+    """The last ``count`` samples of a chunk of a stream."""
+    keep = slice(max(0, len(chunk) - count), None)
+    return StreamChunk(chunk.name, chunk.t[keep], chunk.residual[keep], chunk.lower[keep], chunk.upper[keep],
+                       chunk.bglft[keep], chunk.margin, chunk.persistence, chunk.violation[keep], chunk.alarm[keep],
+                       [p[keep] for p in chunk.points], chunk.start + keep.indices(len(chunk))[0])
+
+
 def _number(value) -> float | None:
     return None if value is None or not np.isfinite(value) else float(value)
 
@@ -269,7 +278,6 @@ class HealthMonitor:
         self.detection = dict(detection or {})
         self.predictor = RULPredictor(model, dt=dt, theta_fail=theta_fail, direction=direction, horizon=horizon,
                                       seed=seeds.spawn(seed, seeds.RUL))
-        self._buffer: list = []
         self._reset()
 
     def _reset(self) -> None:
@@ -278,7 +286,8 @@ class HealthMonitor:
         self._rul_t: list = []
         self._next_index = None
         self._steps = 0
-        self._processed = -1
+        self._stream = None  # the online evaluation of update()
+        self._recent = None  # its last final samples: the alarm's window, and the step
         self._pool = None
         self._finished = False  # a whole record was run: its result is output, not state to go on from
 
@@ -330,22 +339,45 @@ class HealthMonitor:
 
     # -- one sample at a time ------------------------------------------------
     def update(self, sample: Mapping) -> MonitorResult:
-        """Append one sample (``t`` and the signals) and process what has become final."""
+        """Append samples and process what has become final.
+
+        ``sample``: ``t`` and the signals, numbers for one sample or arrays for a micro-batch.  The
+        ARR is evaluated online (:class:`diagnosis.StreamingEvaluation`): every sample is evaluated
+        once, from a ring buffer of the derivative window and running integrals, so a sample costs
+        the same after 10^6 samples as after 10^3.  The result grows by one row per filter step and
+        one RUL distribution per prediction; for streams without end,
+        :meth:`prognosis.fleet.FleetMonitor.update` hands its rows over instead of keeping them.
+        """
         self._finished = False
-        self._buffer.append(dict(sample))
-        final = len(self._buffer) - 1 - self._half_window()  # samples whose centred derivative is known
-        # re-evaluate once per filter step's worth of samples: O(n) work per stride, not per sample
-        recent = np.array([row["t"] for row in self._buffer[-3:]], float)
-        if len(self._buffer) < 2 * self._half_window() + 3 or final - self._processed < self._stride(recent):
-            return self._finish()
-        record = {key: np.array([row[key] for row in self._buffer], float) for key in self._buffer[0]}
-        self._advance(record, last=final)
-        self._processed = final
+        columns = {str(k): np.atleast_1d(np.asarray(v, float)) for k, v in sample.items()}
+        if "t" not in columns:
+            raise ValueError(f"update: the sample has no 't' (columns: {', '.join(columns)})")
+        if self._stream is None:
+            self._stream = StreamingEvaluation(self.arr, **self.detection)
+        chunk = self._stream.push(columns.pop("t"), columns)
+        if len(chunk):
+            self._consume(chunk)
         return self._finish()
 
-    def _half_window(self) -> int:
-        window = self.detection.get("window") or default_window(self.detection.get("polyorder", 3))
-        return window // 2
+    def _consume(self, chunk) -> None:
+        """Detection, then the filter steps due, on the samples of a stream that became final."""
+        self.result.evaluation = chunk
+        joined = chunk if self._recent is None else StreamChunk.concatenate([self._recent, chunk])
+        offset = len(joined) - len(chunk)
+        if self.result.detection_time is None:
+            alarms = np.flatnonzero(chunk.alarm)
+            if alarms.size:
+                k = offset + int(alarms[0])
+                self.result.detection_time = float(joined.t[k])
+                self.filter.initialize(self._start_bounds(joined, k), self.gamma0, gamma_bounds=self.gamma_bounds)
+                self._next_index = chunk.start + int(alarms[0])
+        if self._next_index is not None and len(joined) >= 2:
+            stride = self._stride(joined.t[:2])
+            while self._next_index < chunk.start + len(chunk):
+                i = self._next_index - joined.start
+                self._filter_step(joined.t[i], -joined.residual[i], [p[i:i + 1] for p in joined.points])
+                self._next_index += stride
+        self._recent = _tail(joined, max(chunk.persistence, 2))
 
     # -- shared ----------------------------------------------------------------
     def _advance(self, record, last: int | None, progress: Callable | None = None) -> None:
