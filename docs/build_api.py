@@ -43,6 +43,8 @@ PACKAGES = [
     ("prognosis.statespace", "discrete models, Kalman filters, bootstrap filter, consistency, look-ahead, ROS-ELM", []),
     ("prognosis.identification", "linear Gaussian models by EM, fault trend, posterior predictive", []),
     ("prognosis.lifecontrol", "energy-driven deterioration, Chebyshev bounds, Monte Carlo RUL, RUL control", []),
+    ("prognosis.fleet", "many assets in one vectorized filter: streaming, checkpoints, closed-form RUL, tables",
+     ["prognosis.streams", "prognosis.fleet.rul"]),
     ("bgphm", "command line, plots and long runs", ["bgphm.plotting", "bgphm.runs"]),
 ]
 #: Modules first in this order within each package (the rest follow alphabetically).
