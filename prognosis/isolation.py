@@ -343,7 +343,7 @@ class IsolatingMonitor:
         order).  ``progress(done, total, t)`` is called after every 1 % of the filter steps.
         """
         if evaluations is None:
-            evaluations = [a.evaluate(record, **self._options(a)) for a in self.arrs]
+            evaluations = [a.evaluate(record, **self.options_for(a)) for a in self.arrs]
         elif len(evaluations) != len(self.arrs):
             raise ValueError(f"evaluations: {len(evaluations)} given for {len(self.arrs)} ARRs")
         result = IsolationResult(None, evaluations=evaluations, min_ratio=self.min_ratio)
@@ -363,18 +363,19 @@ class IsolatingMonitor:
         arrs = [self.arrs[i] for i in used]
         result.arrs = [a.name for a in arrs]
         result.groups = indistinguishable_groups(arrs, result.candidates)
-        result.hypotheses, result.rejected = self._hypotheses(result.candidates)
+        result.hypotheses, result.rejected = self.hypotheses_for(result.candidates)
         self._filter(result, [evaluations[i] for i in used], arrs, k, progress)
         return result
 
-    def _options(self, arr) -> dict:
+    def options_for(self, arr) -> dict:
         """This ARR's detection options: its own entry when ``detection`` is keyed by ARR name, else the shared ones."""
         names = {a.name for a in self.arrs}
         if self.detection and set(self.detection) <= names:
             return dict(self.detection.get(arr.name, {}))
         return dict(self.detection)
 
-    def _hypotheses(self, candidates: list) -> tuple[list, dict]:
+    def hypotheses_for(self, candidates: list) -> tuple[list, dict]:
+        """Every candidate with every law, and those rejected before any data (name -> reason)."""
         hypotheses, rejected = [], {}
         for c in candidates:
             for law in self.laws:
@@ -389,14 +390,14 @@ class IsolatingMonitor:
         hypotheses = result.hypotheses
         rng = seeds.generator(self.seed, seeds.RATE_PRIOR)
         noise = np.array([self.noise_std[a.name] for a in arrs])
-        starts = [self._start(h, evaluations, arrs, k0, noise) for h in hypotheses]
+        starts = [self.start_interval(h, evaluations, arrs, k0, noise) for h in hypotheses]
         # a model per row: sigma_v is on the scale of each candidate
-        models = tuple(self._law(h.law, s[2]) for h, s in zip(hypotheses, starts))
+        models = tuple(self.law(h.law, s[2]) for h, s in zip(hypotheses, starts))
         model = PerAssetDegradation(models, tuple(range(len(models))))
         pf = ParticleFilter(model, HypothesisObservation(arrs, hypotheses), n_particles=self.n_particles, dt=self.dt,
                             noise_std=noise, inflation=self.inflation, gamma_std=0.0,
                             adaptation=KernelSmoothing(self.discount), seed=seeds.spawn(self.seed, seeds.FILTER))
-        gamma0 = np.stack([self._rate_particles(h, rng) for h in hypotheses])[..., None]
+        gamma0 = np.stack([self.rate_particles(h, rng) for h in hypotheses])[..., None]
         pf.initialize((np.array([s[0] for s in starts]), np.array([s[1] for s in starts])), gamma0=gamma0,
                       assets=len(hypotheses))
         t = evaluations[0].t
@@ -405,7 +406,7 @@ class IsolatingMonitor:
         every = -(-len(steps) // 100)
         rows, rul_t, rul, decisions = [], [], [], []
         predictors, away = {}, np.zeros(len(hypotheses), int)
-        boxes = np.array([self._box(h, arrs) for h in hypotheses])
+        boxes = np.array([self.healthy_box(h, arrs) for h in hypotheses])
         for done, k in enumerate(steps, 1):
             y = np.array([-e.residual[k] for e in evaluations])
             points = [[p[k] for p in e.points] for e in evaluations]
@@ -430,7 +431,7 @@ class IsolatingMonitor:
             setattr(result, name, {"mean": mean, "rmad": rmad, "quantiles": quantiles})
         result.rul_t, result.rul, result.decisions = np.array(rul_t), rul, decisions
 
-    def _start(self, h: Hypothesis, evaluations: list, arrs: list, k: int, noise: np.ndarray):
+    def start_interval(self, h: Hypothesis, evaluations: list, arrs: list, k: int, noise: np.ndarray):
         """(lo, hi) of theta at the alarm and sigma_v, for one hypothesis.
 
         The uncertainty interval widened to the values of theta that explain the residual on the
@@ -447,7 +448,7 @@ class IsolatingMonitor:
                        for m in seeing}
         best = max(seeing, key=lambda m: information[m] if np.isfinite(information[m]) else -1.0)
         arr, evaluation = arrs[best], evaluations[best]
-        box = self._box(h, [arr])
+        box = self.healthy_box(h, [arr])
         bracket = (min(box[0], h.failure), max(box[1], h.failure))
         explained = models[best].invert(-evaluation.residual[window], points[best], bracket)
         explained = np.clip(explained[np.isfinite(explained)], *bracket)
@@ -458,7 +459,7 @@ class IsolatingMonitor:
         return start[0], start[1], self.process_noise * resolution
 
     @staticmethod
-    def _box(h: Hypothesis, arrs: list) -> tuple[float, float]:
+    def healthy_box(h: Hypothesis, arrs: list) -> tuple[float, float]:
         """The candidate's healthy values: its uncertainty box around nominal (the nominal alone without one)."""
         lo, hi = next((a.uncertainties[h.candidate] for a in arrs if h.candidate in a.uncertainties), (0.0, 0.0))
         return tuple(sorted((h.nominal * (1 + lo), h.nominal * (1 + hi))))
@@ -488,11 +489,13 @@ class IsolatingMonitor:
                     "on the wrong side?)")
         return away
 
-    def _law(self, name: str, process_noise: float):
+    def law(self, name: str, process_noise: float):
+        """The degradation model of law ``name``: the user's, or the built-in one with ``process_noise``."""
         model = self.laws[name]
         return degradation_model(name, process_noise) if model is None else model
 
-    def _rate_particles(self, h: Hypothesis, rng: np.random.Generator) -> np.ndarray:
+    def rate_particles(self, h: Hypothesis, rng: np.random.Generator) -> np.ndarray:
+        """Initial rate particles of a hypothesis: the ``rate`` interval, or the prior on the life."""
         if self.rate is not None:
             return rng.uniform(*self.rate, self.n_particles)
         return rate_prior(h, self.dt, self.n_particles, rng, self.life)

@@ -127,16 +127,16 @@ class FleetMonitor:
         self.report_every = int(report_every)
         self.streams = AssetStreams(s.seed)
         candidates = s.candidates if s.candidates is not None else list(s.failures)
-        self.hypotheses, self.never = s._hypotheses(candidates)
+        self.hypotheses, self.never = s.hypotheses_for(candidates)
         self.arrs = [a for a in s.arrs if any(c in a.parameters for c in candidates)]
         if not self.arrs:
             raise ValueError(f"no ARR is sensitive to any of the candidates {candidates}")
         self.groups = indistinguishable_groups(self.arrs, candidates)
         self.noise = np.array([s.noise_std[a.name] for a in self.arrs])
-        self.options = [s._options(a) for a in self.arrs]
+        self.options = [s.options_for(a) for a in self.arrs]
         self.observations = [[observation_model(a, h.candidate) if h.candidate in a.parameters else None
                               for a in self.arrs] for h in self.hypotheses]
-        self.boxes = np.array([s._box(h, self.arrs) for h in self.hypotheses]).reshape(-1, 2)
+        self.boxes = np.array([s.healthy_box(h, self.arrs) for h in self.hypotheses]).reshape(-1, 2)
         self.domains = np.array([h.domain for h in self.hypotheses], float).reshape(-1, 2)
         self.up = np.array([h.direction == "up" for h in self.hypotheses])
         self.fail = np.array([h.failure for h in self.hypotheses])
@@ -209,7 +209,7 @@ class FleetMonitor:
         for index, h in enumerate(self.hypotheses):
             if h.candidate in allowed and h.name not in self.never:
                 started.append(index)
-                starts.append(s._start(h, windows, self.arrs, len(windows[0].residual) - 1, self.noise))
+                starts.append(s.start_interval(h, windows, self.arrs, len(windows[0].residual) - 1, self.noise))
         return started, starts
 
     def _filter_block(self, batch: list, result: FleetResult) -> None:
@@ -377,7 +377,7 @@ class FleetMonitor:
     def _new_filter(self) -> FleetFilter:
         s = self.settings
         if self._laws is None:
-            self._laws = [s._law(h.law, 0.0) for h in self.hypotheses]
+            self._laws = [s.law(h.law, 0.0) for h in self.hypotheses]
         return FleetFilter(self._laws, self.observations, noise_std=self.noise, n_particles=s.n_particles, dt=s.dt,
                            inflation=s.inflation, discount=s.discount, streams=self.streams)
 
@@ -396,7 +396,7 @@ class FleetMonitor:
                 sigma_v.append(noise if law is None else law.process_noise)
                 owner.append(a)
                 rng = self.streams.generator(item.asset, 0, RATES, lane=h)
-                rates.append(s._rate_particles(self.hypotheses[h], rng)[None, :])
+                rates.append(s.rate_particles(self.hypotheses[h], rng)[None, :])
         rows = pf.add(ids, hypothesis=hypotheses, lo=lo, hi=hi, rates=np.stack(rates), process_noise=sigma_v)
         return rows, np.array(owner)
 
