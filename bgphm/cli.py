@@ -6,11 +6,14 @@
     bgphm simulate MODEL [--t-end T] [--samples N] [--set PARAM=VALUE ...] [--out CSV]
     bgphm detect MODEL DATA.csv [--margin M | --calibrate T] [--persistence N] [--out DIR]
     bgphm prognose MODEL DATA.csv --fail PARAM=VALUE [--fail ...] [--candidate P] [--degradation LAW] [--out DIR]
+    bgphm fleet MODEL RECORDS --fail PARAM=VALUE [--fail ...] --calibrate T --out DIR [--scheduler ADDRESS]
+                [--workers N] [--particles N] [--dt S] [--rul-every K] [--seed S] [--force]
     bgphm demo [dc-motor|torsion-bar|three-tank] [--out DIR] [--seed N]
 
 MODEL is a JSON file (networkx node-link form), a Python file defining ``model``, or a built-in example
 name (see :func:`bondgraph.io.load_model`).  DATA.csv has a header row with a time column ``t`` and one
-column per signal the ARRs use (see :func:`diagnosis.signals.read_csv`).
+column per signal the ARRs use (see :func:`diagnosis.signals.read_csv`).  RECORDS is a directory of
+such CSV files, one per asset, or a Parquet file with an ``asset`` column (``docs/fleet.md``).
 
 Exit codes: 0 success, 2 bad usage or bad input (one line on stderr naming the file, line, column,
 node or parameter), 1 anything else (an interrupted run included).  Progress goes to stderr;
@@ -145,7 +148,6 @@ def cmd_prognose(args, progress: Progress) -> int:
     ``estimates.csv``, ``rul.csv`` and plots.  Returns 0.
     """
     from diagnosis.detection import robust_std
-    from diagnosis.signals import default_window
     from prognosis.isolation import IsolatingMonitor
 
     out = _output_directory(args)
@@ -160,15 +162,7 @@ def cmd_prognose(args, progress: Progress) -> int:
     until = _calibration_end(record, args, otherwise="")
     # each residual's noise on the healthy stretch, even when --margin is given
     noise = {e.name: max(robust_std(e.residual[record.t <= until]), 1e-300) for e in evaluations}
-    step = float(np.median(np.diff(record.t)))
-    window = args.window or default_window(3)
-    # one filter step per derivative window: the residuals it reads are then nearly independent
-    dt = args.dt if args.dt is not None else float(f"{step * window:.12g}")
-    span = float(record.t[-1] - record.t[0])
-    if dt >= span:
-        raise UsageError(f"--dt {dt:g}: the filter step is not shorter than the record ({span:g} s)")
-    if args.dt is not None and abs(round(dt / step) * step - dt) > 1e-6 * dt:
-        raise UsageError(f"--dt {dt:g}: the filter step must be a multiple of the record's step {step:g} s")
+    dt = _filter_step(record, args)
     _check_horizon(args, dt, len(failures) * len(laws))
     detection = {e.name: {"margin": e.margin, "persistence": args.persistence,
                           **({"window": args.window} if args.window else {})} for e in evaluations}
@@ -199,6 +193,56 @@ def cmd_prognose(args, progress: Progress) -> int:
         written += _plots("prognosis", out, (primary, best), progress)
         for path in written:
             print(f"wrote {path}")
+    return EXIT_OK
+
+
+def cmd_fleet(args, progress: Progress) -> int:
+    """``bgphm fleet``: detection, estimation and RUL for every asset of a fleet, to Parquet; returns 0.
+
+    RECORDS is a directory of CSV files (one per asset, the asset id is the file name) or a Parquet
+    file with an ``asset`` column.  The residual noise and the detection margins are calibrated on the
+    first ``--calibrate`` seconds of the first ``--calibrate-assets`` records (by asset id): the median
+    over them, per ARR, serves every asset.  The assets then run in shards on a local Dask cluster
+    (``--workers``), on a running one (``--scheduler``), or in this process (``--workers 0``), through
+    :func:`bgphm.fleet.run_fleet`, which writes the tables ``alarms/``, ``estimates/`` and ``rul/`` and
+    ``summary.json`` under ``--out``.  Progress goes to stderr by assets done.
+    """
+    from bgphm.fleet import FleetSpec, model_reference, open_source, run_fleet
+    from bgphm.fleet.engine import require_dask
+    from bgphm.fleet.sources import pyarrow_modules
+
+    pyarrow_modules()  # the missing extra named before any work
+    if args.scheduler is not None or args.workers > 0:
+        require_dask()
+    source = open_source(args.records)
+    out = check_output(args.out, kind="directory", inputs=input_files(args.model) + source.inputs(),
+                       force=args.force)
+    spec = load_model(args.model)
+    arrs = _arrs(spec, progress, args.arr, args.integrals)
+    parameters, domains = spec.model.parameters, spec.model.domains
+    failures = _failures(args, parameters, domains)
+    candidates = _candidates(args, arrs, failures, parameters)
+    laws = [args.degradation] if args.degradation else ["linear", "exponential"]
+    assets = source.assets()
+    progress(f"{len(assets)} assets in {source.describe()}")
+    calibration, first = _fleet_calibration(arrs, source, assets[:args.calibrate_assets], args, progress)
+    dt = _filter_step(first, args)
+    _check_horizon(args, dt, len(failures) * len(laws))
+    window = {"window": args.window} if args.window else {}
+    detection = {name: {"margin": margin, "persistence": args.persistence, **window}
+                 for name, margin in calibration["margin"].items()}
+    job = FleetSpec(model_reference(args.model), failures, noise_std=calibration["noise_std"], detection=detection,
+                    laws=laws, candidates=candidates, arrs=None if args.arr is None else [args.arr],
+                    integrals=args.integrals, dt=dt, n_particles=args.particles, rul_every=args.rul_every,
+                    horizon=args.horizon, healthy_until=args.calibrate, seed=args.seed)
+    where = args.scheduler or ("this process" if args.workers == 0 else f"a local cluster of {args.workers} workers")
+    progress(f"monitoring {len(assets)} assets ({where}): {len(laws)} law(s) per candidate, {args.particles} "
+             f"particles each, dt = {dt:g} s")
+    summary = run_fleet(job, source, out, scheduler=args.scheduler, workers=args.workers,
+                        shard_size=args.shard_size, progress=_fleet_progress(progress), notes=calibration)
+    print(f"{summary['assets']} assets, {summary['assets_with_alarm']} with an alarm, {summary['rows']['rul']} RUL "
+          f"rows, in {summary['wall_s']:.1f} s ({1e3 * summary['seconds_per_asset']:.1f} ms per asset)")
+    print(f"wrote {out / 'alarms'}, {out / 'estimates'}, {out / 'rul'} (Parquet) and {out / 'summary.json'}")
     return EXIT_OK
 
 
@@ -314,6 +358,68 @@ def _detect(arrs: list, record: Record, args, progress: Progress) -> list:
         evaluations.append(evaluation)
         progress(f"{arr.name}: evaluated with margin {margin:.3g}")
     return evaluations
+
+
+def _fleet_calibration(arrs: list, source, assets: list, args, progress: Progress) -> tuple[dict, Record]:
+    """Noise std and margin per ARR: the median over the calibration assets; and the first asset's record.
+
+    Each record is checked as ``prognose`` checks its own (the stretch before ``--calibrate`` must be
+    fault-free, split-half validation); an error names the record.
+    """
+    from diagnosis.detection import robust_std
+
+    signals = list(dict.fromkeys(s for arr in arrs for s in arr.signals))
+    quiet = Progress(True)  # per-record lines would repeat for every calibration asset
+    noise, margins, first = {a.name: [] for a in arrs}, {a.name: [] for a in arrs}, None
+    for asset, record in source.read(assets, signals):
+        try:
+            until = _calibration_end(record, args, otherwise="")
+            evaluations = _detect(arrs, record, args, quiet)
+        except UsageError as exc:
+            raise UsageError(f"records: asset {asset!r}: {exc}") from None
+        for e in evaluations:
+            noise[e.name].append(max(robust_std(e.residual[record.t <= until]), 1e-300))
+            margins[e.name].append(e.margin)
+        first = record if first is None else first
+    calibration = {"assets": list(assets), "until": args.calibrate,
+                   "noise_std": {n: float(np.median(v)) for n, v in noise.items()},
+                   "margin": {n: float(np.median(v)) for n, v in margins.items()}}
+    for name in noise:
+        progress(f"{name}: residual noise {calibration['noise_std'][name]:.3g}, margin "
+                 f"{calibration['margin'][name]:.3g} (median over {len(assets)} record(s), t <= {args.calibrate:g} s)")
+    return calibration, first
+
+
+def _fleet_progress(progress: Progress, every: float = 2.0):
+    """The ``progress`` callback of :func:`bgphm.fleet.run_fleet`: assets done, at most every ``every`` s."""
+    if progress.quiet:
+        return None
+    printed = -math.inf
+
+    def report(done: int, total: int) -> None:
+        nonlocal printed
+        now = time.perf_counter()
+        if done == total or now - printed >= every:
+            printed = now
+            progress(f"fleet: {done} of {total} assets ({100 * done / total:.0f} %)")
+
+    return report
+
+
+def _filter_step(record: Record, args) -> float:
+    """``--dt``, by default one derivative window of samples, checked against the record's step and span."""
+    from diagnosis.signals import default_window
+
+    step = float(np.median(np.diff(record.t)))
+    window = args.window or default_window(3)
+    # one filter step per derivative window: the residuals it reads are then nearly independent
+    dt = args.dt if args.dt is not None else float(f"{step * window:.12g}")
+    span = float(record.t[-1] - record.t[0])
+    if dt >= span:
+        raise UsageError(f"--dt {dt:g}: the filter step is not shorter than the record ({span:g} s)")
+    if args.dt is not None and abs(round(dt / step) * step - dt) > 1e-6 * dt:
+        raise UsageError(f"--dt {dt:g}: the filter step must be a multiple of the record's step {step:g} s")
+    return dt
 
 
 def _check_horizon(args, dt: float, hypotheses: int) -> None:
@@ -622,7 +728,8 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The ``bgphm`` argument parser: ``--quiet``, ``--debug`` and the commands arr, simulate, detect, prognose, demo.
+    """The ``bgphm`` argument parser: ``--quiet``, ``--debug`` and the commands arr, simulate, detect, prognose, fleet,
+    demo.
 
     Each command's parser sets ``run`` to its ``cmd_*`` function, which :func:`main` calls.
     """
@@ -691,6 +798,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--horizon", type=float, help="RUL horizon cap in s (default 2000 filter steps)")
     p.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
 
+    _fleet_parser(sub, model_help)
+
     from bgphm.demo import DEMOS
 
     listing = "\n".join(f"  {name:<13} {demo.description}" for name, demo in DEMOS.items())
@@ -710,10 +819,51 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _fleet_parser(sub, model_help: str) -> None:
+    p = sub.add_parser("fleet", help="monitor a fleet: records of many assets to Parquet tables of alarms, "
+                       "estimates and RULs, on Dask workers")
+    p.add_argument("model", metavar="MODEL", help=model_help)
+    p.add_argument("records", metavar="RECORDS", help="a directory of CSV files, one per asset (the asset id is the "
+                   "file name), or a Parquet file with a column 'asset' (its rows sorted by t or not)")
+    p.add_argument("--fail", action="append", required=True, metavar="PARAM=VALUE",
+                   help="failure value of a parameter that can fail (repeatable)")
+    p.add_argument("--candidate", help="only this candidate (it needs a failure value)")
+    p.add_argument("--degradation", choices=("exponential", "linear"),
+                   help="only this law (default: linear and exponential compete on evidence)")
+    p.add_argument("--calibrate", type=float, required=True, metavar="T",
+                   help="every record is fault-free for t <= T: the noise and margins are calibrated there, and "
+                        "alarms there start nothing")
+    p.add_argument("--calibrate-assets", type=int, default=10, metavar="N",
+                   help="calibrate on the first N records by asset id, the median per ARR (default 10)")
+    p.add_argument("--arr", help="use only this ARR (default: every ARR sensitive to a candidate)")
+    p.add_argument("--k", type=float, default=4.0, help="margin = k robust std of the residual (default 4)")
+    p.add_argument("--persistence", type=int, default=5, help="consecutive violations for an alarm (default 5)")
+    p.add_argument("--window", type=int, help="Savitzky-Golay window for derivatives (odd; default 11)")
+    p.add_argument("--integrals", choices=("avoid", "keep"), default="avoid",
+                   help="as for prognose: avoid (differentiate) or keep the integrals of measured signals")
+    p.add_argument("--particles", type=int, default=500, help="particles per hypothesis (default 500)")
+    p.add_argument("--dt", type=float, help="filter step in s, a multiple of the records' (default: one "
+                   "derivative window of samples)")
+    p.add_argument("--rul-every", type=int, default=10, help="predict the RUL every N filter steps (default 10)")
+    p.add_argument("--horizon", type=float, help="RUL horizon cap in s (default 2000 filter steps)")
+    p.add_argument("--seed", type=int, default=0, help="random seed (default 0); each asset's draws depend only on "
+                   "it, the asset id and the step")
+    p.add_argument("--out", required=True, help="output directory (new or empty, unless --force)")
+    p.add_argument("--force", action="store_true", help="write into a non-empty --out directory (a previous "
+                   "fleet run's tables there are replaced)")
+    p.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786 "
+                   "(default: a local cluster of --workers processes)")
+    p.add_argument("--workers", type=int, default=2, help="worker processes of the local cluster (default 2; 0 runs "
+                   "every asset in this process, without Dask)")
+    p.add_argument("--shard-size", type=int, metavar="N", help="assets per task (default: a quarter of each "
+                   "worker's share, at most 1000); the results do not depend on it")
+    p.set_defaults(run=cmd_fleet, margin=None, direction=None)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``bgphm`` console script; returns the exit code.
 
-    Commands: ``arr`` (the ARR report), ``simulate``, ``detect``, ``prognose`` and ``demo``; ``bgphm
+    Commands: ``arr`` (the ARR report), ``simulate``, ``detect``, ``prognose``, ``fleet`` and ``demo``; ``bgphm
     COMMAND --help`` lists each one's options.  Exit codes: 0 success, 2 bad usage or bad input (one
     line on stderr naming the file, line, column, node or parameter), 1 anything else, including an
     interrupted run.  Progress goes to stderr unless ``--quiet``.
@@ -769,6 +919,10 @@ def _check_options(args) -> None:
         raise UsageError(f"--particles must be in [2, {MAX_PARTICLES}], got {args.particles}")
     if getattr(args, "rul_every", 1) < 1:
         raise UsageError(f"--rul-every must be at least 1 filter step, got {args.rul_every}")
+    for option, low in (("workers", 0), ("shard_size", 1), ("calibrate_assets", 1)):
+        value = getattr(args, option, None)
+        if value is not None and value < low:
+            raise UsageError(f"--{option.replace('_', '-')} must be at least {low}, got {value}")
     for option in ("horizon", "dt"):
         value = getattr(args, option, None)
         if value is not None and not (math.isfinite(value) and value > 0):

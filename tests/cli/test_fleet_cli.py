@@ -1,0 +1,180 @@
+"""bgphm fleet: a directory of CSV records to Parquet tables, and every bad input as exit 2 with one line.
+
+These runs are in this process (--workers 0); the Dask runs of the command are in test_fleet_dask.py.
+"""
+
+from __future__ import annotations
+
+import builtins
+import json
+
+import pytest
+
+from bgphm.cli import main
+from bgphm.fleet import read_fleet
+
+from .fleets import write_fleet
+
+pytest.importorskip("pyarrow")
+
+ASSETS = {"c0": 0.3, "c1": None, "c2": 0.6}
+FAST = ["--degradation", "linear", "--particles", "100", "--dt", "0.05", "--rul-every", "4", "--workers", "0"]
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def usage_error(capsys, *argv) -> str:
+    """The one line of a command that must fail with exit code 2."""
+    code, out, err = run(capsys, "--quiet", *argv)
+    assert code == 2, (out, err)
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("bgphm: error: "), err
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def records(tmp_path_factory):
+    return write_fleet(tmp_path_factory.mktemp("fleet") / "records", ASSETS)
+
+
+@pytest.fixture(scope="module")
+def fleet_run(records, tmp_path_factory):
+    """One run of the command, its exit code, stdout, stderr and output directory."""
+    out = tmp_path_factory.mktemp("run") / "out"
+    capture = pytest.MonkeyPatch()
+    import io
+    import sys
+
+    stdout, stderr = io.StringIO(), io.StringIO()
+    capture.setattr(sys, "stdout", stdout)
+    capture.setattr(sys, "stderr", stderr)
+    try:
+        code = main(["fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "0.2", *FAST, "--out", str(out)])
+    finally:
+        capture.undo()
+    return code, stdout.getvalue(), stderr.getvalue(), out
+
+
+def test_the_command_writes_parquet_tables_and_a_summary(fleet_run):
+    code, out, err, folder = fleet_run
+    assert code == 0, err
+    assert "3 assets, 2 with an alarm" in out and f"wrote {folder / 'alarms'}" in out
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["assets"] == 3 and summary["scheduler"] == "serial"
+    assert summary["notes"]["assets"] == ["c0", "c1", "c2"] and summary["notes"]["until"] == 0.2
+    assert summary["spec"]["healthy_until"] == 0.2 and summary["spec"]["model"] == "rlc"
+    assert set(summary["spec"]["noise_std"]) == set(summary["notes"]["noise_std"])
+    result = read_fleet(folder)
+    assert sorted(set(result.alarms["asset"])) == ["c0", "c2"]
+    assert sorted(set(result.rul["asset"])) == ["c0", "c2"]
+
+
+def test_the_command_reports_progress_by_assets_done(fleet_run):
+    _, _, err, _ = fleet_run
+    assert "3 assets in CSV directory" in err and "fleet: 3 of 3 assets (100 %)" in err
+    assert "median over 3 record(s), t <= 0.2 s" in err
+
+
+def test_quiet_silences_the_progress_and_force_replaces_the_tables(records, fleet_run, capsys):
+    folder = fleet_run[3]
+    before = read_fleet(folder).rul
+    code, out, err = run(capsys, "--quiet", "fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "0.2",
+                         *FAST, "--out", str(folder), "--force")
+    assert code == 0 and err == "" and "3 assets" in out
+    assert read_fleet(folder).rul["p50"].tolist() == before["p50"].tolist()
+
+
+# ------------------------------------------------------------------------------------------------ bad input
+
+def test_a_missing_records_directory(capsys, tmp_path):
+    line = usage_error(capsys, "fleet", "rlc", str(tmp_path / "nowhere"), "--fail", "R=20", "--calibrate", "0.2",
+                       "--out", str(tmp_path / "out"), "--workers", "0")
+    assert "nowhere: no such directory or file" in line
+
+
+def test_a_directory_without_csv_files(capsys, tmp_path):
+    (tmp_path / "records").mkdir()
+    (tmp_path / "records" / "notes.txt").write_text("x")
+    line = usage_error(capsys, "fleet", "rlc", str(tmp_path / "records"), "--fail", "R=20", "--calibrate", "0.2",
+                       "--out", str(tmp_path / "out"), "--workers", "0")
+    assert "no .csv file in it" in line
+
+
+@pytest.mark.parametrize("fail, message", [("X=20", "--fail 'X=20': the model has no parameter 'X'"),
+                                           ("R=abc", "--fail 'R=abc': 'abc' is not a number"),
+                                           ("R=10", "equals the nominal value of 'R'")])
+def test_a_bad_fail(capsys, records, tmp_path, fail, message):
+    line = usage_error(capsys, "fleet", "rlc", str(records), "--fail", fail, "--calibrate", "0.2",
+                       "--out", str(tmp_path / "out"), "--workers", "0")
+    assert message in line
+
+
+def test_the_output_may_not_be_the_records_directory(capsys, records):
+    line = usage_error(capsys, "fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "0.2",
+                       "--out", str(records), "--workers", "0", "--force")
+    assert "the directory holds the input file" in line
+
+
+def test_an_existing_output_needs_force(capsys, records, tmp_path):
+    (tmp_path / "old.txt").write_text("x")
+    line = usage_error(capsys, "fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "0.2",
+                       "--out", str(tmp_path), "--workers", "0")
+    assert "is not empty; give --force" in line
+
+
+@pytest.mark.parametrize("option, value, message", [
+    ("--workers", "-1", "--workers must be at least 0"),
+    ("--shard-size", "0", "--shard-size must be at least 1"),
+    ("--calibrate-assets", "0", "--calibrate-assets must be at least 1"),
+    ("--particles", "1", "--particles must be in [2,"),
+])
+def test_bad_counts(capsys, records, tmp_path, option, value, message):
+    line = usage_error(capsys, "fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "0.2",
+                       "--out", str(tmp_path / "out"), option, value)
+    assert message in line
+
+
+def test_calibrate_is_required(capsys, records, tmp_path):
+    with pytest.raises(SystemExit) as exit_:
+        main(["fleet", "rlc", str(records), "--fail", "R=20", "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and len(err.strip().splitlines()) == 1
+    assert "the following arguments are required: --calibrate" in err
+
+
+def test_a_calibration_stretch_with_a_fault_names_the_asset(capsys, records, tmp_path):
+    line = usage_error(capsys, "fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "1.6",
+                       "--out", str(tmp_path / "out"), *FAST)
+    assert "records: asset 'c0': --calibrate 1.6 is not fault-free" in line
+
+
+def test_a_calibration_past_the_records_end(capsys, records, tmp_path):
+    line = usage_error(capsys, "fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "5",
+                       "--out", str(tmp_path / "out"), "--workers", "0")
+    assert "asset 'c0': --calibrate 5: at or past the end of the record" in line
+
+
+def test_a_file_that_is_not_parquet(capsys, tmp_path):
+    (tmp_path / "fleet.parquet").write_text("t,x\n")
+    line = usage_error(capsys, "fleet", "rlc", str(tmp_path / "fleet.parquet"), "--fail", "R=20", "--calibrate",
+                       "0.2", "--out", str(tmp_path / "out"), "--workers", "0")
+    assert "not a readable Parquet file" in line
+
+
+def test_a_dask_run_without_dask_names_the_extra_before_any_work(capsys, records, tmp_path, monkeypatch):
+    real_import = builtins.__import__
+
+    def without_distributed(name, *args, **kwargs):
+        if name.split(".")[0] in ("dask", "distributed"):
+            raise ImportError(f"No module named {name!r}")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", without_distributed)
+    line = usage_error(capsys, "fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "0.2",
+                       "--out", str(tmp_path / "out"), "--workers", "2")
+    assert "pip install 'bondgraph-phm[dask]'" in line and "--workers 0" in line
+    assert not (tmp_path / "out").exists()
