@@ -24,6 +24,7 @@ from ..hypotheses import LIFE_PRIOR, indistinguishable_groups, signature_candida
 from ..isolation import DRIFT_AWAY_STEPS, EVIDENCE_RATIO, MIXTURE_FLOOR, PROCESS_NOISE, IsolatingMonitor, decide
 from ..monitor import filter_stride
 from ..observation import observation_model
+from .. import seeds
 from ..rul import RULPredictor
 from ..streams import RATES, AssetStreams, asset_key
 from .filter import ROW_STATE, FleetFilter
@@ -143,16 +144,21 @@ class FleetMonitor:
         self._filter = None  # the streaming filter (run() uses one per block)
         self._laws = None
         self._live: dict = {}
+        self._predictors: dict = {}
+        self._keep_particles = False  # RUL predictors of laws without a closed form, by hypothesis
 
     # -- the batch pipeline ------------------------------------------------------------------
     def run(self, records: Mapping | Iterable, *, progress: Callable[[int, int], None] | None = None,
-            block: int = BLOCK) -> FleetResult:
+            block: int = BLOCK, particles: bool = False) -> FleetResult:
         """Process whole records, ``{asset: record}`` or an iterable of ``(asset, record)`` pairs.
 
         Records are read one at a time and only their values at the filter steps are kept; ``block``
         assets are filtered together.  ``progress(done, total)`` is called after each block with the
-        number of assets done (``total`` is None for an iterable of unknown length).
+        number of assets done (``total`` is None for an iterable of unknown length).  With
+        ``particles``, the result's :attr:`~prognosis.fleet.FleetResult.particles` holds each asset's
+        particles after its last step (otherwise they are dropped with the block).
         """
+        self._keep_particles = bool(particles)
         pairs = records.items() if isinstance(records, Mapping) else records
         total = len(records) if hasattr(records, "__len__") else None
         result, done, batch = FleetResult(), 0, []
@@ -226,7 +232,21 @@ class FleetMonitor:
             mine = owner[index]
             step = pf.step(rows[index], y[mine, j], [[p[mine, j] for p in m] for m in points])
             self._outputs(pf, rows[index], mine, ids[mine], np.full(index.size, j), t[mine, j], step.ess, result)
+        if self._keep_particles:
+            for a, item in enumerate(assets):
+                result.particles[str(item.asset)] = self._particles_of(pf, rows[owner == a])
         pf.remove(rows)
+
+    def particles(self, asset) -> dict:
+        """The particles of a streamed asset now: ``{hypothesis: {"theta": (N,), "gamma": (G, N)}}`` (copies)."""
+        live = self._live.get(asset)
+        if live is None:
+            raise KeyError(f"no asset {asset!r} in the stream")
+        return {} if live.rows is None else self._particles_of(self._filter, live.rows)
+
+    def _particles_of(self, pf: FleetFilter, rows: np.ndarray) -> dict:
+        return {self.hypotheses[pf.hypothesis[r]].name: {"theta": pf.theta[r].copy(), "gamma": pf.gamma[r].copy()}
+                for r in rows}
 
     def _outputs(self, pf, rows, owner, ids, steps, times, ess, result: FleetResult) -> None:
         """The estimates and RUL of the rows whose step (``steps``, taken before the step) is due."""
@@ -463,8 +483,11 @@ class FleetMonitor:
                 times[mine] = crossing_times(law, theta, rate, np.full(theta.shape[0], hypothesis.failure),
                                              np.full(theta.shape[0], hypothesis.direction == "up"), s.horizon)
                 continue
-            predictor = RULPredictor(law, dt=s.dt, theta_fail=hypothesis.failure, direction=hypothesis.direction,
-                                     horizon=s.horizon, seed=s.seed)
+            predictor = self._predictors.get(h)
+            if predictor is None:  # one noise bank per hypothesis, shared by every asset
+                predictor = self._predictors[h] = RULPredictor(law, dt=s.dt, theta_fail=hypothesis.failure,
+                                                               direction=hypothesis.direction, horizon=s.horizon,
+                                                               seed=seeds.spawn(s.seed, seeds.PREDICTORS, int(h)))
             for i, (row, asset, step) in enumerate(zip(rows[mine], ids[mine], steps[mine])):
                 gamma = np.moveaxis(pf.gamma[row:row + 1], 1, -1)
                 key = (asset_key(asset) << 32) | int(step)

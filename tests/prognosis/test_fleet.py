@@ -239,3 +239,22 @@ def test_update_names_what_is_wrong(circuit):
         fleet(arr).update({"t": [0.0]})
     with pytest.raises(KeyError, match="no asset"):
         fleet(arr).retire("nobody")
+
+
+def test_particles_only_on_request_and_the_monitor_pickles(circuit):
+    import pickle
+    arr, records = circuit
+    assert fleet(arr).run(records).particles == {}
+    kept = fleet(arr).run(records, particles=True).particles
+    assert sorted(kept) == ["c1", "c3", "c4"] and kept["c1"]["R/linear"]["theta"].shape == (100,)
+    monitor = fleet(arr)
+    stream(monitor, {"c1": records["c1"]}, sizes=[300], stop=900)
+    now = monitor.particles("c1")["R/linear"]
+    copy = pickle.loads(pickle.dumps(monitor))
+    assert np.array_equal(copy.particles("c1")["R/linear"]["theta"], now["theta"])
+    rest = {"c1": records["c1"]}
+    a, b = stream(monitor, rest, sizes=[300], start=900), stream(copy, rest, sizes=[300], start=900)
+    assert a.rows("rul") > 0
+    for name in ("estimates", "rul"):
+        for column, values in a.table(name).items():
+            assert values.tolist() == b.table(name)[column].tolist(), (name, column)
