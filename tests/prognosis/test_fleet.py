@@ -258,3 +258,14 @@ def test_particles_only_on_request_and_the_monitor_pickles(circuit):
     for name in ("estimates", "rul"):
         for column, values in a.table(name).items():
             assert values.tolist() == b.table(name)[column].tolist(), (name, column)
+
+
+def test_a_law_without_closed_form_is_propagated(circuit):
+    from prognosis.degradation import CustomDegradation
+    arr, records = circuit
+    linear = CustomDegradation(lambda theta, gamma, dt: theta + gamma[..., 0] * dt)
+    custom = fleet(arr, laws={"linear": linear}).run({"c1": records["c1"]}).rul
+    closed = fleet(arr, laws={"linear": LinearDegradation(0.0)}).run({"c1": records["c1"]}).rul
+    assert np.allclose(custom["p50"], closed["p50"], rtol=1e-3, atol=0.01)  # float32 paths vs the closed form
+    again = fleet(arr, laws={"linear": linear}).run({"c1": records["c1"]}).rul
+    assert np.array_equal(custom["mean"], again["mean"])
