@@ -39,7 +39,7 @@ PACKAGES = [
     ("diagnosis", "ARRs, intervals, thresholds, signatures, detection", ["diagnosis.signals"]),
     ("diagnosis.intervals", "outward-rounded interval arithmetic and the sympy-to-interval compiler", []),
     ("prognosis", "degradation laws, observation model, particle filter, RUL, metrics, health monitoring",
-     ["prognosis.metrics"]),
+     ["prognosis.metrics", "prognosis.seeds"]),
     ("prognosis.statespace", "discrete models, Kalman filters, bootstrap filter, consistency, look-ahead, ROS-ELM", []),
     ("prognosis.identification", "linear Gaussian models by EM, fault trend, posterior predictive", []),
     ("prognosis.lifecontrol", "energy-driven deterioration, Chebyshev bounds, Monte Carlo RUL, RUL control", []),

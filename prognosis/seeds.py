@@ -37,10 +37,8 @@ RATE_PRIOR = 2  # the initial rate particles of an IsolatingMonitor's hypotheses
 PREDICTORS = 3  # an IsolatingMonitor's RUL predictors, one per hypothesis row: key (PREDICTORS, row)
 ASSETS = 4  # a fleet's per-asset streams (prognosis.streams): key (ASSETS, asset key)
 
-Seed = int | np.random.SeedSequence  # what a seed may be
 
-
-def check_seed(seed: object, option: str = "seed") -> Seed:
+def check_seed(seed: object, option: str = "seed") -> int | np.random.SeedSequence:
     """``seed`` as given when it is a whole number >= 0 or a SeedSequence; a ValueError naming ``option`` otherwise.
 
     >>> check_seed(7)
@@ -57,7 +55,7 @@ def check_seed(seed: object, option: str = "seed") -> Seed:
     return int(seed)
 
 
-def spawn(seed: Seed, *key: int) -> np.random.SeedSequence:
+def spawn(seed: int | np.random.SeedSequence, *key: int) -> np.random.SeedSequence:
     """The child of ``seed`` under spawn key ``key`` (appended to the key ``seed`` already has).
 
     ``spawn(spawn(s, 1), 2) == spawn(s, 1, 2)``: a consumer can derive streams of its own from the
@@ -73,7 +71,7 @@ def spawn(seed: Seed, *key: int) -> np.random.SeedSequence:
                                   pool_size=parent.pool_size)
 
 
-def generator(seed: Seed, *key: int) -> np.random.Generator:
+def generator(seed: int | np.random.SeedSequence, *key: int) -> np.random.Generator:
     """A fresh :func:`numpy.random.default_rng` on the stream ``spawn(seed, *key)``.
 
     >>> first = generator(3, 0).random()

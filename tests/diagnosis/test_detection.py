@@ -237,3 +237,16 @@ def test_a_nonlinear_arr_pickles_and_evaluates_bitwise_the_same():
     assert np.isfinite(before.lower).any()
     for name in ("residual", "lower", "upper"):
         assert np.array_equal(getattr(after, name), getattr(before, name), equal_nan=True), name
+
+
+def test_dask_names_a_task_holding_a_compiled_arr(rlc):
+    """The compiled ARR points back to its ARR: tokenize followed the cycle without end."""
+    import dataclasses
+
+    tokenize = pytest.importorskip("dask.base").tokenize
+    arrs, record = rlc
+    arr = dataclasses.replace(arrs[0])   # the same relation, not compiled yet
+    before = tokenize(arr)
+    arr.evaluate(record)   # compiles it
+    assert tokenize(arr) == before == tokenize(dataclasses.replace(arrs[0]))   # the same relation, the same name
+    assert tokenize(arrs[1]) != before
