@@ -15,11 +15,13 @@ from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, c
 from .signals import Record, RecordError, RecordWarning, add_noise, as_record, read_csv
 from .resampling import resample
 from .signatures import SignatureMatrix, signature_matrix
+from .streaming import StreamChunk, StreamingEvaluation
 from .structural import StructuralLimitError, StructuralModel, structural_model
 
 __all__ = [
     "ARR", "ARRWarning", "Evaluation", "Interval", "IntervalArray", "IntervalWarning", "Record", "RecordError",
-    "RecordWarning", "SignatureMatrix", "StructuralLimitError", "StructuralModel", "add_noise", "affine_range",
+    "RecordWarning", "SignatureMatrix", "StreamChunk", "StreamingEvaluation", "StructuralLimitError", "StructuralModel",
+    "add_noise", "affine_range",
     "as_record", "compile_interval", "delta", "derive_arrs", "evaluate", "noise_margin", "read_csv", "resample",
     "robust_std", "signature_matrix", "structural_arrs", "structural_model", "unreached",
 ]

@@ -177,7 +177,36 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     >>> evaluate(capacitor, faulty, margin=1e-3, persistence=3).detection_time is None
     True
     """
-    check_arr(arr, "evaluate")
+    check_options(arr, "evaluate", method=method, antiderivatives=antiderivatives, margin=margin,
+                  persistence=persistence, threshold=threshold)
+    data = read_record(arr, record, extra=tuple((antiderivatives or {}).values()))
+    compiled = arr.compiled
+    points = compiled.point_values(data, method=method, window=window, polyorder=polyorder,
+                                   exact=exact_derivatives, antiderivatives=antiderivatives)
+    residual, lower, upper, bglft, violation = judge(compiled, points, margin, threshold)
+    alarm = persistent(violation, persistence)
+    return Evaluation(arr.name, data.t, residual, lower, upper, bglft, float(margin), int(persistence), violation,
+                      alarm, points)
+
+
+def check_options(arr, caller: str, *, method: str = "savgol", antiderivatives: Mapping | None = None,
+                  margin: float = 0.0, persistence: int = 1, threshold: str = "interval") -> None:
+    """The checks of :func:`evaluate`'s options, shared by every caller that evaluates an ARR.
+
+    Raises a TypeError unless ``arr`` is an ARR, a :class:`~diagnosis.signals.RecordError` for an unknown
+    derivative method or antiderivatives that are not a mapping of names, a ValueError naming the option
+    for a bad ``threshold``, ``persistence`` or ``margin``.
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> arr = derive_arrs(rlc_circuit())[0]
+    >>> check_options(arr, "evaluate", margin=1e-3, persistence=3)
+    >>> check_options(arr, "evaluate", persistence=0)
+    Traceback (most recent call last):
+    ...
+    ValueError: persistence must be a whole number of samples >= 1, got 0
+    """
+    check_arr(arr, caller)
     if threshold not in ("interval", "bglft"):
         raise ValueError(f"threshold must be 'interval' or 'bglft', got {threshold!r}")
     if isinstance(persistence, bool) or not isinstance(persistence, numbers.Integral) or persistence < 1:
@@ -187,19 +216,33 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     if method not in ("savgol", "central"):
         raise RecordError(f"{arr.name}: unknown derivative method {method!r}; choose 'savgol' or 'central' "
                           "(known derivatives go in exact_derivatives=)")
-    data = read_record(arr, record, extra=tuple((antiderivatives or {}).values()))
-    compiled = arr.compiled
-    points = compiled.point_values(data, method=method, window=window, polyorder=polyorder,
-                                   exact=exact_derivatives, antiderivatives=antiderivatives)
+    if antiderivatives is not None and (not isinstance(antiderivatives, Mapping) or not all(
+            isinstance(k, str) and isinstance(v, str) for k, v in antiderivatives.items())):
+        raise RecordError(f"{arr.name}: antiderivatives must map signal names to record columns, e.g. "
+                          f"{{'omega_m': 'theta_m'}}, got {antiderivatives!r}")
+
+
+def judge(compiled, points: list[np.ndarray], margin: float, threshold: str) -> tuple[np.ndarray, ...]:
+    """``(residual, lower, upper, bglft, violation)`` at every sample of the point values ``points``.
+
+    Each sample is judged on its own point values (no sample depends on another here), so a stream
+    can judge its samples a batch at a time (:class:`diagnosis.streaming.StreamingEvaluation`).
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> compiled = derive_arrs(rlc_circuit())[0].compiled   # V - 0.1 d1_i - 10 i - v_C
+    >>> V, i, v_C, d1_i = np.array([1.0, 1.0]), np.array([0.1, 0.0]), np.zeros(2), np.zeros(2)
+    >>> residual, lower, upper, bglft, violation = judge(compiled, [V, i, v_C, d1_i], 0.0, "interval")
+    >>> residual.tolist(), violation.tolist()
+    ([0.0, 1.0], [False, True])
+    """
     residual = compiled.residual(points)
     lower, upper = interval_threshold(compiled, points)
     bglft = bglft_threshold(compiled, points)
     lo, hi = (lower, upper) if threshold == "interval" else (-bglft, bglft)
     with np.errstate(invalid="ignore"):
         violation = (-residual < lo - margin) | (-residual > hi + margin)
-    alarm = persistent(violation, persistence)
-    return Evaluation(arr.name, data.t, residual, lower, upper, bglft, float(margin), int(persistence), violation,
-                      alarm, points)
+    return residual, lower, upper, bglft, violation
 
 
 def check_arr(arr: object, caller: str) -> None:

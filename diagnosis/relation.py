@@ -139,6 +139,15 @@ class ARR:
     def __str__(self) -> str:
         return f"{self.name}: r_n = {self.nominal}\n  Psi_2 = {self.uncertain}"
 
+    def __dask_tokenize__(self) -> tuple:
+        """What Dask hashes to name a task that takes this ARR: its fields, not the compiled cache.
+
+        The compiled ARR points back to this one; followed, the cycle made ``dask.base.tokenize``
+        (and so ``Client.submit(f, arr)``) recurse without end.
+        """
+        fields = (f.name for f in dataclasses.fields(self) if f.name != "_compiled")
+        return (type(self).__name__, *(getattr(self, name) for name in fields))
+
     def latex(self) -> str:
         """LaTeX of ``r_n`` and Psi_2, each delta with its parameter as subscript (:func:`diagnosis.deltas.latex`)."""
         return f"r_{{n}} = {latex(self.nominal)}, \\quad \\Psi_2 = {latex(self.uncertain)}"

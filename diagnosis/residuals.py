@@ -63,6 +63,23 @@ class CompiledARR:
     symbols: dict = field(default_factory=dict, repr=False)
     _cache: dict = field(default_factory=dict, repr=False)
 
+    def __getstate__(self) -> dict:
+        """The state without the cached functions: lambdified code and interval evaluators do not pickle.
+
+        They are rebuilt from the expressions on first use, so a compiled ARR shipped to another
+        process (a pool or Dask worker) evaluates exactly as the original.
+
+        >>> import pickle
+        >>> from bondgraph.library import rlc_circuit
+        >>> from diagnosis import derive_arrs
+        >>> compiled = derive_arrs(rlc_circuit())[1].compiled
+        >>> nominal = compiled.function("nominal", compiled.nominal)
+        >>> copy = pickle.loads(pickle.dumps(compiled))
+        >>> copy.function("nominal", copy.nominal)(1.0, 2.0, 3.0) == nominal(1.0, 2.0, 3.0)
+        True
+        """
+        return {**self.__dict__, "_cache": {}}
+
     def cached(self, key: str, build: Callable[[], object]):
         """The value kept under ``key``, made by ``build()`` on first use (lambdified functions, evaluators).
 
@@ -101,16 +118,55 @@ class CompiledARR:
             else:
                 values[symbol] = _trusted(derivative(record, name, order=order, method=method, window=window,
                                                      polyorder=polyorder, name=name), order, method, window, polyorder)
-        for symbol, integrand in self.integrals.items():
-            direct = _from_antiderivatives(integrand, record, antiderivatives or {})
-            if direct is not None:
-                values[symbol] = direct
+        for symbol in self.integrals:
+            terms = self.antiderivative_terms(symbol, antiderivatives or {})
+            if terms is not None:
+                values[symbol] = antiderivative_integral(terms, {c: record[c] for c, _ in terms},
+                                                         {c: record[c][0] for c, _ in terms})
                 continue
-            inputs = [values.get(p, np.zeros(len(record))) for p in self.points]
-            integrand_values = np.broadcast_to(
-                np.asarray(self.function(f"integrand {symbol}", integrand)(*inputs), float), record.t.shape)
-            values[symbol] = cumulative_integral(record, integrand_values, name=str(integrand))
+            values[symbol] = cumulative_integral(record, self.integrand_values(symbol, values, len(record)),
+                                                 name=str(self.integrals[symbol]))
         return [values[p] for p in self.points]
+
+    def integrand_values(self, symbol: sp.Symbol, values: Mapping, samples: int) -> np.ndarray:
+        """The integrand of the integral ``symbol`` at every sample, from the point values known so far.
+
+        ``values`` maps point symbols to arrays of ``samples`` values; a point it does not hold yet (an
+        integral computed after this one) counts as 0, as in :meth:`point_values`, which computes the
+        integrals in order.
+
+        >>> import sympy as sp
+        >>> from bondgraph.library import torsion_bar_monitorable
+        >>> from diagnosis import derive_arrs
+        >>> arr = next(a for a in derive_arrs(torsion_bar_monitorable(), complete=False, integrals="keep")
+        ...            if a.junction == "1_1")
+        >>> compiled = arr.compiled
+        >>> int0 = next(iter(compiled.integrals))
+        >>> compiled.integrals[int0]
+        -omega_Ld + 0.266666666666667*omega_m
+        >>> speeds = {sp.Symbol("omega_Ld"): np.array([1.0, 2.0]), sp.Symbol("omega_m"): np.array([3.0, 6.0])}
+        >>> np.round(compiled.integrand_values(int0, speeds, 2), 6).tolist()
+        [-0.2, -0.4]
+        """
+        inputs = [values.get(p, np.zeros(samples)) for p in self.points]
+        return np.broadcast_to(np.asarray(self.function(f"integrand {symbol}", self.integrals[symbol])(*inputs),
+                                          float), (samples,))
+
+    def antiderivative_terms(self, symbol: sp.Symbol, antiderivatives: Mapping) -> list[tuple[str, float]] | None:
+        """``[(column, c_i), ...]`` when the integrand of ``symbol`` is ``sum c_i x_i`` and every ``x_i`` has its
+        antiderivative in a record column (``antiderivatives``: signal -> column), else None.
+
+        The integral is then ``sum c_i (X_i(t) - X_i(t_0))`` (:func:`antiderivative_integral`), read from
+        the columns rather than integrated from noisy samples.
+        """
+        integrand = self.integrals[symbol]
+        symbols = {sp.Symbol(signal): column for signal, column in antiderivatives.items()}
+        if not integrand.free_symbols or not integrand.free_symbols <= set(symbols):
+            return None
+        coefficients = {x: sp.diff(integrand, x) for x in sorted(integrand.free_symbols, key=str)}
+        if any(not c.is_number for c in coefficients.values()) or integrand.xreplace({x: 0 for x in coefficients}) != 0:
+            return None
+        return [(symbols[x], float(c)) for x, c in coefficients.items()]
 
     def residual(self, points: list[np.ndarray]) -> np.ndarray:
         """The nominal residual ``r_n`` at every sample."""
@@ -118,34 +174,44 @@ class CompiledARR:
                                points[0].shape if points else ()).copy()
 
 
-def _trusted(values: np.ndarray, order: int, method: str, window: int | None, polyorder: int) -> np.ndarray:
-    """A derivative of order 2 or more, NaN (undecided) where its stencil leaves the record.
+def trusted_edge(order: int, method: str, window: int | None, polyorder: int) -> int:
+    """How many samples at each end of a record a derivative of this order is left undecided (NaN).
 
     At the ends of a record the estimate extrapolates a one-sided fit; a first derivative stays close,
     a second one does not (a start-up transient's curvature, and noise, come out tens of times too
-    large), so those samples are left undecided rather than compared with a threshold.
+    large), so those samples are left undecided rather than compared with a threshold: half a
+    Savitzky-Golay window, or ``order`` samples for central differences.
+
+    >>> trusted_edge(1, "savgol", None, 3), trusted_edge(2, "savgol", None, 3), trusted_edge(2, "central", None, 3)
+    (0, 5, 2)
     """
     if order < 2 or method not in ("savgol", "central"):
+        return 0
+    return (window or default_window(polyorder)) // 2 if method == "savgol" else order
+
+
+def _trusted(values: np.ndarray, order: int, method: str, window: int | None, polyorder: int) -> np.ndarray:
+    """A derivative of order 2 or more, NaN (undecided) within :func:`trusted_edge` samples of either end."""
+    edge = trusted_edge(order, method, window, polyorder)
+    if not edge:
         return values
-    edge = (window or default_window(polyorder)) // 2 if method == "savgol" else order
     trusted = np.array(values, dtype=float, copy=True)
     trusted[:edge] = np.nan
     trusted[len(trusted) - edge:] = np.nan
     return trusted
 
 
-def _from_antiderivatives(integrand: sp.Expr, record: Record, antiderivatives: Mapping) -> np.ndarray | None:
-    """``int_0^t sum(c_i x_i) = sum c_i (X_i(t) - X_i(0))`` when every ``x_i`` has its antiderivative ``X_i``."""
-    symbols = {sp.Symbol(signal): column for signal, column in antiderivatives.items()}
-    if not integrand.free_symbols or not integrand.free_symbols <= set(symbols):
-        return None
-    coefficients = {x: sp.diff(integrand, x) for x in integrand.free_symbols}
-    if any(not c.is_number for c in coefficients.values()) or integrand.xreplace({x: 0 for x in coefficients}) != 0:
-        return None
-    total = np.zeros(len(record))
-    for x, c in coefficients.items():
-        position = record[symbols[x]]
-        total += float(c) * (position - position[0])
+def antiderivative_integral(terms: list[tuple[str, float]], columns: Mapping, origin: Mapping) -> np.ndarray:
+    """``sum c_i (X_i - X_i(t_0))`` for ``terms`` from :meth:`CompiledARR.antiderivative_terms`.
+
+    ``columns``: column -> its samples; ``origin``: column -> its value at the record's first sample.
+
+    >>> antiderivative_integral([("theta", 2.0)], {"theta": np.array([1.0, 1.5, 3.0])}, {"theta": 1.0}).tolist()
+    [0.0, 1.0, 4.0]
+    """
+    total = np.zeros(np.shape(columns[terms[0][0]]))
+    for column, c in terms:
+        total += c * (columns[column] - origin[column])
     return total
 
 

@@ -91,6 +91,8 @@ __all__ = [
     "as_record",
     "cumulative_integral",
     "read_csv",
+    "central_derivative",
+    "check_savgol_settings",
     "default_window",
     "derivative",
 ]
@@ -200,7 +202,7 @@ class Record:
         return f"Record({self.name!r}, {len(self)} samples, t in {span}, signals {list(self.columns)})"
 
 
-def as_record(data: object, signals: Iterable[str] = (), *, name: str = "record") -> Record:
+def as_record(data: object, signals: Iterable[str] = (), *, name: str = "record", min_samples: int = 3) -> Record:
     """Check recorded data and copy it into a :class:`Record`.
 
     Parameters
@@ -214,6 +216,9 @@ def as_record(data: object, signals: Iterable[str] = (), *, name: str = "record"
         columns are neither checked nor kept.
     name : str, optional
         The record's name, used in messages.
+    min_samples : int, optional
+        The fewest samples accepted: 3 for a record, 0 for a micro-batch of a stream
+        (:class:`diagnosis.streaming.StreamingEvaluation` checks its batches here).
 
     Returns
     -------
@@ -247,7 +252,7 @@ def as_record(data: object, signals: Iterable[str] = (), *, name: str = "record"
     arrays = {col: _float_column(table[col], col, name) for col in (TIME, *wanted)}
     _check_lengths(arrays, name)
     t = arrays.pop(TIME)
-    _check_time(t, name)
+    _check_time(t, name, min_samples)
     _check_magnitude(t, TIME, t, name)
     for col, x in arrays.items():
         _check_no_inf(x, col, t, name)
@@ -481,9 +486,9 @@ def _check_lengths(arrays: dict, name: str) -> None:
         raise RecordError(f"{name}: columns of different lengths: {TIME!r} has {n} samples, " + ", ".join(wrong))
 
 
-def _check_time(t: np.ndarray, name: str) -> None:
-    if t.size < 3:
-        raise RecordError(f"{name}: column {TIME!r} has {t.size} samples; at least 3 are needed")
+def _check_time(t: np.ndarray, name: str, min_samples: int = 3) -> None:
+    if t.size < min_samples:
+        raise RecordError(f"{name}: column {TIME!r} has {t.size} samples; at least {min_samples} are needed")
     bad = np.flatnonzero(~np.isfinite(t))
     if bad.size:
         i = int(bad[0])
@@ -595,7 +600,7 @@ def derivative(
     if exact is not None:
         raise RecordError(f"signal {name!r}: exact= is only used with method='exact', not {method!r}")
     if method == "central":
-        return _central(record.t, values, order)
+        return central_derivative(record.t, values, order)
     if method == "savgol":
         window = default_window(polyorder) if window is None else window
         _check_savgol(record, name, order, window, polyorder)
@@ -683,15 +688,39 @@ def _exact(record: Record, exact: object, name: str) -> np.ndarray:
     return _checked_signal(record, exact, f"exact derivative of {name}")
 
 
-def _central(t: np.ndarray, x: np.ndarray, order: int) -> np.ndarray:
+def central_derivative(t: np.ndarray, x: np.ndarray, order: int) -> np.ndarray:
+    """The ``order``-th derivative by second-order differences (:func:`numpy.gradient`, applied ``order`` times).
+
+    The computation behind ``derivative(method="central")``, without its checks: ``t`` strictly
+    increasing with at least 3 samples, ``x`` of the same length.  A value depends on the ``order``
+    samples either side of it (one-sided stencils at the ends), so a stream can evaluate it on its
+    last samples alone.
+
+    >>> t = np.array([0.0, 1.0, 3.0, 4.0])
+    >>> np.round(central_derivative(t, t**2, 1), 12).tolist()   # exact for quadratics, on any grid
+    [0.0, 2.0, 6.0, 8.0]
+    """
     # np.gradient is local, so NaN spreads only as far as its stencil reaches
     d = x
     for _ in range(order):
+        gap = np.isnan(d)
         d = np.gradient(d, t, edge_order=2)
+        # on exactly equal steps numpy's formula gives the middle sample weight 0, skipping a gap's own
+        # sample; on any other grid it is NaN there: the same record must not depend on the last bits of t
+        d[gap] = np.nan
     return d
 
 
-def _check_savgol(record: Record, name: str, order: int, window: object, polyorder: object) -> None:
+def check_savgol_settings(name: str, order: int, window: object, polyorder: object) -> None:
+    """Raise a :class:`RecordError` naming the signal unless ``window`` and ``polyorder`` suit a Savitzky-Golay
+    derivative of this order: ``polyorder`` an integer >= ``order``, ``window`` odd and > ``polyorder``.
+
+    >>> check_savgol_settings("i", 1, window=11, polyorder=3)
+    >>> check_savgol_settings("i", 1, window=10, polyorder=3)
+    Traceback (most recent call last):
+    ...
+    diagnosis.signals.RecordError: signal 'i': window must be an odd number of samples > polyorder 3, got 10
+    """
     if isinstance(polyorder, bool) or not isinstance(polyorder, numbers.Integral) or polyorder < order:
         raise RecordError(f"signal {name!r}: polyorder must be an integer >= the derivative order {order}, "
                           f"got {polyorder!r}")
@@ -699,6 +728,10 @@ def _check_savgol(record: Record, name: str, order: int, window: object, polyord
             or window <= polyorder:
         raise RecordError(f"signal {name!r}: window must be an odd number of samples > polyorder {polyorder}, "
                           f"got {window!r}")
+
+
+def _check_savgol(record: Record, name: str, order: int, window: object, polyorder: object) -> None:
+    check_savgol_settings(name, order, window, polyorder)
     if not record.is_uniform:
         raise RecordError(f"signal {name!r}: method='savgol' needs uniform sampling, but steps deviate from "
                           f"the median step {record.dt:g} by up to {_step_deviation(record.t):.2%}; "

@@ -39,10 +39,12 @@ PACKAGES = [
     ("diagnosis", "ARRs, intervals, thresholds, signatures, detection", ["diagnosis.signals"]),
     ("diagnosis.intervals", "outward-rounded interval arithmetic and the sympy-to-interval compiler", []),
     ("prognosis", "degradation laws, observation model, particle filter, RUL, metrics, health monitoring",
-     ["prognosis.metrics"]),
+     ["prognosis.metrics", "prognosis.seeds"]),
     ("prognosis.statespace", "discrete models, Kalman filters, bootstrap filter, consistency, look-ahead, ROS-ELM", []),
     ("prognosis.identification", "linear Gaussian models by EM, fault trend, posterior predictive", []),
     ("prognosis.lifecontrol", "energy-driven deterioration, Chebyshev bounds, Monte Carlo RUL, RUL control", []),
+    ("prognosis.fleet", "many assets in one vectorized filter: streaming, checkpoints, closed-form RUL, tables",
+     ["prognosis.streams", "prognosis.fleet.rul"]),
     ("bgphm", "command line, plots and long runs", ["bgphm.plotting", "bgphm.runs"]),
     ("bgphm.fleet", "fleets on Dask workers, from records to Parquet tables (guide: [docs/fleet.md](fleet.md))", []),
 ]

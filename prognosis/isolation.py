@@ -31,6 +31,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from . import seeds
 from .degradation import PerAssetDegradation, degradation_model
 from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, rate_prior,
                          sensitivity, signature_candidates)
@@ -38,6 +39,7 @@ from .monitor import MonitorResult, filter_stride
 from .observation import observation_model
 from .particle_filter import KernelSmoothing, ParticleFilter, check_particles, check_positive
 from .rul import RULDistribution, RULPredictor
+from .seeds import check_seed
 
 __all__ = ["Decision", "IsolatingMonitor", "IsolationResult", "decide"]
 
@@ -256,7 +258,9 @@ class IsolatingMonitor:
         Parameter -> open interval ``(lo, hi)`` of its physical domain, as the model declares it
         (:attr:`bondgraph.BondGraph.domains`); a hypothesis whose estimate leaves it is rejected.
         A parameter not given keeps the sign of its nominal value (:func:`~prognosis.hypotheses.physical_domain`).
-    seed : int
+    seed : int or numpy.random.SeedSequence
+        The filter, the prior of the rates and each hypothesis' RUL predictor draw from streams of
+        their own spawned from it (:mod:`prognosis.seeds`), so no two seeds share a stream.
 
     Examples
     --------
@@ -286,7 +290,7 @@ class IsolatingMonitor:
                  rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
                  rul_every: int = 10, horizon: float | None = None, detection: Mapping | None = None,
                  min_ratio: float = EVIDENCE_RATIO, healthy_until: float | None = None,
-                 domains: Mapping[str, tuple] | None = None, seed: int = 0):
+                 domains: Mapping[str, tuple] | None = None, seed: int | np.random.SeedSequence = 0):
         self.arrs = list(arrs)
         self.failures = {str(k): float(v) for k, v in failures.items()}
         parameters = {p: a.values[p] for a in self.arrs for p in a.parameters}
@@ -322,7 +326,7 @@ class IsolatingMonitor:
         self.rul_every = int(rul_every)
         self.horizon = HORIZON_STEPS * self.dt if horizon is None else check_positive(horizon, "horizon")
         self.detection = dict(detection or {})
-        self.min_ratio, self.seed = float(min_ratio), int(seed)
+        self.min_ratio, self.seed = float(min_ratio), check_seed(seed)
         self.domains = {str(k): (float(v[0]), float(v[1])) for k, v in (domains or {}).items()}
         for name, (lo, hi) in self.domains.items():
             if name in self.failures and not lo <= self.failures[name] <= hi:
@@ -339,7 +343,7 @@ class IsolatingMonitor:
         order).  ``progress(done, total, t)`` is called after every 1 % of the filter steps.
         """
         if evaluations is None:
-            evaluations = [a.evaluate(record, **self._options(a)) for a in self.arrs]
+            evaluations = [a.evaluate(record, **self.options_for(a)) for a in self.arrs]
         elif len(evaluations) != len(self.arrs):
             raise ValueError(f"evaluations: {len(evaluations)} given for {len(self.arrs)} ARRs")
         result = IsolationResult(None, evaluations=evaluations, min_ratio=self.min_ratio)
@@ -359,18 +363,19 @@ class IsolatingMonitor:
         arrs = [self.arrs[i] for i in used]
         result.arrs = [a.name for a in arrs]
         result.groups = indistinguishable_groups(arrs, result.candidates)
-        result.hypotheses, result.rejected = self._hypotheses(result.candidates)
+        result.hypotheses, result.rejected = self.hypotheses_for(result.candidates)
         self._filter(result, [evaluations[i] for i in used], arrs, k, progress)
         return result
 
-    def _options(self, arr) -> dict:
+    def options_for(self, arr) -> dict:
         """This ARR's detection options: its own entry when ``detection`` is keyed by ARR name, else the shared ones."""
         names = {a.name for a in self.arrs}
         if self.detection and set(self.detection) <= names:
             return dict(self.detection.get(arr.name, {}))
         return dict(self.detection)
 
-    def _hypotheses(self, candidates: list) -> tuple[list, dict]:
+    def hypotheses_for(self, candidates: list) -> tuple[list, dict]:
+        """Every candidate with every law, and those rejected before any data (name -> reason)."""
         hypotheses, rejected = [], {}
         for c in candidates:
             for law in self.laws:
@@ -383,16 +388,16 @@ class IsolatingMonitor:
 
     def _filter(self, result: IsolationResult, evaluations: list, arrs: list, k0: int, progress) -> None:
         hypotheses = result.hypotheses
-        rng = np.random.default_rng([self.seed, 1])
+        rng = seeds.generator(self.seed, seeds.RATE_PRIOR)
         noise = np.array([self.noise_std[a.name] for a in arrs])
-        starts = [self._start(h, evaluations, arrs, k0, noise) for h in hypotheses]
+        starts = [self.start_interval(h, evaluations, arrs, k0, noise) for h in hypotheses]
         # a model per row: sigma_v is on the scale of each candidate
-        models = tuple(self._law(h.law, s[2]) for h, s in zip(hypotheses, starts))
+        models = tuple(self.law(h.law, s[2]) for h, s in zip(hypotheses, starts))
         model = PerAssetDegradation(models, tuple(range(len(models))))
         pf = ParticleFilter(model, HypothesisObservation(arrs, hypotheses), n_particles=self.n_particles, dt=self.dt,
                             noise_std=noise, inflation=self.inflation, gamma_std=0.0,
-                            adaptation=KernelSmoothing(self.discount), seed=self.seed)
-        gamma0 = np.stack([self._rate_particles(h, rng) for h in hypotheses])[..., None]
+                            adaptation=KernelSmoothing(self.discount), seed=seeds.spawn(self.seed, seeds.FILTER))
+        gamma0 = np.stack([self.rate_particles(h, rng) for h in hypotheses])[..., None]
         pf.initialize((np.array([s[0] for s in starts]), np.array([s[1] for s in starts])), gamma0=gamma0,
                       assets=len(hypotheses))
         t = evaluations[0].t
@@ -401,7 +406,7 @@ class IsolatingMonitor:
         every = -(-len(steps) // 100)
         rows, rul_t, rul, decisions = [], [], [], []
         predictors, away = {}, np.zeros(len(hypotheses), int)
-        boxes = np.array([self._box(h, arrs) for h in hypotheses])
+        boxes = np.array([self.healthy_box(h, arrs) for h in hypotheses])
         for done, k in enumerate(steps, 1):
             y = np.array([-e.residual[k] for e in evaluations])
             points = [[p[k] for p in e.points] for e in evaluations]
@@ -426,7 +431,7 @@ class IsolatingMonitor:
             setattr(result, name, {"mean": mean, "rmad": rmad, "quantiles": quantiles})
         result.rul_t, result.rul, result.decisions = np.array(rul_t), rul, decisions
 
-    def _start(self, h: Hypothesis, evaluations: list, arrs: list, k: int, noise: np.ndarray):
+    def start_interval(self, h: Hypothesis, evaluations: list, arrs: list, k: int, noise: np.ndarray):
         """(lo, hi) of theta at the alarm and sigma_v, for one hypothesis.
 
         The uncertainty interval widened to the values of theta that explain the residual on the
@@ -443,7 +448,7 @@ class IsolatingMonitor:
                        for m in seeing}
         best = max(seeing, key=lambda m: information[m] if np.isfinite(information[m]) else -1.0)
         arr, evaluation = arrs[best], evaluations[best]
-        box = self._box(h, [arr])
+        box = self.healthy_box(h, [arr])
         bracket = (min(box[0], h.failure), max(box[1], h.failure))
         explained = models[best].invert(-evaluation.residual[window], points[best], bracket)
         explained = np.clip(explained[np.isfinite(explained)], *bracket)
@@ -454,7 +459,7 @@ class IsolatingMonitor:
         return start[0], start[1], self.process_noise * resolution
 
     @staticmethod
-    def _box(h: Hypothesis, arrs: list) -> tuple[float, float]:
+    def healthy_box(h: Hypothesis, arrs: list) -> tuple[float, float]:
         """The candidate's healthy values: its uncertainty box around nominal (the nominal alone without one)."""
         lo, hi = next((a.uncertainties[h.candidate] for a in arrs if h.candidate in a.uncertainties), (0.0, 0.0))
         return tuple(sorted((h.nominal * (1 + lo), h.nominal * (1 + hi))))
@@ -484,11 +489,13 @@ class IsolatingMonitor:
                     "on the wrong side?)")
         return away
 
-    def _law(self, name: str, process_noise: float):
+    def law(self, name: str, process_noise: float):
+        """The degradation model of law ``name``: the user's, or the built-in one with ``process_noise``."""
         model = self.laws[name]
         return degradation_model(name, process_noise) if model is None else model
 
-    def _rate_particles(self, h: Hypothesis, rng: np.random.Generator) -> np.ndarray:
+    def rate_particles(self, h: Hypothesis, rng: np.random.Generator) -> np.ndarray:
+        """Initial rate particles of a hypothesis: the ``rate`` interval, or the prior on the life."""
         if self.rate is not None:
             return rng.uniform(*self.rate, self.n_particles)
         return rate_prior(h, self.dt, self.n_particles, rng, self.life)
@@ -513,7 +520,8 @@ class IsolatingMonitor:
                 continue
             if row not in predictors:
                 predictors[row] = RULPredictor(models[row], dt=self.dt, theta_fail=h.failure,
-                                               direction=h.direction, horizon=self.horizon, seed=self.seed + 1 + row)
+                                               direction=h.direction, horizon=self.horizon,
+                                               seed=seeds.spawn(self.seed, seeds.PREDICTORS, row))
             prediction = predictors[row].predict(pf.theta[row:row + 1], pf.gamma[row:row + 1], weights[row:row + 1],
                                                  0.0, key=key)
             samples.append(prediction.samples[0])

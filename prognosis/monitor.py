@@ -4,10 +4,11 @@ Detection with the candidate's I-ARR (:mod:`diagnosis`) runs until the first
 alarm; the particle filter then starts from the candidate's uncertainty
 interval (eq. 39), takes ``y = -r_n`` every ``dt`` seconds, and predicts the
 RUL every ``rul_every`` filter steps.  :meth:`HealthMonitor.run` processes a
-whole record; :meth:`HealthMonitor.update` takes one sample at a time and
-processes every filter step whose sample is at least half a derivative
-window old (the Savitzky-Golay estimate is centred), so online results lag
-the newest sample by that half window.  Results are deterministic for a seed.
+whole record; :meth:`HealthMonitor.update` takes a sample (or a micro-batch) at a
+time, evaluates it online (:class:`diagnosis.StreamingEvaluation`) and processes
+every filter step whose sample is at least half a derivative window old (the
+Savitzky-Golay estimate is centred), so online results lag the newest sample by
+that half window.  Results are deterministic for a seed.
 """
 
 from __future__ import annotations
@@ -18,12 +19,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bondgraph._optional import pandas_for
-from diagnosis.signals import default_window
+from diagnosis.streaming import StreamChunk, StreamingEvaluation
 
-from . import metrics
+from . import metrics, seeds
 from .particle_filter import ParticleFilter, VarianceAdaptation, check_particles, check_positive
 from .observation import observation_model
 from .rul import ParallelRUL, RULPredictor
+from .seeds import check_seed
 
 
 @dataclass
@@ -173,6 +175,14 @@ def filter_stride(t: np.ndarray, dt: float) -> int:
     return stride
 
 
+def _tail(chunk: StreamChunk, count: int) -> StreamChunk:
+    """The last ``count`` samples of a chunk of a stream."""
+    keep = slice(max(0, len(chunk) - count), None)
+    return StreamChunk(chunk.name, chunk.t[keep], chunk.residual[keep], chunk.lower[keep], chunk.upper[keep],
+                       chunk.bglft[keep], chunk.margin, chunk.persistence, chunk.violation[keep], chunk.alarm[keep],
+                       [p[keep] for p in chunk.points], chunk.start + keep.indices(len(chunk))[0])
+
+
 def _number(value) -> float | None:
     return None if value is None or not np.isfinite(value) else float(value)
 
@@ -201,7 +211,8 @@ class HealthMonitor:
         by the time a degradation is detected, theta has usually left the uncertainty interval.
     theta_bounds : (lo, hi), optional
         Replaces the candidate's uncertainty interval (needed when the ARR gives none).
-    adaptation : VarianceAdaptation, optional
+    adaptation : VarianceAdaptation or KernelSmoothing, optional
+        The filter works on its own copy, so one object can configure several monitors.
     prediction_walk : float
         Scale of the random-walk standard deviation of gamma in the RUL
         prediction: 1 propagates gamma with the current adapted variance as in
@@ -214,7 +225,19 @@ class HealthMonitor:
     detection : mapping
         Options of :func:`diagnosis.evaluate` (``margin``, ``persistence``,
         ``antiderivatives``, ``method``...).
-    seed : int
+    seed : int or numpy.random.SeedSequence
+        The filter and the RUL predictor draw from streams of their own spawned from it
+        (:mod:`prognosis.seeds`), so no two seeds share a stream.
+
+    Notes
+    -----
+    A monitor pickles with the standard library (to a pool or Dask worker, or to disk): the
+    lambdified observation and residual functions and the RUL noise bank (16 MB for 500 particles
+    over 2000 steps) are left out and rebuilt on first use, so an unpickled monitor gives the same
+    results bit for bit.  A monitor pickled after :meth:`run` also leaves out the result that run
+    returned (pickle the :class:`MonitorResult` itself to ship it), so it stays small: 18 kB on the
+    torsion bar's 100 s record with 500 particles, against 18 MB with the bank and the result.  A
+    monitor fed by :meth:`update` pickles whole, its history included, and goes on where it stood.
     """
 
     def __init__(self, arr, candidate: str, model, *, theta_fail: float, direction: str = "up", dt: float = 0.1,
@@ -222,7 +245,7 @@ class HealthMonitor:
                  gamma0=0.0, gamma_bounds=None, start: str = "residual", theta_bounds=None,
                  adaptation: VarianceAdaptation | None = None, resampling: str = "systematic",
                  resample_below: float = 1.0, prediction_walk: float = 1.0, rul_every: int = 1, horizon: float = 200.0,
-                 detection: Mapping | None = None, seed: int = 0):
+                 detection: Mapping | None = None, seed: int | np.random.SeedSequence = 0):
         if isinstance(noise_std, Mapping):
             raise ValueError(f"noise_std: HealthMonitor watches one ARR; give the standard deviation of its residual "
                              f"as one number, got a {type(noise_std).__name__}")
@@ -241,9 +264,11 @@ class HealthMonitor:
         if (direction == "up") != (theta_fail > nominal):
             raise ValueError(f"failure value {theta_fail} of {candidate!r} is on the wrong side of its nominal "
                              f"value {nominal} for direction {direction!r}")
+        seed = check_seed(seed)
         self.filter = ParticleFilter(model, self.observation, n_particles=n_particles, dt=dt, noise_std=noise_std,
                                      inflation=inflation, gamma_std=gamma_std, adaptation=adaptation,
-                                     resampling=resampling, resample_below=resample_below, seed=seed)
+                                     resampling=resampling, resample_below=resample_below,
+                                     seed=seeds.spawn(seed, seeds.FILTER))
         if prediction_walk < 0:
             raise ValueError(f"prediction_walk must be >= 0, got {prediction_walk}")
         if isinstance(rul_every, bool) or int(rul_every) != rul_every or rul_every < 1:
@@ -252,8 +277,7 @@ class HealthMonitor:
         self.prediction_walk = float(prediction_walk)
         self.detection = dict(detection or {})
         self.predictor = RULPredictor(model, dt=dt, theta_fail=theta_fail, direction=direction, horizon=horizon,
-                                      seed=seed + 1)
-        self._buffer: list = []
+                                      seed=seeds.spawn(seed, seeds.RUL))
         self._reset()
 
     def _reset(self) -> None:
@@ -262,8 +286,19 @@ class HealthMonitor:
         self._rul_t: list = []
         self._next_index = None
         self._steps = 0
-        self._processed = -1
+        self._stream = None  # the online evaluation of update()
+        self._recent = None  # its last final samples: the alarm's window, and the step
         self._pool = None
+        self._finished = False  # a whole record was run: its result is output, not state to go on from
+
+    def __getstate__(self) -> dict:
+        """The state to pickle: the ARR and observation drop their lambdified functions, the predictor
+        its noise bank (each rebuilt on first use); after :meth:`run`, the result it returned is left
+        out too (the record-sized evaluation and every RUL distribution: output, not state)."""
+        state = {**self.__dict__, "_pool": None}
+        if self._finished:
+            state.update(result=MonitorResult(None), _rows=[], _rul_t=[], _finished=False)
+        return state
 
     # -- whole record -------------------------------------------------------
     def run(self, record, *, workers: int = 1,
@@ -277,6 +312,9 @@ class HealthMonitor:
         holds from the alarm on and the time of the last step done, after every 1 % of the steps
         and after the last one (never without an alarm).  An exception it raises, such as
         ``KeyboardInterrupt``, stops the run and propagates; pending predictions are cancelled.
+
+        The result stays available as :attr:`result` in this process; a copy of the monitor
+        pickled after the run travels without it (see the class notes).
         """
         self._reset()
         if workers > 1:
@@ -295,25 +333,51 @@ class HealthMonitor:
                     self._pool = None
         else:
             self._advance(record, last=None, progress=progress)
-        return self._finish()
+        result = self._finish()
+        self._finished = True
+        return result
 
     # -- one sample at a time ------------------------------------------------
     def update(self, sample: Mapping) -> MonitorResult:
-        """Append one sample (``t`` and the signals) and process what has become final."""
-        self._buffer.append(dict(sample))
-        final = len(self._buffer) - 1 - self._half_window()  # samples whose centred derivative is known
-        # re-evaluate once per filter step's worth of samples: O(n) work per stride, not per sample
-        recent = np.array([row["t"] for row in self._buffer[-3:]], float)
-        if len(self._buffer) < 2 * self._half_window() + 3 or final - self._processed < self._stride(recent):
-            return self._finish()
-        record = {key: np.array([row[key] for row in self._buffer], float) for key in self._buffer[0]}
-        self._advance(record, last=final)
-        self._processed = final
+        """Append samples and process what has become final.
+
+        ``sample``: ``t`` and the signals, numbers for one sample or arrays for a micro-batch.  The
+        ARR is evaluated online (:class:`diagnosis.StreamingEvaluation`): every sample is evaluated
+        once, from a ring buffer of the derivative window and running integrals, so a sample costs
+        the same after 10^6 samples as after 10^3.  The result grows by one row per filter step and
+        one RUL distribution per prediction; for streams without end,
+        :meth:`prognosis.fleet.FleetMonitor.update` hands its rows over instead of keeping them.
+        """
+        self._finished = False
+        columns = {str(k): np.atleast_1d(np.asarray(v, float)) for k, v in sample.items()}
+        if "t" not in columns:
+            raise ValueError(f"update: the sample has no 't' (columns: {', '.join(columns)})")
+        if self._stream is None:
+            self._stream = StreamingEvaluation(self.arr, **self.detection)
+        chunk = self._stream.push(columns.pop("t"), columns)
+        if len(chunk):
+            self._consume(chunk)
         return self._finish()
 
-    def _half_window(self) -> int:
-        window = self.detection.get("window") or default_window(self.detection.get("polyorder", 3))
-        return window // 2
+    def _consume(self, chunk) -> None:
+        """Detection, then the filter steps due, on the samples of a stream that became final."""
+        self.result.evaluation = chunk
+        joined = chunk if self._recent is None else StreamChunk.concatenate([self._recent, chunk])
+        offset = len(joined) - len(chunk)
+        if self.result.detection_time is None:
+            alarms = np.flatnonzero(chunk.alarm)
+            if alarms.size:
+                k = offset + int(alarms[0])
+                self.result.detection_time = float(joined.t[k])
+                self.filter.initialize(self._start_bounds(joined, k), self.gamma0, gamma_bounds=self.gamma_bounds)
+                self._next_index = chunk.start + int(alarms[0])
+        if self._next_index is not None and len(joined) >= 2:
+            stride = self._stride(joined.t[:2])
+            while self._next_index < chunk.start + len(chunk):
+                i = self._next_index - joined.start
+                self._filter_step(joined.t[i], -joined.residual[i], [p[i:i + 1] for p in joined.points])
+                self._next_index += stride
+        self._recent = _tail(joined, max(chunk.persistence, 2))
 
     # -- shared ----------------------------------------------------------------
     def _advance(self, record, last: int | None, progress: Callable | None = None) -> None:

@@ -69,6 +69,10 @@ class ObservationModel:
     coefficient: sp.Expr | None
     _function: object = field(default=None, init=False, repr=False)
 
+    def __getstate__(self) -> dict:
+        """The state without the lambdified ``h`` (generated code does not pickle); :meth:`function` rebuilds it."""
+        return {**self.__dict__, "_function": None}
+
     @property
     def symbol(self) -> sp.Symbol:
         """The sympy symbol of the candidate, the variable theta of ``expression``."""

@@ -21,6 +21,7 @@ start value (0 in the paper).
 
 from __future__ import annotations
 
+import copy
 import math
 import numbers
 from collections import deque
@@ -30,6 +31,7 @@ import numpy as np
 
 from .metrics import rmad, weighted_quantiles
 from .resampling import effective_sample_size, get_scheme, normalize_log_weights
+from .seeds import check_seed
 
 
 @dataclass
@@ -222,12 +224,15 @@ class ParticleFilter:
         Multiplier of sigma_w^2 in the likelihood (Jha et al. (2016): 4 or 9).
     gamma_std : float or sequence (G,)
         Initial random-walk standard deviation of each gamma.
-    adaptation : VarianceAdaptation, optional
+    adaptation : VarianceAdaptation or KernelSmoothing, optional
+        Copied (:func:`copy.deepcopy`): the filter keeps its moving averages in its own copy, so
+        one object can configure several filters without mixing their averages.
     resampling : str
         ``"systematic"`` (default), ``"stratified"``, ``"residual"`` or ``"multinomial"``.
     resample_below : float
         Resample when ESS < resample_below * N; 1.0 resamples at every step.
-    seed : int
+    seed : int or numpy.random.SeedSequence
+        Seed of the filter's generator (:func:`numpy.random.default_rng`).
 
     Examples
     --------
@@ -249,7 +254,7 @@ class ParticleFilter:
 
     def __init__(self, model, observation, *, n_particles: int = 500, dt: float = 0.1, noise_std=0.01,
                  inflation: float = 4.0, gamma_std=0.02, adaptation: VarianceAdaptation | None = None,
-                 resampling: str = "systematic", resample_below: float = 1.0, seed: int = 0):
+                 resampling: str = "systematic", resample_below: float = 1.0, seed: int | np.random.SeedSequence = 0):
         n_particles = check_particles(n_particles)
         if inflation <= 0:
             raise ValueError(f"inflation must be positive, got {inflation}")
@@ -262,10 +267,11 @@ class ParticleFilter:
         if self.initial_variance.size != model.n_gamma:
             raise ValueError(f"gamma_std has {self.initial_variance.size} entries; "
                              f"the model has {model.n_gamma} gammas")
-        self.adaptation = adaptation
+        # a copy of its own: a shared adaptation object would average gamma over every filter using it
+        self.adaptation = copy.deepcopy(adaptation)
         self.resample = get_scheme(resampling)
         self.resample_below = resample_below
-        self.rng = np.random.default_rng(seed)
+        self.rng = np.random.default_rng(check_seed(seed))
         self.theta = self.gamma = self.log_weights = self.variance = self.log_evidence = None
 
     def initialize(self, theta_bounds, gamma0=0.0, assets: int = 1, gamma_bounds=None) -> None:

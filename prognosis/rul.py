@@ -15,17 +15,24 @@ particles as ``+inf``.
 
 from __future__ import annotations
 
+import numbers
 import signal
+import warnings
+from concurrent.futures import Future
 from dataclasses import dataclass
 
 import numpy as np
 
+from bondgraph.errors import PHMWarning
+
 from .degradation import LinearDegradation
 from .metrics import weighted_quantiles
+from .seeds import check_seed, generator
 
 MAX_HORIZON_STEPS = 1_000_000  # a horizon longer than this many filter steps is refused
 BANK_BYTES_PER_STEP = 16  # per particle and horizon step: four float32 banks (Z, CW, V, CV)
 MAX_BANK_BYTES = 2**31  # the random-number bank of one predictor (rows x steps x 16 bytes) stays under 2 GiB
+_BANK, _DRAWS, _KEYED = 0, 1, 2  # a predictor's streams under its seed: the bank, unkeyed and keyed predictions
 
 
 def check_horizon(horizon: float, dt: float, particles: int = 0, predictors: int = 1) -> int:
@@ -221,9 +228,18 @@ class RULPredictor:
     direction : {"up", "down"}
     horizon : float
         Cap (s); particles that have not failed by then are censored.
-    seed : int
+    seed : int or numpy.random.SeedSequence
+        The bank, the permutations of unkeyed predictions and each keyed prediction draw from their own
+        streams of it (:mod:`prognosis.seeds`).
     chunk : int
         Most steps propagated at once (chunks start at ``min(chunk, 64)`` steps and double up to it).
+
+    Notes
+    -----
+    The bank (16 bytes per particle and horizon step, 16 MB for 500 particles over 2000 steps) is a
+    function of the seed and of its number of rows alone, so it is not pickled: a predictor sent to
+    another process rebuilds it on its first prediction, as large as it was, and predicts exactly
+    as the original would.
 
     Examples
     --------
@@ -249,28 +265,37 @@ class RULPredictor:
     """
 
     def __init__(self, model, *, dt: float, theta_fail: float, direction: str = "up", horizon: float = 200.0,
-                 seed: int = 0, chunk: int = 512):
+                 seed: int | np.random.SeedSequence = 0, chunk: int = 512):
         if direction not in ("up", "down"):
             raise ValueError(f"direction must be 'up' or 'down', got {direction!r}")
         self.steps = check_horizon(horizon, dt)
         self.model, self.dt, self.theta_fail, self.direction = model, dt, theta_fail, direction
         self.horizon, self.chunk = horizon, chunk
-        self.seed = seed
-        self.rng = np.random.default_rng(seed)
+        self.seed = check_seed(seed)
+        self.rng = generator(self.seed, _DRAWS)
         self._bank = None
+        self._bank_size = 0  # rows of the bank, kept when the bank itself is dropped (pickling)
         self._draws = None
+
+    def __getstate__(self) -> dict:
+        """The state without the noise bank (tens of MB), rebuilt from the seed on the next prediction."""
+        return {**self.__dict__, "_bank": None, "_draws": None}
 
     def _generator(self) -> np.random.Generator:
         return self._draws if self._draws is not None else self.rng
 
     def _bank_rows(self, rows: int):
         if self._bank is None or self._bank["Z"].shape[0] < rows:
+            # as many rows as before (the permutations depend on the bank's size), more if needed
+            rows = max(rows, self._bank_size)
             check_horizon(self.horizon, self.dt, particles=rows)
-            z = self.rng.standard_normal((rows, self.steps), dtype=np.float32)
+            # Z and V from streams of their own: the bank is a function of the seed and its size alone
+            z = generator(self.seed, _BANK, 0).standard_normal((rows, self.steps), dtype=np.float32)
             walk = np.cumsum(z, axis=1)
-            v = self.rng.standard_normal((rows, self.steps), dtype=np.float32)
+            v = generator(self.seed, _BANK, 1).standard_normal((rows, self.steps), dtype=np.float32)
             v *= np.float32(self.model.process_noise)  # the bank holds the process noise itself
             self._bank = {"Z": z, "CW": np.cumsum(walk - z, axis=1), "V": v, "CV": np.cumsum(v, axis=1)}
+            self._bank_size = rows
         return self._bank
 
     def predict(self, theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray, gamma_std, *,
@@ -280,7 +305,7 @@ class RULPredictor:
         ``key`` (e.g. the filter step) makes this prediction's randomness a function of the seed and
         the key alone, so predictions computed in any order or process give the same result.
         """
-        self._draws = None if key is None else np.random.default_rng([self.seed, key])
+        self._draws = None if key is None else generator(self.seed, _KEYED, _check_key(key))
         assets, n, g = gamma.shape
         std = np.broadcast_to(np.broadcast_to(np.asarray(gamma_std, float), (assets, g))[:, None, :], (assets, n, g))
         theta_now = theta.astype(float).reshape(-1)
@@ -356,6 +381,10 @@ class RULPredictor:
         return alive[~hit]
 
 
+class ParallelWarning(PHMWarning, RuntimeWarning):
+    """Work meant for worker processes runs in the calling process instead (it cannot start any)."""
+
+
 class ParallelRUL:
     """RUL predictions in worker processes, so they overlap with filtering on a multi-core machine.
 
@@ -363,6 +392,11 @@ class ParallelRUL:
     parallel; each is keyed by its step (:meth:`RULPredictor.predict`), so the results do not depend
     on which worker computes them or when.  Use as a context manager.  The workers ignore SIGINT, so a
     Ctrl-C interrupts only the calling process, not every worker with a traceback of its own.
+
+    Workers are forked where the platform can fork (they start at once and inherit the imports),
+    else started the platform's default way.  A daemonic process (a ``multiprocessing.Pool`` or
+    Dask worker) cannot have children: there every prediction runs in the calling process when
+    submitted, with the same results, and a :class:`ParallelWarning` says so.
 
     >>> import numpy as np
     >>> from prognosis.degradation import LinearDegradation
@@ -376,8 +410,17 @@ class ParallelRUL:
         import multiprocessing
         from concurrent.futures import ProcessPoolExecutor
 
-        self._pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"),
-                                         initializer=_start_worker, initargs=(model, predictor))
+        self._pool = self._local = None
+        if multiprocessing.current_process().daemon:
+            warnings.warn("ParallelRUL: this process is daemonic (a multiprocessing or Dask worker) and cannot start "
+                          "worker processes; the RUL predictions run in it instead (same results, keyed by step)",
+                          ParallelWarning, stacklevel=2)
+            self._local = RULPredictor(model, **predictor)
+            return
+        fork = "fork" in multiprocessing.get_all_start_methods()
+        context = multiprocessing.get_context("fork" if fork else None)
+        self._pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_start_worker,
+                                         initargs=(model, predictor))
 
     def submit(self, theta, gamma, weights, gamma_std, *, key: int):
         """Start ``RULPredictor.predict(theta, gamma, weights, gamma_std, key=key)`` in a worker; returns its Future.
@@ -385,13 +428,21 @@ class ParallelRUL:
         ``key`` (e.g. the filter step) is required: it fixes the prediction's random numbers, so the result does
         not depend on the worker.  ``future.result()`` is the :class:`RULDistribution`.
         """
-        return self._pool.submit(_predict_in_worker, theta, gamma, weights, gamma_std, key)
+        if self._pool is not None:
+            return self._pool.submit(_predict_in_worker, theta, gamma, weights, gamma_std, key)
+        future = Future()
+        try:
+            future.set_result(self._local.predict(theta, gamma, weights, gamma_std, key=key))
+        except Exception as error:  # delivered by future.result(), as a worker's would be
+            future.set_exception(error)
+        return future
 
     def __enter__(self) -> "ParallelRUL":
         return self
 
     def __exit__(self, *exc) -> None:
-        self._pool.shutdown()
+        if self._pool is not None:
+            self._pool.shutdown()
 
 
 _WORKER_PREDICTOR = None
@@ -424,6 +475,13 @@ def predict_rul(model, theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray
     predictor = RULPredictor(model, dt=dt, theta_fail=theta_fail, direction=direction, horizon=horizon,
                              seed=int(rng.integers(2**63)), chunk=chunk)
     return predictor.predict(theta, gamma, weights, gamma_std)
+
+
+def _check_key(key: object) -> int:
+    """A prediction's ``key`` as an int; a ValueError unless it is a whole number >= 0 (a spawn key)."""
+    if isinstance(key, (bool, np.bool_)) or not isinstance(key, numbers.Integral) or key < 0:
+        raise ValueError(f"key must be a whole number >= 0 (e.g. the filter step), got {key!r}")
+    return int(key)
 
 
 def _crossed(theta: np.ndarray, theta_fail: float, direction: str) -> np.ndarray:

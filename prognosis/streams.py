@@ -2,9 +2,10 @@
 
 A fleet monitor filters many assets in one vectorized step.  With one generator for the batch, an
 asset's draws would depend on which other assets share its batch, and in which order; here every
-asset has its own counter-based stream (Philox, Salmon et al. (2011)): its key comes from
-``SeedSequence(seed, spawn_key=(asset key,))`` and the counter is set from the filter step and the
-purpose of the draws (filter moves, initial particles, RUL), so the numbers an asset gets at a step
+asset has its own counter-based stream (Philox, Salmon et al. (2011)): its key comes from the
+seed's child ``prognosis.seeds.spawn(seed, ASSETS, asset key)`` and the counter is set from the
+filter step, the purpose of the draws (filter moves, initial rates, initial theta) and a lane (the
+hypothesis), so the numbers an asset gets at a step
 are a function of ``(seed, asset, step, purpose)`` alone: the same alone, in any batch, on any
 worker, and after a restart (the step is all the state a stream has).
 
@@ -30,9 +31,11 @@ from collections.abc import Sequence
 
 import numpy as np
 
-__all__ = ["AssetStreams", "FILTER", "INITIAL", "RUL", "asset_key"]
+from . import seeds
 
-FILTER, INITIAL, RUL = 0, 1, 2  # purposes: a filter step's moves, the particles at detection, a RUL prediction
+__all__ = ["AssetStreams", "MOVES", "RATES", "STARTS", "asset_key"]
+
+MOVES, RATES, STARTS = 0, 1, 2  # purposes: a filter step's moves, the initial rates, the initial theta
 
 
 def asset_key(asset: object) -> int:
@@ -87,11 +90,11 @@ class AssetStreams:
         """The Philox key (2 x uint64) of an asset."""
         key = self._keys.get(asset)
         if key is None:
-            sequence = np.random.SeedSequence(self.seed, spawn_key=(asset_key(asset),))
+            sequence = seeds.spawn(self.seed, seeds.ASSETS, asset_key(asset))
             key = self._keys[asset] = sequence.generate_state(2, np.uint64)
         return key
 
-    def generator(self, asset: object, step: int, purpose: int = FILTER, lane: int = 0) -> np.random.Generator:
+    def generator(self, asset: object, step: int, purpose: int = MOVES, lane: int = 0) -> np.random.Generator:
         """A generator at the start of the stream of ``(asset, step, purpose, lane)``.
 
         ``lane`` tells apart streams of one asset at one step (the fleet's hypotheses).  The
@@ -104,7 +107,7 @@ class AssetStreams:
         self._bits.state = state
         return self._generator
 
-    def normals(self, assets: Sequence, step, size: int, purpose: int = FILTER,
+    def normals(self, assets: Sequence, step, size: int, purpose: int = MOVES,
                 out: np.ndarray | None = None) -> np.ndarray:
         """Standard normals ``(len(assets), size)``, row ``i`` from the stream of ``assets[i]``.
 
@@ -116,7 +119,7 @@ class AssetStreams:
             self.generator(asset, k, purpose).standard_normal(out=out[row])
         return out
 
-    def uniforms(self, assets: Sequence, step, size: int, purpose: int = FILTER) -> np.ndarray:
+    def uniforms(self, assets: Sequence, step, size: int, purpose: int = MOVES) -> np.ndarray:
         """Uniforms on [0, 1) ``(len(assets), size)``, row ``i`` from the stream of ``assets[i]``."""
         steps = np.broadcast_to(np.asarray(step), (len(assets),))
         out = np.empty((len(assets), size))

@@ -53,20 +53,32 @@ def _step_up(a: np.ndarray) -> np.ndarray:
 
 
 def up(x):
-    """``np.nextafter(x, +inf)``: one ulp up (exact; a bit operation, not a libm call per element)."""
+    """``np.nextafter(x, +inf)``: one ulp up (exact; a bit operation, not a libm call per element).
+
+    An unknown (NaN) value gets the sound upper bound ``+inf``: stepping a NaN's bit pattern could
+    wrap it to ``-0.0`` (``0x7fff...f + 1``), a finite bound for a missing sample, and which NaN
+    pattern an array holds depends on numpy's loops, hence on the array's length.
+
+    >>> up(np.array([1.0, np.nan, -np.inf])).tolist()
+    [1.0000000000000002, inf, -1.7976931348623157e+308]
+    """
     if np.ndim(x) == 0:
-        return np.nextafter(np.float64(x), _INF)
-    a = np.minimum(x, _MAX)  # MAX steps to +inf, as nextafter(+inf, +inf) = +inf
+        return np.nextafter(np.float64(x), _INF) if not np.isnan(x) else np.float64(_INF)
+    a = np.fmin(x, _MAX)  # MAX steps to +inf, as nextafter(+inf, +inf) = +inf; NaN becomes MAX, hence +inf
     a += 0.0  # -0.0 + 0.0 = +0.0, whose successor is the smallest subnormal
     return _step_up(a)
 
 
 def down(x):
-    """``np.nextafter(x, -inf)``, as ``-nextafter(-x, +inf)``."""
+    """``np.nextafter(x, -inf)``, as ``-nextafter(-x, +inf)``; ``-inf`` for NaN (see :func:`up`).
+
+    >>> down(np.array([1.0, np.nan])).tolist()
+    [0.9999999999999999, -inf]
+    """
     if np.ndim(x) == 0:
-        return np.nextafter(np.float64(x), -_INF)
+        return np.nextafter(np.float64(x), -_INF) if not np.isnan(x) else np.float64(-_INF)
     a = np.negative(x)
-    np.minimum(a, _MAX, out=a)
+    np.fmin(a, _MAX, out=a)
     a += 0.0
     return np.negative(_step_up(a), out=a)
 

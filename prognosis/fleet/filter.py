@@ -25,9 +25,11 @@ import numpy as np
 from scipy.special import ndtr
 
 from ..degradation import ExponentialDegradation, LinearDegradation
-from ..streams import FILTER
+from ..streams import MOVES, STARTS
 
 QUANTILES = (0.05, 0.5, 0.95)
+ROW_STATE = ("theta", "gamma", "hypothesis", "mean", "variance", "sigma_v", "log_evidence", "steps", "rejected",
+             "away")  # what a row is: a checkpoint saves these
 
 
 @dataclass
@@ -71,6 +73,9 @@ class FleetFilter:
                  discount: float = 0.98, floor: float = 1e-3, streams):
         self.laws, self.observations = tuple(laws), [list(o) for o in observations]
         self.noise_std = np.asarray(noise_std, float)
+        variance = inflation * np.square(self.noise_std)
+        self._scale = -0.5 / variance  # log-likelihood per squared gap, per ARR
+        self._constant = -0.5 * np.log(2 * np.pi * variance)  # the Gaussian's normalizing constant, in the evidence
         self.n, self.dt, self.inflation = int(n_particles), float(dt), float(inflation)
         self.shrinkage = (3 * discount - 1) / (2 * discount)
         self.floor, self.streams = float(floor), streams
@@ -86,6 +91,8 @@ class FleetFilter:
         self.sigma_v = np.empty(0)
         self.log_evidence = np.empty(0)
         self.steps = np.empty(0, int)
+        self.rejected = np.empty(0, bool)  # the hypothesis left its domain or drifts away from failure
+        self.away = np.empty(0, int)  # consecutive reports drifting away from failure
 
     # -- rows --------------------------------------------------------------------------------
     def add(self, assets, *, hypothesis, lo, hi, rates, process_noise) -> np.ndarray:
@@ -94,12 +101,12 @@ class FleetFilter:
         ``rates`` (rows, G, N): the initial rate particles.  Returns the rows' indices.
         """
         count = len(assets)
-        rows = self._slots(count)
+        rows = self.allocate(count)
         hypothesis = np.asarray(hypothesis, int)
         lo, hi = np.asarray(lo, float), np.asarray(hi, float)
         u = np.empty((count, self.n))
         for i, (asset, h) in enumerate(zip(assets, hypothesis)):
-            self.streams.generator(asset, 0, FILTER, lane=1000 + int(h)).random(out=u[i])
+            self.streams.generator(asset, 0, STARTS, lane=int(h)).random(out=u[i])
         for i, row in enumerate(rows):
             self.asset[row] = assets[i]
         self.theta[rows] = lo[:, None] + (hi - lo)[:, None] * u
@@ -110,6 +117,7 @@ class FleetFilter:
         self.sigma_v[rows] = np.asarray(process_noise, float)
         self.log_evidence[rows] = 0.0
         self.steps[rows] = 0
+        self.rejected[rows], self.away[rows] = False, 0
         return rows
 
     def remove(self, rows) -> None:
@@ -118,7 +126,7 @@ class FleetFilter:
             self.asset[int(row)] = None
             self.free.append(int(row))
 
-    def _slots(self, count: int) -> np.ndarray:
+    def allocate(self, count: int) -> np.ndarray:
         """``count`` free rows, the lowest first; the arrays double when they are full."""
         if len(self.free) < count:
             self._grow(self.capacity + count - len(self.free))
@@ -136,6 +144,8 @@ class FleetFilter:
         self.sigma_v = np.concatenate([self.sigma_v, np.zeros(extra)])
         self.log_evidence = np.concatenate([self.log_evidence, np.zeros(extra)])
         self.steps = np.concatenate([self.steps, np.zeros(extra, int)])
+        self.rejected = np.concatenate([self.rejected, np.zeros(extra, bool)])
+        self.away = np.concatenate([self.away, np.zeros(extra, int)])
         self.free = sorted(self.free + list(range(self.capacity, size)), reverse=True)  # pop() gives the lowest
         self.capacity = size
 
@@ -147,25 +157,29 @@ class FleetFilter:
         leaves that ARR out of the row's likelihood; a row with no finite ``y`` is only moved.
         """
         rows = np.asarray(rows, int)
-        n = self.n
+        n, y = self.n, np.asarray(y, float)
         draws = self._draws(rows, 1 + self.g)
         theta, gamma = self._predict(rows, draws)
-        log_likelihood, measured = self._log_likelihood(rows, theta, np.asarray(y, float), points)
-        top = np.max(log_likelihood, axis=1)
-        top = np.where(np.isfinite(top), top, 0.0)
-        weights = np.exp(log_likelihood - top[:, None])
+        log_likelihood, finite = self._log_likelihood(rows, theta, y, points)
+        top = np.max(log_likelihood, axis=1, keepdims=True)
+        if not np.isfinite(top).all():
+            top[~np.isfinite(top)] = 0.0
+        log_likelihood -= top
+        weights = np.exp(log_likelihood, out=log_likelihood)
         total = np.sum(weights, axis=1)
-        degenerate = ~(np.isfinite(total) & (total > 0))
-        weights[degenerate] = 1.0
-        total = np.where(degenerate, float(n), total)
-        ess = total**2 / np.sum(weights * weights, axis=1)
-        increment = top + np.log(total / n) + self._log_constant(np.asarray(y, float))
-        self.log_evidence[rows] += np.where(measured & ~degenerate, increment, 0.0)
-        index = systematic_indices(weights, total, ndtr(draws[:, -1].astype(float)))
-        theta = np.take_along_axis(theta, index, axis=1)
-        gamma = np.take_along_axis(gamma, index[:, None, :], axis=2)
+        degenerate = ~(total > 0) | ~np.isfinite(total)
+        if degenerate.any():  # every weight vanished: start again from equal weights, and say so
+            weights[degenerate] = 1.0
+            total[degenerate] = n
+        ess = total * total / np.sum(weights * weights, axis=1)
+        constant = np.sum(np.where(finite, self._constant, 0.0), axis=1)
+        measured = finite.any(axis=1) & ~degenerate
+        self.log_evidence[rows] += np.where(measured, top[:, 0] + np.log(total / n) + constant, 0.0)
+        flat = systematic_indices(weights, total, ndtr(draws[:, -1].astype(float)), flat=True)
+        self.theta[rows] = theta.reshape(-1)[flat].reshape(theta.shape)
+        gamma = np.stack([gamma[:, g].reshape(-1)[flat].reshape(theta.shape) for g in range(self.g)], axis=1)
         self._smooth(rows, gamma)
-        self.theta[rows], self.gamma[rows] = theta, gamma
+        self.gamma[rows] = gamma
         self.steps[rows] += 1
         return FleetStep(ess, degenerate)
 
@@ -176,21 +190,22 @@ class FleetFilter:
         """
         out = np.empty((rows.size, blocks * self.n + 1), np.float32)
         for i, row in enumerate(rows):
-            self.streams.generator(self.asset[row], self.steps[row] + 1, FILTER,
+            self.streams.generator(self.asset[row], self.steps[row] + 1, MOVES,
                                    lane=int(self.hypothesis[row])).standard_normal(dtype=np.float32, out=out[i])
         return out
 
     def _predict(self, rows: np.ndarray, draws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         n, g = self.n, self.g
         theta, gamma = self.theta[rows], self.gamma[rows]
-        moved = np.empty_like(theta)
-        hypotheses = self.hypothesis[rows]
-        for h, law in enumerate(self.laws):
-            mine = hypotheses == h
-            if mine.all():
-                moved = law_step(law, theta, gamma, self.dt)
-            elif mine.any():
-                moved[mine] = law_step(law, theta[mine], gamma[mine], self.dt)
+        if len(self.laws) == 1:
+            moved = law_step(self.laws[0], theta, gamma, self.dt)
+        else:
+            moved = np.empty_like(theta)
+            hypotheses = self.hypothesis[rows]
+            for h, law in enumerate(self.laws):
+                mine = hypotheses == h
+                if mine.any():
+                    moved[mine] = law_step(law, theta[mine], gamma[mine], self.dt)
         moved += draws[:, :n] * self.sigma_v[rows][:, None]
         a = self.shrinkage
         smoothed = draws[:, n:(1 + g) * n].reshape(rows.size, g, n) * np.sqrt(self.variance[rows])[:, :, None]
@@ -200,30 +215,29 @@ class FleetFilter:
         return moved, smoothed
 
     def _log_likelihood(self, rows, theta, y, points) -> tuple[np.ndarray, np.ndarray]:
-        variance = self.inflation * np.square(self.noise_std)
+        """Gaussian log-likelihood (rows, N) without its constant, and which measurements were finite."""
         finite = np.isfinite(y)
-        total = np.zeros_like(theta)
         hypotheses = self.hypothesis[rows]
+        single = len(self.observations) == 1
+        total = None
         for m in range(y.shape[1]):
             if not finite[:, m].any():
                 continue
-            predicted = np.zeros_like(theta)
-            for h, models in enumerate(self.observations):
-                model = models[m]
-                mine = hypotheses == h
-                if model is None or not mine.any():
-                    continue
-                if mine.all():
-                    predicted = model(theta, points[m])
-                else:
-                    predicted[mine] = model(theta[mine], [p[mine] for p in points[m]])
+            if single and self.observations[0][m] is not None:  # the common case: one hypothesis
+                predicted = self.observations[0][m](theta, points[m])
+            else:
+                predicted = np.zeros_like(theta)
+                for h, models in enumerate(self.observations):
+                    mine = hypotheses == h
+                    if models[m] is not None and mine.any():
+                        predicted[mine] = models[m](theta[mine], [p[mine] for p in points[m]])
             gap = np.where(finite[:, m], y[:, m], 0.0)[:, None] - predicted
-            total += np.where(finite[:, m, None], gap * gap * (-0.5 / variance[m]), 0.0)
-        return total, finite.any(axis=1)
-
-    def _log_constant(self, y: np.ndarray) -> np.ndarray:
-        variance = self.inflation * np.square(self.noise_std)
-        return np.sum(np.where(np.isfinite(y), -0.5 * np.log(2 * np.pi * variance), 0.0), axis=1)
+            gap *= gap
+            gap *= self._scale[m]
+            if not finite[:, m].all():
+                gap[~finite[:, m]] = 0.0
+            total = gap if total is None else total + gap
+        return (np.zeros_like(theta) if total is None else total), finite
 
     def _smooth(self, rows: np.ndarray, gamma: np.ndarray) -> None:
         """Kernel smoothing's mean and jitter variance for the next move (equal weights after resampling)."""
@@ -257,19 +271,24 @@ def law_step(law, theta: np.ndarray, gamma: np.ndarray, dt: float) -> np.ndarray
     return np.asarray(law.step(theta, np.moveaxis(gamma, 1, -1), dt), float)
 
 
-def systematic_indices(weights: np.ndarray, total: np.ndarray, u: np.ndarray) -> np.ndarray:
+def systematic_indices(weights: np.ndarray, total: np.ndarray, u: np.ndarray, flat: bool = False) -> np.ndarray:
     """Systematic resampling of each row from its unnormalized ``weights`` (R, N), sums ``total`` and uniform ``u``.
 
     Particle ``i`` gets ``ceil(N C_i - u) - ceil(N C_{i-1} - u)`` copies, ``C`` the normalized
-    cumulative weights: the number of points ``(j + u) / N`` in ``[C_{i-1}, C_i)``.
+    cumulative weights: the number of points ``(j + u) / N`` in ``[C_{i-1}, C_i)``.  Returns the
+    ancestors' indices per row (R, N), or with ``flat`` their indices into the flattened (R * N) array.
 
     >>> systematic_indices(np.array([[1.0, 0.0, 1.0]]), np.array([2.0]), np.array([0.5])).tolist()
     [[0, 2, 2]]
     """
     rows, n = weights.shape
-    edges = np.ceil(np.cumsum(weights, axis=1) * (n / total)[:, None] - u[:, None])
+    edges = np.cumsum(weights, axis=1)
+    edges *= (n / total)[:, None]
+    edges -= u[:, None]
+    np.ceil(edges, out=edges)
     edges[:, -1] = n
     np.clip(edges, 0, n, out=edges)
-    counts = np.diff(edges, axis=1, prepend=0.0).astype(np.int64)
-    flat = np.repeat(np.arange(rows * n), counts.ravel())
-    return flat.reshape(rows, n) - (n * np.arange(rows))[:, None]
+    counts = edges.astype(np.int64)
+    counts[:, 1:] -= counts[:, :-1].copy()
+    ancestors = np.repeat(np.arange(rows * n), counts.reshape(-1))
+    return ancestors if flat else ancestors.reshape(rows, n) - (n * np.arange(rows))[:, None]

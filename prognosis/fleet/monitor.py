@@ -24,9 +24,11 @@ from ..hypotheses import LIFE_PRIOR, indistinguishable_groups, signature_candida
 from ..isolation import DRIFT_AWAY_STEPS, EVIDENCE_RATIO, MIXTURE_FLOOR, PROCESS_NOISE, IsolatingMonitor, decide
 from ..monitor import filter_stride
 from ..observation import observation_model
+from .. import seeds
 from ..rul import RULPredictor
-from ..streams import INITIAL, AssetStreams, asset_key
-from .filter import FleetFilter
+from ..streams import RATES, AssetStreams, asset_key
+from .filter import ROW_STATE, FleetFilter
+from .live import LiveAsset
 from .results import FleetResult
 from .rul import crossing_times, has_closed_form, summarize
 
@@ -126,30 +128,37 @@ class FleetMonitor:
         self.report_every = int(report_every)
         self.streams = AssetStreams(s.seed)
         candidates = s.candidates if s.candidates is not None else list(s.failures)
-        self.hypotheses, self.never = s._hypotheses(candidates)
+        self.hypotheses, self.never = s.hypotheses_for(candidates)
         self.arrs = [a for a in s.arrs if any(c in a.parameters for c in candidates)]
         if not self.arrs:
             raise ValueError(f"no ARR is sensitive to any of the candidates {candidates}")
         self.groups = indistinguishable_groups(self.arrs, candidates)
         self.noise = np.array([s.noise_std[a.name] for a in self.arrs])
-        self.options = [s._options(a) for a in self.arrs]
+        self.options = [s.options_for(a) for a in self.arrs]
         self.observations = [[observation_model(a, h.candidate) if h.candidate in a.parameters else None
                               for a in self.arrs] for h in self.hypotheses]
-        self.boxes = np.array([s._box(h, self.arrs) for h in self.hypotheses])
+        self.boxes = np.array([s.healthy_box(h, self.arrs) for h in self.hypotheses]).reshape(-1, 2)
+        self.domains = np.array([h.domain for h in self.hypotheses], float).reshape(-1, 2)
         self.up = np.array([h.direction == "up" for h in self.hypotheses])
         self.fail = np.array([h.failure for h in self.hypotheses])
-        self._filter = None
+        self._filter = None  # the streaming filter (run() uses one per block)
         self._laws = None
+        self._live: dict = {}
+        self._predictors: dict = {}
+        self._keep_particles = False  # RUL predictors of laws without a closed form, by hypothesis
 
     # -- the batch pipeline ------------------------------------------------------------------
     def run(self, records: Mapping | Iterable, *, progress: Callable[[int, int], None] | None = None,
-            block: int = BLOCK) -> FleetResult:
+            block: int = BLOCK, particles: bool = False) -> FleetResult:
         """Process whole records, ``{asset: record}`` or an iterable of ``(asset, record)`` pairs.
 
         Records are read one at a time and only their values at the filter steps are kept; ``block``
         assets are filtered together.  ``progress(done, total)`` is called after each block with the
-        number of assets done (``total`` is None for an iterable of unknown length).
+        number of assets done (``total`` is None for an iterable of unknown length).  With
+        ``particles``, the result's :attr:`~prognosis.fleet.FleetResult.particles` holds each asset's
+        particles after its last step (otherwise they are dropped with the block).
         """
+        self._keep_particles = bool(particles)
         pairs = records.items() if isinstance(records, Mapping) else records
         total = len(records) if hasattr(records, "__len__") else None
         result, done, batch = FleetResult(), 0, []
@@ -182,7 +191,10 @@ class FleetMonitor:
         k = int(np.argmax(alarm))
         fired = [a.name for a, e in zip(self.arrs, evaluations) if e.alarm[k]]
         result.add("alarms", asset=[asset] * len(fired), t=[t[k]] * len(fired), arr=fired)
-        started, starts = self._start(evaluations, k, fired)
+        persistence = max(e.persistence for e in evaluations)
+        window = slice(max(0, k - persistence + 1), k + 1)
+        started, starts = self._start([_Window(e.residual[window], [p[window] for p in e.points], e.persistence)
+                                       for e in evaluations], fired)
         if not started:
             return None
         steps = np.arange(k, t.size, filter_stride(t, self.settings.dt))
@@ -191,19 +203,19 @@ class FleetMonitor:
                   for e in evaluations]
         return _Asset(asset, t[steps], y, points, started, starts)
 
-    def _start(self, evaluations: list, k: int, fired: list) -> tuple[list, list]:
-        """The hypotheses an alarm starts (those of the signature's candidates) and their initial boxes."""
+    def _start(self, windows: list, fired: list) -> tuple[list, list]:
+        """The hypotheses an alarm starts (those of the signature's candidates) and their initial boxes.
+
+        ``windows``: per ARR, the residual and point values of the samples that raised the alarm.
+        """
         s = self.settings
         allowed = (set(s.candidates) if s.candidates is not None
                    else set(signature_candidates(self.arrs, s.failures, fired)))
-        persistence = max(e.persistence for e in evaluations)
-        window = slice(max(0, k - persistence + 1), k + 1)
-        windows = [_Window(e.residual[window], [p[window] for p in e.points], e.persistence) for e in evaluations]
         started, starts = [], []
         for index, h in enumerate(self.hypotheses):
             if h.candidate in allowed and h.name not in self.never:
                 started.append(index)
-                starts.append(s._start(h, windows, self.arrs, len(windows[0].residual) - 1, self.noise))
+                starts.append(s.start_interval(h, windows, self.arrs, len(windows[0].residual) - 1, self.noise))
         return started, starts
 
     def _filter_block(self, batch: list, result: FleetResult) -> None:
@@ -214,25 +226,178 @@ class FleetMonitor:
         rows, owner = self._add_rows(pf, assets)
         t, y, points = _padded(assets)
         length = np.array([a.t.size for a in assets])
-        hypotheses = pf.hypothesis[rows]
         ids = np.array([a.asset for a in assets], dtype=object)
-        rejected = np.zeros(rows.size, bool)
-        away = np.zeros(rows.size, int)
         for j in range(int(length.max())):
             index = np.flatnonzero(length[owner] > j)
             mine = owner[index]
             step = pf.step(rows[index], y[mine, j], [[p[mine, j] for p in m] for m in points])
-            if j % self.report_every == 0:
-                self._report(pf, rows[index], hypotheses[index], ids[mine], j, t[mine, j], step.ess, result,
-                             rejected, away, index)
-            if j % self.settings.rul_every == 0:
-                self._predict(pf, rows[index], owner[index], ids, t[:, j], j, rejected[index], result)
+            self._outputs(pf, rows[index], mine, ids[mine], np.full(index.size, j), t[mine, j], step.ess, result)
+        if self._keep_particles:
+            for a, item in enumerate(assets):
+                result.particles[str(item.asset)] = self._particles_of(pf, rows[owner == a])
         pf.remove(rows)
+
+    def particles(self, asset) -> dict:
+        """The particles of a streamed asset now: ``{hypothesis: {"theta": (N,), "gamma": (G, N)}}`` (copies)."""
+        live = self._live.get(asset)
+        if live is None:
+            raise KeyError(f"no asset {asset!r} in the stream")
+        return {} if live.rows is None else self._particles_of(self._filter, live.rows)
+
+    def _particles_of(self, pf: FleetFilter, rows: np.ndarray) -> dict:
+        return {self.hypotheses[pf.hypothesis[r]].name: {"theta": pf.theta[r].copy(), "gamma": pf.gamma[r].copy()}
+                for r in rows}
+
+    def _outputs(self, pf, rows, owner, ids, steps, times, ess, result: FleetResult) -> None:
+        """The estimates and RUL of the rows whose step (``steps``, taken before the step) is due."""
+        report = steps % self.report_every == 0
+        if report.any():
+            self._report(pf, rows[report], ids[report], steps[report], times[report], ess[report], result)
+        due = steps % self.settings.rul_every == 0
+        if due.any():
+            self._predict(pf, rows[due], owner[due], ids[due], steps[due], times[due], result)
+
+    # -- streaming ---------------------------------------------------------------------------
+    def update(self, batch) -> FleetResult:
+        """Take a micro-batch of samples of any assets; the rows (alarms, estimates, RUL) it produced.
+
+        ``batch``: a mapping or DataFrame with columns ``asset``, ``t`` and the ARRs' signals (and the
+        antiderivative columns of the detection options), one row per sample; each asset's samples in
+        time order, continuing its previous ones.  Each asset's ARRs are evaluated online
+        (:class:`diagnosis.StreamingEvaluation`), so a sample is final once its centred derivative
+        window is complete and the results lag the newest sample by half a window.  The monitor keeps
+        no history: memory stays bounded however long the stream, and the returned rows are the
+        caller's to keep.
+        """
+        columns = _columns(batch)
+        result = FleetResult()
+        for asset, index in _by_asset(columns["asset"]):
+            live = self._live.get(asset)
+            if live is None:
+                asset_key(asset)
+                live = self._live[asset] = LiveAsset.start(asset, self.arrs, self.options)
+            signals = {name: values[index] for name, values in columns.items() if name not in ("asset", "t")}
+            final = live.push(np.asarray(columns["t"][index], float), signals)
+            if final is not None:
+                self._watch(live, final, result)
+        self._drain(result)
+        return result
+
+    def _watch(self, live: LiveAsset, final, result: FleetResult) -> None:
+        """Detection on the new final samples, the start at the alarm, and the filter steps they make due."""
+        first = live.count
+        if live.alarm is None:
+            alarm = final.alarm.any(axis=1) & (final.t > self.settings.healthy_until)
+            if alarm.any():
+                i = int(np.argmax(alarm))
+                fired = [a.name for a, on in zip(self.arrs, final.alarm[i]) if on]
+                result.add("alarms", asset=[live.asset] * len(fired), t=[final.t[i]] * len(fired), arr=fired)
+                window = live.window(final, i)
+                persistence = [int(o.get("persistence", 1)) for o in self.options]
+                live.hypotheses, live.starts = self._start(
+                    [_Window(-window.y[:, m], list(window.points[m].T), persistence[m]) for m in range(len(self.arrs))],
+                    fired)
+                live.alarm = first + i
+                if live.hypotheses:
+                    pf = self._streaming_filter()
+                    live.rows, _ = self._add_rows(pf, [live])
+        live.remember(final)
+        if live.rows is None or live.alarm >= live.count:
+            return
+        if live.stride is None:
+            live.stride = filter_stride(np.array([0.0, live.sample_step]), self.settings.dt)
+        index = np.arange(first, live.count)
+        due = np.flatnonzero((index >= live.alarm) & ((index - live.alarm) % live.stride == 0))
+        for i in due:
+            live.queue.append((final.t[i], final.y[i], [p[i] for p in final.points]))
+
+    def _drain(self, result: FleetResult) -> None:
+        """Step the filter until no asset has a filter step waiting, each tick one step of every waiting asset."""
+        pf = self._filter
+        while True:
+            waiting = [live for live in self._live.values() if live.queue]
+            if not waiting:
+                return
+            items = [live.queue.pop(0) for live in waiting]
+            rows = np.concatenate([live.rows for live in waiting])
+            owner = np.repeat(np.arange(len(waiting)), [live.rows.size for live in waiting])
+            y = np.stack([item[1] for item in items])[owner]
+            points = [[np.array([item[2][m][p] for item in items])[owner] for p in range(len(items[0][2][m]))]
+                      for m in range(len(self.arrs))]
+            steps = pf.steps[rows].copy()
+            times = np.array([item[0] for item in items])[owner]
+            ids = np.array([live.asset for live in waiting], dtype=object)[owner]
+            step = pf.step(rows, y, points)
+            self._outputs(pf, rows, owner, ids, steps, times, step.ess, result)
+
+    def _streaming_filter(self) -> FleetFilter:
+        if self._filter is None:
+            self._filter = self._new_filter()
+        return self._filter
+
+    def retire(self, asset) -> None:
+        """Forget an asset (replaced, or its stream ended): its rows and buffers are freed."""
+        live = self._live.pop(asset, None)
+        if live is None:
+            raise KeyError(f"no asset {asset!r} in the stream")
+        if live.rows is not None:
+            self._filter.remove(live.rows)
+
+    @property
+    def assets(self) -> list:
+        """The assets of the stream so far."""
+        return list(self._live)
+
+    # -- checkpoints -------------------------------------------------------------------------
+    def checkpoint(self) -> dict:
+        """The streaming state of every asset as plain data (numpy arrays, numbers, strings).
+
+        Particles, kernel-smoothing state, log evidence and filter step of each row (the step is
+        the whole state of an asset's random stream), the online evaluation's buffers and running
+        integrals, the alarm and the queued samples: :meth:`restore` on a monitor with the same
+        settings goes on exactly as if there had been no restart.  It pickles with the standard
+        library (``pickle.dump(monitor.checkpoint(), file)``).
+        """
+        pf = self._filter
+        assets = []
+        for live in self._live.values():
+            state = live.state()
+            state["queue"] = [(float(t), np.asarray(y), [np.asarray(p) for p in points]) for t, y, points in live.queue]
+            if live.rows is not None:
+                state["rows"] = {name: getattr(pf, name)[live.rows].copy() for name in ROW_STATE}
+            assets.append(state)
+        return {"version": 1, "settings": self._fingerprint(), "assets": assets}
+
+    def restore(self, checkpoint: Mapping) -> None:
+        """Take up the streams of a :meth:`checkpoint` (replacing this monitor's streams)."""
+        if checkpoint.get("version") != 1:
+            raise ValueError(f"checkpoint: unknown version {checkpoint.get('version')!r} (expected 1)")
+        if checkpoint.get("settings") != self._fingerprint():
+            raise ValueError("checkpoint: it was made by a monitor with other settings "
+                             f"({checkpoint.get('settings')}); this one has {self._fingerprint()}")
+        self._live, self._filter = {}, None
+        for state in checkpoint["assets"]:
+            live = LiveAsset.restore(state, self.arrs, self.options)
+            live.queue = [(t, np.asarray(y), list(points)) for t, y, points in state.get("queue", [])]
+            if "rows" in state:
+                pf = self._streaming_filter()
+                rows = pf.allocate(len(state["rows"]["theta"]))
+                for name in ROW_STATE:
+                    getattr(pf, name)[rows] = state["rows"][name]
+                for row in rows:
+                    pf.asset[row] = live.asset
+                live.rows = rows
+            self._live[live.asset] = live
+
+    def _fingerprint(self) -> dict:
+        s = self.settings
+        return {"hypotheses": [h.name for h in self.hypotheses], "arrs": [a.name for a in self.arrs],
+                "particles": s.n_particles, "dt": s.dt, "seed": s.seed}
 
     def _new_filter(self) -> FleetFilter:
         s = self.settings
         if self._laws is None:
-            self._laws = [s._law(h.law, 0.0) for h in self.hypotheses]
+            self._laws = [s.law(h.law, 0.0) for h in self.hypotheses]
         return FleetFilter(self._laws, self.observations, noise_std=self.noise, n_particles=s.n_particles, dt=s.dt,
                            inflation=s.inflation, discount=s.discount, streams=self.streams)
 
@@ -250,35 +415,37 @@ class FleetMonitor:
                 law = s.laws[self.hypotheses[h].law]
                 sigma_v.append(noise if law is None else law.process_noise)
                 owner.append(a)
-                rng = self.streams.generator(item.asset, 0, INITIAL, lane=h)
-                rates.append(s._rate_particles(self.hypotheses[h], rng)[None, :])
+                rng = self.streams.generator(item.asset, 0, RATES, lane=h)
+                rates.append(s.rate_particles(self.hypotheses[h], rng)[None, :])
         rows = pf.add(ids, hypothesis=hypotheses, lo=lo, hi=hi, rates=np.stack(rates), process_noise=sigma_v)
         return rows, np.array(owner)
 
-    def _report(self, pf, rows, hypotheses, ids, j, times, ess, result, rejected, away, index) -> None:
+    def _report(self, pf, rows, ids, steps, times, ess, result: FleetResult) -> None:
         """Estimates with quantiles; reject hypotheses that left their domain or drift away from failure."""
-        theta_q, gamma_q = pf.quantiles(rows)
-        result.add("estimates", asset=ids, hypothesis=[self.hypotheses[h].name for h in hypotheses],
-                   step=np.full(rows.size, j), t=times, theta_mean=pf.theta_mean(rows), theta_p5=theta_q[:, 0],
-                   theta_p50=theta_q[:, 1], theta_p95=theta_q[:, 2], gamma_mean=pf.gamma_mean(rows),
-                   gamma_p5=gamma_q[:, 0], gamma_p50=gamma_q[:, 1], gamma_p95=gamma_q[:, 2],
-                   ess=ess, log_evidence=pf.log_evidence[rows])
-        domain = np.array([self.hypotheses[h].domain for h in hypotheses]).reshape(-1, 2)
-        outside = ~((domain[:, 0] < theta_q[:, 1]) & (theta_q[:, 1] < domain[:, 1]))
-        boxes, up = self.boxes[hypotheses].reshape(-1, 2), self.up[hypotheses]
-        wrong = np.where(up, theta_q[:, 2] < boxes[:, 0], theta_q[:, 0] > boxes[:, 1])
-        away[index] = np.where(wrong, away[index] + 1, 0)
-        rejected[index] |= outside | (away[index] >= DRIFT_AWAY_STEPS)
-
-    def _predict(self, pf, rows, owner, ids, times, j, rejected, result: FleetResult) -> None:
-        """The RUL of each live asset: its hypotheses' crossing times mixed by posterior probability."""
-        order = np.unique(owner)
-        position = np.searchsorted(order, owner)
-        count = np.bincount(position, minlength=order.size)
-        width = int(count.max())
-        lane = np.arange(rows.size) - np.repeat(np.cumsum(count) - count, count)  # rank of a row in its asset
         hypotheses = pf.hypothesis[rows]
-        log_z = np.full((order.size, width), -np.inf)
+        theta_q, gamma_q = pf.quantiles(rows)
+        result.add("estimates", asset=ids, hypothesis=[self.hypotheses[h].name for h in hypotheses], step=steps,
+                   t=times, theta_mean=pf.theta_mean(rows), theta_p5=theta_q[:, 0], theta_p50=theta_q[:, 1],
+                   theta_p95=theta_q[:, 2], gamma_mean=pf.gamma_mean(rows), gamma_p5=gamma_q[:, 0],
+                   gamma_p50=gamma_q[:, 1], gamma_p95=gamma_q[:, 2], ess=ess, log_evidence=pf.log_evidence[rows])
+        domain = self.domains[hypotheses]
+        outside = ~((domain[:, 0] < theta_q[:, 1]) & (theta_q[:, 1] < domain[:, 1]))
+        boxes, up = self.boxes[hypotheses], self.up[hypotheses]
+        wrong = np.where(up, theta_q[:, 2] < boxes[:, 0], theta_q[:, 0] > boxes[:, 1])
+        pf.away[rows] = np.where(wrong, pf.away[rows] + 1, 0)
+        pf.rejected[rows] |= outside | (pf.away[rows] >= DRIFT_AWAY_STEPS)
+
+    def _predict(self, pf, rows, owner, ids, steps, times, result: FleetResult) -> None:
+        """The RUL of each asset: its hypotheses' crossing times mixed by posterior probability.
+
+        ``owner`` labels the rows of one asset (consecutive); ``ids``, ``steps``, ``times`` are per row.
+        """
+        first = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])  # each asset's first row
+        count = np.diff(np.r_[first, rows.size])
+        position = np.repeat(np.arange(first.size), count)
+        lane = np.arange(rows.size) - first[position]  # rank of a row in its asset
+        hypotheses, rejected = pf.hypothesis[rows], pf.rejected[rows]
+        log_z = np.full((first.size, int(count.max())), -np.inf)
         log_z[position, lane] = np.where(rejected, -np.inf, pf.log_evidence[rows])
         top = np.max(log_z, axis=1, keepdims=True)
         with np.errstate(invalid="ignore"):
@@ -286,26 +453,25 @@ class FleetMonitor:
             p /= np.sum(p, axis=1, keepdims=True)
         p = np.nan_to_num(p)
         probability = p[position, lane]
-        crossing = self._crossings(pf, rows, hypotheses, ids[owner], j)
+        crossing = self._crossings(pf, rows, hypotheses, ids, steps)
         n = pf.n
-        samples = np.full((order.size, width * n), np.inf)
-        weights = np.zeros((order.size, width * n))
+        samples = np.full((first.size, log_z.shape[1] * n), np.inf)
+        weights = np.zeros(samples.shape)
         columns = lane[:, None] * n + np.arange(n)
         samples[position[:, None], columns] = crossing
         weights[position[:, None], columns] = np.where(probability >= MIXTURE_FLOOR, probability, 0.0)[:, None] / n
         empty = np.sum(weights, axis=1) == 0  # every hypothesis rejected: one censored sample
-        weights[empty, 0] = 1.0
-        samples[empty, 0] = np.inf
+        weights[empty, 0], samples[empty, 0] = 1.0, np.inf
         summary = summarize(samples, weights)
         best = np.argmax(p, axis=1)
-        best_row = np.flatnonzero(lane == 0) + best  # the rows of an asset are consecutive
-        names = [self.hypotheses[h].name if not e else "" for h, e in zip(hypotheses[best_row], empty)]
-        status = self._status(order, position, lane, hypotheses, rejected, log_z, empty)
-        result.add("rul", asset=ids[order], step=np.full(order.size, j), t=times[order], mean=summary["mean"],
+        names = ["" if e else self.hypotheses[h].name for h, e in zip(hypotheses[first + best], empty)]
+        status = self._status(position, hypotheses, rejected, log_z, empty)
+        result.add("rul", asset=ids[first], step=steps[first], t=times[first], mean=summary["mean"],
                    p5=summary["p5"], p50=summary["p50"], p95=summary["p95"], censored=summary["censored"],
-                   hypothesis=names, probability=np.where(empty, 0.0, p[np.arange(order.size), best]), status=status)
+                   hypothesis=names, probability=np.where(empty, 0.0, p[np.arange(first.size), best]),
+                   status=status)
 
-    def _crossings(self, pf, rows, hypotheses, ids, j) -> np.ndarray:
+    def _crossings(self, pf, rows, hypotheses, ids, steps) -> np.ndarray:
         """Crossing times (rows, N): closed form per law where it exists, else propagated paths."""
         s = self.settings
         times = np.empty((rows.size, pf.n))
@@ -317,22 +483,25 @@ class FleetMonitor:
                 times[mine] = crossing_times(law, theta, rate, np.full(theta.shape[0], hypothesis.failure),
                                              np.full(theta.shape[0], hypothesis.direction == "up"), s.horizon)
                 continue
-            predictor = RULPredictor(law, dt=s.dt, theta_fail=hypothesis.failure, direction=hypothesis.direction,
-                                     horizon=s.horizon, seed=s.seed)
-            for i, (row, asset) in enumerate(zip(rows[mine], np.asarray(ids, object)[mine])):
+            predictor = self._predictors.get(h)
+            if predictor is None:  # one noise bank per hypothesis, shared by every asset
+                predictor = self._predictors[h] = RULPredictor(law, dt=s.dt, theta_fail=hypothesis.failure,
+                                                               direction=hypothesis.direction, horizon=s.horizon,
+                                                               seed=seeds.spawn(s.seed, seeds.PREDICTORS, int(h)))
+            for i, (row, asset, step) in enumerate(zip(rows[mine], ids[mine], steps[mine])):
                 gamma = np.moveaxis(pf.gamma[row:row + 1], 1, -1)
-                key = (asset_key(asset) << 32) | j
+                key = (asset_key(asset) << 32) | int(step)
                 times[np.flatnonzero(mine)[i]] = predictor.predict(
                     pf.theta[row:row + 1], gamma, np.full((1, pf.n), 1.0 / pf.n), 0.0, key=key).samples[0]
         return times
 
-    def _status(self, order, position, lane, hypotheses, rejected, log_z, empty) -> list:
+    def _status(self, position, hypotheses, rejected, log_z, empty) -> list:
         """The decision's status per asset ("isolated" for a single hypothesis that stands)."""
         if len(self.hypotheses) == 1:
             return ["rejected" if e else "isolated" for e in empty]
         names = {}
         out = []
-        for a in range(order.size):
+        for a in range(log_z.shape[0]):
             mine = position == a
             hs = [self.hypotheses[h] for h in hypotheses[mine]]
             rejected_names = {h.name: "rejected" for h, r in zip(hs, rejected[mine]) if r}
@@ -355,3 +524,33 @@ def _padded(assets: list) -> tuple[np.ndarray, np.ndarray, list]:
             for p in range(values.shape[1]):
                 points[m][p][a, :size] = values[:, p]
     return t, y, points
+
+
+def _columns(batch) -> dict:
+    """A micro-batch's columns as arrays; ``asset`` and ``t`` required."""
+    if hasattr(batch, "columns") and hasattr(batch, "to_numpy"):  # a DataFrame
+        columns = {str(c): batch[c].to_numpy() for c in batch.columns}
+    elif isinstance(batch, Mapping):
+        columns = {str(c): np.asarray(v) for c, v in batch.items()}
+    else:
+        raise TypeError(f"update: give a mapping or a DataFrame of columns, got a {type(batch).__name__}")
+    for needed in ("asset", "t"):
+        if needed not in columns:
+            raise ValueError(f"update: the batch has no column {needed!r} (columns: {', '.join(columns)})")
+    sizes = {name: np.shape(values)[0] if np.ndim(values) else -1 for name, values in columns.items()}
+    if len(set(sizes.values())) > 1:
+        raise ValueError(f"update: columns of different lengths {sizes}")
+    return columns
+
+
+def _by_asset(assets: np.ndarray):
+    """(asset, indices of its samples in order) for each asset, in order of first appearance."""
+    assets = np.asarray(assets, dtype=object)
+    keys = np.array([str(a) for a in assets]) if assets.size else np.empty(0, str)
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    order = np.argsort(inverse, kind="stable")
+    bounds = np.cumsum(np.bincount(inverse))
+    groups = np.split(order, bounds[:-1])
+    for g in np.argsort(first, kind="stable"):
+        index = groups[g]
+        yield assets[index[0]], index

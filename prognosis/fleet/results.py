@@ -57,6 +57,7 @@ class FleetResult:
     """
 
     parts: dict = field(default_factory=lambda: {name: [] for name in TABLES})
+    particles: dict = field(default_factory=dict)  # asset -> {hypothesis: {"theta", "gamma"}}, on request
 
     def add(self, name: str, **columns) -> None:
         """Append rows to table ``name`` (every column of the table, arrays of one length)."""
@@ -113,6 +114,7 @@ class FleetResult:
         for result in results:
             for name in TABLES:
                 out.parts[name] += result.parts[name]
+            out.particles.update(result.particles)
         return out
 
 

@@ -113,6 +113,28 @@ class DiscreteModel:
     _functions: dict = field(repr=False, compare=False)
     substeps: int = 1
 
+    def __getstate__(self) -> dict:
+        """The state without the lambdified functions (generated code does not pickle).
+
+        They are rebuilt from ``rhs`` and ``measurement`` on first use, so a model sent to a worker
+        process computes exactly as the original:
+
+        >>> import pickle
+        >>> from bondgraph.library import rlc_circuit
+        >>> model = discretize(rlc_circuit().state_equations(), dt=1e-3, augment=["R"])
+        >>> copy = pickle.loads(pickle.dumps(model))
+        >>> x = [0.01, 5e-4, 10.0]
+        >>> bool(np.array_equal(copy.transition(x, [1.0]), model.transition(x, [1.0])))
+        True
+        """
+        return {**self.__dict__, "_functions": {}}
+
+    def _numeric(self, key: str):
+        """The compiled function (or flag) ``key``, rebuilt after unpickling."""
+        if key not in self._functions:
+            self._functions.update(_compile_functions(self.states, self.inputs, self.rhs, self.measurement))
+        return self._functions[key]
+
     @property
     def n_states(self) -> int:
         """Length ``n`` of the state vector, augmented parameters included."""
@@ -154,7 +176,7 @@ class DiscreteModel:
     def rates(self, x, u=None) -> np.ndarray:
         """Continuous-time derivative ``F(x, u)``, shape of ``x``."""
         x, squeeze = _columns(x, self.n_states, "x")
-        out = _evaluate(self._functions["rhs"], x, self.input_vector(u), self.n_states)
+        out = _evaluate(self._numeric("rhs"), x, self.input_vector(u), self.n_states)
         return out[:, 0] if squeeze else out
 
     @property
@@ -174,13 +196,13 @@ class DiscreteModel:
     def _substep(self, x: np.ndarray, u: np.ndarray) -> np.ndarray:
         h = self.substep
         if self.method == "euler":
-            return x + h * _evaluate(self._functions["rhs"], x, u, self.n_states)
+            return x + h * _evaluate(self._numeric("rhs"), x, u, self.n_states)
         k1, k2, k3, k4 = (slope for _, slope in self._rk4_stages(x, u))
         return x + h / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
 
     def _rk4_stages(self, x: np.ndarray, u: np.ndarray) -> list:
         """The four (point, slope) pairs of the RK4 step from columns ``x`` (n, M)."""
-        f, n, dt = self._functions["rhs"], self.n_states, self.substep
+        f, n, dt = self._numeric("rhs"), self.n_states, self.substep
         stages, slope = [], None
         for weight in _RK4_NODES:
             point = x if slope is None else x + weight * dt * slope
@@ -192,7 +214,7 @@ class DiscreteModel:
         """Predicted measurement ``h(x, u)``, shape ``(m,)`` or ``(m, M)``."""
         x, squeeze = _columns(x, self.n_states, "x")
         with np.errstate(invalid="ignore", divide="ignore"):
-            out = _evaluate(self._functions["measurement"], x, self._measurement_inputs(u), self.n_outputs)
+            out = _evaluate(self._numeric("measurement"), x, self._measurement_inputs(u), self.n_outputs)
         return out[:, 0] if squeeze else out
 
     def transition_jacobian(self, x, u=None) -> np.ndarray:
@@ -232,10 +254,10 @@ class DiscreteModel:
         return _finite(jac(x), "measurement Jacobian", x, self.states)
 
     def _measurement_inputs(self, u) -> np.ndarray:
-        return self.input_vector(u, required=self._functions["measurement_uses_inputs"])
+        return self.input_vector(u, required=self._numeric("measurement_uses_inputs"))
 
     def _jacobian(self, key: str, u: np.ndarray, rows: int):
-        function = self._functions[key]
+        function = self._numeric(key)
 
         u = u.tolist()
 
@@ -343,22 +365,29 @@ def discretize(equations, *, dt: float, augment: Sequence[str] = (), parameters:
     rhs = [prepare(r, f"d{name}/dt") for r, name in zip(equations.rhs, state_names)] + [sp.S.Zero] * len(augment)
     measurement = [prepare(equations.outputs[name], f"output {name!r}") for name in outputs]
 
+    return DiscreteModel(
+        states=tuple(state_names), outputs=tuple(outputs), inputs=tuple(equations.inputs),
+        parameters={k: float(v) for k, v in values.items() if k not in augment}, augmented=tuple(augment),
+        dt=float(dt), method=method, rhs=tuple(rhs), measurement=tuple(measurement),
+        _functions=_compile_functions(state_names, equations.inputs, rhs, measurement), substeps=int(substeps),
+    )
+
+
+def _compile_functions(states: Sequence[str], inputs: Sequence[str], rhs: Sequence, measurement: Sequence) -> dict:
+    """The numpy functions of ``F``, ``G`` and their Jacobians, in the symbols :func:`discretize` writes them in."""
+    x = [sp.Symbol(name, real=True) for name in states]
+    u = [sp.Symbol(f"_u_{name}", real=True) for name in inputs]
+
     def jacobian(expressions):
         return sp.Matrix(expressions).jacobian(x).replace(sp.DiracDelta, lambda *a: sp.S.Zero)
 
-    functions = {
-        "rhs": sp.lambdify((*x, *u), rhs, modules="numpy", cse=True),
-        "measurement": sp.lambdify((*x, *u), measurement, modules="numpy", cse=True),
+    return {
+        "rhs": sp.lambdify((*x, *u), list(rhs), modules="numpy", cse=True),
+        "measurement": sp.lambdify((*x, *u), list(measurement), modules="numpy", cse=True),
         "rhs_jacobian": sp.lambdify((*x, *u), jacobian(rhs).tolist(), modules="numpy", cse=True),
         "measurement_jacobian": sp.lambdify((*x, *u), jacobian(measurement).tolist(), modules="numpy", cse=True),
         "measurement_uses_inputs": any(e.has(*u) for e in measurement) if u else False,
     }
-    return DiscreteModel(
-        states=tuple(state_names), outputs=tuple(outputs), inputs=tuple(equations.inputs),
-        parameters={k: float(v) for k, v in values.items() if k not in augment}, augmented=tuple(augment),
-        dt=float(dt), method=method, rhs=tuple(rhs), measurement=tuple(measurement), _functions=functions,
-        substeps=int(substeps),
-    )
 
 
 def _columns(x, n: int, name: str) -> tuple[np.ndarray, bool]:

@@ -202,3 +202,51 @@ def test_a_signal_named_like_a_derivative_point_keeps_its_own_value():
     for arr in derive_arrs(bg):
         residual = arr.evaluate(record, margin=1e-3).residual
         assert np.abs(residual[50:-50]).max() < 1e-6, arr.name  # consistent healthy data: r_n = 0
+
+
+@pytest.mark.parametrize("threshold", ["interval", "bglft"])
+def test_a_used_arr_pickles_and_evaluates_bitwise_the_same(rlc, threshold):
+    """Its lambdified residual, BG-LFT terms and interval evaluator are left out and rebuilt on first use."""
+    import pickle
+
+    arrs, record = rlc
+    arr = derive_arrs(rlc_circuit(), complete=False, integrals="keep")[0]   # one with an integral: v_C
+    options = dict(margin=1e-4, persistence=3, threshold=threshold)
+    before = arr.evaluate(record, **options)
+    assert arr.compiled._cache   # the functions the evaluation built
+    copy = pickle.loads(pickle.dumps(arrs + [arr]))[-1]
+    assert not copy.compiled._cache and copy.compiled is not arr.compiled
+    after = copy.evaluate(record, **options)
+    for name in ("residual", "lower", "upper", "bglft", "violation", "alarm"):
+        assert np.array_equal(getattr(after, name), getattr(before, name), equal_nan=True), name
+    assert all(np.array_equal(a, b) for a, b in zip(after.points, before.points))
+
+
+def test_a_nonlinear_arr_pickles_and_evaluates_bitwise_the_same():
+    """The three-tank ARRs hold square roots and signs of level differences."""
+    import pickle
+
+    from bondgraph.library import three_tank
+
+    bg = three_tank()
+    t = np.linspace(0.0, 20.0, 401)
+    record = simulate(bg, (0.0, 20.0), {"Q1": 1e-4, "Q2": 1e-4}, t_eval=t).record()
+    arr = derive_arrs(bg, complete=False)[0]
+    before = arr.evaluate(record, margin=1e-6)
+    after = pickle.loads(pickle.dumps(arr)).evaluate(record, margin=1e-6)
+    assert np.isfinite(before.lower).any()
+    for name in ("residual", "lower", "upper"):
+        assert np.array_equal(getattr(after, name), getattr(before, name), equal_nan=True), name
+
+
+def test_dask_names_a_task_holding_a_compiled_arr(rlc):
+    """The compiled ARR points back to its ARR: tokenize followed the cycle without end."""
+    import dataclasses
+
+    tokenize = pytest.importorskip("dask.base").tokenize
+    arrs, record = rlc
+    arr = dataclasses.replace(arrs[0])   # the same relation, not compiled yet
+    before = tokenize(arr)
+    arr.evaluate(record)   # compiles it
+    assert tokenize(arr) == before == tokenize(dataclasses.replace(arrs[0]))   # the same relation, the same name
+    assert tokenize(arrs[1]) != before

@@ -235,6 +235,17 @@ def test_central_differences_are_exact_for_quadratics_on_any_grid():
     assert np.allclose(derivative(t, x, order=2, method="central"), 4.0, atol=1e-7)
 
 
+def test_central_differences_leave_a_gaps_own_sample_unknown_on_exactly_equal_steps_too():
+    """numpy's formula for exactly equal steps gives the middle sample weight 0; the gap must not depend on it."""
+    exact, rounded = np.arange(21) * 0.5, np.linspace(0.0, 1.0, 21)
+    assert np.all(np.diff(exact) == 0.5) and not np.all(np.diff(rounded) == np.diff(rounded)[0])
+    for t in (exact, rounded):
+        x = t.copy()
+        x[10] = np.nan
+        assert np.flatnonzero(np.isnan(derivative(t, x, method="central"))).tolist() == [9, 10, 11]
+        assert np.flatnonzero(np.isnan(derivative(t, x, order=2, method="central"))).tolist() == [8, 9, 10, 11, 12]
+
+
 def test_savgol_refuses_uneven_sampling_and_suggests_central():
     t = uneven_grid(101)
     with pytest.raises(RecordError, match=r"'v'.*uniform sampling.*method='central'.*diagnosis.resample\(record\) "

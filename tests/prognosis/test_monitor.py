@@ -141,3 +141,22 @@ def test_health_monitor_refuses_bad_filter_settings_by_name(rlc_arr, options, me
     # noise_std=-1 used to be accepted (a likelihood with a negative variance)
     with pytest.raises(ValueError, match=message):
         HealthMonitor(rlc_arr, "R", ExponentialDegradation(1e-5), theta_fail=20.0, **options)
+
+
+def test_micro_batches_equal_the_whole_record_and_a_restart_pickles(scenario):
+    import pickle
+    arr, record = scenario
+    whole = monitor(arr, seed=4).run(record)
+    online = monitor(arr, seed=4)
+    columns = ["t", *record.columns]
+    half = len(record) // 2
+    for start in range(0, half, 97):  # uneven micro-batches, then a pickled restart mid-stream
+        online.update({c: np.asarray(record[c][start:min(start + 97, half)]) for c in columns})
+    online = pickle.loads(pickle.dumps(online))
+    result = online.update({c: np.asarray(record[c][half:]) for c in columns})
+    assert result.detection_time == whole.detection_time
+    n = result.t.size
+    assert whole.t.size - 2 <= n <= whole.t.size  # only the last half window is still pending
+    assert np.allclose(result.theta["mean"], whole.theta["mean"][:n], rtol=1e-9)
+    with pytest.raises(ValueError, match="no 't'"):
+        online.update({"x": 1.0})

@@ -495,6 +495,24 @@ def test_division_by_an_interval_containing_zero():
     assert (B.lo == -math.inf).all() and (B.hi == math.inf).all()
 
 
+def test_a_missing_point_gives_the_whole_line_whatever_the_arrays_length():
+    """A NaN point value is a missing sample: (-inf, inf), never a finite bound made of a NaN's bits."""
+    from diagnosis.intervals import rounding
+
+    assert rounding.up(np.array([np.nan])).tolist() == [math.inf]
+    assert rounding.down(np.array([np.nan])).tolist() == [-math.inf]
+    every_bit = np.array([0x7FFFFFFFFFFFFFFF, -1], dtype=np.int64).view(float)  # NaNs numpy's loops may produce
+    assert rounding.up(every_bit).tolist() == [math.inf] * 2  # the first stepped to -0.0
+    assert rounding.down(every_bit).tolist() == [-math.inf] * 2
+    f = affine_range(d1 * (-6.5e-5 * x) + d2 * (2.0 * x), [x], {d1: (0.0, 0.2), d2: (-0.05, 0.05)})
+    for n in (1, 3, 14, 100):
+        values = np.linspace(1.0, 2.0, n)
+        values[n // 2] = np.nan
+        band = f(values)
+        assert band.lo[n // 2] == -math.inf and band.hi[n // 2] == math.inf
+        assert np.isfinite(np.delete(band.lo, n // 2)).all() and np.isfinite(np.delete(band.hi, n // 2)).all()
+
+
 def test_sqrt_and_log_domains():
     with pytest.raises(ValueError, match="sqrt"):
         sqrt(Interval(-2.0, -1.0))
