@@ -140,7 +140,6 @@ class FleetMonitor:
         self.boxes = np.array([s.healthy_box(h, self.arrs) for h in self.hypotheses]).reshape(-1, 2)
         self.domains = np.array([h.domain for h in self.hypotheses], float).reshape(-1, 2)
         self.up = np.array([h.direction == "up" for h in self.hypotheses])
-        self.fail = np.array([h.failure for h in self.hypotheses])
         self._filter = None  # the streaming filter (run() uses one per block)
         self._laws = None
         self._live: dict = {}
