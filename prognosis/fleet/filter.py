@@ -76,6 +76,7 @@ class FleetFilter:
         variance = inflation * np.square(self.noise_std)
         self._scale = -0.5 / variance  # log-likelihood per squared gap, per ARR
         self._constant = -0.5 * np.log(2 * np.pi * variance)  # the Gaussian's normalizing constant, in the evidence
+        self._constant_sum = float(np.sum(self._constant))
         self.n, self.dt, self.inflation = int(n_particles), float(dt), float(inflation)
         self.shrinkage = (3 * discount - 1) / (2 * discount)
         self.floor, self.streams = float(floor), streams
@@ -172,12 +173,18 @@ class FleetFilter:
             weights[degenerate] = 1.0
             total[degenerate] = n
         ess = total * total / np.sum(weights * weights, axis=1)
-        constant = np.sum(np.where(finite, self._constant, 0.0), axis=1)
-        measured = finite.any(axis=1) & ~degenerate
+        if finite.all():  # the common case: every ARR measured
+            constant, measured = self._constant_sum, ~degenerate
+        else:
+            constant = np.sum(np.where(finite, self._constant, 0.0), axis=1)
+            measured = finite.any(axis=1) & ~degenerate
         self.log_evidence[rows] += np.where(measured, top[:, 0] + np.log(total / n) + constant, 0.0)
         flat = systematic_indices(weights, total, ndtr(draws[:, -1].astype(float)), flat=True)
         self.theta[rows] = theta.reshape(-1)[flat].reshape(theta.shape)
-        gamma = np.stack([gamma[:, g].reshape(-1)[flat].reshape(theta.shape) for g in range(self.g)], axis=1)
+        if self.g == 1:
+            gamma = gamma.reshape(-1)[flat].reshape(gamma.shape)
+        else:
+            gamma = np.stack([gamma[:, g].reshape(-1)[flat].reshape(theta.shape) for g in range(self.g)], axis=1)
         self._smooth(rows, gamma)
         self.gamma[rows] = gamma
         self.steps[rows] += 1

@@ -270,6 +270,7 @@ class FleetMonitor:
         """
         columns = _columns(batch)
         result = FleetResult()
+        touched = []
         for asset, index in _by_asset(columns["asset"]):
             live = self._live.get(asset)
             if live is None:
@@ -279,7 +280,8 @@ class FleetMonitor:
             final = live.push(np.asarray(columns["t"][index], float), signals)
             if final is not None:
                 self._watch(live, final, result)
-        self._drain(result)
+                touched.append(live)
+        self._drain(touched, result)
         return result
 
     def _watch(self, live: LiveAsset, final, result: FleetResult) -> None:
@@ -310,19 +312,21 @@ class FleetMonitor:
         for i in due:
             live.queue.append((final.t[i], final.y[i], [p[i] for p in final.points]))
 
-    def _drain(self, result: FleetResult) -> None:
-        """Step the filter until no asset has a filter step waiting, each tick one step of every waiting asset."""
+    def _drain(self, lives: list, result: FleetResult) -> None:
+        """Step the filter until none of ``lives`` has a step waiting, each tick one step of every waiting one."""
         pf = self._filter
         while True:
-            waiting = [live for live in self._live.values() if live.queue]
+            waiting = [live for live in lives if live.queue]
             if not waiting:
                 return
             items = [live.queue.pop(0) for live in waiting]
-            rows = np.concatenate([live.rows for live in waiting])
-            owner = np.repeat(np.arange(len(waiting)), [live.rows.size for live in waiting])
-            y = np.stack([item[1] for item in items])[owner]
-            points = [[np.array([item[2][m][p] for item in items])[owner] for p in range(len(items[0][2][m]))]
-                      for m in range(len(self.arrs))]
+            if len(waiting) == 1:
+                rows, owner = waiting[0].rows, np.zeros(waiting[0].rows.size, int)
+            else:
+                rows = np.concatenate([live.rows for live in waiting])
+                owner = np.repeat(np.arange(len(waiting)), [live.rows.size for live in waiting])
+            y = np.array([item[1] for item in items])[owner]
+            points = [list(np.array([item[2][m] for item in items])[owner].T) for m in range(len(self.arrs))]
             steps = pf.steps[rows].copy()
             times = np.array([item[0] for item in items])[owner]
             ids = np.array([live.asset for live in waiting], dtype=object)[owner]
