@@ -89,11 +89,24 @@ def test_a_spec_refuses_law_objects_and_non_mappings():
         FleetSpec("rlc", [("R", 20.0)], noise_std={})
 
 
+def test_a_spec_process_noise_is_an_absolute_sigma_v_of_every_law():
+    from prognosis import ExponentialDegradation, LinearDegradation
+
+    built, _ = monitor_for(spec(laws=["linear", "exponential"], process_noise=2e-3))
+    laws = {"linear": LinearDegradation(2e-3), "exponential": ExponentialDegradation(2e-3)}
+    assert built.monitor.settings.laws == laws
+    assert spec(process_noise=0) == spec(process_noise=0.0) != spec()
+    for bad in (-1e-3, float("nan"), "0.1", True):
+        with pytest.raises(UsageError, match="FleetSpec process_noise must be a finite number >= 0"):
+            spec(process_noise=bad)
+
+
 def test_the_monitor_is_built_once_per_spec_and_thread():
     first, built = monitor_for(spec(seed=11))
     again, built_again = monitor_for(spec(seed=11))
     assert built and not built_again and again is first
     assert first.signals == ["V", "i", "v_C"]
+    assert first.monitor.settings.laws == {"linear": None}  # no process_noise: the monitor's relative sigma_v
 
 
 # ------------------------------------------------------------------------------------------------ shards
