@@ -165,7 +165,7 @@ def _thawed(value: Mapping) -> dict:
 
 @dataclass
 class Built:
-    """What a worker builds from a spec: the monitor and the signals its ARRs read."""
+    """What a worker builds from a spec: the monitor and the record columns it reads (signals, antiderivatives)."""
 
     monitor: object  # a prognosis.fleet.FleetMonitor
     signals: list
@@ -221,6 +221,8 @@ def build(spec: FleetSpec) -> Built:
                            horizon=spec.horizon, rate=spec.rate, detection=_thawed(spec.detection),
                            healthy_until=spec.healthy_until,
                            domains=loaded.model.domains, seed=spec.seed)
-    signals = list(dict.fromkeys(s for arr in monitor.arrs for s in arr.signals))
+    # the detection reads the antiderivative columns too (e.g. encoder angles): a source must read them
+    signals = list(dict.fromkeys(s for arr, options in zip(monitor.arrs, monitor.options)
+                                 for s in (*arr.signals, *(options.get("antiderivatives") or {}).values())))
     return Built(monitor, signals)
 

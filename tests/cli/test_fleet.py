@@ -150,6 +150,24 @@ def test_results_do_not_depend_on_the_sharding(records, reference, tmp_path):
         assert same_tables(read_fleet(tmp_path / str(size)), expected), f"shards of {size}"
 
 
+def test_the_workers_read_the_antiderivative_columns_of_the_detection(records, reference, tmp_path):
+    """Integrals read from the records (detection's antiderivatives) are columns a source must read too."""
+    folder = tmp_path / "records"
+    folder.mkdir()
+    for asset in ("c0", "c1"):
+        lines = (records / f"{asset}.csv").read_text().splitlines()
+        # a column the ARRs do not integrate: the tables must be those of the reference run
+        text = "\n".join([lines[0] + ",q"] + [line + ",0.0" for line in lines[1:]])
+        (folder / f"{asset}.csv").write_text(text + "\n")
+    detection = {name: {**options, "antiderivatives": {"i": "q"}} for name, options in spec().detection.items()}
+    job = spec(detection=detection)
+    assert monitor_for(job)[0].signals == ["V", "i", "v_C", "q"]
+    run_fleet(job, folder, tmp_path / "out", workers=0)
+    got, expected = read_fleet(tmp_path / "out"), read_fleet(reference[0])
+    assert same_tables(got.for_asset("c0"), expected.for_asset("c0")) and got.rows("rul") == expected.for_asset(
+        "c0").rows("rul") > 0
+
+
 def test_a_second_run_replaces_the_parts_of_the_first(records, reference, tmp_path):
     out = tmp_path / "out"
     run_fleet(spec(), records, out, workers=0, shard_size=1)
