@@ -112,6 +112,13 @@ def rss_bytes() -> int:
         return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
 
 
+def busy_cpu_seconds() -> float:
+    """CPU seconds the whole machine spent busy since boot (every process; /proc/stat, idle and iowait out)."""
+    with open("/proc/stat") as stat:
+        fields = [int(v) for v in stat.readline().split()[1:]]
+    return (sum(fields) - fields[3] - fields[4]) / os.sysconf("SC_CLK_TCK")
+
+
 def peak_rss_bytes() -> int:
     """This process's peak resident set size so far (Linux reports KiB)."""
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
@@ -189,10 +196,14 @@ def write_records(path: Path, scenario: tb.Scenario, count: int) -> dict:
 # ------------------------------------------------------------------------------------------------ fleet runs
 
 def timed_run(spec: FleetSpec, records: Path, out: Path, **options) -> dict:
-    """``run_fleet`` timed from the call to its return; its summary with ``wall_s``."""
-    start = time.perf_counter()
+    """``run_fleet`` timed from the call to its return; its summary with ``wall_s`` and ``machine_busy_s``.
+
+    ``machine_busy_s``: CPU seconds every process of the machine spent meanwhile (this run's and others').
+    """
+    busy, start = busy_cpu_seconds(), time.perf_counter()
     summary = run_fleet(spec, records, out, **options)
     summary["wall_s"] = time.perf_counter() - start
+    summary["machine_busy_s"] = busy_cpu_seconds() - busy
     return summary
 
 
@@ -427,6 +438,9 @@ NOTES = {
               "slow b_Md drift; first/last 1e3: the first/last 10 batches; RSS from /proc/self/statm at half "
               "and at the end, in a fresh process",
     "dask_speedup": "wall time of the serial in-process run_fleet (workers=0, one shard of K) / wall_s",
+    "dask_cpu_s": "CPU seconds of the Dask run's tasks summed over workers; dask_task_s: their wall seconds summed "
+                  "(a task that had a core to itself has cpu ~ wall); dask_machine_busy_s, serial_machine_busy_s: "
+                  "CPU seconds the whole machine was busy during each run (/proc/stat), other jobs included",
     "ra": "RA of the RUL mean over predictions with case.after <= t < case.eol, mean over the ra_assets; "
           "HealthMonitor with tuning(case, 'named', noise, N), seed = asset index, workers=1",
 }
@@ -482,7 +496,9 @@ def measure(args, work: Path) -> dict:
     figures.update(wall_s=dask_run["wall_s"], seconds_per_asset=dask_run["wall_s"] / count,
                    particle_steps_per_s=steps["particle_steps"] / dask_run["cpu_s"],
                    dask_speedup=serial_run["wall_s"] / dask_run["wall_s"], serial_wall_s=serial_run["wall_s"],
-                   dask_cpu_s=dask_run["cpu_s"], dask_shards=dask_run["shards"], dask_shard_size=dask_run["shard_size"],
+                   dask_cpu_s=dask_run["cpu_s"], dask_task_s=dask_run["task_s"],
+                   dask_machine_busy_s=dask_run["machine_busy_s"], serial_machine_busy_s=serial_run["machine_busy_s"],
+                   dask_shards=dask_run["shards"], dask_shard_size=dask_run["shard_size"],
                    particle_steps_per_s_wall=steps["particle_steps"] / dask_run["wall_s"], **steps)
     figures.update(sharding(s.spec, records, work, count, args.workers, dask_run, serial_out, dask_out))
     ra_ids = asset_ids(count)[:min(args.ra_assets, count)]
