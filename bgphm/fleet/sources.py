@@ -165,19 +165,56 @@ class ParquetRecords:
         if missing:
             raise RecordError(f"records {self.path}: missing column(s) {missing}; columns present: {names}")
 
+    def selection(self, assets: Sequence[str]):
+        """The dataset filter of these asset ids, on the column as stored.
+
+        A filter on the stored column, with the ids' range, lets pyarrow skip the row groups whose
+        statistics exclude them (a file sorted by asset is then read once over all chunks); a cast of
+        the column, or a long list of ids alone, would make it read and test every row of the file for
+        every chunk.  For an integer column the ids are compared as the integers whose text they are
+        (an id that is not one matches no row).
+
+        >>> import tempfile, pathlib, pyarrow as pa, pyarrow.dataset, pyarrow.parquet as pq
+        >>> path = pathlib.Path(tempfile.mkdtemp()) / "fleet.parquet"
+        >>> pq.write_table(pa.table({"asset": ["a", "a", "b", "b"], "t": [0.0, 1.0, 0.0, 1.0]}), path,
+        ...                row_group_size=2)
+        >>> source = ParquetRecords(str(path))
+        >>> fragment = next(pyarrow.dataset.dataset(path).get_fragments())
+        >>> len(fragment.split_by_row_group(source.selection(["b"])))   # one row group of two is read
+        1
+        """
+        pa, pc, _ = pyarrow_modules()
+        kind = self._dataset().schema.field(self.column).type
+        column = pc.field(self.column)
+        if pa.types.is_string(kind) or pa.types.is_large_string(kind):
+            return _within(column, pa.array(list(assets), type=kind))
+        if pa.types.is_integer(kind):
+            try:
+                return _within(column, pa.array([int(a) for a in assets if _integer_text(a)], type=kind))
+            except (pa.ArrowInvalid, OverflowError):  # an id beyond the column's integers: compare as text
+                pass
+        return column.cast(pa.string()).isin(list(assets))
+
     def _chunk(self, assets: list, signals: list) -> Iterator[tuple[str, Record]]:
         pa, pc, _ = pyarrow_modules()
-        key = pc.field(self.column).cast(pa.string())
-        table = self._dataset().to_table(columns=[self.column, "t", *signals], filter=key.isin(assets))
-        ids = table.column(self.column).cast(pa.string())
-        table = table.set_column(0, self.column, ids)
-        table = table.take(pc.sort_indices(table, sort_keys=[(self.column, "ascending"), ("t", "ascending")]))
-        ids = np.asarray(table.column(self.column).to_pylist(), dtype=object)
+        # one thread: a Dask worker runs one task per core already (and the threaded scan was slower here)
+        table = self._dataset().to_table(columns=[self.column, "t", *signals], filter=self.selection(assets),
+                                         use_threads=False)
+        table = table.set_column(0, self.column, table.column(self.column).cast(pa.string()))
+        order = pc.sort_indices(table, sort_keys=[(self.column, "ascending"), ("t", "ascending")]).to_numpy()
+        if np.any(order[1:] < order[:-1]):  # a file sorted by asset and time needs no copy
+            table = table.take(order)
+        # each asset's first and last row from the counts (in order of appearance, i.e. sorted), not a
+        # Python string per row
+        counts = pc.value_counts(table.column(self.column)).flatten()
+        ends = np.cumsum(counts[1].to_numpy())
+        bounds = dict(zip(counts[0].to_pylist(), zip((ends - counts[1].to_numpy()).tolist(), ends.tolist())))
         columns = {c: table.column(c).to_numpy(zero_copy_only=False) for c in ["t", *signals]}
+        del table, order  # the chunk is held once, as the numpy columns
         for asset in assets:
-            lo, hi = np.searchsorted(ids, asset, "left"), np.searchsorted(ids, asset, "right")
-            if lo == hi:
+            if asset not in bounds:
                 raise RecordError(f"records {self.path}: no row for asset {asset!r}")
+            lo, hi = bounds[asset]
             data = {c: _floats(v[lo:hi]) for c, v in columns.items()}
             yield asset, as_record(data, signals, name=f"{self.path} (asset {asset!r})")
 
@@ -225,6 +262,24 @@ def read_csv_fast(path: Path, signals: Sequence[str]) -> Record | None:
     except (pa.ArrowException, OSError, ValueError, KeyError):
         return None
     return record if np.all(np.isfinite(record.t)) else None
+
+
+def _within(column, values):
+    """``column`` in ``values``, with their range first: pyarrow prunes row groups by a range, but not by
+    a long list of values (a shard's chunk holds hundreds of ids)."""
+    _, pc, _ = pyarrow_modules()
+    if not len(values):
+        return column.isin(values)
+    bounds = pc.min_max(values)
+    return (column >= bounds["min"]) & (column <= bounds["max"]) & column.isin(values)
+
+
+def _integer_text(asset: str) -> bool:
+    """Whether an id is the text of an integer as an integer column's ids are written (``"12"``, ``"-3"``)."""
+    try:
+        return str(int(asset)) == asset
+    except (TypeError, ValueError):
+        return False
 
 
 def _floats(values: np.ndarray) -> np.ndarray:

@@ -20,6 +20,7 @@ Examples
 
 from __future__ import annotations
 
+import math
 import threading
 import warnings
 from collections.abc import Mapping, Sequence
@@ -72,6 +73,11 @@ class FleetSpec:
         As :func:`diagnosis.derive_arrs`.
     dt, n_particles, rul_every, report_every, horizon, rate, healthy_until, seed
         As :class:`~prognosis.fleet.FleetMonitor`.
+    process_noise : float, optional
+        Absolute standard deviation of each law's process noise per filter step (the ``process_noise``
+        of :func:`prognosis.degradation.degradation_model`), the same for every candidate: the monitor
+        gets ``{law: degradation_model(law, process_noise)}``.  None (default): the monitor's own
+        sigma_v, a fraction of each candidate's resolution (FleetMonitor's relative ``process_noise``).
 
     Notes
     -----
@@ -94,6 +100,7 @@ class FleetSpec:
     rate: tuple[float, float] | None = None
     healthy_until: float | None = None
     seed: int = 0
+    process_noise: float | None = None
 
     def __post_init__(self):
         if not isinstance(self.model, (str, Path)):
@@ -102,6 +109,8 @@ class FleetSpec:
             raise UsageError(f"FleetSpec laws must be built-in law names (e.g. ['linear']), got {self.laws!r}: "
                              "a law object would have to travel to every worker")
         object.__setattr__(self, "model", str(self.model))
+        if self.process_noise is not None:
+            object.__setattr__(self, "process_noise", _noise(self.process_noise))
         for name in ("failures", "noise_std", "detection"):
             object.__setattr__(self, name, _frozen(getattr(self, name), name))
         for name in ("laws", "candidates", "arrs", "rate"):
@@ -131,6 +140,14 @@ class FleetSpec:
         return out
 
 
+def _noise(value) -> float:
+    """A process noise sigma_v: a finite number >= 0 (a float, so that equal specs have equal keys)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value < 0:
+        raise UsageError(f"FleetSpec process_noise must be a finite number >= 0 (sigma_v per filter step), "
+                         f"got {value!r}")
+    return float(value)
+
+
 def _rebuild(state: dict) -> FleetSpec:
     return FleetSpec(**state)
 
@@ -148,7 +165,7 @@ def _thawed(value: Mapping) -> dict:
 
 @dataclass
 class Built:
-    """What a worker builds from a spec: the monitor and the signals its ARRs read."""
+    """What a worker builds from a spec: the monitor and the record columns it reads (signals, antiderivatives)."""
 
     monitor: object  # a prognosis.fleet.FleetMonitor
     signals: list
@@ -182,6 +199,7 @@ def build(spec: FleetSpec) -> Built:
     """Load the model, derive its ARRs and build the monitor of ``spec`` (no cache)."""
     from bondgraph.io import load_model
     from diagnosis.arrs import ARRWarning, derive_arrs
+    from prognosis.degradation import degradation_model
     from prognosis.fleet import FleetMonitor
 
     loaded = load_model(spec.model)
@@ -194,12 +212,17 @@ def build(spec: FleetSpec) -> Built:
         if unknown:
             raise UsageError(f"FleetSpec arrs: no ARR {unknown} in {loaded.source} (ARRs: {', '.join(names)})")
         arrs = [a for a in arrs if a.name in spec.arrs]
-    monitor = FleetMonitor(arrs, dict(spec.failures), noise_std=dict(spec.noise_std), laws=list(spec.laws),
+    # law objects carry an absolute sigma_v; names leave it to the monitor (relative to each candidate)
+    laws = (list(spec.laws) if spec.process_noise is None
+            else {law: degradation_model(law, spec.process_noise) for law in spec.laws})
+    monitor = FleetMonitor(arrs, dict(spec.failures), noise_std=dict(spec.noise_std), laws=laws,
                            candidates=None if spec.candidates is None else list(spec.candidates), dt=spec.dt,
                            n_particles=spec.n_particles, rul_every=spec.rul_every, report_every=spec.report_every,
                            horizon=spec.horizon, rate=spec.rate, detection=_thawed(spec.detection),
                            healthy_until=spec.healthy_until,
                            domains=loaded.model.domains, seed=spec.seed)
-    signals = list(dict.fromkeys(s for arr in monitor.arrs for s in arr.signals))
+    # the detection reads the antiderivative columns too (e.g. encoder angles): a source must read them
+    signals = list(dict.fromkeys(s for arr, options in zip(monitor.arrs, monitor.options)
+                                 for s in (*arr.signals, *(options.get("antiderivatives") or {}).values())))
     return Built(monitor, signals)
 

@@ -89,11 +89,24 @@ def test_a_spec_refuses_law_objects_and_non_mappings():
         FleetSpec("rlc", [("R", 20.0)], noise_std={})
 
 
+def test_a_spec_process_noise_is_an_absolute_sigma_v_of_every_law():
+    from prognosis import ExponentialDegradation, LinearDegradation
+
+    built, _ = monitor_for(spec(laws=["linear", "exponential"], process_noise=2e-3))
+    laws = {"linear": LinearDegradation(2e-3), "exponential": ExponentialDegradation(2e-3)}
+    assert built.monitor.settings.laws == laws
+    assert spec(process_noise=0) == spec(process_noise=0.0) != spec()
+    for bad in (-1e-3, float("nan"), "0.1", True):
+        with pytest.raises(UsageError, match="FleetSpec process_noise must be a finite number >= 0"):
+            spec(process_noise=bad)
+
+
 def test_the_monitor_is_built_once_per_spec_and_thread():
     first, built = monitor_for(spec(seed=11))
     again, built_again = monitor_for(spec(seed=11))
     assert built and not built_again and again is first
     assert first.signals == ["V", "i", "v_C"]
+    assert first.monitor.settings.laws == {"linear": None}  # no process_noise: the monitor's relative sigma_v
 
 
 # ------------------------------------------------------------------------------------------------ shards
@@ -135,6 +148,24 @@ def test_results_do_not_depend_on_the_sharding(records, reference, tmp_path):
     for size in (2, 1):
         run_fleet(spec(), records, tmp_path / str(size), workers=0, shard_size=size)
         assert same_tables(read_fleet(tmp_path / str(size)), expected), f"shards of {size}"
+
+
+def test_the_workers_read_the_antiderivative_columns_of_the_detection(records, reference, tmp_path):
+    """Integrals read from the records (detection's antiderivatives) are columns a source must read too."""
+    folder = tmp_path / "records"
+    folder.mkdir()
+    for asset in ("c0", "c1"):
+        lines = (records / f"{asset}.csv").read_text().splitlines()
+        # a column the ARRs do not integrate: the tables must be those of the reference run
+        text = "\n".join([lines[0] + ",q"] + [line + ",0.0" for line in lines[1:]])
+        (folder / f"{asset}.csv").write_text(text + "\n")
+    detection = {name: {**options, "antiderivatives": {"i": "q"}} for name, options in spec().detection.items()}
+    job = spec(detection=detection)
+    assert monitor_for(job)[0].signals == ["V", "i", "v_C", "q"]
+    run_fleet(job, folder, tmp_path / "out", workers=0)
+    got, expected = read_fleet(tmp_path / "out"), read_fleet(reference[0])
+    assert same_tables(got.for_asset("c0"), expected.for_asset("c0")) and got.rows("rul") == expected.for_asset(
+        "c0").rows("rul") > 0
 
 
 def test_a_second_run_replaces_the_parts_of_the_first(records, reference, tmp_path):
@@ -222,6 +253,27 @@ def test_parquet_asset_ids_may_be_integers(records, tmp_path):
     assert source.assets() == ["0", "1", "2", "3", "4", "5"]
     [(asset, record)] = list(source.read(["4"], ["i"]))
     assert asset == "4" and len(record) == 2001
+
+
+@pytest.mark.parametrize("integer_ids", [False, True])
+def test_a_parquet_chunk_reads_only_the_row_groups_of_its_assets(records, tmp_path, integer_ids):
+    """Sorted by asset, a file's row groups hold few assets: a chunk's filter must let pyarrow skip the others."""
+    import pyarrow.dataset
+
+    path = parquet_of(records, tmp_path / "sorted.parquet", integer_ids=integer_ids, shuffle=False)
+    source = open_source(path)
+    ids = source.assets()
+    fragment = next(pyarrow.dataset.dataset(path).get_fragments())
+    groups = fragment.split_by_row_group()
+    # a chunk holds hundreds of ids: pyarrow prunes by a list of ids only when it is short (here 80 ids)
+    wanted = fragment.split_by_row_group(source.selection(ids[2:4] * 40))
+    assert len(groups) == 13 and len(wanted) == 5  # rows 4002-8003 of 12006, 1000 per row group
+    from_csv = dict(CsvDirectory(str(records)).read(["c2", "c3"], ["i"]))
+    got = dict(source.read(ids[2:4], ["i"]))
+    assert [np.array_equal(got[a]["i"], from_csv[c]["i"]) for a, c in zip(ids[2:4], ["c2", "c3"])] == [True, True]
+    missing = "x" if not integer_ids else "02"  # "02" is not how the integer 2 reads
+    with pytest.raises(RecordError, match=f"no row for asset '{missing}'"):
+        list(source.read([missing], ["i"]))
 
 
 def test_sources_name_what_is_wrong(records, tmp_path):
