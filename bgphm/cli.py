@@ -151,12 +151,7 @@ def cmd_prognose(args, progress: Progress) -> int:
     from prognosis.isolation import IsolatingMonitor
 
     out = _output_directory(args)
-    spec = load_model(args.model)
-    arrs = _arrs(spec, progress, args.arr, args.integrals)
-    parameters, domains = spec.model.parameters, spec.model.domains
-    failures = _failures(args, parameters, domains)
-    candidates = _candidates(args, arrs, failures, parameters)
-    laws = [args.degradation] if args.degradation else ["linear", "exponential"]
+    spec, arrs, failures, candidates, laws = _what_can_fail(args, progress)
     record = _record(args.data, arrs, progress, args.resample)
     evaluations = _detect(arrs, record, args, progress)
     until = _calibration_end(record, args, otherwise="")
@@ -171,7 +166,7 @@ def cmd_prognose(args, progress: Progress) -> int:
     monitor = IsolatingMonitor(arrs, failures, noise_std=noise, laws=laws, candidates=candidates, dt=dt,
                                n_particles=args.particles, rate=None if args.rate is None else tuple(args.rate),
                                rul_every=args.rul_every, horizon=args.horizon, detection=detection,
-                               healthy_until=until, domains=domains, seed=args.seed)
+                               healthy_until=until, domains=spec.model.domains, seed=args.seed)
     progress(f"particle filter from the first alarm after t = {until:g} s: {len(laws)} law(s) per candidate, "
              f"{args.particles} particles each, dt = {dt:g} s")
     result = monitor.run(record, evaluations=evaluations, progress=_filter_progress(progress))
@@ -217,12 +212,7 @@ def cmd_fleet(args, progress: Progress) -> int:
     source = open_source(args.records)
     out = check_output(args.out, kind="directory", inputs=input_files(args.model) + source.inputs(),
                        force=args.force)
-    spec = load_model(args.model)
-    arrs = _arrs(spec, progress, args.arr, args.integrals)
-    parameters, domains = spec.model.parameters, spec.model.domains
-    failures = _failures(args, parameters, domains)
-    candidates = _candidates(args, arrs, failures, parameters)
-    laws = [args.degradation] if args.degradation else ["linear", "exponential"]
+    spec, arrs, failures, candidates, laws = _what_can_fail(args, progress)
     assets = source.assets()
     progress(f"{len(assets)} assets in {source.describe()}")
     calibration, first = _fleet_calibration(arrs, source, assets[:args.calibrate_assets], args, progress)
@@ -494,6 +484,17 @@ def _filter_progress(progress: Progress, every: float = 2.0):
                      f"{now - start:.1f} s elapsed")
 
     return report
+
+
+def _what_can_fail(args, progress: Progress) -> tuple:
+    """``prognose`` and ``fleet``: the model, its ARRs, the failure values, the candidates and the laws."""
+    spec = load_model(args.model)
+    arrs = _arrs(spec, progress, args.arr, args.integrals)
+    parameters, domains = spec.model.parameters, spec.model.domains
+    failures = _failures(args, parameters, domains)
+    candidates = _candidates(args, arrs, failures, parameters)
+    laws = [args.degradation] if args.degradation else ["linear", "exponential"]
+    return spec, arrs, failures, candidates, laws
 
 
 def _failures(args, parameters: dict, domains: dict) -> dict:
