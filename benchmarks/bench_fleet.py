@@ -59,7 +59,6 @@ import json
 import math
 import multiprocessing
 import os
-import resource
 import shutil
 import sys
 import tempfile
@@ -72,7 +71,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples"))
 
 import torsion_bar as tb  # noqa: E402  (examples/, put on the path above)
 
+from bgphm.errors import MissingExtraError  # noqa: E402
 from bgphm.fleet import FleetSpec, ParquetRecords, local_cluster, read_fleet, run_fleet  # noqa: E402
+from bgphm.fleet.engine import require_dask  # noqa: E402
+from bgphm.fleet.sources import pyarrow_modules  # noqa: E402
 from bgphm.fleet.spec import build  # noqa: E402
 from diagnosis import derive_arrs  # noqa: E402
 from diagnosis.detection import noise_margin  # noqa: E402
@@ -119,9 +121,17 @@ def busy_cpu_seconds() -> float:
     return (sum(fields) - fields[3] - fields[4]) / os.sysconf("SC_CLK_TCK")
 
 
+def reset_peak_rss() -> None:
+    """Start this process's peak RSS (VmHWM) again from its RSS now (Linux >= 4.0: /proc/self/clear_refs)."""
+    with open("/proc/self/clear_refs", "w") as refs:
+        refs.write("5")
+
+
 def peak_rss_bytes() -> int:
-    """This process's peak resident set size so far (Linux reports KiB)."""
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    """This process's peak resident set size since the last :func:`reset_peak_rss` (VmHWM)."""
+    with open("/proc/self/status") as status:
+        line = next(line for line in status if line.startswith("VmHWM:"))
+    return int(line.split()[1]) * 1024
 
 
 def in_fresh_process(function, *args):
@@ -348,24 +358,25 @@ def rul_cost(spec: FleetSpec, records: Path, count: int) -> dict:
             "rul_assets": len(ids), "rul_predictions": extra}
 
 
-def monitor_memory(records: str, spec: FleetSpec, count: int) -> dict:
-    """In a fresh process: peak RSS growth of ``FleetMonitor.run`` over the first ``count`` assets of the file.
+def monitor_memory(records: str, spec: FleetSpec, ids: list) -> dict:
+    """In a fresh process: peak RSS growth of ``FleetMonitor.run`` over the assets ``ids`` of the file.
 
-    The records are read from the Parquet file while the monitor runs (as a worker reads them).
+    The records are read from the Parquet file while the monitor runs (as a worker reads them); the
+    peak is counted from just before the run (what the imports and the build took is not).
     """
     built = build(spec)
     source = ParquetRecords(records)
-    ids = source.assets()[:count]
     before = rss_bytes()
+    reset_peak_rss()
     result = built.monitor.run(source.read(ids, built.signals))
     return {"peak_growth_bytes": peak_rss_bytes() - before, "rul_rows": result.rows("rul")}
 
 
-def memory(records: Path, spec: FleetSpec, count: int) -> dict:
+def memory(records: Path, spec: FleetSpec, count: int, total: int) -> dict:
     """Per-asset peak memory from fresh processes at ``count`` and ``count // 2`` assets, and the fixed part."""
-    half = count // 2
-    small = in_fresh_process(monitor_memory, str(records), spec, half)["peak_growth_bytes"]
-    large = in_fresh_process(monitor_memory, str(records), spec, count)["peak_growth_bytes"]
+    half, ids = count // 2, asset_ids(total)
+    small = in_fresh_process(monitor_memory, str(records), spec, ids[:half])["peak_growth_bytes"]
+    large = in_fresh_process(monitor_memory, str(records), spec, ids[:count])["peak_growth_bytes"]
     per_asset = (large - small) / (count - half)
     return {"memory_per_asset_kb": per_asset / 1024, "memory_fixed_mb": (large - per_asset * count) / 2**20,
             "memory_peak_growth_mb": large / 2**20, "memory_assets": [half, count]}
@@ -429,9 +440,9 @@ NOTES = {
     "particle_steps_per_s": "filter particle-steps of the Dask run (steps from each asset's alarm to the end of "
                             "its record x N) / CPU seconds of its tasks summed over workers (process_time in "
                             "run_shard: reading, detection, filter, RUL, writing)",
-    "memory_per_asset_kb": "peak RSS (ru_maxrss) minus RSS before FleetMonitor.run, in a fresh spawned process per "
-                           "count, records read from the Parquet file during the run; (peak at M - peak at M/2) / "
-                           "(M/2); memory_fixed_mb = peak at M - M x per asset",
+    "memory_per_asset_kb": "peak RSS during FleetMonitor.run (VmHWM reset just before it) minus RSS before it, in a "
+                           "fresh spawned process per count, records read from the Parquet file during the run; "
+                           "(peak at M - peak at M/2) / (M/2); memory_fixed_mb = peak at M - M x per asset",
     "rul_ms_per_asset_prediction": "FleetMonitor.run on records held in memory, rul_every=1 vs rul_every=1e9 "
                                    "(report_every=10 in both), best of 2 each, difference / extra RUL rows",
     "stream": "one asset, FleetMonitor.update with micro-batches of stream_batch_samples samples (1 s at 100 Hz), "
@@ -513,7 +524,7 @@ def measure(args, work: Path) -> dict:
     figures.update(filter_speed(s, n))
     figures.update(rul_cost(s.spec, records, min(args.rul_assets, count)))
     log("memory in fresh processes")
-    figures.update(memory(records, s.spec, min(args.memory_assets, count)))
+    figures.update(memory(records, s.spec, min(args.memory_assets, count), count))
     log(f"streaming {STREAM_SAMPLES} samples of one asset in a fresh process")
     stream_record(work / "stream.npz", STREAM_SAMPLES)
     figures.update(in_fresh_process(stream, s.spec, str(work / "stream.npz"), STREAM_BATCH))
@@ -524,6 +535,11 @@ def measure(args, work: Path) -> dict:
 
 def main(argv=None) -> dict:
     args = parse(argv)
+    try:
+        require_dask()
+        pyarrow_modules()
+    except MissingExtraError as error:
+        raise SystemExit(f"bench_fleet: {error}") from None
     if args.keep is not None:
         args.keep.mkdir(parents=True, exist_ok=True)
     work = args.keep.resolve() if args.keep is not None else Path(tempfile.mkdtemp(prefix="bench_fleet-", dir="/tmp"))

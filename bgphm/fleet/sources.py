@@ -124,17 +124,23 @@ class ParquetRecords:
     column: str = "asset"
 
     def assets(self) -> list[str]:
-        """The distinct asset ids, sorted."""
+        """The distinct asset ids, sorted.
+
+        The column is read batch by batch, keeping each batch's distinct ids: the whole column as text
+        took 1.5 GB and 4 s for 10^4 assets of 10^4 rows.
+        """
         pa, pc, _ = pyarrow_modules()
         self._check_columns([])
-        ids = self._dataset().to_table(columns=[self.column]).column(self.column)
-        ids = pc.unique(ids.cast(pa.string()))
-        if ids.null_count:
-            raise RecordError(f"records {self.path}: column {self.column!r} has empty cells; every row needs an "
-                              "asset id")
-        if not len(ids):
+        ids = set()
+        for batch in self._dataset().to_batches(columns=[self.column], use_threads=False):
+            column = batch.column(0)
+            if column.null_count:
+                raise RecordError(f"records {self.path}: column {self.column!r} has empty cells; every row needs an "
+                                  "asset id")
+            ids.update(pc.unique(column).cast(pa.string()).to_pylist())
+        if not ids:
             raise RecordError(f"records {self.path}: no rows")
-        return sorted(ids.to_pylist())
+        return sorted(ids)
 
     def inputs(self) -> list[Path]:
         return [Path(self.path)]

@@ -290,6 +290,13 @@ def test_sources_name_what_is_wrong(records, tmp_path):
     pq.write_table(pa.table({"id": ["a"], "t": [0.0]}), tmp_path / "noasset.parquet")
     with pytest.raises(RecordError, match=r"missing column\(s\) \['asset'\]"):
         open_source(tmp_path / "noasset.parquet").assets()
+    pq.write_table(pa.table({"asset": ["a", None], "t": [0.0, 1.0]}), tmp_path / "noid.parquet")
+    with pytest.raises(RecordError, match="column 'asset' has empty cells; every row needs an asset id"):
+        open_source(tmp_path / "noid.parquet").assets()
+    pq.write_table(pa.table({"asset": pa.array([], pa.string()), "t": pa.array([], pa.float64())}),
+                   tmp_path / "empty.parquet")
+    with pytest.raises(RecordError, match="no rows"):
+        open_source(tmp_path / "empty.parquet").assets()
     pq.write_table(pa.table({"asset": ["a"] * 3, "t": [0.0, 1.0, 1.0], "i": [1.0, 2.0, 3.0]}),
                    tmp_path / "twice.parquet")
     with pytest.raises(RecordError, match=r"asset 'a'.*not strictly increasing"):
