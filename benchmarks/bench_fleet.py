@@ -2,9 +2,10 @@
 
 The b-md case of ``examples/torsion_bar.py`` (b_Md growing as b_Md,n exp(0.05 (t - 10)) from
 t = 10 s, failure at 0.45 N.m.s/rad, 100 s at 100 Hz) is simulated once, without noise; every asset
-then gets its own encoder phase and sensor noise (seeds ``[i, 7]`` and ``i`` for asset ``i``, as
-the example draws them), and the K records go to one Parquet file with an ``asset`` column (rows
-sorted by asset, a row group per 25 assets), which the workers read as a user's would.  The
+then gets its own encoder phase and sensor noise (``encoder(record, default_rng([i, 7]))`` and
+``add_noise(..., NOISE, seed=i)`` for asset ``i``), and the K records go to one Parquet file with
+an ``asset`` column (rows sorted by asset, a row group per 25 assets), which the workers read as a
+user's would.  The
 residual noise is calibrated on a separate healthy record (``noise_margin(..., k=1)``, never from
 the truth).  The job: the named candidate b_Md failing at 0.45, law ``exponential`` with the
 case's absolute process noise (as HealthMonitor's named preset), N = ``--particles``, dt = 0.1 s,
@@ -28,8 +29,11 @@ What is measured, all in one run of this script (one JSON line with ``--json``):
   every filter step, minus the same run with a RUL only at the first step, over the extra
   predictions;
 * ``memory_per_asset_kb``: peak RSS growth of ``FleetMonitor.run`` (records read from the Parquet
-  file) in a fresh process at M and M/2 assets (M = min(K, ``--memory-assets``)), the difference
-  over M/2; ``memory_fixed_mb`` is what remains at M;
+  file; the peak counted from just before the run) in a fresh process at M and M/2 assets
+  (M = min(K, ``--memory-assets``)), the difference over M/2; ``memory_fixed_mb`` is what remains at
+  M.  Up to the 1000 assets the monitor filters together, this includes the block's observations
+  and step arrays (bounded by the block); beyond, only the result tables grow
+  (``--memory-assets 2000`` at K >= 2000 shows it);
 * ``ra_vs_single_asset``: mean RA of the fleet minus that of ``HealthMonitor`` (named preset, same
   records, same settings) over the first ``--ra-assets`` assets, RA as the example computes it
   (predictions from t = 52 s to before the end of life); ``speedup_vs_health_monitor`` is the
@@ -82,6 +86,7 @@ from diagnosis.signals import add_noise, as_record  # noqa: E402
 from prognosis import HealthMonitor  # noqa: E402
 from prognosis.degradation import ExponentialDegradation  # noqa: E402
 from prognosis.fleet import FleetFilter  # noqa: E402
+from prognosis.fleet.monitor import BLOCK  # noqa: E402
 from prognosis.hypotheses import Hypothesis, rate_prior  # noqa: E402
 from prognosis.metrics import mean_relative_accuracy, relative_accuracy  # noqa: E402
 from prognosis.monitor import filter_stride  # noqa: E402
@@ -379,7 +384,7 @@ def memory(records: Path, spec: FleetSpec, count: int, total: int) -> dict:
     large = in_fresh_process(monitor_memory, str(records), spec, ids[:count])["peak_growth_bytes"]
     per_asset = (large - small) / (count - half)
     return {"memory_per_asset_kb": per_asset / 1024, "memory_fixed_mb": (large - per_asset * count) / 2**20,
-            "memory_peak_growth_mb": large / 2**20, "memory_assets": [half, count]}
+            "memory_peak_growth_mb": large / 2**20, "memory_assets": [half, count], "memory_block_assets": BLOCK}
 
 
 def stream_record(path: Path, samples: int) -> None:
@@ -442,7 +447,9 @@ NOTES = {
                             "run_shard: reading, detection, filter, RUL, writing)",
     "memory_per_asset_kb": "peak RSS during FleetMonitor.run (VmHWM reset just before it) minus RSS before it, in a "
                            "fresh spawned process per count, records read from the Parquet file during the run; "
-                           "(peak at M - peak at M/2) / (M/2); memory_fixed_mb = peak at M - M x per asset",
+                           "(peak at M - peak at M/2) / (M/2); memory_fixed_mb = peak at M - M x per asset. Up to "
+                           "memory_block_assets (the assets FleetMonitor.run filters together) this includes the "
+                           "block's observations and step arrays; beyond, only the result tables grow",
     "rul_ms_per_asset_prediction": "FleetMonitor.run on records held in memory, rul_every=1 vs rul_every=1e9 "
                                    "(report_every=10 in both), best of 2 each, difference / extra RUL rows",
     "stream": "one asset, FleetMonitor.update with micro-batches of stream_batch_samples samples (1 s at 100 Hz), "
