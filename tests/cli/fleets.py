@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import builtins
 from pathlib import Path
 
 import numpy as np
@@ -43,3 +44,15 @@ def spec(**settings):
                "rul_every": 4, "detection": {"ARR_J1": {"margin": 0.011}, "ARR_J0": {"margin": 1.1e-3}},
                "healthy_until": 0.2, **settings}
     return FleetSpec("rlc", {"R": 20.0}, **options)
+
+
+def without_dask(monkeypatch) -> None:
+    """Make ``import dask`` and ``import distributed`` fail for the rest of the test (a machine without the extra)."""
+    real_import = builtins.__import__
+
+    def without_distributed(name, *args, **kwargs):
+        if name.split(".")[0] in ("dask", "distributed"):
+            raise ImportError(f"No module named {name!r}")
+        return real_import(name, *args, **kwargs)
+
+    monkeypatch.setattr(builtins, "__import__", without_distributed)

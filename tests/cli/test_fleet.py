@@ -5,7 +5,6 @@ The Dask runs are in test_fleet_dask.py (slow tier: a cluster takes seconds to s
 
 from __future__ import annotations
 
-import builtins
 import json
 import pickle
 import warnings
@@ -20,7 +19,7 @@ from bgphm.fleet.spec import monitor_for
 from bondgraph.errors import PHMError
 from diagnosis.signals import RecordError
 
-from .fleets import ONSETS, spec, write_fleet
+from .fleets import ONSETS, spec, without_dask, write_fleet
 
 pa = pytest.importorskip("pyarrow")
 pq = pytest.importorskip("pyarrow.parquet")
@@ -204,14 +203,7 @@ def test_bad_counts_are_refused(records, tmp_path):
 
 
 def test_a_dask_run_without_dask_names_the_extra(records, tmp_path, monkeypatch):
-    real_import = builtins.__import__
-
-    def without_distributed(name, *args, **kwargs):
-        if name.split(".")[0] in ("dask", "distributed"):
-            raise ImportError(f"No module named {name!r}")
-        return real_import(name, *args, **kwargs)
-
-    monkeypatch.setattr(builtins, "__import__", without_distributed)
+    without_dask(monkeypatch)
     with pytest.raises(MissingExtraError, match=r"pip install 'bondgraph-phm\[dask\]'") as caught:
         run_fleet(spec(), records, tmp_path / "out", workers=2)
     assert isinstance(caught.value, ImportError) and isinstance(caught.value, PHMError)

@@ -5,7 +5,6 @@ These runs are in this process (--workers 0); the Dask runs of the command are i
 
 from __future__ import annotations
 
-import builtins
 import json
 
 import pytest
@@ -13,7 +12,7 @@ import pytest
 from bgphm.cli import main
 from bgphm.fleet import read_fleet
 
-from .fleets import write_fleet
+from .fleets import without_dask, write_fleet
 
 pytest.importorskip("pyarrow")
 
@@ -166,14 +165,7 @@ def test_a_file_that_is_not_parquet(capsys, tmp_path):
 
 
 def test_a_dask_run_without_dask_names_the_extra_before_any_work(capsys, records, tmp_path, monkeypatch):
-    real_import = builtins.__import__
-
-    def without_distributed(name, *args, **kwargs):
-        if name.split(".")[0] in ("dask", "distributed"):
-            raise ImportError(f"No module named {name!r}")
-        return real_import(name, *args, **kwargs)
-
-    monkeypatch.setattr(builtins, "__import__", without_distributed)
+    without_dask(monkeypatch)
     line = usage_error(capsys, "fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "0.2",
                        "--out", str(tmp_path / "out"), "--workers", "2")
     assert "pip install 'bondgraph-phm[dask]'" in line and "--workers 0" in line
