@@ -1,0 +1,1 @@
+"""Zoo models, one module per system; each defines ``CASE``, a :class:`tests.zoo.case.ZooCase`."""
