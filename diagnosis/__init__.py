@@ -6,8 +6,9 @@
 ['ARR_1_1', 'ARR_1_2', 'ARR_MSO_1']
 """
 
-from .arrs import derive_arrs
+from .arrs import derive_arrs, evaluable
 from .relation import ARR, ARRWarning
+from .residuals import ARRError
 from .deltas import delta
 from .detection import Evaluation, evaluate, noise_margin, robust_std
 from .elimination import structural_arrs, unreached
@@ -19,9 +20,9 @@ from .streaming import StreamChunk, StreamingEvaluation
 from .structural import StructuralLimitError, StructuralModel, structural_model
 
 __all__ = [
-    "ARR", "ARRWarning", "Evaluation", "Interval", "IntervalArray", "IntervalWarning", "Record", "RecordError",
-    "RecordWarning", "SignatureMatrix", "StreamChunk", "StreamingEvaluation", "StructuralLimitError", "StructuralModel",
-    "add_noise", "affine_range",
-    "as_record", "compile_interval", "delta", "derive_arrs", "evaluate", "noise_margin", "read_csv", "resample",
-    "robust_std", "signature_matrix", "structural_arrs", "structural_model", "unreached",
+    "ARR", "ARRError", "ARRWarning", "Evaluation", "Interval", "IntervalArray", "IntervalWarning", "Record",
+    "RecordError", "RecordWarning", "SignatureMatrix", "StreamChunk", "StreamingEvaluation", "StructuralLimitError",
+    "StructuralModel", "add_noise", "affine_range", "as_record", "compile_interval", "delta", "derive_arrs",
+    "evaluable", "evaluate", "noise_margin", "read_csv", "resample", "robust_std", "signature_matrix",
+    "structural_arrs", "structural_model", "unreached",
 ]

@@ -32,8 +32,9 @@ from bondgraph.structure import require_model
 from .elimination import MAX_ORDER, structural_arrs
 from .junctions import junction_arrs
 from .relation import ARR, ARRWarning
+from .residuals import ARRError
 
-__all__ = ["ARR", "ARRWarning", "derive_arrs"]
+__all__ = ["ARR", "ARRError", "ARRWarning", "derive_arrs", "evaluable"]
 
 
 def derive_arrs(bg: BondGraph, *, complete: bool = True, sensor_faults: bool = True,
@@ -89,11 +90,36 @@ def derive_arrs(bg: BondGraph, *, complete: bool = True, sensor_faults: bool = T
     """
     require_model(bg, "derive_arrs")
     if not complete:
-        return junction_arrs(bg, integrals=integrals)
+        return evaluable(junction_arrs(bg, integrals=integrals))
     with warnings.catch_warnings():
         # a junction whose balance needs an unmeasured variable is what the completion makes up for;
         # what it cannot make up for is named in its own warning
         warnings.simplefilter("ignore", ARRWarning)
-        arrs = junction_arrs(bg, integrals=integrals)
-    return arrs + structural_arrs(bg, existing=arrs, sensor_faults=sensor_faults, max_order=max_order,
-                                  integrals=integrals, isolation=isolation)
+        arrs = evaluable(junction_arrs(bg, integrals=integrals), warn=False)
+    return arrs + evaluable(structural_arrs(bg, existing=arrs, sensor_faults=sensor_faults, max_order=max_order,
+                                            integrals=integrals, isolation=isolation))
+
+
+def evaluable(arrs: list[ARR], *, warn: bool = True) -> list[ARR]:
+    """The ARRs a record can evaluate; each one left out is named, with the reason, in an :class:`ARRWarning`.
+
+    An ARR is offered only if it compiles to numerics (:func:`~diagnosis.residuals.compile_arr`): a
+    relation that holds, say, an uncertainty inside an integral or a function numpy cannot compute would
+    fail on the user's first record, so it is not offered, and the warning (a note of the ARR report)
+    says why.
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> [arr.name for arr in evaluable(derive_arrs(rlc_circuit()))]
+    ['ARR_J1', 'ARR_J0']
+    """
+    kept = []
+    for arr in arrs:
+        try:
+            arr.compiled
+        except ARRError as exc:
+            if warn:
+                warnings.warn(f"{arr.name} is not offered: {str(exc).removeprefix(arr.name + ': ')}", ARRWarning,
+                              stacklevel=3)
+            continue
+        kept.append(arr)
+    return kept

@@ -25,6 +25,7 @@ from bondgraph.structure import Structure, T
 
 from .deltas import delta, delta_parameter, latex
 from .detection import Evaluation, evaluate
+from .integral_forms import factor_out_of_integrals
 from .residuals import CompiledARR, compile_arr
 
 
@@ -282,6 +283,10 @@ def split_relation(name, junction, detector, r_n, r_true, blocked_by, structure,
     has them already).
     """
     deltas = sorted((s for s in r_true.free_symbols if delta_parameter(s) is not None), key=str)
+    # an integral is computed once from the record: uncertain parameters and their deltas stand outside it
+    uncertain_symbols = [*deltas, *(sp.Symbol(delta_parameter(d)) for d in deltas)]
+    r_n = factor_out_of_integrals(r_n, uncertain_symbols)
+    r_true = factor_out_of_integrals(r_true, uncertain_symbols)
     # r_true - r_n vanishes with every delta, so each delta's term comes from the addends of r_true
     # that hold it: tidying those alone keeps the cost of an ARR independent of the size of the model
     holding = {d: [] for d in deltas}

@@ -26,6 +26,9 @@ import numpy as np
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from bondgraph.errors import PHMError
+
+from .deltas import delta_parameter
 from .signals import Record, RecordError, as_record, cumulative_integral, default_window, derivative
 
 
@@ -215,6 +218,40 @@ def antiderivative_integral(terms: list[tuple[str, float]], columns: Mapping, or
     return total
 
 
+class ARRError(PHMError, ValueError):
+    """An ARR that cannot be evaluated on a record; the message names the ARR and the term at fault."""
+
+
+#: Functions of the point values that numpy computes (anything else in a relation is refused at compile time).
+NUMERIC_FUNCTIONS = (sp.Abs, sp.sign, sp.exp, sp.log, sp.sin, sp.cos, sp.tan, sp.sinh, sp.cosh, sp.tanh, sp.asin,
+                     sp.acos, sp.atan, sp.atan2, sp.Min, sp.Max, sp.Heaviside, sp.floor, sp.ceiling, sp.Piecewise)
+
+T = sp.Symbol("t")
+
+
+def _depth(integral: sp.Integral) -> int:
+    """How deep ``integral`` nests: 1 plus the deepest integral inside, counting each of its limits."""
+    inner = max((_depth(i) for i in integral.function.atoms(sp.Integral)), default=0)
+    return inner + len(integral.limits)
+
+
+def _check_numeric(name: str, nominal: sp.Expr, uncertain: sp.Expr, integrals: Mapping) -> None:
+    """Raise an :class:`ARRError` unless every part of the relation is a function numpy can compute."""
+    for where, expression in [("r_n", nominal), ("Psi_2", uncertain), *(
+            (f"the integrand of {s}", g) for s, g in integrals.items())]:
+        left = expression.atoms(sp.Derivative, sp.Integral, AppliedUndef, sp.Subs)
+        if left:
+            raise ARRError(f"{name}: cannot evaluate {sorted(map(str, left))[0]} in {where}")
+        for f in expression.atoms(sp.Function):
+            if not isinstance(f, NUMERIC_FUNCTIONS):
+                raise ARRError(f"{name}: cannot evaluate the function {type(f).__name__} in {where} ({f})")
+    for symbol, integrand in integrals.items():
+        inside = sorted(str(s) for s in integrand.free_symbols if delta_parameter(s) is not None)
+        if inside:
+            raise ARRError(f"{name}: the uncertainty {inside[0]} sits inside an integral ({integrand}); its "
+                           "range cannot be bounded from point values")
+
+
 def compile_arr(arr) -> CompiledARR:
     """Compile an :class:`~diagnosis.arrs.ARR`: its signals, derivatives and integrals become point symbols.
 
@@ -227,8 +264,11 @@ def compile_arr(arr) -> CompiledARR:
 
     Raises
     ------
-    ValueError
-        For a derivative that is not a time derivative of a signal.
+    ARRError
+        For what a record cannot give: a derivative that is not a time derivative of a signal, an
+        integral that does not start at the record's start, an integrand holding an uncertainty
+        ``delta`` (:func:`diagnosis.integral_forms.factor_out_of_integrals` moves what it can out),
+        or a function numpy cannot compute (``re``, ``im``, an unevaluated ``Subs``...).
 
     Examples
     --------
@@ -255,19 +295,34 @@ def compile_arr(arr) -> CompiledARR:
         taken.add(name)
         return sp.Symbol(name)
 
-    for d in sorted((arr.nominal + arr.uncertain).atoms(sp.Derivative), key=str):
+    # the atoms of each part: in the sum, an integral of r_n may cancel against its copy in Psi_2
+    def atoms(kind):
+        return arr.nominal.atoms(kind) | arr.uncertain.atoms(kind)
+
+    for d in sorted(atoms(sp.Derivative), key=str):
         (variable, order), = d.variable_count
         if not isinstance(d.expr, AppliedUndef) or str(variable) != "t":
-            raise ValueError(f"{arr.name}: cannot evaluate {d} (only time derivatives of signals)")
+            raise ARRError(f"{arr.name}: cannot evaluate {d}: only time derivatives of signals are estimated "
+                           "from a record")
         symbol = fresh(f"d{order}_{d.expr.func.__name__}")
         derivatives[symbol] = (d.expr.func.__name__, int(order))
         replace[d] = symbol
-    for k, integral in enumerate(sorted((arr.nominal + arr.uncertain).atoms(sp.Integral), key=str)):
-        symbol = fresh(f"int{k}")
-        integrals[symbol] = integral.function.xreplace(replace)
-        replace[integral] = symbol
+    k = 0
+    for integral in sorted(atoms(sp.Integral), key=lambda i: (_depth(i), str(i))):
+        # inner integrals first, so that an outer integrand is written in the inner one's point
+        integrand = integral.function.xreplace(replace)
+        for limits in integral.limits:  # Integral(g, L, L) is the integral of the integral of g
+            if tuple(limits) != (T, 0, T):
+                raise ARRError(f"{arr.name}: cannot evaluate {integral}: only integrals from the start of the "
+                               "record, (t, 0, t), are computed")
+            symbol = fresh(f"int{k}")
+            k += 1
+            integrals[symbol] = integrand
+            integrand = symbol
+        replace[integral] = integrand
     values = {sp.Symbol(p): v for p, v in arr.values.items()}
     points = [signal_symbols[n] for n in signals] + list(derivatives) + list(integrals)
+    _check_numeric(arr.name, arr.nominal.xreplace(replace), arr.uncertain.xreplace(replace), integrals)
     return CompiledARR(
         arr=arr,
         points=points,

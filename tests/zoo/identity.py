@@ -22,7 +22,7 @@ def _cumtrapz(tk: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 def _depth(integral: sp.Integral) -> int:
     inner = [i for i in integral.function.atoms(sp.Integral)]
-    return 1 + max((_depth(i) for i in inner), default=0)
+    return len(integral.limits) + max((_depth(i) for i in inner), default=0)
 
 
 def arr_values(expression: sp.Expr, run: ReferenceRun) -> np.ndarray:
@@ -49,7 +49,10 @@ def arr_values(expression: sp.Expr, run: ReferenceRun) -> np.ndarray:
         return np.broadcast_to(np.asarray(fn(*(arrays[s] for s in symbols)), float), tk.shape)
 
     for integral in sorted(expression.atoms(sp.Integral), key=_depth):
-        replace[integral] = point(_cumtrapz(tk, numeric(integral.function)))
+        values = numeric(integral.function)
+        for _ in integral.limits:  # Integral(g, L, L): sympy's form of a double integral
+            values = _cumtrapz(tk, values)
+        replace[integral] = point(values)
     return numeric(expression)
 
 
