@@ -11,6 +11,8 @@ from .relation import ARR, ARRWarning
 from .residuals import ARRError
 from .deltas import delta
 from .detection import Evaluation, evaluate, noise_margin, robust_std
+from .detectability import Detectability, detectability
+from .monitoring import Detection, consistent_faults, detect
 from .elimination import structural_arrs, unreached
 from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, compile_interval
 from .signals import Record, RecordError, RecordWarning, add_noise, as_record, read_csv
@@ -20,9 +22,10 @@ from .streaming import StreamChunk, StreamingEvaluation
 from .structural import StructuralLimitError, StructuralModel, structural_model
 
 __all__ = [
-    "ARR", "ARRError", "ARRWarning", "Evaluation", "Interval", "IntervalArray", "IntervalWarning", "Record",
-    "RecordError", "RecordWarning", "SignatureMatrix", "StreamChunk", "StreamingEvaluation", "StructuralLimitError",
-    "StructuralModel", "add_noise", "affine_range", "as_record", "compile_interval", "delta", "derive_arrs",
-    "evaluable", "evaluate", "noise_margin", "read_csv", "resample", "robust_std", "signature_matrix",
-    "structural_arrs", "structural_model", "unreached",
+    "ARR", "ARRError", "ARRWarning", "Detectability", "Detection", "Evaluation", "Interval", "IntervalArray",
+    "IntervalWarning", "Record", "RecordError", "RecordWarning", "SignatureMatrix", "StreamChunk",
+    "StreamingEvaluation", "StructuralLimitError", "StructuralModel", "add_noise", "affine_range", "as_record",
+    "compile_interval", "consistent_faults", "delta", "derive_arrs", "detect", "detectability", "evaluable",
+    "evaluate", "noise_margin", "read_csv", "resample", "robust_std", "signature_matrix", "structural_arrs",
+    "structural_model", "unreached",
 ]

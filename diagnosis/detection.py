@@ -31,7 +31,7 @@ from __future__ import annotations
 
 import math
 import numbers
-from collections.abc import Mapping
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -39,7 +39,8 @@ import numpy as np
 from bondgraph._optional import pandas_for
 
 from .residuals import read_record
-from .signals import RecordError
+from .signals import RecordError, default_window
+from .steps import step_mask
 from .thresholds import bglft_threshold, interval_threshold
 
 
@@ -64,6 +65,8 @@ class Evaluation:
     points : list of ndarray
         The ARR's point values per sample (signals, derivative estimates,
         integrals), in the order of :class:`~diagnosis.residuals.CompiledARR`.
+    masked : ndarray of bool
+        Samples left undecided because a derivative estimate reaches across a step of an input.
 
     Examples
     --------
@@ -95,6 +98,7 @@ class Evaluation:
     violation: np.ndarray
     alarm: np.ndarray
     points: list = field(default_factory=list, repr=False)
+    masked: np.ndarray | None = field(default=None, repr=False, kw_only=True)
 
     @property
     def detection_time(self) -> float | None:
@@ -133,7 +137,8 @@ class Evaluation:
 
 def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, polyorder: int = 3,
              exact_derivatives: Mapping | None = None, antiderivatives: Mapping | None = None,
-             margin: float = 0.0, persistence: int = 1, threshold: str = "interval") -> Evaluation:
+             margin: float = 0.0, persistence: int = 1, threshold: str = "interval",
+             steps: bool | Iterable[str] = True) -> Evaluation:
     """Residual, thresholds and alarms of one ARR over a record.
 
     Parameters
@@ -154,6 +159,11 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
         Consecutive violations needed to raise an alarm.
     threshold : {"interval", "bglft"}
         Which band decides: the interval range of Psi_2 or the BG-LFT ``sum |w_i|``.
+    steps : bool or iterable of str
+        Leave undecided the samples a derivative estimate takes across a step of an input
+        (:mod:`diagnosis.steps`): True (default) looks for steps in the ARR's input signals (those not
+        measured), an iterable names the record columns to look in (a model's inputs, say), False
+        judges every sample.  Only an ARR that estimates derivatives is affected.
 
     Returns
     -------
@@ -183,10 +193,55 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     compiled = arr.compiled
     points = compiled.point_values(data, method=method, window=window, polyorder=polyorder,
                                    exact=exact_derivatives, antiderivatives=antiderivatives)
+    masked = _across_steps(arr, data, _step_columns(arr, record, steps), method, window, polyorder,
+                           exact_derivatives)
+    if masked.any():
+        points = [np.where(masked, np.nan, p) for p in points]
     residual, lower, upper, bglft, violation = judge(compiled, points, margin, threshold)
     alarm = persistent(violation, persistence)
     return Evaluation(arr.name, data.t, residual, lower, upper, bglft, float(margin), int(persistence), violation,
-                      alarm, points)
+                      alarm, points, masked=masked)
+
+
+def _step_columns(arr, record, steps) -> dict:
+    """Input name -> samples, for the inputs whose steps :func:`evaluate` looks for (``steps``)."""
+    if steps is False:
+        return {}
+    if steps is True:
+        names = [s for s in arr.signals if s not in arr.sensors]
+    elif isinstance(steps, str) or not isinstance(steps, Iterable):
+        raise ValueError(f"steps must be True, False or a list of input names, got {steps!r}")
+    else:
+        names = list(dict.fromkeys(steps))
+    present = [n for n in names if n in arr.signals or _has_column(record, n)]
+    if not present:
+        return {}
+    data = read_record(arr, record, extra=tuple(n for n in present if n not in arr.signals))
+    return {n: data[n] for n in present}
+
+
+def _has_column(record, name: str) -> bool:
+    columns = getattr(record, "columns", record)
+    try:
+        return name in columns
+    except TypeError:
+        return False
+
+
+def _across_steps(arr, data, inputs: Mapping, method: str, window: int | None, polyorder: int,
+                  exact) -> np.ndarray:
+    """The samples whose derivative estimates reach across a step of an input (see :func:`evaluate`)."""
+    estimated = [order for name, order in arr.derivatives.items() if order and not _known(name, order, exact)]
+    if not inputs or not estimated:
+        return np.zeros(len(data), bool)
+    order = max(estimated)
+    reach = ((window or default_window(polyorder)) // 2 if method == "savgol" else 1) + order
+    return step_mask({"t": data.t, **inputs}, list(inputs), reach)
+
+
+def _known(name: str, order: int, exact) -> bool:
+    """Whether every derivative of ``name`` up to ``order`` is given exactly."""
+    return bool(exact) and all((name if k == 1 else f"{name}:{k}") in exact for k in range(1, order + 1))
 
 
 def check_options(arr, caller: str, *, method: str = "savgol", antiderivatives: Mapping | None = None,

@@ -46,6 +46,10 @@ Example
 >>> batch = evaluate(arr, record, margin=1e-3)
 >>> bool(np.allclose(whole.residual, batch.residual, rtol=1e-12, atol=1e-15))
 True
+
+A stream does not mask the samples around steps of the inputs as :func:`~diagnosis.detection.evaluate`
+does by default (:mod:`diagnosis.steps` needs the whole record to tell a step from a fast change); to
+compare a stream with a batch evaluation, evaluate with ``steps=False``.
 """
 
 from __future__ import annotations

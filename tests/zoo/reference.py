@@ -49,14 +49,17 @@ def nominal_parameters(case: ZooCase) -> dict:
     return dict(case.build().parameters)
 
 
-def _segments(case: ZooCase, inputs: str, t_end: float) -> list[tuple[float, float, dict]]:
-    """``[(start, end, {input symbol: expression in t}), ...]`` stretches with smooth inputs."""
+def _segments(case: ZooCase, inputs: str, t_end: float, cuts: tuple = ()) -> list[tuple[float, float, dict]]:
+    """``[(start, end, {input symbol: expression in t}), ...]`` stretches with smooth inputs (and cut at ``cuts``)."""
+    inner = tuple(c for c in cuts if 0.0 < c < t_end)
     if inputs == "smooth":
-        return [(0.0, t_end, {sp.Symbol(k): sp.sympify(v) for k, v in case.smooth_inputs.items()})]
+        times = sorted({0.0, t_end, *inner})
+        smooth = {sp.Symbol(k): sp.sympify(v) for k, v in case.smooth_inputs.items()}
+        return [(a, b, smooth) for a, b in zip(times[:-1], times[1:])]
     if inputs != "step":
         raise ValueError(f"inputs must be 'smooth' or 'step', not {inputs!r}")
-    times = sorted({0.0, t_end, *(float(s) for profile in case.step_inputs.values() for s, _ in profile
-                                  if 0.0 < s < t_end)})
+    times = sorted({0.0, t_end, *inner, *(float(s) for profile in case.step_inputs.values() for s, _ in profile
+                                          if 0.0 < s < t_end)})
     segments = []
     for start, end in zip(times[:-1], times[1:]):
         levels = {}
@@ -68,11 +71,13 @@ def _segments(case: ZooCase, inputs: str, t_end: float) -> list[tuple[float, flo
 
 
 def simulate_reference(case: ZooCase, *, parameters: Mapping | None = None, inputs: str = "smooth",
-                       t_end: float | None = None, dt: float | None = None, order: int = ORDER) -> ReferenceRun:
+                       t_end: float | None = None, dt: float | None = None, order: int = ORDER,
+                       fault_at: float | None = None) -> ReferenceRun:
     """Integrate the case's physics and sample its inputs, outputs and their exact derivatives.
 
     ``parameters``: parameter -> a number or a sympy expression in ``t`` (a drifting parameter);
-    the others keep their nominal values.  ``inputs``: ``"smooth"`` or ``"step"``.
+    the others keep their nominal values; with ``fault_at``, they take these values from that time on
+    (an abrupt fault), nominal before.  ``inputs``: ``"smooth"`` or ``"step"``.
     """
     t_end = case.t_end if t_end is None else t_end
     dt = case.dt if dt is None else dt
@@ -81,6 +86,7 @@ def simulate_reference(case: ZooCase, *, parameters: Mapping | None = None, inpu
     unknown = set(parameters or {}) - set(values)
     if unknown:
         raise ValueError(f"{case.name}: unknown parameter(s) {sorted(unknown)}")
+    healthy = {sp.Symbol(k): sp.sympify(v) for k, v in values.items()}
     values.update(parameters or {})
     psubs = {sp.Symbol(k): sp.sympify(v) for k, v in values.items()}
     states = list(case.states)
@@ -89,8 +95,8 @@ def simulate_reference(case: ZooCase, *, parameters: Mapping | None = None, inpu
     names = list(case.outputs) + [k for k in (case.smooth_inputs if inputs == "smooth" else case.step_inputs)]
     samples = {n: np.full(grid.size, np.nan) for n in names}
     derivs = {n: [np.full(grid.size, np.nan) for _ in range(order)] for n in names}
-    for start, end, u in _segments(case, inputs, t_end):
-        subs = {**psubs, **u}
+    for start, end, u in _segments(case, inputs, t_end, () if fault_at is None else (fault_at,)):
+        subs = {**(healthy if fault_at is not None and start < fault_at else psubs), **u}
         f = [sp.sympify(e).xreplace(subs) for e in case.rhs]
         rhs = sp.lambdify([t, states], f, modules="numpy")
         jac = sp.lambdify([t, states], sp.Matrix(f).jacobian(states), modules="numpy")

@@ -1,0 +1,150 @@
+"""What an ARR can see on a record: the smallest parameter change it detects at its calibrated margin.
+
+A change of a parameter theta by a relative amount epsilon moves the nominal residual of an ARR, to
+first order, by ``-epsilon s(t)`` with the sensitivity ``s = theta_n dr_n/dtheta`` (the observation
+model of Jha et al. (2016), eq. 27, per unit of relative change).  The alarm needs ``-r_n`` outside
+``[B_lo - m, B_hi + m]`` for ``persistence`` samples in a row, so a rise of theta is detected once
+
+    epsilon > (B_hi + m) / s        (s > 0),   or   (m - B_lo) / |s|   (s < 0)
+
+on every sample of some run of ``persistence`` samples: the smallest such epsilon over the record is
+the **detectable rise**; a fall likewise.  Both are read on the record at hand (its excitation, its
+noise through the calibrated margin ``m``), so they say what this ARR can see on this machine.
+
+An ARR that cannot detect a change of any parameter below :data:`BLIND_CHANGE` is **blind** on the
+record: typically the noise of a second derivative inflates its margin beyond any plausible fault.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+import sympy as sp
+from numpy.lib.stride_tricks import sliding_window_view
+
+__all__ = ["BLIND_CHANGE", "Detectability", "detectability"]
+
+#: An ARR that needs a larger relative change than this of every parameter is reported blind.
+BLIND_CHANGE = 1.0
+
+
+@dataclass(frozen=True)
+class Detectability:
+    """The smallest relative changes an ARR detects on a record.
+
+    Attributes
+    ----------
+    arr : str
+        The ARR's name.
+    rise, fall : dict
+        Parameter -> smallest detectable relative rise (fall) of it, ``inf`` if none is.
+    margin : float
+        The noise margin the figures are for.
+    blind : bool
+        No parameter is detectable below :data:`BLIND_CHANGE` in either direction.
+    reason : str
+        Why the ARR is blind ("" when it is not).
+    """
+
+    arr: str
+    rise: dict
+    fall: dict
+    margin: float
+    blind: bool
+    reason: str
+
+    def change(self, parameter: str) -> float:
+        """The smallest relative change of ``parameter`` detected whichever its sign: the larger of rise and fall."""
+        return max(self.rise[parameter], self.fall[parameter])
+
+    def detectable(self, parameter: str, change: float) -> bool:
+        """Whether a relative change ``change`` (signed, e.g. 0.3 or -0.3) of ``parameter`` is detected."""
+        if parameter not in self.rise:
+            return False
+        return change >= self.rise[parameter] if change > 0 else -change >= self.fall[parameter]
+
+    def as_dict(self) -> dict:
+        finite = {k: (None if not np.isfinite(v) else float(v)) for k, v in self.rise.items()}
+        return {"arr": self.arr, "margin": self.margin, "blind": self.blind, "reason": self.reason,
+                "rise": finite, "fall": {k: (None if not np.isfinite(v) else float(v)) for k, v in self.fall.items()}}
+
+
+def detectability(evaluation, arr) -> Detectability:
+    """The detectable changes of each parameter of ``arr`` on the record of ``evaluation``.
+
+    ``evaluation`` is ``arr.evaluate(record, margin=..., persistence=...)`` on a fault-free record
+    (the calibration stretch or the whole record): its point values, band and margin are used.
+
+    Examples
+    --------
+    The motor's speed ARR on a bench run: friction b is seen from a rise of a few percent, the
+    inertia J only where the speed changes.
+
+    >>> from bondgraph import simulate
+    >>> from bondgraph.library import dc_motor
+    >>> from diagnosis import derive_arrs, noise_margin
+    >>> motor = dc_motor()
+    >>> t = np.linspace(0.0, 2.0, 2001)
+    >>> run = simulate(motor, (0.0, 2.0), {"U": 12.0}, t_eval=t).record()
+    >>> arr = derive_arrs(motor)[1]
+    >>> d = detectability(arr.evaluate(run, margin=1e-6, persistence=5), arr)
+    >>> sorted(d.rise), d.blind
+    (['J', 'b', 'k_m'], False)
+    >>> 0.2 < d.rise["b"] < 0.3   # b's box is (0, +20 %): a rise must clear it first
+    True
+    """
+    sensitivities = _sensitivities(arr, evaluation.points)
+    lo = evaluation.lower - evaluation.margin
+    hi = evaluation.upper + evaluation.margin
+    rise, fall = {}, {}
+    for parameter, s in sensitivities.items():
+        with np.errstate(divide="ignore", invalid="ignore"):
+            up = np.where(s > 0, hi / s, -lo / -s)      # epsilon > 0 moves -r_n by epsilon * s
+            down = np.where(s > 0, -lo / s, hi / -s)    # epsilon < 0 by -|epsilon| * s
+        rise[parameter] = _smallest(up, evaluation.persistence)
+        fall[parameter] = _smallest(down, evaluation.persistence)
+    worst = [max(rise[p], fall[p]) for p in rise]
+    blind = not worst or min(worst) > BLIND_CHANGE
+    return Detectability(evaluation.name, rise, fall, float(evaluation.margin), blind,
+                         _blind_reason(arr, evaluation.margin) if blind else "")
+
+
+def _sensitivities(arr, points: list) -> dict:
+    """Parameter -> ``theta_n dr_n/dtheta`` at every sample, from the ARR's point values."""
+    compiled = arr.compiled
+    values = {sp.Symbol(p): v for p, v in arr.values.items()}
+    out = {}
+    for parameter in sorted(arr.parameters):
+        theta = sp.Symbol(parameter)
+        slope = sp.diff(arr.nominal, theta).xreplace(compiled.symbols).xreplace(values)
+        f = sp.lambdify(compiled.points, float(arr.values[parameter]) * slope, modules="numpy")
+        out[parameter] = np.broadcast_to(np.asarray(f(*points), float), np.shape(points[0])).copy()
+    return out
+
+
+def _smallest(required: np.ndarray, persistence: int) -> float:
+    """The smallest change that exceeds ``required`` on each of ``persistence`` consecutive samples."""
+    need = np.where(np.isfinite(required) & (required > 0), required, np.inf)
+    if need.size < persistence:
+        return float("inf")
+    runs = sliding_window_view(need, persistence).max(axis=1) if persistence > 1 else need
+    return float(runs.min()) if runs.size else float("inf")
+
+
+def _blind_reason(arr, margin: float) -> str:
+    order = arr.order
+    if order >= 2:
+        return (f"its calibrated margin {margin:.3g} is set by the noise of derivative estimates of order {order}, "
+                f"larger than a {BLIND_CHANGE:.0%} change of any parameter moves the residual")
+    return f"a {BLIND_CHANGE:.0%} change of any of its parameters moves the residual less than its margin {margin:.3g}"
+
+
+def summary(rows: Mapping[str, Detectability]) -> dict:
+    """Parameter -> the smallest change any of the ARRs detects (whichever sign), over ``rows``."""
+    best: dict = {}
+    for d in rows.values():
+        for p in d.rise:
+            best[p] = min(best.get(p, float("inf")), d.change(p))
+    return best

@@ -1,0 +1,240 @@
+"""Detection on a record, with the defaults a user's model needs: every choice made from the data.
+
+:func:`detect` is the pipeline behind ``bgphm detect``:
+
+1. **Forms from the calibration record.**  Each ARR is tried in its differentiated form with
+   several derivative windows (:data:`WINDOWS`) and, when its relation holds integrals, in integral
+   form; each candidate's margin is calibrated on the fault-free stretch and the form that detects
+   the smallest parameter changes there (:mod:`diagnosis.detectability`) is kept.  An integral form
+   is kept only where every differentiated form is blind: an integral of measured noise is a random
+   walk, so its margin is widened by ``(record span / calibration span) ** (n - 1/2)`` for an
+   ``n``-fold integral (how the spread of integrated white noise grows).
+2. **Steps of the inputs** are found in the record and the samples whose derivative estimates reach
+   across them are left undecided (:mod:`diagnosis.steps`).
+3. **Detectability**: per ARR and parameter, the smallest relative change detected at its margin; an
+   ARR that sees no change below 100 % is reported blind, with the reason.
+4. **Isolation**: the faults (parameters and sensors) consistent with the ARRs that fired: every
+   fired ARR is sensitive to them.  An ARR that did not fire exonerates nothing (a sensitive ARR may
+   still be blind to a small change), so the list is the faults that explain every alarm.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .arrs import derive_arrs
+from .detectability import Detectability, detectability
+from .detection import Evaluation, noise_margin
+from .signatures import SignatureMatrix, signature_matrix
+from .signals import Record, RecordWarning, as_record
+
+__all__ = ["WINDOWS", "Detection", "consistent_faults", "detect"]
+
+#: Derivative windows tried for each differentiated ARR (Savitzky-Golay samples; None is the default 11),
+#: those up to a tenth of the calibration stretch.
+WINDOWS = (None, 21, 41, 81, 161)
+#: The share of the record that calibrates the margins when no calibration stretch is given.
+CALIBRATION_SHARE = 0.2
+
+
+@dataclass
+class Detection:
+    """The outcome of :func:`detect`.
+
+    Attributes
+    ----------
+    evaluations : list of Evaluation
+        One per ARR, in the chosen form, over the whole record.
+    forms : dict
+        ARR name -> ``{"form": ..., "window": ...}``, what was chosen and why (``"reason"``).
+    detectability : dict
+        ARR name -> :class:`~diagnosis.detectability.Detectability`: over the record, at the margin
+        calibrated on its fault-free stretch.
+    signatures : SignatureMatrix
+        Of the ARRs used.
+    fired : list of str
+        ARRs in alarm after the calibration stretch.
+    candidates : list of str
+        Faults consistent with ``fired`` (empty when nothing fired).
+    calibration_end : float
+    """
+
+    evaluations: list
+    forms: dict
+    detectability: dict
+    signatures: SignatureMatrix
+    fired: list
+    candidates: list
+    calibration_end: float
+    arrs: list = field(default_factory=list, repr=False)
+
+    @property
+    def detection_time(self) -> float | None:
+        """The first alarm after the calibration stretch, or None."""
+        times = [_first_alarm(e, self.calibration_end) for e in self.evaluations]
+        times = [t for t in times if t is not None]
+        return min(times) if times else None
+
+    @property
+    def blind(self) -> list:
+        """The ARRs that detect no parameter change below 100 % on this record."""
+        return [name for name, d in self.detectability.items() if d.blind]
+
+    def as_dict(self) -> dict:
+        """Plain data for JSON."""
+        return {"detection_time": self.detection_time, "calibration_end": self.calibration_end,
+                "fired": list(self.fired), "candidates": list(self.candidates), "blind": self.blind,
+                "forms": self.forms, "detectability": {k: d.as_dict() for k, d in self.detectability.items()}}
+
+
+def detect(bg, record, *, calibrate: float | None = None, margin: float | None = None, k: float = 4.0,
+           persistence: int = 5, window: int | None = None, integrals: str = "auto",
+           arrs: Sequence | None = None, steps: bool = True) -> Detection:
+    """Evaluate the ARRs of ``bg`` on ``record`` with forms, margins and masks chosen from the record.
+
+    Parameters
+    ----------
+    bg : BondGraph
+    record : mapping, DataFrame or Record
+    calibrate : float, optional
+        End of the fault-free stretch (default: the first 20 % of the record).
+    margin : float, optional
+        A fixed noise margin for every ARR instead of the calibrated ones.
+    k, persistence : noise margin in robust standard deviations; consecutive violations for an alarm.
+    window : int, optional
+        A fixed derivative window (no choice among :data:`WINDOWS`).
+    integrals : {"auto", "avoid", "keep"}
+        ``"auto"`` chooses per ARR (see the module), the others force the form for every ARR.
+    arrs : sequence of ARR, optional
+        The ARRs to evaluate (default: :func:`derive_arrs` of ``bg`` with ``integrals``).
+    steps : bool
+        Leave undecided the samples whose derivative estimates reach across a step of a model input.
+
+    Examples
+    --------
+    >>> from bondgraph import simulate
+    >>> from bondgraph.library import rlc_circuit
+    >>> bg = rlc_circuit()
+    >>> t = np.linspace(0.0, 2.0, 2001)
+    >>> run = simulate(bg, (0.0, 2.0), {"V": lambda t: np.sin(20 * t)}, t_eval=t,
+    ...                parameters={"R": lambda t: 10.0 if t < 1.0 else 14.0}).record()
+    >>> result = detect(bg, run, calibrate=0.8, margin=1e-3)
+    >>> result.fired, result.candidates[:2]
+    (['ARR_J1'], ['R', 'L'])
+    """
+    if integrals not in ("auto", "avoid", "keep"):
+        raise ValueError(f"option integrals: {integrals!r} is not one of auto, avoid, keep")
+    inputs = list(bg.inputs)
+    given = arrs is not None
+    first = list(arrs) if given else derive_arrs(bg, integrals="avoid" if integrals == "auto" else integrals)
+    names = list(dict.fromkeys(s for arr in first for s in arr.signals))
+    data = as_record(record, names + [n for n in inputs if _has(record, n) and n not in names])
+    until = _calibration_end(data, calibrate)
+    healthy = data.between(end=until)
+    kept = {"avoid": {a.name: a for a in first}}
+    if integrals == "auto" and not given:
+        kept["keep"] = {a.name: a for a in derive_arrs(bg, integrals="keep")}
+    step_inputs = [n for n in inputs if n in data.columns] if steps else False
+    evaluations, forms, seen, used = [], {}, {}, []
+    for arr in first:
+        candidates = [kept[form][arr.name] for form in kept if arr.name in kept[form]]
+        chosen, options, d, evaluation, reason = _choose(candidates, healthy, data, until, margin, k, persistence,
+                                                         window, step_inputs)
+        evaluations.append(evaluation)
+        forms[arr.name] = {"form": chosen.form, "window": options.get("window"), "margin": options["margin"],
+                           "reason": reason}
+        seen[arr.name] = d
+        used.append(chosen)
+    signatures = signature_matrix(used)
+    fired = [e.name for e in evaluations if _first_alarm(e, until) is not None]
+    return Detection(evaluations, forms, seen, signatures, fired, consistent_faults(signatures, fired), until, used)
+
+
+def consistent_faults(signatures: SignatureMatrix, fired: Sequence[str]) -> list:
+    """The faults whose signature holds every fired ARR: exact matches first, then the others.
+
+    >>> from bondgraph.library import dc_motor
+    >>> from diagnosis import derive_arrs
+    >>> consistent_faults(signature_matrix(derive_arrs(dc_motor())), ["ARR_1_m"])
+    ['J', 'b', 'k_m', 'sensor i', 'sensor omega']
+    """
+    if not fired:
+        return []
+    columns = [signatures.columns.index(name) for name in fired]
+    exact, wider = [], []
+    for row, name in zip(signatures.matrix, signatures.rows):
+        if all(row[c] for c in columns):
+            (exact if int(row.sum()) == len(columns) else wider).append(name)
+    return exact + wider
+
+
+def _choose(candidates, healthy: Record, data: Record, until: float, margin, k, persistence, window, steps):
+    """``(arr, options, detectability, evaluation, reason)``: the form that sees the smallest changes.
+
+    Margins come from ``healthy``; the detectable changes are read over the whole record ``data``.
+    """
+    trials = []
+    for arr in candidates:
+        windows = [window] if window is not None or arr.order == 0 else [
+            w for w in WINDOWS if w is None or w <= len(healthy) // 10]
+        for w in windows:
+            options = {"persistence": persistence, "steps": steps, **({"window": w} if w else {})}
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", RecordWarning)
+                m = margin if margin is not None else noise_margin(arr, healthy, k=k, **options)
+                if margin is None and arr.integrals:
+                    m *= (_span(data) / max(_span(healthy), 1e-300)) ** (_integral_depth(arr) - 0.5)
+                evaluation = arr.evaluate(data, margin=m, **options)
+            # what a change would show over the whole record (its excitation), at the healthy stretch's margin
+            trials.append((arr, {**options, "margin": float(m)}, detectability(evaluation, arr), evaluation))
+    if len(trials) == 1:
+        return (*trials[0], "the only form")
+    differentiated = [t for t in trials if not t[0].integrals]
+    pool = [t for t in differentiated if not t[2].blind] or trials
+    arr, options, d, evaluation = min(pool, key=lambda t: _score(t[2]))
+    reason = "sees the smallest changes on this record"
+    if arr.integrals and differentiated:
+        reason = "every differentiated form is blind on this record"
+    return arr, options, d, evaluation, reason
+
+
+def _score(d: Detectability) -> float:
+    """The geometric mean of the detectable changes (capped at 1e6 so an invisible parameter counts, finitely)."""
+    changes = [min(d.change(p), 1e6) for p in d.rise] or [1e6]
+    return float(np.exp(np.mean(np.log(np.maximum(changes, 1e-12)))))
+
+
+def _first_alarm(evaluation: Evaluation, after: float) -> float | None:
+    late = evaluation.alarm & (evaluation.t > after)
+    return float(evaluation.t[np.argmax(late)]) if late.any() else None
+
+
+def _calibration_end(data: Record, calibrate: float | None) -> float:
+    t0, t1 = float(data.t[0]), float(data.t[-1])
+    return t0 + CALIBRATION_SHARE * (t1 - t0) if calibrate is None else float(calibrate)
+
+
+def _integral_depth(arr) -> int:
+    """How many integrations deep the ARR's deepest integral is (an n-fold integral of white noise spreads as
+    ``t^(n - 1/2)``)."""
+    import sympy as sp
+
+    def depth(e) -> int:
+        return max((len(i.limits) + depth(i.function) for i in e.atoms(sp.Integral)), default=0)
+    return depth(arr.nominal)
+
+
+def _span(data: Record) -> float:
+    return float(data.t[-1] - data.t[0])
+
+
+def _has(record, name: str) -> bool:
+    columns = getattr(record, "columns", record)
+    try:
+        return name in columns
+    except TypeError:
+        return False
