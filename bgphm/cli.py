@@ -107,24 +107,47 @@ def cmd_simulate(args, progress: Progress) -> int:
 def cmd_detect(args, progress: Progress) -> int:
     """``bgphm detect``: evaluate the ARRs (or ``--arr``) on the record ``args.data``, print each alarm; returns 0.
 
-    The noise margin is ``--margin`` or ``--k`` robust standard deviations of the residual on the start of
-    the record (``--calibrate``).  With ``--out``: ``detection.json``, ``residuals.csv`` and residual plots.
+    :func:`diagnosis.detect` chooses each ARR's form and margin from the record (``--margin``, ``--window``
+    and ``--integrals`` fix them); the split-half check refuses a calibration stretch that holds a fault.
+    With ``--out``: ``detection.json``, ``residuals.csv`` and residual plots.
     """
+    from diagnosis.monitoring import detect
+
     out = _output_directory(args)
     spec = load_model(args.model)
-    arrs = _arrs(spec, progress, args.arr, args.integrals)
-    record = _record(args.data, arrs, progress, args.resample)
-    evaluations = _detect(arrs, record, args, progress)
+    arrs = _arrs(spec, progress, args.arr, "avoid" if args.integrals == "auto" else args.integrals)
+    record = _record(args.data, arrs, progress, args.resample, extra=spec.model.inputs)
+    until = _calibration_end(record, args) if args.margin is None else None
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RecordWarning)
+        result = detect(spec.model, record, calibrate=until, margin=args.margin, k=args.k,
+                        persistence=args.persistence, window=args.window, integrals=args.integrals,
+                        arrs=arrs if args.arr or args.integrals != "auto" else None)
+    for w in caught:
+        progress(f"warning: {w.message}")
+    if args.margin is None:
+        steps = [n for n in spec.model.inputs if n in record.columns]
+        for arr, e in zip(result.arrs, result.evaluations):
+            options = {k: v for k, v in result.forms[e.name].items() if k == "window" and v}
+            _check_calibration(arr, record, e, until, args, {"persistence": args.persistence, "steps": steps,
+                                                             **options})
+    evaluations = result.evaluations
     summary = {"model": spec.model.name, "data": str(args.data), "samples": len(record),
-               "arrs": {e.name: _evaluation_summary(e) for e in evaluations}}
-    first = [e.detection_time for e in evaluations if e.detection_time is not None]
-    summary["detection_time"] = min(first) if first else None
+               "arrs": {e.name: _evaluation_summary(e) for e in evaluations}, **result.as_dict()}
     summary["alarming_arrs"] = [e.name for e in evaluations if e.detection_time is not None]
     for e in evaluations:
         when = "no alarm" if e.detection_time is None else f"alarm at t = {e.detection_time:g} s"
-        print(f"{e.name}: {when} (margin {e.margin:.3g}, persistence {e.persistence})")
+        form = result.forms[e.name]
+        how = form["form"] + (f", window {form['window']}" if form["window"] else "")
+        print(f"{e.name}: {when} (margin {e.margin:.3g}, persistence {e.persistence}; {how})")
+        d = result.detectability[e.name]
+        if d.blind:
+            print(f"  blind on this record: {d.reason}")
+    print(_detectable_line(result))
+    if result.fired:
+        print(f"faults consistent with {', '.join(result.fired)}: {', '.join(result.candidates) or 'none'}")
     if out is not None:
-        write_text(out / "detection.json", json.dumps(summary, indent=2))
+        write_text(out / "detection.json", json.dumps(summary, indent=2, default=_json_value))
         columns = {"t": record.t}
         for e in evaluations:
             # the threshold holds -r_n in [lower - margin, upper + margin]; written as the band on r_n itself
@@ -135,6 +158,16 @@ def cmd_detect(args, progress: Progress) -> int:
         for path in written:
             print(f"wrote {path}")
     return EXIT_OK
+
+
+def _detectable_line(result) -> str:
+    """``smallest detectable change: b 12 %, J 85 %, k_m none`` over every ARR of the detection."""
+    best: dict = {}
+    for d in result.detectability.values():
+        for p in d.rise:
+            best[p] = min(best.get(p, float("inf")), d.change(p))
+    parts = [f"{p} {v:.0%}" if np.isfinite(v) else f"{p} none" for p, v in sorted(best.items())]
+    return "smallest detectable change: " + (", ".join(parts) if parts else "no parameter")
 
 
 def cmd_prognose(args, progress: Progress) -> int:
@@ -283,8 +316,11 @@ def _named(arrs: list, name: str):
     raise UsageError(f"--arr {name!r}: no such ARR (available: {', '.join(a.name for a in arrs)})")
 
 
-def _record(path, arrs: list, progress: Progress, resample: bool = False) -> Record:
+def _record(path, arrs: list, progress: Progress, resample: bool = False, extra: Sequence[str] = ()) -> Record:
+    """The record's columns for the ARRs' signals (and those of ``extra`` it holds: inputs whose steps matter)."""
     signals = list(dict.fromkeys(s for arr in arrs for s in arr.signals))
+    present = _header(path) if extra else []
+    signals += [s for s in extra if s in present and s not in signals]
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always", RecordWarning)
@@ -309,6 +345,17 @@ def _record(path, arrs: list, progress: Progress, resample: bool = False) -> Rec
                  "no decision is made there")
     progress(f"read {len(record)} samples of {signals} from {path}")
     return record
+
+
+def _header(path) -> list[str]:
+    """The column names of a CSV file's header row (empty if it cannot be read: read_csv says why)."""
+    import csv
+
+    try:
+        with open(path, newline="", encoding="utf-8") as handle:
+            return [c.strip() for c in next(csv.reader(handle), [])]
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return []
 
 
 def _calibration_end(record: Record, args, *, otherwise: str = " (or give --margin)") -> float:
@@ -429,31 +476,41 @@ def _check_calibration(arr, record: Record, evaluation, until: float, args, opti
     """Refuse a calibration stretch that holds a fault: split-half validation.
 
     A margin calibrated on a stretch that holds a fault absorbs it, and the alarm comes late or never.
-    A degradation, once there, stays: a fault in the stretch is in its second half.  So the margin is
-    calibrated again on the first half alone, and the stretch is refused if the ARR is in alarm in its
-    second half, with that margin or with the whole stretch's.  Alarms in the first half (a start-up
-    transient, say) are left to the user, as the monitors ignore alarms before the stretch's end.  A
+    A degradation, once there, stays: a fault in the stretch keeps the ARR in alarm up to the stretch's
+    end.  So the margin is calibrated again on the first half alone, and the stretch is refused if the
+    ARR is in alarm in the last quarter of the stretch, with that margin or with the whole stretch's.
+    An alarm that ends before (a transient at an input step, a start-up) is no fault.  A
     first half under 20 samples is not checked.
     """
     from diagnosis.detection import noise_margin
+    from diagnosis.monitoring import SAFETY, quiet_margin
 
     t0 = float(record.t[0])
     half = t0 + 0.5 * (until - t0)
-    second = (record.t > half) & (record.t <= until)
+    last = (record.t > t0 + 0.75 * (until - t0)) & (record.t <= until)
     stretch = (f"--calibrate {until:g}" if args.calibrate is not None
                else f"the default calibration stretch (the first 20 % of the record, t <= {until:g} s)")
     hint = "give a shorter --calibrate (or --margin)"
-    if evaluation.alarm[second].any():
-        when = float(record.t[second][evaluation.alarm[second]][0])
-        raise UsageError(f"{stretch} is not fault-free: {evaluation.name} is in alarm at t = {when:g} s within it; "
-                         + hint)
+    if _stays_in_alarm(evaluation.alarm, last):
+        when = float(record.t[last][evaluation.alarm[last]][0])
+        raise UsageError(f"{stretch} is not fault-free: {evaluation.name} is in alarm at t = {when:g} s, in the last "
+                         "quarter of it; " + hint)
     if np.count_nonzero(record.t <= half) < 20:
         return
-    check = arr.evaluate(record, margin=noise_margin(arr, record.between(end=half), k=args.k, **options), **options)
-    if check.alarm[second].any():
-        when = float(record.t[second][check.alarm[second]][0])
+    first = record.between(end=half)
+    quarter = t0 + 0.25 * (until - t0)
+    margin = max(noise_margin(arr, first, k=args.k, **options),
+                 SAFETY * quiet_margin(arr.evaluate(first, **options), after=quarter))
+    check = arr.evaluate(record, margin=margin, **options)
+    if _stays_in_alarm(check.alarm, last):
+        when = float(record.t[last][check.alarm[last]][0])
         raise UsageError(f"{stretch} is not fault-free: calibrated on its first half (t <= {half:g} s), "
-                         f"{evaluation.name} is in alarm at t = {when:g} s within it; {hint}")
+                         f"{evaluation.name} is in alarm at t = {when:g} s, in the last quarter of it; {hint}")
+
+
+def _stays_in_alarm(alarm: np.ndarray, last: np.ndarray) -> bool:
+    """In alarm on some sample of ``last`` (the last quarter of a calibration stretch)."""
+    return bool(alarm[last].any())
 
 
 def _evaluation_summary(e) -> dict:
@@ -769,11 +826,19 @@ def build_parser() -> argparse.ArgumentParser:
                        help="calibrate the margin on t <= T, assumed fault-free (default: the first 20 %%)")
         p.add_argument("--k", type=float, default=4.0, help="margin = k robust std of the residual (default 4)")
         p.add_argument("--persistence", type=int, default=5, help="consecutive violations for an alarm (default 5)")
-        p.add_argument("--window", type=int, help="Savitzky-Golay window for derivatives (odd; default 11)")
-        p.add_argument("--integrals", choices=("avoid", "keep"), default="avoid",
-                       help="avoid: differentiate an ARR that would integrate measured signals (default); keep: "
-                            "keep the integrals (better on long records sampled fast, where a second derivative "
-                            "of the noise is larger than the integral's random walk)")
+        if name == "detect":
+            p.add_argument("--window", type=int, help="Savitzky-Golay window for derivatives (odd; default: "
+                                                      "chosen per ARR from the record)")
+            p.add_argument("--integrals", choices=("auto", "avoid", "keep"), default="auto",
+                           help="auto: per ARR, the form that detects the smallest changes on the record "
+                                "(default); avoid: differentiate an ARR that would integrate measured signals; "
+                                "keep: keep the integrals")
+        else:
+            p.add_argument("--window", type=int, help="Savitzky-Golay window for derivatives (odd; default 11)")
+            p.add_argument("--integrals", choices=("avoid", "keep"), default="avoid",
+                           help="avoid: differentiate an ARR that would integrate measured signals (default); keep: "
+                                "keep the integrals (better on long records sampled fast, where a second "
+                                "derivative of the noise is larger than the integral's random walk)")
         p.add_argument("--resample", action="store_true",
                        help="put a record with uneven steps on a uniform grid of its median step (linear "
                             "interpolation within runs of data, never across a gap)")

@@ -2,13 +2,15 @@
 
 :func:`detect` is the pipeline behind ``bgphm detect``:
 
-1. **Forms from the calibration record.**  Each ARR is tried in its differentiated form with
-   several derivative windows (:data:`WINDOWS`) and, when its relation holds integrals, in integral
-   form; each candidate's margin is calibrated on the fault-free stretch and the form that detects
-   the smallest parameter changes there (:mod:`diagnosis.detectability`) is kept.  An integral form
-   is kept only where every differentiated form is blind: an integral of measured noise is a random
-   walk, so its margin is widened by ``(record span / calibration span) ** (n - 1/2)`` for an
-   ``n``-fold integral (how the spread of integrated white noise grows).
+1. **Forms from the record.** Each ARR is tried in its differentiated form with several derivative
+   windows (:data:`WINDOWS`) and, when its relation holds integrals, in integral form; each
+   candidate's margin is calibrated on the fault-free stretch (``k`` robust standard deviations of
+   the residual, and at least :data:`SAFETY` times the margin that keeps the second half of that
+   stretch free of alarms: a derivative estimate's bias at a transient is not noise) and the form
+   that detects the smallest parameter changes over the record (:mod:`diagnosis.detectability`) is
+   kept. An integral form is kept only where every differentiated form is blind: an integral of
+   measured noise is a random walk, so its margin is widened by ``(record span / calibration span)
+   ** (n - 1/2)`` for an ``n``-fold integral (how the spread of integrated white noise grows).
 2. **Steps of the inputs** are found in the record and the samples whose derivative estimates reach
    across them are left undecided (:mod:`diagnosis.steps`).
 3. **Detectability**: per ARR and parameter, the smallest relative change detected at its margin; an
@@ -25,6 +27,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 from .arrs import derive_arrs
 from .detectability import Detectability, detectability
@@ -32,11 +35,14 @@ from .detection import Evaluation, noise_margin
 from .signatures import SignatureMatrix, signature_matrix
 from .signals import Record, RecordWarning, as_record
 
-__all__ = ["WINDOWS", "Detection", "consistent_faults", "detect"]
+__all__ = ["SAFETY", "WINDOWS", "Detection", "consistent_faults", "detect", "quiet_margin"]
 
 #: Derivative windows tried for each differentiated ARR (Savitzky-Golay samples; None is the default 11),
 #: those up to a tenth of the calibration stretch.
 WINDOWS = (None, 21, 41, 81, 161)
+#: The calibrated margin is at least this multiple of the smallest margin that keeps the fault-free stretch
+#: quiet (:func:`quiet_margin`): estimator bias at transients, which the noise's robust spread ignores.
+SAFETY = 1.25
 #: The share of the record that calibrates the margins when no calibration stretch is given.
 CALIBRATION_SHARE = 0.2
 
@@ -154,6 +160,31 @@ def detect(bg, record, *, calibrate: float | None = None, margin: float | None =
     return Detection(evaluations, forms, seen, signatures, fired, consistent_faults(signatures, fired), until, used)
 
 
+def quiet_margin(evaluation: Evaluation, after: float = -np.inf) -> float:
+    """The smallest margin under which ``evaluation`` (of a fault-free stretch) raises no alarm after ``after``.
+
+    The start of a record may hold a start-up transient whose alarms the monitors ignore anyway (they
+    watch from the end of the calibration stretch): :func:`detect` looks at the second half only.
+
+    A violation is ``-r_n`` beyond the band by more than the margin; an alarm needs ``persistence`` of
+    them in a row, so the margin need only exceed, in every run of ``persistence`` samples, the
+    smallest excess of the run.  Derivative estimates are biased where the signals bend sharply (the
+    start of a transient): the noise's robust spread does not see that bias, this does.
+
+    >>> e = Evaluation("ARR", np.arange(6.0), np.array([0, -3.0, -3.0, 0, -1.0, 0]), np.zeros(6), np.zeros(6),
+    ...                np.zeros(6), 0.0, 2, np.zeros(6, bool), np.zeros(6, bool))
+    >>> quiet_margin(e)   # -r_n exceeds the band by 3 on two samples in a row
+    3.0
+    """
+    excess = np.maximum(-evaluation.residual - evaluation.upper, evaluation.lower + evaluation.residual)
+    excess = np.where(np.isfinite(excess) & (evaluation.t > after), np.maximum(excess, 0.0), 0.0)
+    p = evaluation.persistence
+    if excess.size < p:
+        return 0.0
+    runs = sliding_window_view(excess, p).min(axis=1) if p > 1 else excess
+    return float(runs.max()) if runs.size else 0.0
+
+
 def consistent_faults(signatures: SignatureMatrix, fired: Sequence[str]) -> list:
     """The faults whose signature holds every fired ARR: exact matches first, then the others.
 
@@ -186,6 +217,9 @@ def _choose(candidates, healthy: Record, data: Record, until: float, margin, k, 
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore", RecordWarning)
                 m = margin if margin is not None else noise_margin(arr, healthy, k=k, **options)
+                if margin is None:
+                    half = float(healthy.t[0] + 0.5 * (healthy.t[-1] - healthy.t[0]))
+                    m = max(m, SAFETY * quiet_margin(arr.evaluate(healthy, **options), after=half))
                 if margin is None and arr.integrals:
                     m *= (_span(data) / max(_span(healthy), 1e-300)) ** (_integral_depth(arr) - 0.5)
                 evaluation = arr.evaluate(data, margin=m, **options)

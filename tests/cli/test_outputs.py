@@ -2,6 +2,7 @@
 
 import json
 import os
+import re
 
 import numpy as np
 import pytest
@@ -176,7 +177,9 @@ def test_calibrating_over_a_fault_is_refused(tmp_path, capsys):
     assert code == 2 and err.startswith("bgphm: error: --calibrate 0.9") and "is not fault-free" in err
     assert "ARR_1_m" in err
     code, out, err = run(capsys, "--quiet", "detect", "dc-motor", str(data), "--calibrate", "0.4")
-    assert code == 0 and "ARR_1_m: alarm at t = 0.5" in out, err
+    # a centred derivative window sees the fault a few samples early
+    when = float(re.search(r"ARR_1_m: alarm at t = ([0-9.]+) s", out).group(1))
+    assert code == 0 and abs(when - 0.5) <= 0.01, out
 
 
 def test_library_warnings_reach_stderr_as_one_line_without_a_source_path(monkeypatch, capsys):
