@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .observation import observation_model
+from .errors import PrognosisError
 
 __all__ = ["Hypothesis", "HypothesisObservation", "indistinguishable_groups", "physical_domain", "rate_prior",
            "sensitivity", "signature_candidates"]
@@ -125,7 +126,7 @@ def signature_candidates(arrs: Sequence, failures: Mapping[str, float], fired: I
     by_name = {a.name: a for a in arrs}
     unknown = sorted(fired - set(by_name))
     if unknown:
-        raise ValueError(f"no ARR named {unknown[0]!r} (ARRs: {', '.join(by_name)})")
+        raise PrognosisError(f"no ARR named {unknown[0]!r} (ARRs: {', '.join(by_name)})")
     return [p for p in failures if all(p in by_name[name].parameters for name in fired)]
 
 

@@ -40,6 +40,7 @@ from .observation import observation_model
 from .particle_filter import KernelSmoothing, ParticleFilter, check_particles, check_positive
 from .rul import RULDistribution, RULPredictor
 from .seeds import check_seed
+from .errors import PrognosisError
 
 __all__ = ["Decision", "IsolatingMonitor", "IsolationResult", "decide"]
 
@@ -191,7 +192,7 @@ class IsolationResult:
         """Row of the hypothesis ``"candidate/law"``."""
         names = [h.name for h in self.hypotheses]
         if name not in names:
-            raise ValueError(f"no hypothesis {name!r} (hypotheses: {', '.join(names)})")
+            raise PrognosisError(f"no hypothesis {name!r} (hypotheses: {', '.join(names)})")
         return names.index(name)
 
     def monitor_result(self, hypothesis: str | None = None) -> MonitorResult:
@@ -296,33 +297,33 @@ class IsolatingMonitor:
         parameters = {p: a.values[p] for a in self.arrs for p in a.parameters}
         for name in self.failures:
             if name not in parameters:
-                raise ValueError(f"failure value for {name!r}: no ARR contains that parameter "
-                                 f"(parameters the ARRs see: {', '.join(sorted(parameters))})")
+                raise PrognosisError(f"failure value for {name!r}: no ARR contains that parameter "
+                                     f"(parameters the ARRs see: {', '.join(sorted(parameters))})")
         self.nominal = {p: float(parameters[p]) for p in self.failures}
         for name, value in self.failures.items():
             if value == self.nominal[name]:
-                raise ValueError(f"failure value of {name!r} equals its nominal value {value:g}")
+                raise PrognosisError(f"failure value of {name!r} equals its nominal value {value:g}")
         if not isinstance(noise_std, Mapping):
-            raise ValueError(f"noise_std: give the standard deviation of each ARR's residual by ARR name, "
-                             f"got a {type(noise_std).__name__}")
+            raise PrognosisError(f"noise_std: give the standard deviation of each ARR's residual by ARR name, "
+                                 f"got a {type(noise_std).__name__}")
         missing = [a.name for a in self.arrs if a.name not in noise_std]
         if missing:
-            raise ValueError(f"noise_std has no value for the ARR(s) {missing}")
+            raise PrognosisError(f"noise_std has no value for the ARR(s) {missing}")
         self.noise_std = {k: check_positive(v, f"noise_std[{k!r}]") for k, v in noise_std.items()}
         self.laws = dict(laws) if isinstance(laws, Mapping) else {name: None for name in laws}
         if not self.laws:
-            raise ValueError("laws: give at least one degradation law")
+            raise PrognosisError("laws: give at least one degradation law")
         if candidates is not None:
             unknown = [c for c in candidates if c not in self.failures]
             if unknown:
-                raise ValueError(f"candidate {unknown[0]!r} has no failure value (failure values: "
-                                 f"{', '.join(self.failures)})")
+                raise PrognosisError(f"candidate {unknown[0]!r} has no failure value (failure values: "
+                                     f"{', '.join(self.failures)})")
         self.candidates = None if candidates is None else list(candidates)
         self.dt, self.n_particles = check_positive(dt, "dt"), check_particles(n_particles)
         self.inflation = check_positive(inflation, "inflation")
         self.life, self.rate, self.process_noise, self.discount = life, rate, process_noise, discount
         if isinstance(rul_every, bool) or int(rul_every) != rul_every or rul_every < 1:
-            raise ValueError(f"rul_every must be a positive whole number of filter steps, got {rul_every!r}")
+            raise PrognosisError(f"rul_every must be a positive whole number of filter steps, got {rul_every!r}")
         self.rul_every = int(rul_every)
         self.horizon = HORIZON_STEPS * self.dt if horizon is None else check_positive(horizon, "horizon")
         self.detection = dict(detection or {})
@@ -330,8 +331,8 @@ class IsolatingMonitor:
         self.domains = {str(k): (float(v[0]), float(v[1])) for k, v in (domains or {}).items()}
         for name, (lo, hi) in self.domains.items():
             if name in self.failures and not lo <= self.failures[name] <= hi:
-                raise ValueError(f"failure value of {name!r} ({self.failures[name]:g}) lies outside its physical "
-                                 f"domain ({lo:g}, {hi:g})")
+                raise PrognosisError(f"failure value of {name!r} ({self.failures[name]:g}) lies outside its physical "
+                                     f"domain ({lo:g}, {hi:g})")
         self.healthy_until = -math.inf if healthy_until is None else float(healthy_until)
 
     # -- the pipeline ------------------------------------------------------------------------
@@ -345,7 +346,7 @@ class IsolatingMonitor:
         if evaluations is None:
             evaluations = [a.evaluate(record, **self.options_for(a)) for a in self.arrs]
         elif len(evaluations) != len(self.arrs):
-            raise ValueError(f"evaluations: {len(evaluations)} given for {len(self.arrs)} ARRs")
+            raise PrognosisError(f"evaluations: {len(evaluations)} given for {len(self.arrs)} ARRs")
         result = IsolationResult(None, evaluations=evaluations, min_ratio=self.min_ratio)
         t = evaluations[0].t
         alarms = [np.flatnonzero(e.alarm & (t > self.healthy_until)) for e in evaluations]

@@ -23,6 +23,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import sympy as sp
 
+from .errors import PrognosisError
+
 
 @dataclass
 class ObservationModel:
@@ -102,8 +104,8 @@ class ObservationModel:
         """
         y = np.asarray(y, float)
         if self.coefficient is None and bracket is None:
-            raise ValueError(f"the observation equation of {self.candidate!r} is not linear in it: "
-                             f"invert needs a bracket (lo, hi) for the root search")
+            raise PrognosisError(f"the observation equation of {self.candidate!r} is not linear in it: "
+                                 f"invert needs a bracket (lo, hi) for the root search")
         values = [np.asarray(p, float)[:, None] for p in points]
         if self.coefficient is not None:
             slope = np.asarray(self.function()(np.full((y.size, 1), self.nominal + 1.0), *values), float)
@@ -131,7 +133,7 @@ def observation_model(arr, candidate: str) -> ObservationModel:
     -(b_Md - 0.005025)*omega_m(t)/k_belt**2
     """
     if candidate not in arr.parameters:
-        raise ValueError(
+        raise PrognosisError(
             f"{arr.name} is not sensitive to {candidate!r}; it is sensitive to {sorted(arr.parameters)}"
         )
     theta = sp.Symbol(candidate)
