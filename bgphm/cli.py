@@ -541,9 +541,10 @@ def _candidates(args, arrs: list, failures: dict, parameters: dict) -> list | No
         raise UsageError(f"--candidate {name!r}: give its failure value (--fail {name}=VALUE)")
     inferred = "up" if failures[name] > parameters[name] else "down"
     if args.direction is not None and args.direction != inferred:
+        side = "above" if inferred == "up" else "below"
         raise UsageError(f"--fail {failures[name]:g} is on the wrong side of the nominal value {parameters[name]:g} of "
-                         f"{name!r} for --direction {args.direction} (a failure value "
-                         f"{'above' if args.direction == 'up' else 'below'} it is needed)")
+                         f"{name!r} for --direction {args.direction}: it lies {side} nominal; give --direction "
+                         f"{inferred} (or leave --direction out: it follows from --fail)")
     return [name]
 
 

@@ -29,6 +29,38 @@ from .seeds import check_seed
 from .errors import PrognosisError
 
 
+def check_failure_side(candidate: str, theta_fail: float, nominal: float, direction: str) -> None:
+    """Check that ``theta_fail`` lies on the ``direction`` side of ``nominal``; the error suggests the other direction.
+
+    A parameter that wears downwards (a damper losing its oil, a spring softening) fails below its
+    nominal value and needs ``direction="down"``; the default is ``"up"``, so the message says
+    which direction the failure value calls for.
+
+    Examples
+    --------
+    >>> check_failure_side("c_s", 3000.0, 1500.0, "up")
+    >>> try:
+    ...     check_failure_side("c_s", 750.0, 1500.0, "up")
+    ... except PrognosisError as error:
+    ...     print(error)
+    failure value 750 of 'c_s' is on the wrong side for direction 'up': it lies below the nominal value 1500; \
+give direction='down' for a parameter that fails below nominal
+    """
+    if direction not in ("up", "down"):
+        raise PrognosisError(f"direction must be 'up' or 'down', got {direction!r}")
+    if not np.isfinite(theta_fail):
+        raise PrognosisError(f"failure value of {candidate!r} must be a finite number, got {theta_fail!r}")
+    if theta_fail == nominal:
+        raise PrognosisError(f"failure value {theta_fail:g} of {candidate!r} equals its nominal value: it must lie "
+                             f"{'above' if direction == 'up' else 'below'} it for direction {direction!r}")
+    side = "above" if theta_fail > nominal else "below"
+    needed = "up" if side == "above" else "down"
+    if direction != needed:
+        raise PrognosisError(f"failure value {theta_fail:g} of {candidate!r} is on the wrong side for direction "
+                             f"{direction!r}: it lies {side} the nominal value {nominal:g}; give "
+                             f"direction={needed!r} for a parameter that fails {side} nominal")
+
+
 @dataclass
 class MonitorResult:
     """Time-indexed output of a health monitor (one asset)."""
@@ -262,9 +294,7 @@ class HealthMonitor:
         if start not in ("residual", "uncertainty_box"):
             raise PrognosisError(f"start must be 'residual' or 'uncertainty_box', got {start!r}")
         self.start, self.gamma_bounds = start, gamma_bounds
-        if (direction == "up") != (theta_fail > nominal):
-            raise PrognosisError(f"failure value {theta_fail} of {candidate!r} is on the wrong side of its nominal "
-                                 f"value {nominal} for direction {direction!r}")
+        check_failure_side(candidate, theta_fail, nominal, direction)
         seed = check_seed(seed)
         self.filter = ParticleFilter(model, self.observation, n_particles=n_particles, dt=dt, noise_std=noise_std,
                                      inflation=inflation, gamma_std=gamma_std, adaptation=adaptation,
