@@ -34,7 +34,7 @@ import numpy as np
 from . import seeds
 from .degradation import PerAssetDegradation, degradation_model
 from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, rate_prior,
-                         sensitivity, signature_candidates)
+                         same_signature, sensitivity, signature_candidates)
 from .monitor import MonitorResult, filter_stride
 from .observation import observation_model
 from .particle_filter import KernelSmoothing, ParticleFilter, check_particles, check_positive
@@ -62,6 +62,8 @@ class Decision:
         ``"indistinguishable"``) or not yet told apart (``"undecided"``); None if every hypothesis
         was rejected.
     status : {"isolated", "indistinguishable", "undecided", "rejected"}
+        ``"isolated"`` only when the evidence singles out one candidate *and* no other fault of the
+        model (parameter or sensor) has its signature; otherwise ``"indistinguishable"``.
     candidate_ratio : float
         Evidence ratio of the reported candidate(s) over the best other one (inf when alone).
     degradation : str or None
@@ -71,6 +73,9 @@ class Decision:
     degradation_ratio : float
     probabilities : dict
         Posterior probability of each hypothesis (``"candidate/law"``), uniform prior.
+    same_signature : tuple of str
+        The faults outside the reported candidate(s), parameters and ``"sensor <signal>"``, with the
+        same fault signature over the ARRs: the evidence cannot have told them apart.
     """
 
     candidate: str | list | None
@@ -80,21 +85,26 @@ class Decision:
     degradation_decided: bool
     degradation_ratio: float
     probabilities: dict
+    same_signature: tuple = ()
 
     def as_dict(self) -> dict:
         return {"candidate": self.candidate, "status": self.status, "candidate_ratio": _finite(self.candidate_ratio),
                 "degradation": self.degradation, "degradation_decided": self.degradation_decided,
-                "degradation_ratio": _finite(self.degradation_ratio), "probabilities": self.probabilities}
+                "degradation_ratio": _finite(self.degradation_ratio), "probabilities": self.probabilities,
+                "same_signature": list(self.same_signature)}
 
 
 def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: Sequence[Sequence[str]],
-           rejected: Mapping[str, str] = {}, min_ratio: float = EVIDENCE_RATIO) -> Decision:
+           rejected: Mapping[str, str] = {}, min_ratio: float = EVIDENCE_RATIO,
+           signatures: Mapping[str, Sequence[str]] = {}) -> Decision:
     """Rank hypotheses by evidence: the candidate, then the law, each declared beyond ``min_ratio``.
 
     A candidate's evidence sums its laws' (uniform prior over hypotheses).  The best candidate is
     isolated when it beats every candidate outside its group of indistinguishable ones by
-    ``min_ratio``; its group is reported when it has several members; otherwise every candidate
-    within the ratio of the best is reported, undecided.
+    ``min_ratio`` and ``signatures`` (candidate -> the other faults with its fault signature,
+    :func:`~prognosis.hypotheses.same_signature`) names none; its group, or the faults sharing its
+    signature, make it ``"indistinguishable"``; otherwise every candidate within the ratio of the
+    best is reported, undecided.
 
     Examples
     --------
@@ -105,6 +115,9 @@ def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: S
     (['a', 'b'], 'indistinguishable', 'linear', True)
     >>> decide(hs, log_z, [["a"], ["b"], ["c"]]).status   # e^1 is not decisive
     'undecided'
+    >>> d = decide(hs, log_z, [["a", "b"], ["c"]], signatures={"a": ["b", "k"], "b": ["a", "k"]})
+    >>> d.status, d.same_signature   # a fault without a failure value shares their signature
+    ('indistinguishable', ('k',))
     """
     log_z = np.array([-np.inf if h.name in rejected else float(v) for h, v in zip(hypotheses, log_evidence)])
     probabilities = _softmax(log_z)
@@ -129,8 +142,13 @@ def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: S
     by_law = {law: _logsumexp(log_z[[h.law == law and h.candidate in reported for h in hypotheses]]) for law in laws}
     ranked = sorted(laws, key=by_law.get, reverse=True)
     law_margin = by_law[ranked[0]] - (by_law[ranked[1]] if len(ranked) > 1 else -np.inf)
+    twins = ()
+    if status != "undecided":
+        twins = tuple(dict.fromkeys(f for c in reported for f in signatures.get(c, ()) if f not in reported))
+        status = "indistinguishable" if twins else status
     return Decision(reported[0] if len(reported) == 1 else reported, status, math.exp(min(margin, 700.0)),
-                    ranked[0], bool(law_margin >= math.log(min_ratio)), math.exp(min(law_margin, 700.0)), named)
+                    ranked[0], bool(law_margin >= math.log(min_ratio)), math.exp(min(law_margin, 700.0)), named,
+                    twins)
 
 
 @dataclass
@@ -145,6 +163,9 @@ class IsolationResult:
         The ARRs alarming at that time (the signature the candidates come from).
     candidates, groups : list
         Candidates from the signature; their groups of indistinguishable ones.
+    same_signature : dict
+        Candidate -> the other faults of the model (parameters, ``"sensor <signal>"``) with its fault
+        signature over the monitor's ARRs (:func:`~prognosis.hypotheses.same_signature`).
     hypotheses : list of Hypothesis
     arrs : list of str
         The ARRs whose residuals the hypotheses are weighed on.
@@ -168,6 +189,7 @@ class IsolationResult:
     fired: list = field(default_factory=list)
     candidates: list = field(default_factory=list)
     groups: list = field(default_factory=list)
+    same_signature: dict = field(default_factory=dict)
     hypotheses: list = field(default_factory=list)
     arrs: list = field(default_factory=list)
     t: np.ndarray = field(default_factory=lambda: np.empty(0))
@@ -186,7 +208,8 @@ class IsolationResult:
         """The decision on all the data (None without an alarm or a candidate)."""
         if not self.t.size:
             return None
-        return decide(self.hypotheses, self.log_evidence[-1], self.groups, self.rejected, self.min_ratio)
+        return decide(self.hypotheses, self.log_evidence[-1], self.groups, self.rejected, self.min_ratio,
+                      self.same_signature)
 
     def index(self, name: str) -> int:
         """Row of the hypothesis ``"candidate/law"``."""
@@ -364,6 +387,8 @@ class IsolatingMonitor:
         arrs = [self.arrs[i] for i in used]
         result.arrs = [a.name for a in arrs]
         result.groups = indistinguishable_groups(arrs, result.candidates)
+        # isolable in the model: over every ARR given, not only those the filter weighs
+        result.same_signature = {c: same_signature(self.arrs, c) for c in result.candidates}
         result.hypotheses, result.rejected = self.hypotheses_for(result.candidates)
         self._filter(result, [evaluations[i] for i in used], arrs, k, progress)
         return result
@@ -417,7 +442,8 @@ class IsolatingMonitor:
             away = self._reject_drift_away(result, hypotheses, estimate, float(t[k]), boxes, away)
             rows.append((float(t[k]), pf.log_evidence.copy(), estimate))
             if (done - 1) % self.rul_every == 0:
-                decision = decide(hypotheses, pf.log_evidence, result.groups, result.rejected, self.min_ratio)
+                decision = decide(hypotheses, pf.log_evidence, result.groups, result.rejected, self.min_ratio,
+                                  result.same_signature)
                 rul.append(self._mixture(pf, hypotheses, decision, predictors, models, key=done))
                 rul_t.append(float(t[k]))
                 decisions.append(decision)
