@@ -304,8 +304,8 @@ class IsolatingMonitor:
     ...                            dt=0.01, n_particles=200, detection={"margin": 0.01})
     >>> result = monitor.run(record)
     >>> d = result.decision
-    >>> d.candidate, d.status, d.degradation
-    ('R', 'isolated', 'linear')
+    >>> d.candidate, d.status, d.degradation, d.same_signature   # L fires the same ARR: not isolable in the model
+    ('R', 'indistinguishable', 'linear', ('L',))
     """
 
     def __init__(self, arrs: Sequence, failures: Mapping[str, float], *, noise_std: Mapping[str, float],
