@@ -598,9 +598,10 @@ def _candidates(args, arrs: list, failures: dict, parameters: dict) -> list | No
         raise UsageError(f"--candidate {name!r}: give its failure value (--fail {name}=VALUE)")
     inferred = "up" if failures[name] > parameters[name] else "down"
     if args.direction is not None and args.direction != inferred:
+        side = "above" if inferred == "up" else "below"
         raise UsageError(f"--fail {failures[name]:g} is on the wrong side of the nominal value {parameters[name]:g} of "
-                         f"{name!r} for --direction {args.direction} (a failure value "
-                         f"{'above' if args.direction == 'up' else 'below'} it is needed)")
+                         f"{name!r} for --direction {args.direction}: it lies {side} nominal; give --direction "
+                         f"{inferred} (or leave --direction out: it follows from --fail)")
     return [name]
 
 
@@ -613,6 +614,7 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
                "status": "no alarm" if result.detection_time is None else (
                    "no candidate" if decision is None else decision.status),
                "degradation": None if decision is None else decision.degradation,
+               "same_signature": [] if decision is None else list(decision.same_signature),
                "failure_values": failures, "filter_step": dt, "particles_per_hypothesis": args.particles,
                "residual_noise_std": noise, "seed": args.seed, "evidence": {}, "predictions": [], "decisions": []}
     if decision is None:
@@ -654,7 +656,10 @@ def _prognosis_line(result, summary: dict) -> str:
         return f"{head}; {why}"
     last = summary["last"]
     law = summary["degradation"] + ("" if summary["degradation_decided"] else " (undecided)")
-    return (f"{head}; candidate {summary['candidate']} ({summary['status']}), degradation {law}; at t = "
+    status = summary["status"]
+    if summary["same_signature"]:   # isolable in the model only when no other fault shares the signature
+        status = f"indistinguishable from {', '.join(summary['same_signature'])} (same signature)"
+    return (f"{head}; candidate {summary['candidate']} ({status}), degradation {law}; at t = "
             f"{last['t']:g} s RUL median {_fmt(last['rul_median'])} s, 5-95 % [{_fmt(last['rul_p5'])}, "
             f"{_fmt(last['rul_p95'])}] s")
 

@@ -292,9 +292,9 @@ def _add_node(graph: nx.DiGraph, node, where: str) -> None:
             raise ModelFileError(f"{where}: '{key}' must be a string, got {attributes[key]!r}")
     if "domains" in attributes and not isinstance(attributes["domains"], dict):
         raise ModelFileError(f"{where}: 'domains' must map law constants to a domain name")
-    if "value" in attributes and (isinstance(attributes["value"], bool)
-                                  or not isinstance(attributes["value"], (int, float))):
-        raise ModelFileError(f"{where}: 'value' must be a number, got {attributes['value']!r}")
+    for key in ("value", "stiffness"):
+        if key in attributes and (isinstance(attributes[key], bool) or not isinstance(attributes[key], (int, float))):
+            raise ModelFileError(f"{where}: '{key}' must be a number, got {attributes[key]!r}")
     if "uncertainty" in attributes:
         attributes["uncertainty"] = _pair(attributes["uncertainty"], f"{where}: 'uncertainty'")
     if "params" in attributes:

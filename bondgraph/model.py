@@ -44,6 +44,7 @@ Examples
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Hashable, Mapping
 from difflib import get_close_matches
 
@@ -273,11 +274,14 @@ def _read_element(name: Hashable, data: Mapping, *, strict: bool = False) -> Ele
     constant_domains = _read_constant_domains(where, data.get("domains"), constants)
     domain = _read_own_domain(where, kind, data.get("domain"))
 
+    stiffness = data.get("stiffness")
+    if stiffness is not None:
+        _check_stiffness_alone(where, kind, data)
     if kind in el.PARAMETRIC:
         param = _read_name(where, "parameter", data.get("param"), name, "param")
         if param in RESERVED_NAMES:
             raise ModelError(f"{where}: parameter name {param!r} is reserved (e, f, q, p, t)")
-        value = _read_value(where, data.get("value"))
+        value = _read_value(where, data.get("value") if stiffness is None else stiffness)
         if data.get("uncertainty") is not None:
             uncertainty = _read_uncertainty(where, data["uncertainty"])
     elif data.get("uncertainty") is not None:
@@ -290,6 +294,8 @@ def _read_element(name: Hashable, data: Mapping, *, strict: bool = False) -> Ele
         value = _read_value(where, data["value"])  # optional constant input
 
     names = {**{c: sp.Symbol(c) for c in constants}, **({param: sp.Symbol(param)} if param else {})}
+    if stiffness is not None:  # a linear spring e = k q: exactly the law form, so every stage treats it as one
+        law = _read_law(where, kind, PORT_SYMBOLS["e"] - sp.Symbol(param) * PORT_SYMBOLS["q"], names, param)
     if data.get("law") is not None:
         if kind not in el.LAW_VARIABLES:
             raise ModelError(f"{where}: a law is only for C, I and R elements (use 'modulus' on a two-port)")
@@ -308,6 +314,17 @@ def _read_element(name: Hashable, data: Mapping, *, strict: bool = False) -> Ele
                    hint="" if constant in declared else "set its domain in 'domains' if another sign is meant")
     return Element(name, kind, param, value, uncertainty, law, modulus, signal, constants, constant_uncertainties,
                    domain, constant_domains)
+
+
+def _check_stiffness_alone(where: str, kind: str, data: Mapping) -> None:
+    """A ``stiffness`` declares a C element's parameter and law (``e = k q``): nothing else may."""
+    if kind != "C":
+        raise ModelError(f"{where}: 'stiffness' is only for C elements (a linear spring, e = k q)")
+    if isinstance(data["stiffness"], bool) or not isinstance(data["stiffness"], numbers.Real):
+        raise ModelError(f"{where}: stiffness {data['stiffness']!r} is not a number")
+    for other, meaning in (("value", "a compliance, e = q/C"), ("law", "its own law")):
+        if data.get(other) is not None:
+            raise ModelError(f"{where}: give 'stiffness' (e = k q) or '{other}' ({meaning}), not both")
 
 
 def _check_attributes(where: str, data: Mapping, known: frozenset, *, strict: bool) -> None:

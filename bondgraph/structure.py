@@ -30,8 +30,8 @@ PORT_SYMBOLS = {name: sp.Symbol(name) for name in ("e", "f", "q", "p")}
 #: Names no parameter, constant or signal may take: they would clash with the port variables or time.
 RESERVED_NAMES = frozenset(PORT_SYMBOLS) | {"t"}
 #: The node attributes of the model contract (docs/model.md), what ``BondGraph.add`` and a JSON node accept.
-NODE_ATTRIBUTES = frozenset({"kind", "param", "value", "uncertainty", "law", "modulus", "signal", "params",
-                             "uncertainties", "domain", "domains", "label", "description"})
+NODE_ATTRIBUTES = frozenset({"kind", "param", "value", "stiffness", "uncertainty", "law", "modulus", "signal",
+                             "params", "uncertainties", "domain", "domains", "label", "description"})
 #: The bond attributes of the model contract, what ``BondGraph.bond`` and a JSON link accept.
 BOND_ATTRIBUTES = frozenset({"label", "description"})
 

@@ -24,6 +24,7 @@ Three method families sit beside it as subpackages:
 -omega_m(t)/k_belt**2
 """
 
+from .errors import PrognosisError
 from .degradation import CustomDegradation, ExponentialDegradation, LinearDegradation, degradation_model
 from .metrics import alpha_lambda, prognostic_horizon, relative_accuracy, relative_rmse, rmad
 from .monitor import HealthMonitor, MonitorResult
@@ -34,7 +35,8 @@ from .rul import RULDistribution, RULPredictor, predict_rul
 
 __all__ = [
     "CustomDegradation", "ExponentialDegradation", "HealthMonitor", "LinearDegradation", "MonitorResult",
-    "ObservationModel", "ParticleFilter", "RULDistribution", "RULPredictor", "StepDiagnostics", "VarianceAdaptation",
+    "ObservationModel", "ParticleFilter", "PrognosisError", "RULDistribution", "RULPredictor", "StepDiagnostics",
+    "VarianceAdaptation",
     "alpha_lambda", "degradation_model", "effective_sample_size", "observation_model", "predict_rul",
     "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad",
 ]

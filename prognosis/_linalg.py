@@ -23,6 +23,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from .errors import PrognosisError
+
 
 def symmetric(a: np.ndarray) -> np.ndarray:
     """The symmetric part ``(a + a^T) / 2`` (round-off makes products of covariances drift apart)."""
@@ -140,23 +142,23 @@ def block(matrix: np.ndarray, rows: np.ndarray) -> np.ndarray:
 
 
 def state_vector(value, n: int, name: str, labels) -> np.ndarray:
-    """``value`` as ``n`` finite floats, or a ``ValueError`` naming ``name`` and the labels at fault.
+    """``value`` as ``n`` finite floats, or a ``PrognosisError`` naming ``name`` and the labels at fault.
 
     >>> state_vector([1, 2], 2, "mean", ["x", "v"]).tolist()
     [1.0, 2.0]
     """
     vector = np.asarray(value, float).reshape(-1)
     if vector.shape != (n,):
-        raise ValueError(f"{name}: expected {n} values for {list(labels)}, got shape {vector.shape}")
+        raise PrognosisError(f"{name}: expected {n} values for {list(labels)}, got shape {vector.shape}")
     if not np.all(np.isfinite(vector)):
-        raise ValueError(f"{name}: non-finite value for {[labels[i] for i in np.nonzero(~np.isfinite(vector))[0]]}")
+        raise PrognosisError(f"{name}: non-finite value for {[labels[i] for i in np.nonzero(~np.isfinite(vector))[0]]}")
     return vector
 
 
 def covariance_matrix(value, n: int, name: str, labels) -> np.ndarray:
     """``value`` as a symmetric PSD (n, n) covariance; ``n`` variances give a diagonal one.
 
-    Raises a ``ValueError`` naming ``name`` (and the labels of negative variances) otherwise.
+    Raises a ``PrognosisError`` naming ``name`` (and the labels of negative variances) otherwise.
 
     >>> covariance_matrix([1.0, 4.0], 2, "Q", ["x", "v"]).tolist()
     [[1.0, 0.0], [0.0, 4.0]]
@@ -165,15 +167,15 @@ def covariance_matrix(value, n: int, name: str, labels) -> np.ndarray:
     if matrix.ndim == 1 and matrix.shape == (n,):
         matrix = np.diag(matrix)
     if matrix.shape != (n, n):
-        raise ValueError(f"{name}: expected a ({n}, {n}) matrix or {n} variances for {list(labels)}, "
-                         f"got shape {matrix.shape}")
+        raise PrognosisError(f"{name}: expected a ({n}, {n}) matrix or {n} variances for {list(labels)}, "
+                             f"got shape {matrix.shape}")
     if not np.all(np.isfinite(matrix)):
-        raise ValueError(f"{name}: non-finite entries")
+        raise PrognosisError(f"{name}: non-finite entries")
     if not np.allclose(matrix, matrix.T, rtol=1e-10, atol=0.0):
-        raise ValueError(f"{name}: not symmetric")
+        raise PrognosisError(f"{name}: not symmetric")
     diagonal = np.diag(matrix)
     if np.any(diagonal < 0):
-        raise ValueError(f"{name}: negative variance for {[labels[i] for i in np.nonzero(diagonal < 0)[0]]}")
+        raise PrognosisError(f"{name}: negative variance for {[labels[i] for i in np.nonzero(diagonal < 0)[0]]}")
     if np.linalg.eigvalsh(symmetric(matrix)).min() < -1e-12 * max(float(diagonal.max()), 1e-300):
-        raise ValueError(f"{name}: not positive semi-definite")
+        raise PrognosisError(f"{name}: not positive semi-definite")
     return symmetric(matrix)

@@ -24,6 +24,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import PrognosisError
+
 
 @dataclass(frozen=True)
 class LinearDegradation:
@@ -165,7 +167,7 @@ class PerAssetDegradation:
 
     def __post_init__(self):
         if len({m.n_gamma for m in self.models}) > 1:
-            raise ValueError("every law of a PerAssetDegradation must have the same number of gammas")
+            raise PrognosisError("every law of a PerAssetDegradation must have the same number of gammas")
 
     @property
     def n_gamma(self) -> int:
@@ -240,6 +242,6 @@ def degradation_model(name: str, process_noise: float = 0.0):
     [2.0]
     """
     if name not in MODELS:
-        raise ValueError(f"unknown degradation model {name!r}; choose from {sorted(MODELS)} "
-                         "or use CustomDegradation(g)")
+        raise PrognosisError(f"unknown degradation model {name!r}; choose from {sorted(MODELS)} "
+                             "or use CustomDegradation(g)")
     return MODELS[name](process_noise=process_noise)

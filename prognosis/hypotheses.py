@@ -23,10 +23,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from diagnosis import signature_matrix
+
 from .observation import observation_model
+from .errors import PrognosisError
 
 __all__ = ["Hypothesis", "HypothesisObservation", "indistinguishable_groups", "physical_domain", "rate_prior",
-           "sensitivity", "signature_candidates"]
+           "same_signature", "sensitivity", "signature_candidates"]
 
 LIFE_PRIOR = (10.0, 1e5)  # filter steps: the life from nominal to failure, log-uniform between these
 
@@ -125,8 +128,36 @@ def signature_candidates(arrs: Sequence, failures: Mapping[str, float], fired: I
     by_name = {a.name: a for a in arrs}
     unknown = sorted(fired - set(by_name))
     if unknown:
-        raise ValueError(f"no ARR named {unknown[0]!r} (ARRs: {', '.join(by_name)})")
+        raise PrognosisError(f"no ARR named {unknown[0]!r} (ARRs: {', '.join(by_name)})")
     return [p for p in failures if all(p in by_name[name].parameters for name in fired)]
+
+
+def same_signature(arrs: Sequence, candidate: str) -> list[str]:
+    """The other faults, model parameters and sensors, whose fault signature over ``arrs`` is ``candidate``'s.
+
+    A candidate is isolable in the model only when this list is empty: otherwise a fault of any of
+    them fires exactly the same ARRs, whatever the failure values given (the rows of
+    :func:`diagnosis.signature_matrix`, sensors as ``"sensor <signal>"``).
+
+    Examples
+    --------
+    The RLC circuit's resistance and inductance sit in the loop's ARR alone; the capacitance alone
+    in the node's, while both sensors are read by both ARRs:
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> arrs = derive_arrs(rlc_circuit())
+    >>> same_signature(arrs, "R"), same_signature(arrs, "C")
+    (['L'], [])
+    >>> same_signature(arrs, "sensor i")
+    ['sensor v_C']
+    """
+    signatures = signature_matrix(arrs)
+    if candidate not in signatures.rows:
+        return []
+    mine = signatures.matrix[signatures.rows.index(candidate)]
+    return [row for row, signature in zip(signatures.rows, signatures.matrix)
+            if row != candidate and np.array_equal(signature, mine)]
 
 
 def indistinguishable_groups(arrs: Sequence, candidates: Sequence[str], *, rtol: float = 1e-5,

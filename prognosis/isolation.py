@@ -34,12 +34,13 @@ import numpy as np
 from . import seeds
 from .degradation import PerAssetDegradation, degradation_model
 from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, rate_prior,
-                         sensitivity, signature_candidates)
+                         same_signature, sensitivity, signature_candidates)
 from .monitor import MonitorResult, filter_stride
 from .observation import observation_model
 from .particle_filter import KernelSmoothing, ParticleFilter, check_particles, check_positive
 from .rul import RULDistribution, RULPredictor
 from .seeds import check_seed
+from .errors import PrognosisError
 
 __all__ = ["Decision", "IsolatingMonitor", "IsolationResult", "decide"]
 
@@ -61,6 +62,8 @@ class Decision:
         ``"indistinguishable"``) or not yet told apart (``"undecided"``); None if every hypothesis
         was rejected.
     status : {"isolated", "indistinguishable", "undecided", "rejected"}
+        ``"isolated"`` only when the evidence singles out one candidate *and* no other fault of the
+        model (parameter or sensor) has its signature; otherwise ``"indistinguishable"``.
     candidate_ratio : float
         Evidence ratio of the reported candidate(s) over the best other one (inf when alone).
     degradation : str or None
@@ -70,6 +73,9 @@ class Decision:
     degradation_ratio : float
     probabilities : dict
         Posterior probability of each hypothesis (``"candidate/law"``), uniform prior.
+    same_signature : tuple of str
+        The faults outside the reported candidate(s), parameters and ``"sensor <signal>"``, with the
+        same fault signature over the ARRs: the evidence cannot have told them apart.
     """
 
     candidate: str | list | None
@@ -79,21 +85,26 @@ class Decision:
     degradation_decided: bool
     degradation_ratio: float
     probabilities: dict
+    same_signature: tuple = ()
 
     def as_dict(self) -> dict:
         return {"candidate": self.candidate, "status": self.status, "candidate_ratio": _finite(self.candidate_ratio),
                 "degradation": self.degradation, "degradation_decided": self.degradation_decided,
-                "degradation_ratio": _finite(self.degradation_ratio), "probabilities": self.probabilities}
+                "degradation_ratio": _finite(self.degradation_ratio), "probabilities": self.probabilities,
+                "same_signature": list(self.same_signature)}
 
 
 def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: Sequence[Sequence[str]],
-           rejected: Mapping[str, str] = {}, min_ratio: float = EVIDENCE_RATIO) -> Decision:
+           rejected: Mapping[str, str] = {}, min_ratio: float = EVIDENCE_RATIO,
+           signatures: Mapping[str, Sequence[str]] = {}) -> Decision:
     """Rank hypotheses by evidence: the candidate, then the law, each declared beyond ``min_ratio``.
 
     A candidate's evidence sums its laws' (uniform prior over hypotheses).  The best candidate is
     isolated when it beats every candidate outside its group of indistinguishable ones by
-    ``min_ratio``; its group is reported when it has several members; otherwise every candidate
-    within the ratio of the best is reported, undecided.
+    ``min_ratio`` and ``signatures`` (candidate -> the other faults with its fault signature,
+    :func:`~prognosis.hypotheses.same_signature`) names none; its group, or the faults sharing its
+    signature, make it ``"indistinguishable"``; otherwise every candidate within the ratio of the
+    best is reported, undecided.
 
     Examples
     --------
@@ -104,6 +115,9 @@ def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: S
     (['a', 'b'], 'indistinguishable', 'linear', True)
     >>> decide(hs, log_z, [["a"], ["b"], ["c"]]).status   # e^1 is not decisive
     'undecided'
+    >>> d = decide(hs, log_z, [["a", "b"], ["c"]], signatures={"a": ["b", "k"], "b": ["a", "k"]})
+    >>> d.status, d.same_signature   # a fault without a failure value shares their signature
+    ('indistinguishable', ('k',))
     """
     log_z = np.array([-np.inf if h.name in rejected else float(v) for h, v in zip(hypotheses, log_evidence)])
     probabilities = _softmax(log_z)
@@ -128,8 +142,13 @@ def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: S
     by_law = {law: _logsumexp(log_z[[h.law == law and h.candidate in reported for h in hypotheses]]) for law in laws}
     ranked = sorted(laws, key=by_law.get, reverse=True)
     law_margin = by_law[ranked[0]] - (by_law[ranked[1]] if len(ranked) > 1 else -np.inf)
+    twins = ()
+    if status != "undecided":
+        twins = tuple(dict.fromkeys(f for c in reported for f in signatures.get(c, ()) if f not in reported))
+        status = "indistinguishable" if twins else status
     return Decision(reported[0] if len(reported) == 1 else reported, status, math.exp(min(margin, 700.0)),
-                    ranked[0], bool(law_margin >= math.log(min_ratio)), math.exp(min(law_margin, 700.0)), named)
+                    ranked[0], bool(law_margin >= math.log(min_ratio)), math.exp(min(law_margin, 700.0)), named,
+                    twins)
 
 
 @dataclass
@@ -144,6 +163,9 @@ class IsolationResult:
         The ARRs alarming at that time (the signature the candidates come from).
     candidates, groups : list
         Candidates from the signature; their groups of indistinguishable ones.
+    same_signature : dict
+        Candidate -> the other faults of the model (parameters, ``"sensor <signal>"``) with its fault
+        signature over the monitor's ARRs (:func:`~prognosis.hypotheses.same_signature`).
     hypotheses : list of Hypothesis
     arrs : list of str
         The ARRs whose residuals the hypotheses are weighed on.
@@ -167,6 +189,7 @@ class IsolationResult:
     fired: list = field(default_factory=list)
     candidates: list = field(default_factory=list)
     groups: list = field(default_factory=list)
+    same_signature: dict = field(default_factory=dict)
     hypotheses: list = field(default_factory=list)
     arrs: list = field(default_factory=list)
     t: np.ndarray = field(default_factory=lambda: np.empty(0))
@@ -185,13 +208,14 @@ class IsolationResult:
         """The decision on all the data (None without an alarm or a candidate)."""
         if not self.t.size:
             return None
-        return decide(self.hypotheses, self.log_evidence[-1], self.groups, self.rejected, self.min_ratio)
+        return decide(self.hypotheses, self.log_evidence[-1], self.groups, self.rejected, self.min_ratio,
+                      self.same_signature)
 
     def index(self, name: str) -> int:
         """Row of the hypothesis ``"candidate/law"``."""
         names = [h.name for h in self.hypotheses]
         if name not in names:
-            raise ValueError(f"no hypothesis {name!r} (hypotheses: {', '.join(names)})")
+            raise PrognosisError(f"no hypothesis {name!r} (hypotheses: {', '.join(names)})")
         return names.index(name)
 
     def monitor_result(self, hypothesis: str | None = None) -> MonitorResult:
@@ -280,8 +304,8 @@ class IsolatingMonitor:
     ...                            dt=0.01, n_particles=200, detection={"margin": 0.01})
     >>> result = monitor.run(record)
     >>> d = result.decision
-    >>> d.candidate, d.status, d.degradation
-    ('R', 'isolated', 'linear')
+    >>> d.candidate, d.status, d.degradation, d.same_signature   # L fires the same ARR: not isolable in the model
+    ('R', 'indistinguishable', 'linear', ('L',))
     """
 
     def __init__(self, arrs: Sequence, failures: Mapping[str, float], *, noise_std: Mapping[str, float],
@@ -296,33 +320,33 @@ class IsolatingMonitor:
         parameters = {p: a.values[p] for a in self.arrs for p in a.parameters}
         for name in self.failures:
             if name not in parameters:
-                raise ValueError(f"failure value for {name!r}: no ARR contains that parameter "
-                                 f"(parameters the ARRs see: {', '.join(sorted(parameters))})")
+                raise PrognosisError(f"failure value for {name!r}: no ARR contains that parameter "
+                                     f"(parameters the ARRs see: {', '.join(sorted(parameters))})")
         self.nominal = {p: float(parameters[p]) for p in self.failures}
         for name, value in self.failures.items():
             if value == self.nominal[name]:
-                raise ValueError(f"failure value of {name!r} equals its nominal value {value:g}")
+                raise PrognosisError(f"failure value of {name!r} equals its nominal value {value:g}")
         if not isinstance(noise_std, Mapping):
-            raise ValueError(f"noise_std: give the standard deviation of each ARR's residual by ARR name, "
-                             f"got a {type(noise_std).__name__}")
+            raise PrognosisError(f"noise_std: give the standard deviation of each ARR's residual by ARR name, "
+                                 f"got a {type(noise_std).__name__}")
         missing = [a.name for a in self.arrs if a.name not in noise_std]
         if missing:
-            raise ValueError(f"noise_std has no value for the ARR(s) {missing}")
+            raise PrognosisError(f"noise_std has no value for the ARR(s) {missing}")
         self.noise_std = {k: check_positive(v, f"noise_std[{k!r}]") for k, v in noise_std.items()}
         self.laws = dict(laws) if isinstance(laws, Mapping) else {name: None for name in laws}
         if not self.laws:
-            raise ValueError("laws: give at least one degradation law")
+            raise PrognosisError("laws: give at least one degradation law")
         if candidates is not None:
             unknown = [c for c in candidates if c not in self.failures]
             if unknown:
-                raise ValueError(f"candidate {unknown[0]!r} has no failure value (failure values: "
-                                 f"{', '.join(self.failures)})")
+                raise PrognosisError(f"candidate {unknown[0]!r} has no failure value (failure values: "
+                                     f"{', '.join(self.failures)})")
         self.candidates = None if candidates is None else list(candidates)
         self.dt, self.n_particles = check_positive(dt, "dt"), check_particles(n_particles)
         self.inflation = check_positive(inflation, "inflation")
         self.life, self.rate, self.process_noise, self.discount = life, rate, process_noise, discount
         if isinstance(rul_every, bool) or int(rul_every) != rul_every or rul_every < 1:
-            raise ValueError(f"rul_every must be a positive whole number of filter steps, got {rul_every!r}")
+            raise PrognosisError(f"rul_every must be a positive whole number of filter steps, got {rul_every!r}")
         self.rul_every = int(rul_every)
         self.horizon = HORIZON_STEPS * self.dt if horizon is None else check_positive(horizon, "horizon")
         self.detection = dict(detection or {})
@@ -330,8 +354,8 @@ class IsolatingMonitor:
         self.domains = {str(k): (float(v[0]), float(v[1])) for k, v in (domains or {}).items()}
         for name, (lo, hi) in self.domains.items():
             if name in self.failures and not lo <= self.failures[name] <= hi:
-                raise ValueError(f"failure value of {name!r} ({self.failures[name]:g}) lies outside its physical "
-                                 f"domain ({lo:g}, {hi:g})")
+                raise PrognosisError(f"failure value of {name!r} ({self.failures[name]:g}) lies outside its physical "
+                                     f"domain ({lo:g}, {hi:g})")
         self.healthy_until = -math.inf if healthy_until is None else float(healthy_until)
 
     # -- the pipeline ------------------------------------------------------------------------
@@ -345,7 +369,7 @@ class IsolatingMonitor:
         if evaluations is None:
             evaluations = [a.evaluate(record, **self.options_for(a)) for a in self.arrs]
         elif len(evaluations) != len(self.arrs):
-            raise ValueError(f"evaluations: {len(evaluations)} given for {len(self.arrs)} ARRs")
+            raise PrognosisError(f"evaluations: {len(evaluations)} given for {len(self.arrs)} ARRs")
         result = IsolationResult(None, evaluations=evaluations, min_ratio=self.min_ratio)
         t = evaluations[0].t
         alarms = [np.flatnonzero(e.alarm & (t > self.healthy_until)) for e in evaluations]
@@ -363,6 +387,8 @@ class IsolatingMonitor:
         arrs = [self.arrs[i] for i in used]
         result.arrs = [a.name for a in arrs]
         result.groups = indistinguishable_groups(arrs, result.candidates)
+        # isolable in the model: over every ARR given, not only those the filter weighs
+        result.same_signature = {c: same_signature(self.arrs, c) for c in result.candidates}
         result.hypotheses, result.rejected = self.hypotheses_for(result.candidates)
         self._filter(result, [evaluations[i] for i in used], arrs, k, progress)
         return result
@@ -416,7 +442,8 @@ class IsolatingMonitor:
             away = self._reject_drift_away(result, hypotheses, estimate, float(t[k]), boxes, away)
             rows.append((float(t[k]), pf.log_evidence.copy(), estimate))
             if (done - 1) % self.rul_every == 0:
-                decision = decide(hypotheses, pf.log_evidence, result.groups, result.rejected, self.min_ratio)
+                decision = decide(hypotheses, pf.log_evidence, result.groups, result.rejected, self.min_ratio,
+                                  result.same_signature)
                 rul.append(self._mixture(pf, hypotheses, decision, predictors, models, key=done))
                 rul_t.append(float(t[k]))
                 decisions.append(decision)

@@ -22,7 +22,7 @@ Conventions: the last axis of a sample array holds the particles (or the
 time steps ``k`` for a sequence); every leading axis (assets, prediction
 points) is a batch axis, so ``(assets, points, particles)`` arrays are
 evaluated at once.  1-D input gives a scalar.  Particle weights default to
-uniform; NaN, infinite or negative weights raise ``ValueError``.
+uniform; NaN, infinite or negative weights raise ``PrognosisError`` (a ``ValueError``).
 
 Example
 -------
@@ -44,6 +44,8 @@ from scipy import stats
 
 from bondgraph.errors import PHMWarning
 
+from .errors import PrognosisError
+
 __all__ = [
     "MetricWarning", "alpha_lambda", "convergence", "cumulative_relative_accuracy", "format_ranking",
     "mean_relative_accuracy", "mean_rmad", "prognostic_horizon", "rank_with_ties", "relative_accuracy", "relative_rmse",
@@ -61,12 +63,12 @@ def _weights_like(samples: np.ndarray, weights: ArrayLike | None) -> np.ndarray:
         return np.full(samples.shape, 1.0 / samples.shape[-1])
     w = np.broadcast_to(np.asarray(weights, dtype=float), samples.shape)
     if not np.isfinite(w).all():
-        raise ValueError("weights contain NaN or infinite values")
+        raise PrognosisError("weights contain NaN or infinite values")
     if (w < 0).any():
-        raise ValueError("weights contain negative values")
+        raise PrognosisError("weights contain negative values")
     total = w.sum(axis=-1, keepdims=True)
     if (total == 0).any():
-        raise ValueError("weights sum to 0 along the particle axis")
+        raise PrognosisError("weights sum to 0 along the particle axis")
     return w / total
 
 
@@ -83,7 +85,7 @@ def _moved_weights(weights: ArrayLike | None, shape: tuple[int, ...], axis: int)
 def _last_axis(values: ArrayLike, axis: int) -> np.ndarray:
     x = np.asarray(values, dtype=float)
     if x.ndim == 0 or x.shape[axis] == 0:
-        raise ValueError(f"need at least one value along axis {axis}, got shape {x.shape}")
+        raise PrognosisError(f"need at least one value along axis {axis}, got shape {x.shape}")
     return np.moveaxis(x, axis, -1)
 
 
@@ -315,9 +317,9 @@ def alpha_lambda(rul_samples: ArrayLike, weights: ArrayLike | None, rul_true: Ar
     (0.5, True)
     """
     if not (np.isfinite(alpha) and alpha >= 0):
-        raise ValueError(f"alpha must be a finite number >= 0, got {alpha}")
+        raise PrognosisError(f"alpha must be a finite number >= 0, got {alpha}")
     if not 0 <= beta <= 1:
-        raise ValueError(f"beta must lie in [0, 1], got {beta}")
+        raise PrognosisError(f"beta must lie in [0, 1], got {beta}")
     true = np.asarray(rul_true, dtype=float)
     mass = mass_within(rul_samples, weights, (1 - alpha) * true, (1 + alpha) * true)
     return mass, np.asarray(mass >= beta)[()]
@@ -372,10 +374,10 @@ def prognostic_horizon(times: ArrayLike, passed: ArrayLike, eol: ArrayLike) -> n
     """
     ok = np.asarray(passed, dtype=bool)
     if ok.ndim == 0 or ok.shape[-1] == 0:
-        raise ValueError(f"passed must have shape (..., K) with K >= 1, got shape {ok.shape}")
+        raise PrognosisError(f"passed must have shape (..., K) with K >= 1, got shape {ok.shape}")
     t = np.broadcast_to(np.asarray(times, dtype=float), ok.shape)
     if (np.diff(t, axis=-1) < 0).any():
-        raise ValueError("prediction times must be increasing")
+        raise PrognosisError("prediction times must be increasing")
     suffix = np.flip(np.logical_and.accumulate(np.flip(ok, axis=-1), axis=-1), axis=-1)
     start = np.take_along_axis(t, np.argmax(suffix, axis=-1)[..., None], axis=-1)[..., 0]
     return np.where(suffix[..., -1], np.asarray(eol, dtype=float) - start, np.nan)[()]
@@ -451,11 +453,11 @@ def convergence(times: ArrayLike, metric_values: ArrayLike, t_start: ArrayLike |
     """
     m = np.asarray(metric_values, dtype=float)
     if m.ndim == 0 or m.shape[-1] < 2:
-        raise ValueError(f"need at least 2 prediction times along the last axis, got shape {m.shape}")
+        raise PrognosisError(f"need at least 2 prediction times along the last axis, got shape {m.shape}")
     t = np.broadcast_to(np.asarray(times, dtype=float), m.shape)
     dt = np.diff(t, axis=-1)
     if (dt < 0).any():
-        raise ValueError("prediction times must be increasing")
+        raise PrognosisError("prediction times must be increasing")
     left = m[..., :-1]
     area = np.sum(dt * left, axis=-1)
     start = t[..., 0] if t_start is None else np.asarray(t_start, dtype=float)
@@ -498,7 +500,7 @@ def rank_with_ties(scores: Mapping[str, ArrayLike], *, rtol: float = 1e-3,
 
     Raises
     ------
-    ValueError
+    PrognosisError
         No methods, a method with no or non-finite scores or another number of runs, or ``rtol`` or
         ``confidence`` out of range.
 
@@ -520,9 +522,9 @@ def rank_with_ties(scores: Mapping[str, ArrayLike], *, rtol: float = 1e-3,
     [['A'], ['B']]
     """
     if not 0.0 < confidence < 1.0:
-        raise ValueError(f"confidence must be in (0, 1), got {confidence!r}")
+        raise PrognosisError(f"confidence must be in (0, 1), got {confidence!r}")
     if not rtol >= 0.0:
-        raise ValueError(f"rtol must be non-negative, got {rtol!r}")
+        raise PrognosisError(f"rtol must be non-negative, got {rtol!r}")
     runs = _paired_runs(scores)
     order = sorted(runs, key=lambda name: runs[name].mean())
     groups = [[order[0]]]
@@ -537,15 +539,15 @@ def rank_with_ties(scores: Mapping[str, ArrayLike], *, rtol: float = 1e-3,
 def _paired_runs(scores: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
     """Each method's scores as a finite 1-D array, all of one length."""
     if not scores:
-        raise ValueError("scores: no methods to rank")
+        raise PrognosisError("scores: no methods to rank")
     runs = {name: np.atleast_1d(np.asarray(values, float)).reshape(-1) for name, values in scores.items()}
     first = next(iter(runs))
     for name, values in runs.items():
         if values.size == 0 or not np.all(np.isfinite(values)):
-            raise ValueError(f"scores of {name!r}: need finite values, got {values.tolist()}")
+            raise PrognosisError(f"scores of {name!r}: need finite values, got {values.tolist()}")
         if values.size != runs[first].size:
-            raise ValueError(f"scores of {name!r}: {values.size} runs, but {runs[first].size} for {first!r}; "
-                             "methods are compared run by run")
+            raise PrognosisError(f"scores of {name!r}: {values.size} runs, but {runs[first].size} for {first!r}; "
+                                 "methods are compared run by run")
     return runs
 
 

@@ -26,6 +26,39 @@ from .particle_filter import ParticleFilter, VarianceAdaptation, check_particles
 from .observation import observation_model
 from .rul import ParallelRUL, RULPredictor
 from .seeds import check_seed
+from .errors import PrognosisError
+
+
+def check_failure_side(candidate: str, theta_fail: float, nominal: float, direction: str) -> None:
+    """Check that ``theta_fail`` lies on the ``direction`` side of ``nominal``; the error suggests the other direction.
+
+    A parameter that wears downwards (a damper losing its oil, a spring softening) fails below its
+    nominal value and needs ``direction="down"``; the default is ``"up"``, so the message says
+    which direction the failure value calls for.
+
+    Examples
+    --------
+    >>> check_failure_side("c_s", 3000.0, 1500.0, "up")
+    >>> try:
+    ...     check_failure_side("c_s", 750.0, 1500.0, "up")
+    ... except PrognosisError as error:
+    ...     print(error)
+    failure value 750 of 'c_s' is on the wrong side for direction 'up': it lies below the nominal value 1500; \
+give direction='down' for a parameter that fails below nominal
+    """
+    if direction not in ("up", "down"):
+        raise PrognosisError(f"direction must be 'up' or 'down', got {direction!r}")
+    if not np.isfinite(theta_fail):
+        raise PrognosisError(f"failure value of {candidate!r} must be a finite number, got {theta_fail!r}")
+    if theta_fail == nominal:
+        raise PrognosisError(f"failure value {theta_fail:g} of {candidate!r} equals its nominal value: it must lie "
+                             f"{'above' if direction == 'up' else 'below'} it for direction {direction!r}")
+    side = "above" if theta_fail > nominal else "below"
+    needed = "up" if side == "above" else "down"
+    if direction != needed:
+        raise PrognosisError(f"failure value {theta_fail:g} of {candidate!r} is on the wrong side for direction "
+                             f"{direction!r}: it lies {side} the nominal value {nominal:g}; give "
+                             f"direction={needed!r} for a parameter that fails {side} nominal")
 
 
 @dataclass
@@ -163,7 +196,7 @@ class MonitorResult:
 
 
 def filter_stride(t: np.ndarray, dt: float) -> int:
-    """Record samples per filter step ``dt``; raises ValueError unless ``dt`` is a multiple of the record's step.
+    """Record samples per filter step ``dt``; raises PrognosisError unless ``dt`` is a multiple of the record's step.
 
     >>> filter_stride(np.arange(0.0, 1.0, 0.01), 0.1)
     10
@@ -171,7 +204,7 @@ def filter_stride(t: np.ndarray, dt: float) -> int:
     step = float(np.median(np.diff(t)))
     stride = int(round(dt / step))
     if stride < 1 or abs(stride * step - dt) > 1e-6 * dt:
-        raise ValueError(f"the filter step dt = {dt} s is not a multiple of the record's step {step} s")
+        raise PrognosisError(f"the filter step dt = {dt} s is not a multiple of the record's step {step} s")
     return stride
 
 
@@ -247,8 +280,8 @@ class HealthMonitor:
                  resample_below: float = 1.0, prediction_walk: float = 1.0, rul_every: int = 1, horizon: float = 200.0,
                  detection: Mapping | None = None, seed: int | np.random.SeedSequence = 0):
         if isinstance(noise_std, Mapping):
-            raise ValueError(f"noise_std: HealthMonitor watches one ARR; give the standard deviation of its residual "
-                             f"as one number, got a {type(noise_std).__name__}")
+            raise PrognosisError(f"noise_std: HealthMonitor watches one ARR; give the standard deviation of its "
+                                 f"residual as one number, got a {type(noise_std).__name__}")
         noise_std = check_positive(noise_std, "noise_std")
         n_particles = check_particles(n_particles)
         dt, horizon = check_positive(dt, "dt"), check_positive(horizon, "horizon")
@@ -259,20 +292,18 @@ class HealthMonitor:
         lo, hi = arr.uncertainties.get(candidate, (0.0, 0.0))
         self.theta_bounds = (nominal * (1 + lo), nominal * (1 + hi)) if theta_bounds is None else tuple(theta_bounds)
         if start not in ("residual", "uncertainty_box"):
-            raise ValueError(f"start must be 'residual' or 'uncertainty_box', got {start!r}")
+            raise PrognosisError(f"start must be 'residual' or 'uncertainty_box', got {start!r}")
         self.start, self.gamma_bounds = start, gamma_bounds
-        if (direction == "up") != (theta_fail > nominal):
-            raise ValueError(f"failure value {theta_fail} of {candidate!r} is on the wrong side of its nominal "
-                             f"value {nominal} for direction {direction!r}")
+        check_failure_side(candidate, theta_fail, nominal, direction)
         seed = check_seed(seed)
         self.filter = ParticleFilter(model, self.observation, n_particles=n_particles, dt=dt, noise_std=noise_std,
                                      inflation=inflation, gamma_std=gamma_std, adaptation=adaptation,
                                      resampling=resampling, resample_below=resample_below,
                                      seed=seeds.spawn(seed, seeds.FILTER))
         if prediction_walk < 0:
-            raise ValueError(f"prediction_walk must be >= 0, got {prediction_walk}")
+            raise PrognosisError(f"prediction_walk must be >= 0, got {prediction_walk}")
         if isinstance(rul_every, bool) or int(rul_every) != rul_every or rul_every < 1:
-            raise ValueError(f"rul_every must be a positive whole number of filter steps, got {rul_every!r}")
+            raise PrognosisError(f"rul_every must be a positive whole number of filter steps, got {rul_every!r}")
         self.gamma0, self.rul_every, self.horizon = gamma0, rul_every, horizon
         self.prediction_walk = float(prediction_walk)
         self.detection = dict(detection or {})
@@ -351,7 +382,7 @@ class HealthMonitor:
         self._finished = False
         columns = {str(k): np.atleast_1d(np.asarray(v, float)) for k, v in sample.items()}
         if "t" not in columns:
-            raise ValueError(f"update: the sample has no 't' (columns: {', '.join(columns)})")
+            raise PrognosisError(f"update: the sample has no 't' (columns: {', '.join(columns)})")
         if self._stream is None:
             self._stream = StreamingEvaluation(self.arr, **self.detection)
         chunk = self._stream.push(columns.pop("t"), columns)

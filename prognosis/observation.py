@@ -22,6 +22,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import sympy as sp
+from sympy.core.function import AppliedUndef
+
+from .errors import PrognosisError
 
 
 @dataclass
@@ -102,8 +105,8 @@ class ObservationModel:
         """
         y = np.asarray(y, float)
         if self.coefficient is None and bracket is None:
-            raise ValueError(f"the observation equation of {self.candidate!r} is not linear in it: "
-                             f"invert needs a bracket (lo, hi) for the root search")
+            raise PrognosisError(f"the observation equation of {self.candidate!r} is not linear in it: "
+                                 f"invert needs a bracket (lo, hi) for the root search")
         values = [np.asarray(p, float)[:, None] for p in points]
         if self.coefficient is not None:
             slope = np.asarray(self.function()(np.full((y.size, 1), self.nominal + 1.0), *values), float)
@@ -122,6 +125,11 @@ class ObservationModel:
 def observation_model(arr, candidate: str) -> ObservationModel:
     """The observation equation of ``arr`` for the prognostic candidate ``candidate``.
 
+    The ARR's signals, derivatives and integrals are kept whole while the equation is expanded, so
+    that ``h`` is a function of the ARR's own point values (a spring's ``Integral(v_u - v_s)/C_s``
+    stays one integral).  A candidate inside an integral or a derivative would need point values the
+    ARR does not compute: a :class:`~prognosis.errors.PrognosisError` names the ARR and the integral.
+
     Examples
     --------
     >>> from bondgraph.library import torsion_bar_monitorable
@@ -131,15 +139,36 @@ def observation_model(arr, candidate: str) -> ObservationModel:
     -(b_Md - 0.005025)*omega_m(t)/k_belt**2
     """
     if candidate not in arr.parameters:
-        raise ValueError(
+        raise PrognosisError(
             f"{arr.name} is not sensitive to {candidate!r}; it is sensitive to {sorted(arr.parameters)}"
         )
     theta = sp.Symbol(candidate)
     nominal = float(arr.values[candidate])
-    balance = arr.nominal  # R(theta): the nominal part with theta free
+    balance, back = _opaque(arr.nominal)  # R(theta): the nominal part with theta free
+    inside = [atom for atom in back.values() if not isinstance(atom, AppliedUndef) and theta in atom.free_symbols]
+    if inside:
+        raise PrognosisError(f"{arr.name}: {candidate!r} sits inside {inside[0]}, so its observation model needs "
+                             f"integrals or derivatives the ARR does not compute; use an ARR in which {candidate!r} "
+                             "multiplies the signals, their derivatives and integrals")
     h = sp.factor_terms(sp.expand(balance - balance.xreplace({theta: nominal})))
     slope = sp.diff(h, theta)
     coefficient = sp.factor_terms(slope) if not slope.has(theta) else None  # no simplify: keep sign() as is
     if coefficient is not None:
         h = (theta - nominal) * coefficient
-    return ObservationModel(arr, candidate, nominal, h, coefficient)
+        coefficient = coefficient.xreplace(back)
+    return ObservationModel(arr, candidate, nominal, h.xreplace(back), coefficient)
+
+
+def _opaque(expression: sp.Expr) -> tuple[sp.Expr, dict]:
+    """``expression`` with each signal, derivative and integral as one plain symbol, and the map back.
+
+    ``sp.expand`` and ``sp.factor_terms`` rewrite inside an integral (``Integral(a - b)`` becomes
+    ``Integral(a) - Integral(b)``), but the ARR computes only its own integrals and derivatives (its
+    point values): as symbols they stay whole.  The outermost one is replaced (``xreplace`` works top
+    down), so an integral nested in another stays inside it.
+    """
+    atoms = sorted(expression.atoms(sp.Integral, sp.Derivative, AppliedUndef), key=sp.default_sort_key)
+    forward = {atom: sp.Dummy(f"point{k}") for k, atom in enumerate(atoms)}
+    opaque = expression.xreplace(forward)
+    used = opaque.free_symbols
+    return opaque, {symbol: atom for atom, symbol in forward.items() if symbol in used}

@@ -32,6 +32,7 @@ import numpy as np
 from .metrics import rmad, weighted_quantiles
 from .resampling import effective_sample_size, get_scheme, normalize_log_weights
 from .seeds import check_seed
+from .errors import PrognosisError
 
 
 @dataclass
@@ -141,7 +142,7 @@ class KernelSmoothing:
 
     def __post_init__(self):
         if not 1 / 3 < self.discount <= 1:
-            raise ValueError(f"discount must lie in (1/3, 1], got {self.discount}")
+            raise PrognosisError(f"discount must lie in (1/3, 1], got {self.discount}")
 
     @property
     def shrinkage(self) -> float:
@@ -257,7 +258,7 @@ class ParticleFilter:
                  resampling: str = "systematic", resample_below: float = 1.0, seed: int | np.random.SeedSequence = 0):
         n_particles = check_particles(n_particles)
         if inflation <= 0:
-            raise ValueError(f"inflation must be positive, got {inflation}")
+            raise PrognosisError(f"inflation must be positive, got {inflation}")
         _check_noise_std(noise_std)
         dt = check_positive(dt, "dt")
         self.model, self.observation = model, observation
@@ -265,8 +266,8 @@ class ParticleFilter:
         self.noise_std, self.inflation = noise_std, inflation
         self.initial_variance = np.square(np.atleast_1d(np.asarray(gamma_std, float)))
         if self.initial_variance.size != model.n_gamma:
-            raise ValueError(f"gamma_std has {self.initial_variance.size} entries; "
-                             f"the model has {model.n_gamma} gammas")
+            raise PrognosisError(f"gamma_std has {self.initial_variance.size} entries; "
+                                 f"the model has {model.n_gamma} gammas")
         # a copy of its own: a shared adaptation object would average gamma over every filter using it
         self.adaptation = copy.deepcopy(adaptation)
         self.resample = get_scheme(resampling)
@@ -282,7 +283,7 @@ class ParticleFilter:
         """
         lo, hi = (np.broadcast_to(np.asarray(b, float), (assets,)) for b in theta_bounds)
         if np.any(lo > hi):
-            raise ValueError(f"theta bounds have lo > hi: {theta_bounds}")
+            raise PrognosisError(f"theta bounds have lo > hi: {theta_bounds}")
         self.theta = lo[:, None] + (hi - lo)[:, None] * self.rng.random((assets, self.n))
         shape = (assets, self.n, self.model.n_gamma)
         if gamma_bounds is None:  # gamma0: a value per gamma (G,), or the particles themselves (A, N, G)
@@ -290,7 +291,7 @@ class ParticleFilter:
         else:
             g_lo, g_hi = (np.broadcast_to(np.asarray(b, float), (self.model.n_gamma,)) for b in gamma_bounds)
             if np.any(g_lo > g_hi):
-                raise ValueError(f"gamma bounds have lo > hi: {gamma_bounds}")
+                raise PrognosisError(f"gamma bounds have lo > hi: {gamma_bounds}")
             self.gamma = g_lo + (g_hi - g_lo) * self.rng.random(shape)
         self.log_weights = np.full((assets, self.n), -np.log(self.n))
         self.log_evidence = np.zeros(assets)
@@ -390,25 +391,25 @@ class ParticleFilter:
 
 
 def check_positive(value: object, option: str) -> float:
-    """``value`` as a float; a ValueError naming ``option`` unless it is a finite number > 0.
+    """``value`` as a float; a PrognosisError naming ``option`` unless it is a finite number > 0.
 
     >>> check_positive(0.01, "noise_std")
     0.01
     >>> check_positive(-1, "noise_std")
     Traceback (most recent call last):
     ...
-    ValueError: noise_std must be a finite number > 0, got -1
+    prognosis.errors.PrognosisError: noise_std must be a finite number > 0, got -1
     """
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Real) or not math.isfinite(value) \
             or value <= 0:
-        raise ValueError(f"{option} must be a finite number > 0, got {value!r}")
+        raise PrognosisError(f"{option} must be a finite number > 0, got {value!r}")
     return float(value)
 
 
 def check_particles(value: object) -> int:
-    """``n_particles`` as an int; a ValueError unless it is a whole number >= 2 (a weighted cloud needs two)."""
+    """``n_particles`` as an int; a PrognosisError unless it is >= 2 (a weighted cloud needs two)."""
     if isinstance(value, (bool, np.bool_)) or not isinstance(value, numbers.Integral) or value < 2:
-        raise ValueError(f"n_particles must be a whole number >= 2, got {value!r}")
+        raise PrognosisError(f"n_particles must be a whole number >= 2, got {value!r}")
     return int(value)
 
 
@@ -417,8 +418,8 @@ def _check_noise_std(noise_std: object) -> None:
     try:
         values = np.asarray(noise_std, dtype=float)
     except (TypeError, ValueError):
-        raise ValueError(f"noise_std must be a number or an array of numbers, got {noise_std!r}") from None
+        raise PrognosisError(f"noise_std must be a number or an array of numbers, got {noise_std!r}") from None
     bad = ~(np.isfinite(values) & (values > 0))
     if bad.any():
-        raise ValueError(f"noise_std must be finite and > 0, got {float(values[bad].reshape(-1)[0])!r}"
-                         + (f" in {values.tolist()}" if values.ndim else ""))
+        raise PrognosisError(f"noise_std must be finite and > 0, got {float(values[bad].reshape(-1)[0])!r}"
+                             + (f" in {values.tolist()}" if values.ndim else ""))

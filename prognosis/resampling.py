@@ -23,7 +23,7 @@ particle ``i`` is ``N w_i``.  They differ in variance (Douc and Cappe 2005,
 Weights have shape ``(..., N)``: one row of ``N`` particles per asset (a single
 asset may be passed as a 1-D array).  Rows are normalized defensively; a row
 containing NaN, infinite or negative weights, or summing to zero, raises
-``ValueError``.  Indices come back with the weights' shape, each row sorted
+``PrognosisError`` (a ``ValueError``).  Indices come back with the weights' shape, each row sorted
 ascending.
 
 Weights are usually computed in the log domain: :func:`normalize_log_weights`
@@ -48,6 +48,8 @@ from collections.abc import Callable
 import numpy as np
 from numpy.typing import ArrayLike
 
+from .errors import PrognosisError
+
 __all__ = [
     "SCHEMES", "effective_sample_size", "get_scheme", "multinomial", "normalize_log_weights", "residual",
     "stratified", "systematic",
@@ -64,18 +66,18 @@ def _as_rows(weights: ArrayLike) -> np.ndarray:
     """Validated, normalized weights reshaped to ``(rows, N)``."""
     w = np.asarray(weights, dtype=float)
     if w.ndim == 0 or w.shape[-1] == 0:
-        raise ValueError(f"weights must have shape (..., N) with N >= 1 particles, got shape {w.shape}")
+        raise PrognosisError(f"weights must have shape (..., N) with N >= 1 particles, got shape {w.shape}")
     rows = w.reshape(-1, w.shape[-1])
     if np.isnan(rows).any():
-        raise ValueError("weights contain NaN")
+        raise PrognosisError("weights contain NaN")
     if np.isinf(rows).any():
-        raise ValueError("weights contain infinite values")
+        raise PrognosisError("weights contain infinite values")
     if (rows < 0).any():
-        raise ValueError("weights contain negative values")
+        raise PrognosisError("weights contain negative values")
     total = rows.sum(axis=-1, keepdims=True)
     if (total == 0).any():
         bad = np.flatnonzero(total[:, 0] == 0)
-        raise ValueError(f"weights of row(s) {bad.tolist()} sum to 0: nothing to resample from")
+        raise PrognosisError(f"weights of row(s) {bad.tolist()} sum to 0: nothing to resample from")
     return rows / total
 
 
@@ -151,7 +153,7 @@ def systematic(weights: ArrayLike, rng: np.random.Generator) -> np.ndarray:
 
     Raises
     ------
-    ValueError
+    PrognosisError
         If a row has NaN, infinite or negative weights or sums to zero.
 
     Examples
@@ -364,7 +366,7 @@ def normalize_log_weights(log_weights: ArrayLike) -> tuple[np.ndarray, np.ndarra
     """
     log_w = np.asarray(log_weights, dtype=float)
     if log_w.ndim == 0 or log_w.shape[-1] == 0:
-        raise ValueError(f"log weights must have shape (..., N) with N >= 1, got shape {log_w.shape}")
+        raise PrognosisError(f"log weights must have shape (..., N) with N >= 1, got shape {log_w.shape}")
     degenerate = (np.isnan(log_w) | (log_w == np.inf)).any(axis=-1) | (log_w == -np.inf).all(axis=-1)
     safe = np.where(degenerate[..., None], 0.0, log_w)
     peak = safe.max(axis=-1, keepdims=True)
@@ -390,13 +392,14 @@ def get_scheme(name: str) -> Scheme:
     --------
     >>> get_scheme("systematic") is systematic
     True
-    >>> get_scheme("bootstrap")
-    Traceback (most recent call last):
-    ...
-    ValueError: unknown resampling scheme 'bootstrap'; choose one of: multinomial, residual, stratified, systematic
+    >>> try:
+    ...     get_scheme("bootstrap")
+    ... except PrognosisError as error:
+    ...     print(error)
+    unknown resampling scheme 'bootstrap'; choose one of: multinomial, residual, stratified, systematic
     """
     try:
         return SCHEMES[name]
     except (KeyError, TypeError):
         names = ", ".join(sorted(SCHEMES))
-        raise ValueError(f"unknown resampling scheme {name!r}; choose one of: {names}") from None
+        raise PrognosisError(f"unknown resampling scheme {name!r}; choose one of: {names}") from None

@@ -28,6 +28,7 @@ from bondgraph.errors import PHMWarning
 from .degradation import LinearDegradation
 from .metrics import weighted_quantiles
 from .seeds import check_seed, generator
+from .errors import PrognosisError
 
 MAX_HORIZON_STEPS = 1_000_000  # a horizon longer than this many filter steps is refused
 BANK_BYTES_PER_STEP = 16  # per particle and horizon step: four float32 banks (Z, CW, V, CV)
@@ -36,7 +37,7 @@ _BANK, _DRAWS, _KEYED = 0, 1, 2  # a predictor's streams under its seed: the ban
 
 
 def check_horizon(horizon: float, dt: float, particles: int = 0, predictors: int = 1) -> int:
-    """The number of steps of ``horizon``; a ValueError when it is beyond the predictors' limits.
+    """The number of steps of ``horizon``; a PrognosisError when it is beyond the predictors' limits.
 
     At most :data:`MAX_HORIZON_STEPS` steps of ``dt``, and the random-number banks of ``predictors``
     predictors of ``particles`` rows each (:data:`BANK_BYTES_PER_STEP` bytes per row and step) at most
@@ -44,22 +45,24 @@ def check_horizon(horizon: float, dt: float, particles: int = 0, predictors: int
 
     >>> check_horizon(200.0, 0.1, particles=500)
     2000
-    >>> check_horizon(1e12, 0.1)
-    Traceback (most recent call last):
-    ...
-    ValueError: horizon 1e+12 s is 1e+13 steps of dt = 0.1 s; at most 1000000 (prognosis.rul.MAX_HORIZON_STEPS)
+    >>> try:
+    ...     check_horizon(1e12, 0.1)
+    ... except PrognosisError as error:
+    ...     print(error)
+    horizon 1e+12 s is 1e+13 steps of dt = 0.1 s; at most 1000000 (prognosis.rul.MAX_HORIZON_STEPS)
     """
     if not (np.isfinite(horizon) and np.isfinite(dt) and horizon > 0 and dt > 0):
-        raise ValueError(f"horizon and dt must be positive and finite, got horizon={horizon}, dt={dt}")
+        raise PrognosisError(f"horizon and dt must be positive and finite, got horizon={horizon}, dt={dt}")
     if horizon / dt > MAX_HORIZON_STEPS:
-        raise ValueError(f"horizon {horizon:g} s is {horizon / dt:.3g} steps of dt = {dt:g} s; at most "
-                         f"{MAX_HORIZON_STEPS} (prognosis.rul.MAX_HORIZON_STEPS)")
+        raise PrognosisError(f"horizon {horizon:g} s is {horizon / dt:.3g} steps of dt = {dt:g} s; at most "
+                             f"{MAX_HORIZON_STEPS} (prognosis.rul.MAX_HORIZON_STEPS)")
     steps = int(np.ceil(horizon / dt - 1e-9))
     need = predictors * particles * steps * BANK_BYTES_PER_STEP
     if need > MAX_BANK_BYTES:
-        raise ValueError(f"{predictors} x {particles} particles x {steps} steps would need {need / 2**30:.3g} GiB of "
-                         f"random numbers, more than {MAX_BANK_BYTES / 2**30:g} GiB (prognosis.rul.MAX_BANK_BYTES); "
-                         "shorten the horizon or use fewer particles")
+        raise PrognosisError(f"{predictors} x {particles} particles x {steps} steps would need "
+                             f"{need / 2**30:.3g} GiB of random numbers, more than {MAX_BANK_BYTES / 2**30:g} GiB "
+                             "(prognosis.rul.MAX_BANK_BYTES); "
+                             "shorten the horizon or use fewer particles")
     return steps
 
 
@@ -267,7 +270,7 @@ class RULPredictor:
     def __init__(self, model, *, dt: float, theta_fail: float, direction: str = "up", horizon: float = 200.0,
                  seed: int | np.random.SeedSequence = 0, chunk: int = 512):
         if direction not in ("up", "down"):
-            raise ValueError(f"direction must be 'up' or 'down', got {direction!r}")
+            raise PrognosisError(f"direction must be 'up' or 'down', got {direction!r}")
         self.steps = check_horizon(horizon, dt)
         self.model, self.dt, self.theta_fail, self.direction = model, dt, theta_fail, direction
         self.horizon, self.chunk = horizon, chunk
@@ -478,9 +481,9 @@ def predict_rul(model, theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray
 
 
 def _check_key(key: object) -> int:
-    """A prediction's ``key`` as an int; a ValueError unless it is a whole number >= 0 (a spawn key)."""
+    """A prediction's ``key`` as an int; a PrognosisError unless it is a whole number >= 0 (a spawn key)."""
     if isinstance(key, (bool, np.bool_)) or not isinstance(key, numbers.Integral) or key < 0:
-        raise ValueError(f"key must be a whole number >= 0 (e.g. the filter step), got {key!r}")
+        raise PrognosisError(f"key must be a whole number >= 0 (e.g. the filter step), got {key!r}")
     return int(key)
 
 

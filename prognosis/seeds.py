@@ -28,6 +28,8 @@ import numbers
 
 import numpy as np
 
+from .errors import PrognosisError
+
 __all__ = ["ASSETS", "FILTER", "PREDICTORS", "RATE_PRIOR", "RUL", "check_seed", "generator", "spawn"]
 
 #: Spawn keys of a monitor's consumers (the first element of the key under the monitor's seed).
@@ -39,19 +41,19 @@ ASSETS = 4  # a fleet's per-asset streams (prognosis.streams): key (ASSETS, asse
 
 
 def check_seed(seed: object, option: str = "seed") -> int | np.random.SeedSequence:
-    """``seed`` as given when it is a whole number >= 0 or a SeedSequence; a ValueError naming ``option`` otherwise.
+    """``seed`` if a whole number >= 0 or a SeedSequence; otherwise a PrognosisError naming ``option``.
 
     >>> check_seed(7)
     7
     >>> check_seed(-1)
     Traceback (most recent call last):
     ...
-    ValueError: seed must be a whole number >= 0 or a numpy.random.SeedSequence, got -1
+    prognosis.errors.PrognosisError: seed must be a whole number >= 0 or a numpy.random.SeedSequence, got -1
     """
     if isinstance(seed, np.random.SeedSequence):
         return seed
     if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, numbers.Integral) or seed < 0:
-        raise ValueError(f"{option} must be a whole number >= 0 or a numpy.random.SeedSequence, got {seed!r}")
+        raise PrognosisError(f"{option} must be a whole number >= 0 or a numpy.random.SeedSequence, got {seed!r}")
     return int(seed)
 
 

@@ -32,6 +32,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from . import seeds
+from .errors import PrognosisError
 
 __all__ = ["AssetStreams", "MOVES", "RATES", "STARTS", "asset_key"]
 
@@ -48,7 +49,7 @@ def asset_key(asset: object) -> int:
         raise TypeError(f"asset ids are integers or strings, got the bool {asset!r}")
     if isinstance(asset, numbers.Integral):
         if asset < 0:
-            raise ValueError(f"asset id {asset} is negative; integer asset ids must be >= 0")
+            raise PrognosisError(f"asset id {asset} is negative; integer asset ids must be >= 0")
         return int(asset)
     if isinstance(asset, str):
         # the top bit marks a hashed string, so the string "17" and the integer 17 get different keys
@@ -73,7 +74,7 @@ class AssetStreams:
 
     def __init__(self, seed: int = 0):
         if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, numbers.Integral) or seed < 0:
-            raise ValueError(f"seed must be a whole number >= 0, got {seed!r}")
+            raise PrognosisError(f"seed must be a whole number >= 0, got {seed!r}")
         self.seed = int(seed)
         self._keys: dict = {}
         self._bits = np.random.Philox(0)

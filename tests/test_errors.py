@@ -9,9 +9,10 @@ from bondgraph import (AlgebraicLoopError, BondGraph, CausalityError, EquationEr
 from bondgraph.io import ModelFileError, load_model
 from bondgraph.library import rlc_circuit
 from diagnosis import RecordError, as_record
+from prognosis import PrognosisError
 
 ERRORS = [ModelError, LawError, ModelFileError, CausalityError, EquationError, AlgebraicLoopError, SimulationError,
-          RecordError, UsageError]
+          RecordError, UsageError, PrognosisError]
 
 
 @pytest.mark.parametrize("error", ERRORS, ids=lambda e: e.__name__)

@@ -31,6 +31,7 @@ from .filter import ROW_STATE, FleetFilter
 from .live import LiveAsset
 from .results import FleetResult
 from .rul import crossing_times, has_closed_form, summarize
+from ..errors import PrognosisError
 
 __all__ = ["FleetMonitor"]
 
@@ -124,14 +125,14 @@ class FleetMonitor:
         if report_every is None:
             report_every = s.rul_every
         if isinstance(report_every, bool) or int(report_every) != report_every or report_every < 1:
-            raise ValueError(f"report_every must be a positive whole number of filter steps, got {report_every!r}")
+            raise PrognosisError(f"report_every must be a positive whole number of filter steps, got {report_every!r}")
         self.report_every = int(report_every)
         self.streams = AssetStreams(s.seed)
         candidates = s.candidates if s.candidates is not None else list(s.failures)
         self.hypotheses, self.never = s.hypotheses_for(candidates)
         self.arrs = [a for a in s.arrs if any(c in a.parameters for c in candidates)]
         if not self.arrs:
-            raise ValueError(f"no ARR is sensitive to any of the candidates {candidates}")
+            raise PrognosisError(f"no ARR is sensitive to any of the candidates {candidates}")
         self.groups = indistinguishable_groups(self.arrs, candidates)
         self.noise = np.array([s.noise_std[a.name] for a in self.arrs])
         self.options = [s.options_for(a) for a in self.arrs]
@@ -374,10 +375,10 @@ class FleetMonitor:
     def restore(self, checkpoint: Mapping) -> None:
         """Take up the streams of a :meth:`checkpoint` (replacing this monitor's streams)."""
         if checkpoint.get("version") != 1:
-            raise ValueError(f"checkpoint: unknown version {checkpoint.get('version')!r} (expected 1)")
+            raise PrognosisError(f"checkpoint: unknown version {checkpoint.get('version')!r} (expected 1)")
         if checkpoint.get("settings") != self._fingerprint():
-            raise ValueError("checkpoint: it was made by a monitor with other settings "
-                             f"({checkpoint.get('settings')}); this one has {self._fingerprint()}")
+            raise PrognosisError("checkpoint: it was made by a monitor with other settings "
+                                 f"({checkpoint.get('settings')}); this one has {self._fingerprint()}")
         self._live, self._filter = {}, None
         for state in checkpoint["assets"]:
             live = LiveAsset.restore(state, self.arrs, self.options)
@@ -539,10 +540,10 @@ def _columns(batch) -> dict:
         raise TypeError(f"update: give a mapping or a DataFrame of columns, got a {type(batch).__name__}")
     for needed in ("asset", "t"):
         if needed not in columns:
-            raise ValueError(f"update: the batch has no column {needed!r} (columns: {', '.join(columns)})")
+            raise PrognosisError(f"update: the batch has no column {needed!r} (columns: {', '.join(columns)})")
     sizes = {name: np.shape(values)[0] if np.ndim(values) else -1 for name, values in columns.items()}
     if len(set(sizes.values())) > 1:
-        raise ValueError(f"update: columns of different lengths {sizes}")
+        raise PrognosisError(f"update: columns of different lengths {sizes}")
     return columns
 
 

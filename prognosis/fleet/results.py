@@ -24,6 +24,8 @@ import numpy as np
 
 from bondgraph._optional import pandas_for
 
+from ..errors import PrognosisError
+
 TABLES = ("alarms", "estimates", "rul")
 COLUMNS = {
     "alarms": ("asset", "t", "arr"),
@@ -63,13 +65,13 @@ class FleetResult:
         """Append rows to table ``name`` (every column of the table, arrays of one length)."""
         missing = set(COLUMNS[name]) - set(columns)
         if missing:
-            raise ValueError(f"table {name!r}: columns {sorted(missing)} missing")
+            raise PrognosisError(f"table {name!r}: columns {sorted(missing)} missing")
         self.parts[name].append({c: _column(c, columns[c]) for c in COLUMNS[name]})
 
     def table(self, name: str) -> dict:
         """Table ``name`` as a mapping column -> array."""
         if name not in TABLES:
-            raise ValueError(f"no table {name!r}; tables: {', '.join(TABLES)}")
+            raise PrognosisError(f"no table {name!r}; tables: {', '.join(TABLES)}")
         parts = self.parts[name]
         if not parts:
             return empty_table(name)

@@ -1,6 +1,6 @@
 """Checks of the arrays the identification functions take: outputs ``y``, inputs ``u``, model matrices.
 
-Each check returns float arrays of the expected shape or raises a ``ValueError`` naming the array
+Each check returns float arrays of the expected shape or raises a ``PrognosisError`` naming the array
 and what is wrong with it.
 
 >>> y, u = check_data([1.0, 2.0, float("nan")], None)
@@ -12,21 +12,23 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import PrognosisError
+
 
 def check_matrix(name: str, value, rows: int | None = None) -> np.ndarray:
     """``value`` as a finite 2-D float matrix (a 1-D one of ``rows`` entries as a column); the error names ``name``."""
     try:
         a = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be a numeric matrix: {exc}") from None
+        raise PrognosisError(f"{name} must be a numeric matrix: {exc}") from None
     if a.ndim == 1 and rows is not None and a.size == rows:
         a = a[:, None]
     if a.ndim != 2:
-        raise ValueError(f"{name} must be a 2-D matrix, got shape {a.shape}")
+        raise PrognosisError(f"{name} must be a 2-D matrix, got shape {a.shape}")
     if not np.all(np.isfinite(a)):
-        raise ValueError(f"{name} has non-finite entries")
+        raise PrognosisError(f"{name} has non-finite entries")
     if rows is not None and a.shape[0] != rows:
-        raise ValueError(f"{name} must have {rows} rows, got shape {a.shape}")
+        raise PrognosisError(f"{name} must have {rows} rows, got shape {a.shape}")
     return a
 
 
@@ -34,14 +36,14 @@ def check_covariance(name: str, value, size: int) -> np.ndarray:
     """``value`` as a symmetric positive semi-definite (size, size) matrix; the error names ``name``."""
     a = check_matrix(name, value)
     if a.shape != (size, size):
-        raise ValueError(f"{name} must have shape ({size}, {size}), got {a.shape}")
+        raise PrognosisError(f"{name} must have shape ({size}, {size}), got {a.shape}")
     scale = max(1.0, float(np.abs(a).max())) if a.size else 1.0
     if not np.allclose(a, a.T, rtol=0.0, atol=1e-9 * scale):
-        raise ValueError(f"{name} must be symmetric")
+        raise PrognosisError(f"{name} must be symmetric")
     a = 0.5 * (a + a.T)
     if size and np.linalg.eigvalsh(a)[0] < -1e-10 * scale:
-        raise ValueError(f"{name} must be positive semi-definite (smallest eigenvalue "
-                         f"{np.linalg.eigvalsh(a)[0]:.3g})")
+        raise PrognosisError(f"{name} must be positive semi-definite (smallest eigenvalue "
+                             f"{np.linalg.eigvalsh(a)[0]:.3g})")
     return a
 
 
@@ -50,7 +52,7 @@ def as_columns(value, name: str) -> np.ndarray:
     try:
         value = np.asarray(value, dtype=float)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"{name} must be numeric: {exc}") from None
+        raise PrognosisError(f"{name} must be numeric: {exc}") from None
     return value[:, None] if value.ndim == 1 else value
 
 
@@ -58,9 +60,9 @@ def check_data(y, u) -> tuple[np.ndarray, np.ndarray]:
     """``y`` as (T, m) with NaN allowed, ``u`` as (T, r) finite (r = 0 for None)."""
     y = as_columns(y, "y")
     if y.ndim != 2 or y.shape[0] == 0 or y.shape[1] == 0:
-        raise ValueError(f"y must have shape (T,) or (T, m) with T, m >= 1, got {y.shape}")
+        raise PrognosisError(f"y must have shape (T,) or (T, m) with T, m >= 1, got {y.shape}")
     if np.any(np.isinf(y)):
-        raise ValueError("y has infinite entries (use NaN for a missing measurement)")
+        raise PrognosisError("y has infinite entries (use NaN for a missing measurement)")
     return y, check_inputs(u, y.shape[0], None)
 
 
@@ -68,19 +70,19 @@ def check_inputs(u, steps: int | None, width: int | None, name: str = "u") -> np
     """``u`` as finite (T, r) inputs, checked against ``steps`` rows and ``width`` columns when given."""
     if u is None:
         if width:
-            raise ValueError(f"{name} is required: the model has {width} inputs")
+            raise PrognosisError(f"{name} is required: the model has {width} inputs")
         if steps is None:
-            raise ValueError(f"{name} is required")
+            raise PrognosisError(f"{name} is required")
         return np.zeros((steps, 0))
     u = as_columns(u, name)
     if u.ndim != 2:
-        raise ValueError(f"{name} must have shape (T, r), got {u.shape}")
+        raise PrognosisError(f"{name} must have shape (T, r), got {u.shape}")
     if steps is not None and u.shape[0] != steps:
-        raise ValueError(f"{name} has {u.shape[0]} rows but y has {steps}")
+        raise PrognosisError(f"{name} has {u.shape[0]} rows but y has {steps}")
     if width is not None and u.shape[1] != width:
-        raise ValueError(f"{name} has {u.shape[1]} columns but the model has {width} inputs")
+        raise PrognosisError(f"{name} has {u.shape[1]} columns but the model has {width} inputs")
     if not np.all(np.isfinite(u)):
-        raise ValueError(f"{name} has non-finite entries (inputs must be known)")
+        raise PrognosisError(f"{name} has non-finite entries (inputs must be known)")
     return u
 
 
@@ -88,7 +90,7 @@ def check_future_inputs(u_future, steps: int | None, width: int, caller: str) ->
     """The known future inputs as (H, r); without inputs, ``steps`` gives the horizon H."""
     if u_future is None:
         if steps is None:
-            raise ValueError(f"{caller} needs u_future (H, r) or, for a model without inputs, steps")
+            raise PrognosisError(f"{caller} needs u_future (H, r) or, for a model without inputs, steps")
         u_future = np.zeros((int(steps), 0))
     return check_inputs(u_future, None, width, name="u_future")
 

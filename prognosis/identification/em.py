@@ -17,6 +17,7 @@ from .. import _linalg as linalg
 from .data import check_data
 from .model import IdentificationWarning, LinearGaussianModel, check_model_data
 from .smoother import SmootherResult, filter_arrays, smooth_arrays
+from ..errors import PrognosisError
 
 
 def em_step(model: LinearGaussianModel, y: ArrayLike, u: ArrayLike | None = None, *, cross_covariance: bool = True,
@@ -59,7 +60,7 @@ def em_step(model: LinearGaussianModel, y: ArrayLike, u: ArrayLike | None = None
 
     Missing outputs (NaN rows) are supported with ``cross_covariance=False`` only: the output regression
     then runs over the observed rows; with ``S`` free the M-step of an incomplete record has no closed
-    form, and a ``ValueError`` says so.
+    form, and a ``PrognosisError`` says so.
 
     Example
     -------
@@ -73,7 +74,7 @@ def em_step(model: LinearGaussianModel, y: ArrayLike, u: ArrayLike | None = None
     """
     y, u = check_model_data(model, y, u)
     if y.shape[0] < 2:
-        raise ValueError(f"y: EM needs at least 2 samples, got {y.shape[0]}")
+        raise PrognosisError(f"y: EM needs at least 2 samples, got {y.shape[0]}")
     new, smoothed = em_arrays_step(model, y, u, cross_covariance, estimate_initial)
     return new, smoothed.log_likelihood
 
@@ -88,10 +89,10 @@ def em_arrays_step(model: LinearGaussianModel, y: np.ndarray, u: np.ndarray, cro
     """
     observed = ~np.isnan(y).any(axis=1)
     if cross_covariance and not observed.all():
-        raise ValueError("y has missing rows (NaN): EM with a free cross-covariance S needs a complete record; "
-                         "use cross_covariance=False")
+        raise PrognosisError("y has missing rows (NaN): EM with a free cross-covariance S needs a complete record; "
+                             "use cross_covariance=False")
     if not observed.any():
-        raise ValueError("y: every row is missing (NaN)")
+        raise PrognosisError("y: every row is missing (NaN)")
     res = smooth_arrays(model, y, u)
     new = _m_step(model, res, y, u, cross_covariance, estimate_initial)
     return new, res
@@ -226,18 +227,18 @@ def fit_em(y: ArrayLike, u: ArrayLike | None, n_states: int, *, initial: LinearG
     True
     """
     if isinstance(n_states, bool) or not isinstance(n_states, (int, np.integer)) or n_states < 1:
-        raise ValueError(f"n_states must be a positive integer, got {n_states!r}")
+        raise PrognosisError(f"n_states must be a positive integer, got {n_states!r}")
     if max_iter < 0:
-        raise ValueError(f"max_iter must be >= 0, got {max_iter}")
+        raise PrognosisError(f"max_iter must be >= 0, got {max_iter}")
     if not tol >= 0.0:
-        raise ValueError(f"tol must be >= 0, got {tol}")
+        raise PrognosisError(f"tol must be >= 0, got {tol}")
     y_arr, u_arr = check_data(y, u)
     model = initial_model(y_arr, u_arr, n_states, seed=seed) if initial is None else initial
     if model.n_states != n_states:
-        raise ValueError(f"initial has {model.n_states} states but n_states is {n_states}")
+        raise PrognosisError(f"initial has {model.n_states} states but n_states is {n_states}")
     y_arr, u_arr = check_model_data(model, y_arr, u_arr)
     if y_arr.shape[0] < 2:
-        raise ValueError(f"y: EM needs at least 2 samples, got {y_arr.shape[0]}")
+        raise PrognosisError(f"y: EM needs at least 2 samples, got {y_arr.shape[0]}")
     history: list[float] = []
     converged = False
     iterations = 0
@@ -266,7 +267,7 @@ def initial_model(y: ArrayLike, u: ArrayLike | None, n_states: int, *, seed: int
     m, r = y.shape[1], u.shape[1]
     rows = ~np.isnan(y).any(axis=1)
     if rows.sum() < 2:
-        raise ValueError("y: need at least 2 observed rows to initialize EM")
+        raise PrognosisError("y: need at least 2 observed rows to initialize EM")
     yo, uo = y[rows], u[rows]
     d = np.linalg.lstsq(uo, yo, rcond=None)[0].T if r else np.zeros((m, 0))
     e = yo - uo @ d.T

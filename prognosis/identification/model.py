@@ -11,6 +11,7 @@ from bondgraph.errors import PHMWarning
 
 from .. import _linalg as linalg
 from .data import check_covariance, check_data, check_inputs, check_matrix
+from ..errors import PrognosisError
 
 
 class IdentificationWarning(PHMWarning, RuntimeWarning):
@@ -37,7 +38,7 @@ class LinearGaussianModel:
     P1 : array (n, n), symmetric positive semi-definite, or None for the identity
 
     Arrays are stored as read-only float arrays; a bad shape, a non-finite entry, an asymmetric or
-    indefinite covariance raises a ``ValueError`` that names the matrix.
+    indefinite covariance raises a ``PrognosisError`` that names the matrix.
 
     Example
     -------
@@ -64,10 +65,10 @@ class LinearGaussianModel:
         a = check_matrix("A", self.A)
         n = a.shape[0]
         if a.shape != (n, n):
-            raise ValueError(f"A must be square (n, n), got shape {a.shape}")
+            raise PrognosisError(f"A must be square (n, n), got shape {a.shape}")
         c = check_matrix("C", self.C)
         if c.shape[1] != n:
-            raise ValueError(f"C must have shape (m, {n}) for {n} states, got {c.shape}")
+            raise PrognosisError(f"C must have shape (m, {n}) for {n} states, got {c.shape}")
         m = c.shape[0]
         if self.B is None:
             r = 0 if self.D is None else check_matrix("D", self.D).shape[1]
@@ -77,24 +78,24 @@ class LinearGaussianModel:
             r = b.shape[1]
         d = np.zeros((m, r)) if self.D is None else check_matrix("D", self.D, rows=m)
         if b.shape != (n, r):
-            raise ValueError(f"B must have shape ({n}, {r}) to match D, got {b.shape}")
+            raise PrognosisError(f"B must have shape ({n}, {r}) to match D, got {b.shape}")
         if d.shape != (m, r):
-            raise ValueError(f"D must have shape ({m}, {r}) for {m} outputs and {r} inputs, got {d.shape}")
+            raise PrognosisError(f"D must have shape ({m}, {r}) for {m} outputs and {r} inputs, got {d.shape}")
         q = check_covariance("Q", self.Q, n)
         rr = check_covariance("R", self.R, m)
         s = np.zeros((n, m)) if self.S is None else check_matrix("S", self.S)
         if s.shape != (n, m):
-            raise ValueError(f"S must have shape ({n}, {m}), got {s.shape}")
+            raise PrognosisError(f"S must have shape ({n}, {m}), got {s.shape}")
         mu1 = np.zeros(n) if self.mu1 is None else np.asarray(self.mu1, dtype=float).reshape(-1)
         if mu1.shape != (n,) or not np.all(np.isfinite(mu1)):
-            raise ValueError(f"mu1 must be a finite vector of {n} entries, got shape {np.shape(self.mu1)}")
+            raise PrognosisError(f"mu1 must be a finite vector of {n} entries, got shape {np.shape(self.mu1)}")
         p1 = np.eye(n) if self.P1 is None else check_covariance("P1", self.P1, n)
         if np.linalg.eigvalsh(rr)[0] <= 0.0:
-            raise ValueError("R must be positive definite (the innovations need it)")
+            raise PrognosisError("R must be positive definite (the innovations need it)")
         if np.any(s):
             joint = np.block([[q, s], [s.T, rr]])
             if np.linalg.eigvalsh(joint)[0] < -1e-10 * max(1.0, np.abs(joint).max()):
-                raise ValueError("[[Q, S], [S^T, R]] must be positive semi-definite: S is too large for Q and R")
+                raise PrognosisError("[[Q, S], [S^T, R]] must be positive semi-definite: S is too large for Q and R")
         for name, value in (("A", a), ("B", b), ("C", c), ("D", d), ("Q", q), ("R", rr), ("S", s),
                             ("mu1", mu1), ("P1", p1)):
             value = np.array(value, dtype=float)
@@ -149,11 +150,11 @@ class LinearGaussianModel:
         """
         if u is None:
             if steps is None:
-                raise ValueError("simulate needs the inputs u (T, r) or, for a model without inputs, steps")
+                raise PrognosisError("simulate needs the inputs u (T, r) or, for a model without inputs, steps")
             u = np.zeros((int(steps), 0))
         u = check_inputs(u, None, self.n_inputs)
         if steps is not None and steps != u.shape[0]:
-            raise ValueError(f"steps ({steps}) disagrees with the {u.shape[0]} rows of u")
+            raise PrognosisError(f"steps ({steps}) disagrees with the {u.shape[0]} rows of u")
         rng = np.random.default_rng(rng)
         steps, n = u.shape[0], self.n_states
         noise = rng.standard_normal((steps, n + self.n_outputs)) @ linalg.eigen_root(self.noise_covariance).T
@@ -183,7 +184,7 @@ class LinearGaussianModel:
         """
         t = check_matrix("T", T)
         if t.shape != (self.n_states, self.n_states):
-            raise ValueError(f"T must have shape ({self.n_states}, {self.n_states}), got {t.shape}")
+            raise PrognosisError(f"T must have shape ({self.n_states}, {self.n_states}), got {t.shape}")
         t_inv = np.linalg.inv(t)  # raises LinAlgError if T is singular
         return LinearGaussianModel(A=t @ self.A @ t_inv, B=t @ self.B, C=self.C @ t_inv, D=self.D,
                                    Q=linalg.symmetric(t @ self.Q @ t.T), R=self.R,
@@ -208,12 +209,12 @@ class LinearGaussianModel:
 
 
 def check_model_data(model: LinearGaussianModel, y, u) -> tuple[np.ndarray, np.ndarray]:
-    """``y`` and ``u`` checked against the model's numbers of outputs and inputs (a ``ValueError`` naming them)."""
+    """``y`` and ``u`` checked against the model's numbers of outputs and inputs (a ``PrognosisError`` naming them)."""
     if u is None and model.n_inputs:
-        raise ValueError(f"u is required: the model has {model.n_inputs} inputs")
+        raise PrognosisError(f"u is required: the model has {model.n_inputs} inputs")
     y, u = check_data(y, u)
     if y.shape[1] != model.n_outputs:
-        raise ValueError(f"y has {y.shape[1]} columns but the model has {model.n_outputs} outputs")
+        raise PrognosisError(f"y has {y.shape[1]} columns but the model has {model.n_outputs} outputs")
     if u.shape[1] != model.n_inputs:
-        raise ValueError(f"u has {u.shape[1]} columns but the model has {model.n_inputs} inputs")
+        raise PrognosisError(f"u has {u.shape[1]} columns but the model has {model.n_inputs} inputs")
     return y, u

@@ -12,6 +12,7 @@ from .. import _linalg as linalg
 from .em import em_arrays_step, initial_model
 from .model import LinearGaussianModel
 from .smoother import SmootherResult, smooth_arrays
+from ..errors import PrognosisError
 
 
 @dataclass(frozen=True, eq=False)
@@ -90,13 +91,13 @@ class OnlineEM:
                  initial_iterations: int = 200, tol: float = 1e-8, cross_covariance: bool = False,
                  initial: LinearGaussianModel | None = None):
         if isinstance(n_states, bool) or not isinstance(n_states, (int, np.integer)) or n_states < 1:
-            raise ValueError(f"n_states must be a positive integer, got {n_states!r}")
+            raise PrognosisError(f"n_states must be a positive integer, got {n_states!r}")
         if window < 2:
-            raise ValueError(f"window must be at least 2 samples, got {window}")
+            raise PrognosisError(f"window must be at least 2 samples, got {window}")
         if iterations < 1 or every < 1 or initial_iterations < 1:
-            raise ValueError("iterations, every and initial_iterations must be >= 1")
+            raise PrognosisError("iterations, every and initial_iterations must be >= 1")
         if every >= window:
-            raise ValueError(f"every ({every}) must be smaller than window ({window}) for the warm start")
+            raise PrognosisError(f"every ({every}) must be smaller than window ({window}) for the warm start")
         self.n_states, self.window, self.iterations, self.every = int(n_states), int(window), iterations, every
         self.initial_iterations, self.tol, self.cross_covariance = initial_iterations, tol, cross_covariance
         self.initial = initial
@@ -144,12 +145,12 @@ class OnlineEM:
         y_t = np.atleast_1d(np.asarray(y_t, dtype=float)).reshape(-1)
         u_t = np.zeros(0) if u_t is None else np.atleast_1d(np.asarray(u_t, dtype=float)).reshape(-1)
         if self._y and (y_t.shape != self._y[0].shape or u_t.shape != self._u[0].shape):
-            raise ValueError(f"y_t, u_t: expected shapes {self._y[0].shape}, {self._u[0].shape}, got "
-                             f"{y_t.shape}, {u_t.shape}")
+            raise PrognosisError(f"y_t, u_t: expected shapes {self._y[0].shape}, {self._u[0].shape}, got "
+                                 f"{y_t.shape}, {u_t.shape}")
         if not np.all(np.isfinite(u_t)):
-            raise ValueError("u_t must be finite (inputs are known)")
+            raise PrognosisError("u_t must be finite (inputs are known)")
         if np.any(np.isinf(y_t)):
-            raise ValueError("y_t must be finite or NaN (missing)")
+            raise PrognosisError("y_t must be finite or NaN (missing)")
         self._y.append(y_t)
         self._u.append(u_t)
         self._time += 1

@@ -71,6 +71,7 @@ from bondgraph.errors import PHMWarning
 
 from ..resampling import systematic
 from .data import check_data, check_future_inputs
+from ..errors import PrognosisError
 
 __all__ = ["PosteriorPrediction", "SamplerWarning", "WindowPosterior", "sample_posterior", "window_log_posterior"]
 
@@ -122,9 +123,9 @@ def _layout(n: int, r: int, direct_inputs: Sequence[int]) -> _Layout:
     direct = tuple(int(j) for j in direct_inputs)
     for j in direct:
         if not 0 <= j < r:
-            raise ValueError(f"direct_inputs names input column {j}, but u has {r} columns")
+            raise PrognosisError(f"direct_inputs names input column {j}, but u has {r} columns")
     if len(set(direct)) != len(direct):
-        raise ValueError(f"direct_inputs repeats an input column: {list(direct_inputs)}")
+        raise PrognosisError(f"direct_inputs repeats an input column: {list(direct_inputs)}")
     dynamic = np.array([j for j in range(r) if j not in direct], dtype=int)
     rd = dynamic.size
     return _Layout(direct, dynamic, 1 + n + np.arange(n * rd).reshape(n, rd), 1 + n + n * rd + np.arange(r),
@@ -200,9 +201,9 @@ def window_log_posterior(theta: ArrayLike, y: ArrayLike, u: ArrayLike | None, *,
     y, u = check_data(y, u)
     theta = np.atleast_2d(np.asarray(theta, dtype=float))
     if y.shape[1] != 1:
-        raise ValueError(f"the window posterior handles one output; y has {y.shape[1]} columns")
+        raise PrognosisError(f"the window posterior handles one output; y has {y.shape[1]} columns")
     if theta.shape[1] % 2 or theta.shape[1] == 0:
-        raise ValueError(f"theta must have 2 n columns (a and f), got {theta.shape[1]}")
+        raise PrognosisError(f"theta must have 2 n columns (a and f), got {theta.shape[1]}")
     layout = _layout(theta.shape[1] // 2, u.shape[1], direct_inputs)
     return _regression(theta, y[:, 0], u, max_radius, layout).log_posterior
 
@@ -307,7 +308,7 @@ class WindowPosterior:
         (True, True)
         """
         if not 0.0 < level < 1.0:
-            raise ValueError(f"level must be in (0, 1), got {level}")
+            raise PrognosisError(f"level must be in (0, 1), got {level}")
         r = self.u.shape[1]
         uf = check_future_inputs(u_future, steps, r, "predict") / self.scale
         theta = self.theta
@@ -438,19 +439,19 @@ def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, partic
     """
     y, u = check_data(y, u)
     if y.shape[1] != 1:
-        raise ValueError(f"the window posterior handles one output; y has {y.shape[1]} columns")
+        raise PrognosisError(f"the window posterior handles one output; y has {y.shape[1]} columns")
     if not np.all(np.isfinite(y)) or not np.all(np.isfinite(u)):
-        raise ValueError("the window posterior needs a complete window: y and u must be finite")
+        raise PrognosisError("the window posterior needs a complete window: y and u must be finite")
     if n_states < 1:
-        raise ValueError(f"n_states must be at least 1, got {n_states}")
+        raise PrognosisError(f"n_states must be at least 1, got {n_states}")
     if not 0.0 < target_ess < 1.0:
-        raise ValueError(f"target_ess must be in (0, 1), got {target_ess}")
+        raise PrognosisError(f"target_ess must be in (0, 1), got {target_ess}")
     if moves < 1 or particles < 10:
-        raise ValueError(f"need at least 1 move and 10 particles, got moves={moves}, particles={particles}")
+        raise PrognosisError(f"need at least 1 move and 10 particles, got moves={moves}, particles={particles}")
     layout = _layout(n_states, u.shape[1], direct_inputs)
     p = layout.p
     if y.shape[0] <= p + 2:
-        raise ValueError(f"a window of {y.shape[0]} samples is too short for {p} linear parameters")
+        raise PrognosisError(f"a window of {y.shape[0]} samples is too short for {p} linear parameters")
     scale = np.sqrt(np.mean(u ** 2, axis=0)) if u.shape[1] else np.ones(0)
     scale = np.where(scale > 0, scale, 1.0)  # the inputs are scaled for the conditioning of the regression
     y, u = y[:, 0], u / scale
@@ -458,8 +459,8 @@ def sample_posterior(y: ArrayLike, u: ArrayLike | None, n_states: int, *, partic
     theta = _prior_draws(rng, particles, n_states, max_radius)
     log_lik = _regression(theta, y, u, max_radius, layout).log_posterior
     if not np.any(np.isfinite(log_lik)):
-        raise ValueError("the window regression is rank deficient for every prior draw: the inputs do not excite "
-                         f"the {p} linear parameters (a constant input column duplicates the initial state?)")
+        raise PrognosisError("the window regression is rank deficient for every prior draw: the inputs do not excite "
+                             f"the {p} linear parameters (a constant input column duplicates the initial state?)")
     exponent, log_evidence, stages, acceptance = 0.0, 0.0, 0, []
     step = 2.38 / np.sqrt(theta.shape[1])
     while exponent < 1.0:

@@ -14,6 +14,7 @@ from scipy.stats import norm
 
 from .data import check_future_inputs
 from .model import LinearGaussianModel
+from ..errors import PrognosisError
 
 
 def fault_trend(model: LinearGaussianModel, margin: float = 0.0) -> bool:
@@ -47,7 +48,7 @@ def detect_trend(radii: ArrayLike, threshold: float = 1.0, persistence: int = 3)
     """
     radii = np.asarray(radii, dtype=float).reshape(-1)
     if isinstance(persistence, bool) or int(persistence) != persistence or persistence < 1:
-        raise ValueError(f"persistence must be a positive integer, got {persistence!r}")
+        raise PrognosisError(f"persistence must be a positive integer, got {persistence!r}")
     persistence = int(persistence)
     above = np.concatenate([[0], (radii > threshold).astype(int)])
     run = np.cumsum(above)
@@ -128,14 +129,14 @@ def predict_feature(model: LinearGaussianModel, mean: ArrayLike, covariance: Arr
     True
     """
     if not 0.0 < level < 1.0:
-        raise ValueError(f"level must be in (0, 1), got {level}")
+        raise PrognosisError(f"level must be in (0, 1), got {level}")
     n = model.n_states
     x = np.asarray(mean, dtype=float).reshape(-1)
     p = np.asarray(covariance, dtype=float)
     if x.shape != (n,) or not np.all(np.isfinite(x)):
-        raise ValueError(f"mean must be a finite vector of {n} entries, got shape {np.shape(mean)}")
+        raise PrognosisError(f"mean must be a finite vector of {n} entries, got shape {np.shape(mean)}")
     if p.shape != (n, n) or not np.all(np.isfinite(p)):
-        raise ValueError(f"covariance must be a finite ({n}, {n}) matrix, got shape {p.shape}")
+        raise PrognosisError(f"covariance must be a finite ({n}, {n}) matrix, got shape {p.shape}")
     u = check_future_inputs(u_future, steps, model.n_inputs, "predict_feature")
     horizon = u.shape[0]
     xs = np.empty((horizon, n))

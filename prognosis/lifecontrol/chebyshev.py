@@ -37,6 +37,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..errors import PrognosisError
+
 __all__ = ["chebyshev_bounds", "chebyshev_intervals", "chebyshev_level", "chebyshev_scale", "covariance_from_bounds"]
 
 
@@ -62,7 +64,7 @@ def chebyshev_level(n: int, c: float) -> float:
     0.0
     """
     if n < 1 or not c > 0:
-        raise ValueError(f"need n >= 1 and c > 0, got n={n!r}, c={c!r}")
+        raise PrognosisError(f"need n >= 1 and c > 0, got n={n!r}, c={c!r}")
     return max(0.0, 1.0 - n / c ** 2)
 
 
@@ -73,7 +75,7 @@ def chebyshev_scale(n: int, level: float) -> float:
     10.0
     """
     if n < 1 or not 0.0 <= level < 1.0:
-        raise ValueError(f"need n >= 1 and 0 <= level < 1, got n={n!r}, level={level!r}")
+        raise PrognosisError(f"need n >= 1 and 0 <= level < 1, got n={n!r}, level={level!r}")
     return float(np.sqrt(n / (1.0 - level)))
 
 
@@ -100,12 +102,12 @@ def chebyshev_bounds(covariance, c: float) -> np.ndarray:
     """
     p = np.asarray(covariance, float)
     if p.ndim < 2 or p.shape[-1] != p.shape[-2]:
-        raise ValueError(f"covariance: expected (n, n) or (..., n, n), got shape {p.shape}")
+        raise PrognosisError(f"covariance: expected (n, n) or (..., n, n), got shape {p.shape}")
     if not c > 0:
-        raise ValueError(f"c must be positive, got {c!r}")
+        raise PrognosisError(f"c must be positive, got {c!r}")
     variances = np.diagonal(p, axis1=-2, axis2=-1)
     if np.any(variances < 0):
-        raise ValueError("covariance: negative variance on the diagonal")
+        raise PrognosisError("covariance: negative variance on the diagonal")
     return c * np.sqrt(variances)
 
 
@@ -133,7 +135,7 @@ def chebyshev_intervals(mean, covariance, c: float) -> tuple[np.ndarray, np.ndar
     half = chebyshev_bounds(covariance, c)
     mean = np.asarray(mean, float)
     if mean.shape != half.shape:
-        raise ValueError(f"mean shape {mean.shape} does not match the covariance diagonal {half.shape}")
+        raise PrognosisError(f"mean shape {mean.shape} does not match the covariance diagonal {half.shape}")
     return mean - half, mean + half
 
 
@@ -160,7 +162,7 @@ def covariance_from_bounds(bounds, c: float) -> np.ndarray:
     """
     bounds = np.asarray(bounds, float).reshape(-1)
     if not c > 0:
-        raise ValueError(f"c must be positive, got {c!r}")
+        raise PrognosisError(f"c must be positive, got {c!r}")
     if not np.all(np.isfinite(bounds)) or np.any(bounds < 0):
-        raise ValueError(f"bounds must be finite and non-negative, got {bounds.tolist()}")
+        raise PrognosisError(f"bounds must be finite and non-negative, got {bounds.tolist()}")
     return np.diag((bounds / c) ** 2)

@@ -36,6 +36,8 @@ from dataclasses import dataclass, field
 
 import sympy as sp
 
+from ..errors import PrognosisError
+
 __all__ = ["DeteriorationEquations", "energy_deterioration"]
 
 
@@ -144,19 +146,20 @@ def energy_deterioration(equations, element: Hashable, *, coefficient: str | Non
         candidates = sorted(str(s) for s in power.free_symbols if str(s) in parameters)
         own = [c for c in candidates if c == str(element)]
         if not own and len(candidates) != 1:
-            raise ValueError(f"element {element!r}: its power depends on parameters {candidates}; "
-                             "say which one decays with coefficient=")
+            raise PrognosisError(f"element {element!r}: its power depends on parameters {candidates}; "
+                                 "say which one decays with coefficient=")
         coefficient = own[0] if own else candidates[0]
     if coefficient not in parameters:
-        raise ValueError(f"coefficient {coefficient!r} is not a parameter of the model; it has {sorted(parameters)}")
+        raise PrognosisError(f"coefficient {coefficient!r} is not a parameter of the model; "
+                             f"it has {sorted(parameters)}")
     taken = {str(s) for s in equations.states} | set(parameters) - {coefficient}
     for name in (rate, energy):
         if name in taken or name == coefficient:
-            raise ValueError(f"state name {name!r} is already used by the model")
+            raise PrognosisError(f"state name {name!r} is already used by the model")
     if rate == energy:
-        raise ValueError(f"rate and energy need different names, both are {rate!r}")
+        raise PrognosisError(f"rate and energy need different names, both are {rate!r}")
     if not power.has(sp.Symbol(coefficient)):
-        raise ValueError(f"the power of {element!r} ({power}) does not depend on {coefficient!r}")
+        raise PrognosisError(f"the power of {element!r} ({power}) does not depend on {coefficient!r}")
     alpha, m, d = sp.Symbol(coefficient), sp.Symbol(rate), sp.Symbol(energy)
     return DeteriorationEquations(
         states=[*equations.states, alpha, m, d],

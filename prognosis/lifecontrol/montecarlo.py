@@ -29,6 +29,7 @@ from collections.abc import Callable
 import numpy as np
 
 from ..rul import RULDistribution
+from ..errors import PrognosisError
 
 __all__ = ["monte_carlo_rul", "sample_gaussian"]
 
@@ -71,12 +72,12 @@ def sample_gaussian(mean, covariance, n: int, rng: np.random.Generator, lower=No
     correlation = 0.5 * (p + p.T) / np.outer(scale, scale)
     values, vectors = np.linalg.eigh(correlation)
     if values.min() < -1e-9 * max(values.max(), 1e-300):
-        raise ValueError("covariance is not positive semi-definite")
+        raise PrognosisError("covariance is not positive semi-definite")
     factor = scale[:, None] * vectors * np.sqrt(np.clip(values, 0.0, None))
     lo = np.full(d, -np.inf) if lower is None else np.asarray(lower, float).reshape(d)
     hi = np.full(d, np.inf) if upper is None else np.asarray(upper, float).reshape(d)
     if np.any(mean < lo) or np.any(mean > hi):
-        raise ValueError(f"the mean {mean.tolist()} is outside the bounds [{lo.tolist()}, {hi.tolist()}]")
+        raise PrognosisError(f"the mean {mean.tolist()} is outside the bounds [{lo.tolist()}, {hi.tolist()}]")
     out = np.empty((d, n))
     missing = np.arange(n)
     for _ in range(max_rounds):
@@ -133,7 +134,7 @@ def monte_carlo_rul(rates: Callable, mean, covariance, margin: Callable, *, hori
     True
     """
     if not dt > 0 or not horizon > 0:
-        raise ValueError(f"dt and horizon must be positive, got dt={dt!r}, horizon={horizon!r}")
+        raise PrognosisError(f"dt and horizon must be positive, got dt={dt!r}, horizon={horizon!r}")
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
     x = sample_gaussian(mean, covariance, n_samples, rng, lower, upper)
     initial = x.copy()

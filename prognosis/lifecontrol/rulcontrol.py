@@ -65,6 +65,8 @@ import numpy as np
 
 from bondgraph.errors import PHMWarning
 
+from ..errors import PrognosisError
+
 __all__ = ["RULControlWarning", "RULController", "RULDecision"]
 
 # the values of RULDecision.status
@@ -196,13 +198,13 @@ class RULController:
 
     def __post_init__(self):
         if not 0.0 < self.eta < 1.0:
-            raise ValueError(f"eta must be in (0, 1), got {self.eta!r}")
+            raise PrognosisError(f"eta must be in (0, 1), got {self.eta!r}")
         if not self.gain > 0 or not self.rul_ref > 0:
-            raise ValueError(f"gain and rul_ref must be positive, got {self.gain!r}, {self.rul_ref!r}")
+            raise PrognosisError(f"gain and rul_ref must be positive, got {self.gain!r}, {self.rul_ref!r}")
         if not self.lower <= min(0.0, self.upper):
-            raise ValueError(f"need lower <= min(0, upper), got lower={self.lower!r}, upper={self.upper!r}")
+            raise PrognosisError(f"need lower <= min(0, upper), got lower={self.lower!r}, upper={self.upper!r}")
         if not self.max_iterations >= 1:
-            raise ValueError(f"max_iterations must be at least 1, got {self.max_iterations!r}")
+            raise PrognosisError(f"max_iterations must be at least 1, got {self.max_iterations!r}")
 
     def decide(self, predict: Callable, theta0: float = 0.0) -> RULDecision:
         """``theta*`` for ``predict(theta) -> RULDistribution`` (its RUL must not grow with theta).

@@ -44,6 +44,7 @@ import numpy as np
 from .. import _linalg as linalg
 from .gaussian import Innovation, innovation, measured_rows, noises
 from ..resampling import effective_sample_size, get_scheme, normalize_log_weights
+from ..errors import PrognosisError
 
 __all__ = ["BootstrapParticleFilter"]
 
@@ -88,7 +89,7 @@ class BootstrapParticleFilter:
     def __init__(self, model, mean, covariance, process_noise, measurement_noise, *, n_particles: int = 1000,
                  resampling: str = "systematic", resample_below: float = 0.5, seed: int = 0):
         if n_particles < 2:
-            raise ValueError(f"n_particles must be at least 2, got {n_particles}")
+            raise PrognosisError(f"n_particles must be at least 2, got {n_particles}")
         n = model.n_states
         self.model = model
         self.process_noise, self.measurement_noise, self._sqrt_q = noises(model, process_noise, measurement_noise)

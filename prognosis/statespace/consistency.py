@@ -36,6 +36,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
+from ..errors import PrognosisError
+
 __all__ = ["ConsistencyReport", "InnovationMonitor", "innovation_consistency", "whiten"]
 
 
@@ -66,7 +68,8 @@ def whiten(residuals, covariances) -> np.ndarray:
     if s.ndim == 1:
         s = s[:, None, None]
     if s.shape != (*e.shape, e.shape[1]):
-        raise ValueError(f"covariances: expected shape {(*e.shape, e.shape[1])} for residuals {e.shape}, got {s.shape}")
+        raise PrognosisError(f"covariances: expected shape {(*e.shape, e.shape[1])} for residuals {e.shape}, "
+                             f"got {s.shape}")
     ok = np.isfinite(e).all(axis=1) & np.isfinite(s).all(axis=(1, 2))
     out = np.full(e.shape, np.nan)
     if ok.any():
@@ -188,7 +191,7 @@ def innovation_consistency(residuals, covariances, *, level: float = 0.95, lags:
     ok = np.isfinite(nu).all(axis=1)
     k = int(ok.sum())
     if k < max(lags + 2, 3):
-        raise ValueError(f"innovation_consistency needs more than {max(lags + 1, 2)} complete samples, got {k}")
+        raise PrognosisError(f"innovation_consistency needs more than {max(lags + 1, 2)} complete samples, got {k}")
     e, s, nu = e[ok], s.reshape(-1, e.shape[1], e.shape[1])[ok], nu[ok]
     m = e.shape[1]
     variance_ratio = e.var(axis=0, ddof=1) / np.diagonal(s, axis1=1, axis2=2).mean(axis=0)
@@ -236,8 +239,8 @@ class InnovationMonitor:
 
     def __init__(self, window: int = 600, threshold: float = 5.0, persistence: int = 10):
         if window < 2 or persistence < 1 or not threshold > 0:
-            raise ValueError(f"need window >= 2, persistence >= 1 and threshold > 0, got {window}, "
-                             f"{persistence}, {threshold}")
+            raise PrognosisError(f"need window >= 2, persistence >= 1 and threshold > 0, got {window}, "
+                                 f"{persistence}, {threshold}")
         self.window, self.threshold, self.persistence = int(window), float(threshold), int(persistence)
         self.reset()
 

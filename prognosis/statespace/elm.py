@@ -52,6 +52,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import linalg
 
+from ..errors import PrognosisError
+
 __all__ = ["ACTIVATIONS", "ROSELM", "SeriesForecaster"]
 
 
@@ -67,18 +69,18 @@ ACTIVATIONS = tuple(_ACTIVATION_FUNCTIONS)
 
 def _check_hyperparameters(n_hidden: int, regularization: float, activation: str) -> None:
     if n_hidden < 1:
-        raise ValueError(f"n_hidden must be >= 1, got {n_hidden}")
+        raise PrognosisError(f"n_hidden must be >= 1, got {n_hidden}")
     if not regularization >= 0:  # also rejects NaN
-        raise ValueError(f"regularization must be >= 0, got {regularization}")
+        raise PrognosisError(f"regularization must be >= 0, got {regularization}")
     if activation not in _ACTIVATION_FUNCTIONS:
-        raise ValueError(f"activation must be one of {ACTIVATIONS}, got {activation!r}")
+        raise PrognosisError(f"activation must be one of {ACTIVATIONS}, got {activation!r}")
 
 
 def _check_finite_rows(a: np.ndarray, name: str) -> None:
     """Raise naming the first row of the 2-D array ``a`` holding NaN or inf."""
     bad = ~np.isfinite(a).all(axis=1)
     if bad.any():
-        raise ValueError(f"{name} row {np.flatnonzero(bad)[0]} contains NaN or inf")
+        raise PrognosisError(f"{name} row {np.flatnonzero(bad)[0]} contains NaN or inf")
 
 
 def _ridge_init(H: np.ndarray, T: np.ndarray, regularization: float) -> tuple[np.ndarray, np.ndarray]:
@@ -93,8 +95,8 @@ def _ridge_init(H: np.ndarray, T: np.ndarray, regularization: float) -> tuple[np
     padded = H if n >= L else np.vstack([H, np.zeros((L - n, L))])
     U, s, Vt = linalg.svd(padded, full_matrices=False)
     if regularization == 0 and s[-1] <= s[0] * L * np.finfo(float).eps:
-        raise ValueError("regularization=0 needs the initial hidden-output matrix H0 to have full column rank: "
-                         f"use regularization > 0 or more than n_hidden={L} well-spread samples (got {n})")
+        raise PrognosisError("regularization=0 needs the initial hidden-output matrix H0 to have full column rank: "
+                             f"use regularization > 0 or more than n_hidden={L} well-spread samples (got {n})")
     denominator = s**2 + regularization
     K = (Vt.T / denominator) @ Vt
     beta = Vt.T @ ((s / denominator)[:, None] * (U[:n].T @ T))
@@ -142,11 +144,11 @@ class ROSELM:
                  activation: str = "sigmoid", weight_range: tuple[float, float] = (-1.0, 1.0),
                  bias_range: tuple[float, float] = (0.0, 1.0), seed: int | np.random.SeedSequence | None = 0):
         if n_inputs < 1:
-            raise ValueError(f"n_inputs must be >= 1, got {n_inputs}")
+            raise PrognosisError(f"n_inputs must be >= 1, got {n_inputs}")
         _check_hyperparameters(n_hidden, regularization, activation)
         for name, (low, high) in (("weight_range", weight_range), ("bias_range", bias_range)):
             if not low <= high:
-                raise ValueError(f"{name} must be (low, high) with low <= high, got {(low, high)}")
+                raise PrognosisError(f"{name} must be (low, high) with low <= high, got {(low, high)}")
         self.n_inputs = int(n_inputs)
         self.n_hidden = int(n_hidden)
         self.regularization = float(regularization)
@@ -166,8 +168,8 @@ class ROSELM:
         if X.ndim == 1:
             X = X[None, :]
         if X.ndim != 2 or X.shape[1] != self.n_inputs:
-            raise ValueError(f"{name} must have n_inputs={self.n_inputs} columns (shape (N, {self.n_inputs}) "
-                             f"or ({self.n_inputs},) for one sample), got shape {np.shape(X)}")
+            raise PrognosisError(f"{name} must have n_inputs={self.n_inputs} columns (shape (N, {self.n_inputs}) "
+                                 f"or ({self.n_inputs},) for one sample), got shape {np.shape(X)}")
         _check_finite_rows(X, name)
         return X
 
@@ -180,13 +182,13 @@ class ROSELM:
             T = T[None, :]
         if T.shape != (n_rows, self.n_outputs):
             expected = (n_rows,) if self._vector_output else (n_rows, self.n_outputs)
-            raise ValueError(f"{name} must have shape {expected} (one target per input row), got {T.shape}")
+            raise PrognosisError(f"{name} must have shape {expected} (one target per input row), got {T.shape}")
         _check_finite_rows(T, name)
         return T
 
     def _require_fit(self, method: str) -> None:
         if self._beta is None:
-            raise ValueError(f"{method} called before fit: initialize the network with fit(X, T) first")
+            raise PrognosisError(f"{method} called before fit: initialize the network with fit(X, T) first")
 
     # -- model ----------------------------------------------------------------------------------------------------
     @property
@@ -218,10 +220,10 @@ class ROSELM:
         H = self.hidden(X)
         T = np.asarray(T, dtype=float)
         if T.ndim not in (1, 2) or len(T) != len(H):
-            raise ValueError(f"T must have shape ({len(H)},) or ({len(H)}, m), one target per row of X, "
-                             f"got {T.shape}")
+            raise PrognosisError(f"T must have shape ({len(H)},) or ({len(H)}, m), one target per row of X, "
+                                 f"got {T.shape}")
         if len(H) == 0:
-            raise ValueError("X has no rows: fit needs at least one sample")
+            raise PrognosisError("X has no rows: fit needs at least one sample")
         self._vector_output = T.ndim == 1
         T = T.reshape(len(H), -1)
         _check_finite_rows(T, "T")
@@ -310,7 +312,7 @@ class SeriesForecaster:
                  activation: str = "sigmoid", scale: bool = False, seed: int | None = 0,
                  names: Sequence[str] | None = None):
         if embedding < 1:
-            raise ValueError(f"embedding must be >= 1, got {embedding}")
+            raise PrognosisError(f"embedding must be >= 1, got {embedding}")
         _check_hyperparameters(n_hidden, regularization, activation)
         self.embedding = int(embedding)
         self.n_hidden = int(n_hidden)
@@ -329,7 +331,7 @@ class SeriesForecaster:
 
     def _require_fit(self, method: str) -> None:
         if self._history is None:
-            raise ValueError(f"{method} called before fit: initialize with fit(history) first")
+            raise PrognosisError(f"{method} called before fit: initialize with fit(history) first")
 
     def _scaled(self, Z: np.ndarray) -> np.ndarray:
         return (Z - self.mean) / self.std
@@ -353,19 +355,19 @@ class SeriesForecaster:
         """
         Z = np.asarray(history, dtype=float)
         if Z.ndim not in (1, 2):
-            raise ValueError(f"history must have shape (N0,) or (N0, m), got {Z.shape}")
+            raise PrognosisError(f"history must have shape (N0,) or (N0, m), got {Z.shape}")
         vector = Z.ndim == 1
         Z = Z.reshape(len(Z), -1)
         m, p = Z.shape[1], self.embedding
         if self.names is not None and len(self.names) != m:
-            raise ValueError(f"names has {len(self.names)} entries but history has {m} variables")
+            raise PrognosisError(f"names has {len(self.names)} entries but history has {m} variables")
         if len(Z) < p + 1:
-            raise ValueError(f"history needs at least embedding + 1 = {p + 1} rows (one training pair), "
-                             f"got {len(Z)}")
+            raise PrognosisError(f"history needs at least embedding + 1 = {p + 1} rows (one training pair), "
+                                 f"got {len(Z)}")
         for i in range(m):
             bad = np.flatnonzero(~np.isfinite(Z[:, i]))
             if bad.size:
-                raise ValueError(f"history {self._variable(i)} row {bad[0]} is NaN or inf")
+                raise PrognosisError(f"history {self._variable(i)} row {bad[0]} is NaN or inf")
         if self.scale:
             mean, std = Z.mean(axis=0), Z.std(axis=0)
             std = np.where(std <= 1e-12 * np.abs(mean), 1.0, std)  # constant up to rounding
@@ -385,10 +387,10 @@ class SeriesForecaster:
         self._require_fit("update")
         z = np.atleast_1d(np.asarray(z, dtype=float))
         if z.shape != (self.n_variables,):
-            raise ValueError(f"z must have length {self.n_variables} (one value per variable), got shape {z.shape}")
+            raise PrognosisError(f"z must have length {self.n_variables} (one value per variable), got shape {z.shape}")
         bad = np.flatnonzero(~np.isfinite(z))
         if bad.size:
-            raise ValueError(f"z {self._variable(bad[0])} is NaN or inf")
+            raise PrognosisError(f"z {self._variable(bad[0])} is NaN or inf")
         window = self._scaled(self._history[-self.embedding:])  # (p, m)
         target = self._scaled(z)
         for i, model in enumerate(self.models):
@@ -404,7 +406,7 @@ class SeriesForecaster:
         """
         self._require_fit("forecast")
         if steps < 1:
-            raise ValueError(f"steps must be >= 1, got {steps}")
+            raise PrognosisError(f"steps must be >= 1, got {steps}")
         window = self._scaled(self._history[-self.embedding:])  # (p, m), a new array
         out = np.empty((steps, self.n_variables))
         for k in range(steps):  # step k needs the prediction of step k - 1

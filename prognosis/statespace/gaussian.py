@@ -25,6 +25,7 @@ from bondgraph.errors import PHMWarning
 
 from .. import _linalg as linalg
 from .strong_tracking import StrongTracking
+from ..errors import PrognosisError
 
 
 class FilterWarning(PHMWarning, RuntimeWarning):
@@ -140,14 +141,14 @@ def noises(model, process_noise, measurement_noise) -> tuple[np.ndarray, np.ndar
     q = linalg.covariance_matrix(process_noise, model.n_states, "process_noise (Q)", model.states)
     r = linalg.covariance_matrix(measurement_noise, model.n_outputs, "measurement_noise (R)", model.outputs)
     if np.any(np.linalg.eigvalsh(r) <= 0):
-        raise ValueError("measurement_noise (R) must be positive definite")
+        raise PrognosisError("measurement_noise (R) must be positive definite")
     return q, r, linalg.psd_sqrt(q)
 
 def measured_rows(z, model) -> tuple[np.ndarray, np.ndarray]:
     """``z`` as a vector of the model's outputs, and the mask of its finite (measured) entries."""
     z = np.asarray(z, float).reshape(-1)
     if z.shape != (model.n_outputs,):
-        raise ValueError(f"z: expected {model.n_outputs} values for {list(model.outputs)}, got shape {z.shape}")
+        raise PrognosisError(f"z: expected {model.n_outputs} values for {list(model.outputs)}, got shape {z.shape}")
     return z, np.isfinite(z)
 
 def innovation(rows: np.ndarray, residual=None, covariance=None, fading: float = 1.0) -> Innovation:

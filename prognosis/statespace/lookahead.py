@@ -39,6 +39,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import PrognosisError
+
 __all__ = ["LookAhead", "look_ahead", "predict_ahead"]
 
 
@@ -181,13 +183,13 @@ def predict_ahead(estimator, measurements, *, horizon: int, start: int, forecast
     """
     z = np.asarray(measurements, float)
     if z.ndim != 2:
-        raise ValueError(f"measurements: expected shape (K, m), got {z.shape}")
+        raise PrognosisError(f"measurements: expected shape (K, m), got {z.shape}")
     if horizon < 1:
-        raise ValueError(f"horizon must be at least 1 step, got {horizon}")
+        raise PrognosisError(f"horizon must be at least 1 step, got {horizon}")
     steps = z.shape[0]
     if not 1 <= start <= steps - horizon:
-        raise ValueError(f"start must be in [1, {steps - horizon}] for {steps} measurements and horizon {horizon}, "
-                         f"got {start}")
+        raise PrognosisError(f"start must be in [1, {steps - horizon}] for {steps} measurements and horizon {horizon}, "
+                             f"got {start}")
     filtered = np.empty((steps, len(estimator.mean)))
     fading, nis = np.ones(steps), np.full(steps, np.nan)
     origin = np.arange(start, steps - horizon + 1)
@@ -201,7 +203,7 @@ def predict_ahead(estimator, measurements, *, horizon: int, start: int, forecast
         if k >= start and k + horizon <= steps:
             future = np.asarray(forecasts(k), float)
             if future.shape != (horizon, z.shape[1]):
-                raise ValueError(f"forecasts({k}) returned shape {future.shape}, expected {(horizon, z.shape[1])}")
+                raise PrognosisError(f"forecasts({k}) returned shape {future.shape}, expected {(horizon, z.shape[1])}")
             begin = time.perf_counter()
             ahead_inputs = None if inputs is None else [_input(inputs, k + j) for j in range(horizon)]
             predicted[k - start] = look_ahead(estimator, future, ahead_inputs)[-1]

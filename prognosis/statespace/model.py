@@ -46,6 +46,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import sympy as sp
 
+from ..errors import PrognosisError
+
 __all__ = ["DiscreteModel", "discretize"]
 
 _TIME = sp.Symbol("t")
@@ -164,13 +166,13 @@ class DiscreteModel:
             missing = [n for n in self.inputs if n not in u]
             unknown = sorted(set(u) - set(self.inputs))
             if missing or unknown:
-                raise ValueError(f"inputs: missing {missing}, unknown {unknown}; the model's inputs are "
-                                 f"{list(self.inputs)}")
+                raise PrognosisError(f"inputs: missing {missing}, unknown {unknown}; the model's inputs are "
+                                     f"{list(self.inputs)}")
             return np.array([float(u[n]) for n in self.inputs])
         vector = np.zeros(0) if u is None else np.atleast_1d(np.asarray(u, float))
         if vector.shape != (len(self.inputs),):
-            raise ValueError(f"inputs: expected {len(self.inputs)} values for {list(self.inputs)}, "
-                             f"got shape {vector.shape}")
+            raise PrognosisError(f"inputs: expected {len(self.inputs)} values for {list(self.inputs)}, "
+                                 f"got shape {vector.shape}")
         return vector
 
     def rates(self, x, u=None) -> np.ndarray:
@@ -321,27 +323,27 @@ def discretize(equations, *, dt: float, augment: Sequence[str] = (), parameters:
     [[0.8, -1.0], [0.0, 1.0]]
     """
     if not dt > 0 or not np.isfinite(dt):
-        raise ValueError(f"dt must be a positive number, got {dt!r}")
+        raise PrognosisError(f"dt must be a positive number, got {dt!r}")
     if method not in METHODS:
-        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+        raise PrognosisError(f"method must be one of {METHODS}, got {method!r}")
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:
-        raise ValueError(f"substeps must be a positive integer, got {substeps!r}")
+        raise PrognosisError(f"substeps must be a positive integer, got {substeps!r}")
     nominal = {str(k): v for k, v in equations.parameters.items()}
     parameters = dict(parameters or {})
     for name in [*augment, *parameters]:
         if name not in nominal:
-            raise ValueError(f"parameter {name!r} is not in the model; it has {sorted(nominal)}")
+            raise PrognosisError(f"parameter {name!r} is not in the model; it has {sorted(nominal)}")
     if len(set(augment)) != len(augment):
-        raise ValueError(f"augment lists a parameter twice: {list(augment)}")
+        raise PrognosisError(f"augment lists a parameter twice: {list(augment)}")
     values = {**nominal, **parameters}
     for name, value in values.items():
         if name not in augment and (value is None or callable(value) or not np.isfinite(float(value))):
-            raise ValueError(f"parameter {name!r} needs a finite number, got {value!r}")
+            raise PrognosisError(f"parameter {name!r} needs a finite number, got {value!r}")
     available = list(equations.outputs)
     outputs = list(available if outputs is None else outputs)
     for name in outputs:
         if name not in available:
-            raise ValueError(f"output {name!r} is not a measured signal of the model; it has {available}")
+            raise PrognosisError(f"output {name!r} is not a measured signal of the model; it has {available}")
 
     # real symbols so that sympy differentiates Abs and sign (d|e|/de = sign(e))
     state_names = [str(s) for s in equations.states] + list(augment)
@@ -358,8 +360,8 @@ def discretize(equations, *, dt: float, augment: Sequence[str] = (), parameters:
                                           if isinstance(s, sp.Symbol) and s not in x and s not in u})
         leftover = sorted(map(str, expression.free_symbols - set(x) - set(u)))
         if leftover or expression.has(sp.Derivative, sp.Integral):
-            raise ValueError(f"{where} depends on {leftover or 'derivatives or integrals'}: "
-                             "a state-space model needs explicit state equations")
+            raise PrognosisError(f"{where} depends on {leftover or 'derivatives or integrals'}: "
+                                 "a state-space model needs explicit state equations")
         return expression
 
     rhs = [prepare(r, f"d{name}/dt") for r, name in zip(equations.rhs, state_names)] + [sp.S.Zero] * len(augment)
@@ -396,13 +398,13 @@ def _columns(x, n: int, name: str) -> tuple[np.ndarray, bool]:
         return array[:, None], True
     if array.ndim == 2 and array.shape[0] == n:
         return array, False
-    raise ValueError(f"{name}: expected shape ({n},) or ({n}, M), got {array.shape}")
+    raise PrognosisError(f"{name}: expected shape ({n},) or ({n}, M), got {array.shape}")
 
 
 def _point(x, n: int) -> np.ndarray:
     array = np.asarray(x, float)
     if array.shape != (n,):
-        raise ValueError(f"x: a Jacobian is taken at one point of shape ({n},), got {array.shape}")
+        raise PrognosisError(f"x: a Jacobian is taken at one point of shape ({n},), got {array.shape}")
     return array
 
 

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import _linalg as linalg
+from ..errors import PrognosisError
 
 
 @dataclass
@@ -81,11 +82,11 @@ class StrongTracking:
 
     def __post_init__(self):
         if not 0.0 < self.forgetting <= 1.0:
-            raise ValueError(f"forgetting (rho) must be in (0, 1], got {self.forgetting}")
+            raise PrognosisError(f"forgetting (rho) must be in (0, 1], got {self.forgetting}")
         if self.softening < 1.0:
-            raise ValueError(f"softening (beta) must be >= 1, got {self.softening}")
+            raise PrognosisError(f"softening (beta) must be >= 1, got {self.softening}")
         if not self.max_factor >= 1.0:
-            raise ValueError(f"max_factor must be >= 1, got {self.max_factor}")
+            raise PrognosisError(f"max_factor must be >= 1, got {self.max_factor}")
 
     def reset(self) -> None:
         """Forget ``V_k`` (eq. 10); the filters call this at their start and in ``reinitialize``."""

@@ -8,6 +8,7 @@ import numpy as np
 from .. import _linalg as linalg
 from .gaussian import GaussianFilter, cholesky_or_repair
 from .strong_tracking import StrongTracking
+from ..errors import PrognosisError
 
 
 class UnscentedKalmanFilter(GaussianFilter):
@@ -51,10 +52,10 @@ class UnscentedKalmanFilter(GaussianFilter):
                  fading: StrongTracking | None = None):
         n = model.n_states
         if not alpha > 0:
-            raise ValueError(f"alpha must be positive, got {alpha}")
+            raise PrognosisError(f"alpha must be positive, got {alpha}")
         spread = alpha ** 2 * (n + kappa) - n
         if not n + spread > 0:
-            raise ValueError(f"n + lambda = alpha^2 (n + kappa) must be positive, got {n + spread}")
+            raise PrognosisError(f"n + lambda = alpha^2 (n + kappa) must be positive, got {n + spread}")
         self._scale = np.sqrt(n + spread)
         self._wm = np.full(2 * n + 1, 0.5 / (n + spread))
         self._wm[0] = spread / (n + spread)

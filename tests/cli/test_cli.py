@@ -240,6 +240,8 @@ def test_unknown_candidate(motor_csv, capsys):
 
 @pytest.mark.parametrize("extra, message", [
     (["--fail", "1e-5", "--direction", "up"], "wrong side of the nominal value 0.0001"),
+    (["--fail", "1e-5", "--direction", "up"], "lies below nominal; give --direction down"),
+    (["--fail", "1e-3", "--direction", "down"], "lies above nominal; give --direction up"),
     (["--fail", "1e-4"], "equals the nominal value"),
     (["--fail=-1e-3"], "outside the physical domain (0, inf)"),  # the exponential sign check comes after
 ])

@@ -120,7 +120,7 @@ def test_prognose_prints_filter_progress_unless_quiet(demos, capsys):
     argv = ["prognose", str(path / "model.json"), str(path / "data.csv"), "--candidate", "az2", "--degradation",
             "exponential", "--fail", "1.2", "--calibrate", "190", "--particles", "50", "--rul-every", "50"]
     code, out, err = run(capsys, *argv)
-    assert code == 0 and "(ARR_0_2); candidate az2 (isolated)" in out
+    assert code == 0 and "(ARR_0_2); candidate az2 (indistinguishable from A_2 (same signature))" in out
     lines = re.findall(r"filter: (\d+) % of (\d+) steps \(t = [\d.e+-]+ s\), [\d.]+ s elapsed", err)
     assert lines and lines[-1][0] == "100"
     code, out_quiet, err = run(capsys, "--quiet", *argv)

@@ -1,15 +1,19 @@
 """Health monitor (Jha et al. (2016), Table V): detection, then estimation and RUL, whole record or sample by sample."""
 
+import re
+
 import numpy as np
 import pytest
 
-from bondgraph import simulate
+from bondgraph import PHMError, simulate
 from bondgraph.library import torsion_bar, torsion_bar_controller, torsion_bar_monitorable
 from diagnosis import derive_arrs
 from diagnosis.signals import add_noise, as_record
 from prognosis.degradation import ExponentialDegradation
 from prognosis.particle_filter import VarianceAdaptation
+from prognosis.errors import PrognosisError
 from prognosis.monitor import HealthMonitor
+from tests.zoo.models.quarter_car import build as quarter_car
 from tests.scenarios import torsion_bar_b_md, torsion_bar_sensors
 
 ANTIDERIVATIVES = {"omega_m": "theta_m", "omega_Ld": "theta_Ld"}  # encoder angles
@@ -104,6 +108,32 @@ def test_failure_value_on_the_wrong_side_is_refused(scenario):
     arr, _ = scenario
     with pytest.raises(ValueError, match="wrong side"):
         monitor(arr, theta_fail=0.001)
+
+
+@pytest.mark.parametrize("fail, direction, hint", [
+    (750.0, "up", "lies below the nominal value 1500; give direction='down'"),   # a damper losing its oil
+    (3000.0, "down", "lies above the nominal value 1500; give direction='up'"),
+])
+def test_a_failure_value_on_the_other_side_suggests_the_direction(fail, direction, hint):
+    """The quarter car's damper (a model the monitor was not written around) fails below or above nominal."""
+    arr = next(a for a in derive_arrs(quarter_car(), integrals="avoid") if "c_s" in a.parameters)
+    with pytest.raises(PrognosisError, match=re.escape(hint)) as caught:
+        HealthMonitor(arr, "c_s", ExponentialDegradation(1e-5), theta_fail=fail, direction=direction)
+    assert isinstance(caught.value, PHMError) and isinstance(caught.value, ValueError)
+    other = "down" if direction == "up" else "up"
+    monitor = HealthMonitor(arr, "c_s", ExponentialDegradation(1e-5), theta_fail=fail, direction=other)
+    assert monitor.predictor.direction == other
+
+
+@pytest.mark.parametrize("fail, direction, message", [
+    (1500.0, "down", "equals its nominal value"),
+    (float("nan"), "down", "must be a finite number"),
+    (750.0, "downwards", "direction must be 'up' or 'down'"),
+])
+def test_a_failure_value_at_nominal_or_an_unknown_direction_is_refused(fail, direction, message):
+    arr = next(a for a in derive_arrs(quarter_car(), integrals="avoid") if "c_s" in a.parameters)
+    with pytest.raises(PrognosisError, match=message):
+        HealthMonitor(arr, "c_s", ExponentialDegradation(1e-5), theta_fail=fail, direction=direction)
 
 
 def test_a_record_without_degradation_starts_no_filter(scenario):
