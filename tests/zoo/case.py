@@ -48,6 +48,9 @@ class ZooCase:
     step_inputs : dict
         Input signal -> ``((t_0, level_0), (t_1, level_1), ...)``, a piecewise-constant profile
         (``t_0 = 0``) with at least one step inside the record: the detection records.
+        A closed loop: an input of either kind may be an expression in sensor signals (a controller
+        law, e.g. ``k_p*(0.5 - h2)``, a level a set-point); the reference reads them from the states
+        and a simulation passes it as ``u(t, y)``.
     t_end, dt : float
         Record horizon and sampling step in seconds; ``t_end / dt`` about 1000-5000 samples.
     noise : dict

@@ -65,7 +65,7 @@ def _segments(case: ZooCase, inputs: str, t_end: float, cuts: tuple = ()) -> lis
         levels = {}
         for name, profile in case.step_inputs.items():
             level = [v for s, v in profile if s <= start][-1]
-            levels[sp.Symbol(name)] = sp.Float(level)
+            levels[sp.Symbol(name)] = sp.sympify(level)
         segments.append((start, end, levels))
     return segments
 
@@ -95,8 +95,12 @@ def simulate_reference(case: ZooCase, *, parameters: Mapping | None = None, inpu
     names = list(case.outputs) + [k for k in (case.smooth_inputs if inputs == "smooth" else case.step_inputs)]
     samples = {n: np.full(grid.size, np.nan) for n in names}
     derivs = {n: [np.full(grid.size, np.nan) for _ in range(order)] for n in names}
+    # a closed loop: an input written in sensor signals (a controller) reads them from the states
     for start, end, u in _segments(case, inputs, t_end, () if fault_at is None else (fault_at,)):
-        subs = {**(healthy if fault_at is not None and start < fault_at else psubs), **u}
+        params = healthy if fault_at is not None and start < fault_at else psubs
+        sensors = {sp.Symbol(k): sp.sympify(v).xreplace(params) for k, v in case.outputs.items()}
+        u = {k: v.xreplace(sensors) for k, v in u.items()}
+        subs = {**params, **u}
         f = [sp.sympify(e).xreplace(subs) for e in case.rhs]
         rhs = sp.lambdify([t, states], f, modules="numpy")
         jac = sp.lambdify([t, states], sp.Matrix(f).jacobian(states), modules="numpy")
