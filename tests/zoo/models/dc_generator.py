@@ -48,5 +48,5 @@ CASE = ZooCase(
     t_end=0.5,
     dt=1e-4,
     noise={"omega": 0.2, "v_L": 0.2},
-    faults=("J", "R_Ld", "R_a"),
+    faults=("J", "R_Ld", "K_e"),
 )

@@ -58,5 +58,5 @@ CASE = ZooCase(
     t_end=0.3,
     dt=7.5e-5,
     noise={"i": 0.01, "tau_sp": 2e-3},
-    faults=("R_a", "k_sp", "b_t"),
+    faults=("R_a", "k_sp", "k_m"),
 )
