@@ -154,27 +154,29 @@ def survey(case: ZooCase, out=sys.stdout) -> None:
                   f" {sorted(arr.parameters)}]: {text}", file=out)
 
 
-if __name__ == "__main__":
-    for name in sys.argv[1:] or model_names():
-        survey(load_case(name))
 
-
-def fault_visibility(case: ZooCase, change: float = 0.3) -> dict:
+def fault_visibility(case: ZooCase, change: float = 0.3, names: tuple | None = None) -> dict:
     """Parameter -> ``max |y_faulty - y_nominal| / noise`` over the sensors, on the step record.
 
     ``y_faulty`` has the parameter ``(1 + change)`` times its nominal value from the start; a fault is
-    clearly visible when this is well above 1 (the noise's standard deviation).
+    clearly visible when this is well above 1 (the noise's standard deviation).  ``names``: the
+    parameters to try (default: every uncertain one).
 
-    >>> visibility = fault_visibility(load_case("quarter_car"))
+    >>> visibility = fault_visibility(load_case("quarter_car"), names=("c_s",))
     >>> visibility["c_s"] > 3
     True
     """
     nominal = simulate_reference(case, inputs="step", order=0)
+    bg = case.build()
     out = {}
-    for name, value in case.build().parameters.items():
-        if name not in case.build().uncertainties:
-            continue
+    for name in names or tuple(bg.uncertainties):
+        value = bg.parameters[name]
         faulty = simulate_reference(case, inputs="step", order=0, parameters={name: value * (1 + change)})
         out[name] = max(float(np.nanmax(np.abs(faulty.columns[s] - nominal.columns[s]))) / case.noise[s]
                         for s in case.outputs)
     return out
+
+
+if __name__ == "__main__":
+    for name in sys.argv[1:] or model_names():
+        survey(load_case(name))
