@@ -154,7 +154,6 @@ def survey(case: ZooCase, out=sys.stdout) -> None:
                   f" {sorted(arr.parameters)}]: {text}", file=out)
 
 
-
 def fault_visibility(case: ZooCase, change: float = 0.3, names: tuple | None = None) -> dict:
     """Parameter -> ``max |y_faulty - y_nominal| / noise`` over the sensors, on the step record.
 
