@@ -119,6 +119,11 @@ def _sensitivities(arr, points: list) -> dict:
     for parameter in sorted(arr.parameters):
         theta = sp.Symbol(parameter)
         slope = sp.diff(arr.nominal, theta).xreplace(compiled.symbols).xreplace(values)
+        if slope.has(sp.Integral, sp.Derivative):
+            # the parameter sits inside an integral: its sensitivity is not a point value of this ARR,
+            # so no change of it is claimed detectable (the figure is conservative, never optimistic)
+            out[parameter] = np.full(np.shape(points[0]), np.nan)
+            continue
         f = sp.lambdify(compiled.points, float(arr.values[parameter]) * slope, modules="numpy")
         out[parameter] = np.broadcast_to(np.asarray(f(*points), float), np.shape(points[0])).copy()
     return out
