@@ -344,6 +344,18 @@ def test_non_string_law_is_rejected():
     assert_element_rejects(["f - a*e"])
 
 
+@pytest.mark.parametrize("law, match", [
+    ("e/0 - f", r"division by zero in 'e / 0'"),            # found by tests/cli/test_fuzz.py (issue 30)
+    ("f - a*e/(e - e)", r"division by zero in 'a \* e / \(e - e\)'"),
+    ("f - log(0)*e", "is infinite or undefined"),
+    ("f - 0**-1*e", "is infinite or undefined"),
+    (f - sp.zoo * e, "is infinite or undefined"),             # given as sympy
+    (f - a * e + sp.nan, "is infinite or undefined"),
+])
+def test_a_law_that_divides_by_zero_is_rejected_naming_the_element(law, match):
+    assert_element_rejects(law, match=match)
+
+
 def test_sympy_law_with_undeclared_symbol_is_rejected():
     assert_element_rejects(f - b * e, match="b")
 
