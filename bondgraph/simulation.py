@@ -269,12 +269,14 @@ def _solve(guard: "_Guard", span, z0, t_eval, method: str, options: dict) -> obj
     with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")  # Piecewise laws evaluate unselected branches too: hence the errstate
         solution = solve_ivp(guard, span, z0, method=method, t_eval=t_eval, **options)
-    reasons = []
+    reasons, others = [], {}
     for w in caught:
         if str(w.message).startswith("lsoda:"):
             reasons.append(str(w.message).removeprefix("lsoda:").strip().rstrip("."))
-        else:
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
+        else:  # once each, as the default filter would have shown them: an input may warn at every call
+            others.setdefault((w.category, str(w.message), w.filename, w.lineno), w)
+    for w in others.values():
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
     if reasons and not solution.success:
         solution.message = "; ".join(dict.fromkeys(reasons))
     return solution

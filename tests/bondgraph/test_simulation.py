@@ -267,3 +267,22 @@ def test_a_hopeless_pace_stops_the_integration_early():
     # the same circuit over a span it can finish is not stopped: the pace check does not misjudge it
     result = simulate(equations, (0.0, 20.0), {"V": 1.0}, parameters={"R": 0.0}, t_eval=[0.0, 20.0])
     assert result.solver.nfev > simulation.PACE_START
+
+
+def test_a_warning_of_an_input_is_passed_on_once_per_pass():
+    import warnings
+
+    calls = []
+
+    def drive(t):
+        calls.append(t)
+        warnings.warn("input clipped", UserWarning)
+        return 1.0
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("default")
+        simulate(rlc_circuit(), (0.0, 0.01), {"V": drive}, t_eval=[0.0, 0.01])
+    # called at every evaluation of the model; its warning shown once by the integration and at most once
+    # more by the evaluation of the result
+    assert len(calls) > 10
+    assert {str(w.message) for w in caught} == {"input clipped"} and len(caught) <= 2
