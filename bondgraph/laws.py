@@ -69,9 +69,31 @@ def parse_expression(text: str, names: Mapping[str, sp.Basic], *, where: str = "
     except SyntaxError as exc:
         raise LawError(f"{where}: not a valid expression: {text!r} ({exc.msg})") from None
     try:
-        return _build(tree.body, names, where)
+        expression = _build(tree.body, names, where)
     except RecursionError:
         raise LawError(f"{where}: expression nested too deeply") from None
+    check_finite(expression, where=where)
+    return expression
+
+
+def check_finite(expression: sp.Basic, *, where: str) -> None:
+    """Raise a LawError naming ``where`` when ``expression`` holds an infinity or NaN.
+
+    sympy turns ``e/0``, ``log(0)`` or ``0**-1`` into ``zoo`` (complex infinity), ``oo`` or ``nan``
+    instead of failing; a law holding one has no numeric value and breaks causality and elimination.
+
+    Examples
+    --------
+    >>> import sympy as sp
+    >>> e, f = sp.symbols("e f")
+    >>> check_finite(e - 2*f, where="R1 law")
+    >>> check_finite(sp.log(0)*e - f, where="R1 law")
+    Traceback (most recent call last):
+    ...
+    bondgraph.errors.LawError: R1 law: zoo*e - f is infinite or undefined (a division by zero, log(0)?)
+    """
+    if expression.has(sp.zoo, sp.oo, -sp.oo, sp.nan):
+        raise LawError(f"{where}: {expression} is infinite or undefined (a division by zero, log(0)?)")
 
 
 def _build(node: ast.AST, names: Mapping[str, sp.Basic], where: str) -> sp.Expr:
@@ -95,7 +117,10 @@ def _build(node: ast.AST, names: Mapping[str, sp.Basic], where: str) -> sp.Expr:
         operand = _build(node.operand, names, where)
         return -operand if isinstance(node.op, ast.USub) else operand
     if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
-        return _BINARY[type(node.op)](_build(node.left, names, where), _build(node.right, names, where))
+        left, right = _build(node.left, names, where), _build(node.right, names, where)
+        if isinstance(node.op, ast.Div) and right.is_zero:  # sympy would give zoo, which no analysis can use
+            raise LawError(f"{where}: division by zero in {ast.unparse(node)!r}")
+        return _BINARY[type(node.op)](left, right)
     if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Pow):
         base = _build(node.left, names, where)
         exponent = _build(node.right, names, where)

@@ -58,7 +58,7 @@ from .causality import Causality, assign_causality
 from .equations import StateEquations, model_equations, state_equations
 from .domains import CONSTANT_DOMAIN, DOMAINS, check_in_domain, default_domain, describe, read_domain
 from .errors import LawError, ModelError
-from .laws import parse_expression
+from .laws import check_finite, parse_expression
 from .names import check_name, check_node_id
 from .structure import (BOND_ATTRIBUTES, NODE_ATTRIBUTES, PORT_SYMBOLS, RESERVED_NAMES, Bond, Element, Structure,
                         signal_function)
@@ -475,6 +475,7 @@ def _read_law(where: str, kind: str, law, names: dict, param: str) -> sp.Expr:
             raise LawError(f"{where} law: undefined function(s) {sorted(map(str, expression.atoms(AppliedUndef)))}")
     else:
         raise LawError(f"{where} law: expected a sympy expression or a string, got {type(law).__name__}")
+    check_finite(expression, where=f"{where} law")
     symbols = {s.name for s in expression.free_symbols}
     missing = [v for v in ports if v not in symbols]
     if missing:
@@ -499,6 +500,7 @@ def _read_modulus(where, kind, modulus, names, param, signal) -> sp.Expr:
         unknown = {str(s) for s in modulus.free_symbols | modulus.atoms(AppliedUndef)} - allowed - {"t"}
         if unknown:
             raise LawError(f"{where} modulus: unknown symbol(s) {sorted(unknown)}")
+        check_finite(modulus, where=f"{where} modulus")
         return modulus
     raise LawError(f"{where} modulus: expected a sympy expression or a string, got {type(modulus).__name__}")
 

@@ -28,7 +28,12 @@ what would hang, exhaust memory or silently give a wrong answer:
   capacitance or inductance divides by zero), when :data:`STALL_EVALUATIONS` evaluations in a row
   are at the same time (the solver's step has collapsed below the spacing of floats: LSODA then
   retries forever), and after ``max_evaluations`` (default :data:`MAX_EVALUATIONS`) evaluations of
-  the model in all (a step so small that the time crawls).
+  the model in all (a step so small that the time crawls), or earlier, from :data:`PACE_START`
+  evaluations on, when the pace so far projects more than :data:`PACE_MARGIN` times
+  ``max_evaluations`` to reach ``t_end`` (an undamped oscillator over a million periods).
+* When LSODA (the default method) gives up (repeated convergence failures on a very stiff model,
+  an open circuit ``R = 1e12`` say), the integration is done again with the implicit ``Radau``
+  method, with a :class:`SimulationWarning`; when that fails too, the error names both failures.
 """
 
 from __future__ import annotations
@@ -36,6 +41,7 @@ from __future__ import annotations
 import inspect
 import math
 import numbers
+import warnings
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 
@@ -45,7 +51,7 @@ from scipy.integrate import solve_ivp
 
 from ._optional import pandas_for
 from .equations import StateEquations
-from .errors import SimulationError
+from .errors import PHMWarning, SimulationError
 from .model import BondGraph
 from .structure import T, signal_function
 
@@ -138,9 +144,22 @@ MAX_SAMPLES = 10_000_000
 #: integration is declared stalled: a Jacobian estimate takes one per state and Newton iterations a
 #: handful, while a solver whose step no longer moves the time in floating point calls forever.
 STALL_EVALUATIONS = 10_000
-#: The default most evaluations of the model in one simulation (``max_evaluations``): minutes of work
-#: for a small model; the examples and tests need at most about 25 000.
-MAX_EVALUATIONS = 5_000_000
+#: The default most evaluations of the model in one simulation (``max_evaluations``): about 20 s of
+#: work for a small model; the examples and tests need at most about 25 000.
+MAX_EVALUATIONS = 1_000_000
+#: Evaluations after which the pace of the integration is judged (see :data:`PACE_MARGIN`).
+PACE_START = 20_000
+#: An integration is stopped early when, at its pace so far, reaching ``t_end`` would take more than this
+#: many times ``max_evaluations``: a hopeless run then ends in about a second, not at the limit.  The margin
+#: leaves room for a solver that is slow at first (a fast transient) and speeds up later.
+PACE_MARGIN = 2.0
+#: The method tried again when LSODA gives up: implicit and L-stable, it integrates the very stiff models
+#: (an open circuit, a tiny capacitance) on which LSODA's switching fails.
+FALLBACK_METHOD = "Radau"
+
+
+class SimulationWarning(PHMWarning):
+    """A simulation that succeeded differently than asked (another solver method, say)."""
 
 
 def simulate(
@@ -206,18 +225,61 @@ def simulate(
     t_eval = np.linspace(t0, t1, 501) if t_eval is None else _checked_times(t_eval, t0, t1)
     limit = _checked_count(max_evaluations, "max_evaluations")
     _check_max_step(max_step, t1 - t0, limit)
-    guard = _Guard(plan, limit, t1)
-    with np.errstate(invalid="ignore", divide="ignore"):  # Piecewise laws evaluate unselected branches too
-        solution = solve_ivp(guard, (t0, t1), z0, method=method, t_eval=t_eval,
-                             rtol=rtol, atol=atol, max_step=max_step)
-    if not solution.success:
-        failed_at = solution.t[-1] if solution.t.size else t0
-        raise SimulationError(f"integration failed at t = {failed_at}: {solution.message}")
+    solution = _integrate(plan, (t0, t1), z0, t_eval, limit, method=method, rtol=rtol, atol=atol,
+                          max_step=max_step)
     if not np.all(np.isfinite(solution.y)):
         k = int(np.argmax(~np.all(np.isfinite(solution.y), axis=0)))
         raise SimulationError(f"the state became NaN or infinite at t = {solution.t[k]:g}; "
                               "check the laws and parameters")
     return plan.result(solution)
+
+
+def _integrate(plan: "_Plan", span: tuple[float, float], z0: np.ndarray, t_eval: np.ndarray, limit: int,
+               *, method: str, **options) -> object:
+    """``solve_ivp`` under a :class:`_Guard`; LSODA's failure is retried with :data:`FALLBACK_METHOD`.
+
+    Raises a SimulationError naming the method(s), the time reached and the solver's message when the
+    integration fails; the retry gets the evaluations the first attempt left.
+    """
+    guard = _Guard(plan, limit, span)
+    solution = _solve(guard, span, z0, t_eval, method, options)
+    if solution.success:
+        return solution
+    failure = f"{method} failed at t = {guard.furthest:g} of {span[1]:g}: {solution.message}"
+    if method != "LSODA" or guard.evaluations >= limit:
+        raise SimulationError(f"the integration {failure} (a very stiff model? check the parameters, or try "
+                              f"method={FALLBACK_METHOD!r})")
+    retry = _Guard(plan, limit - guard.evaluations, span)
+    solution = _solve(retry, span, z0, t_eval, FALLBACK_METHOD, options)
+    if not solution.success:
+        raise SimulationError(f"the integration {failure}, and {FALLBACK_METHOD} failed at t = {retry.furthest:g}: "
+                              f"{solution.message} (check the parameters: a value that makes the model extremely "
+                              "stiff or singular?)")
+    warnings.warn(f"{failure}; integrated with {FALLBACK_METHOD} instead", SimulationWarning, stacklevel=3)
+    return solution
+
+
+def _solve(guard: "_Guard", span, z0, t_eval, method: str, options: dict) -> object:
+    """One ``solve_ivp`` run; LSODA's warning on a failure goes into the result's message, not to the user.
+
+    LSODA says why it failed only in a warning ("Repeated convergence failures..."); its result's
+    message is a bare "Unexpected istate in LSODA."  Other warnings (from an input callable, say) are
+    issued again as they came.
+    """
+    with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")  # Piecewise laws evaluate unselected branches too: hence the errstate
+        solution = solve_ivp(guard, span, z0, method=method, t_eval=t_eval, **options)
+    reasons, others = [], {}
+    for w in caught:
+        if str(w.message).startswith("lsoda:"):
+            reasons.append(str(w.message).removeprefix("lsoda:").strip().rstrip("."))
+        else:  # once each, as the default filter would have shown them: an input may warn at every call
+            others.setdefault((w.category, str(w.message), w.filename, w.lineno), w)
+    for w in others.values():
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno, source=w.source)
+    if reasons and not solution.success:
+        solution.message = "; ".join(dict.fromkeys(reasons))
+    return solution
 
 
 def check_sample_count(count: object, option: str = "t_eval") -> int:
@@ -326,8 +388,9 @@ class _Guard:
     in all.  Without it LSODA calls the model forever once its step collapses.
     """
 
-    def __init__(self, plan: "_Plan", limit: int, t_end: float):
-        self.plan, self.limit, self.t_end = plan, limit, t_end
+    def __init__(self, plan: "_Plan", limit: int, span: tuple[float, float]):
+        self.plan, self.limit = plan, limit
+        self.t_start, self.t_end = span
         self.names = [f"d{x}/dt" for x in plan.equations.states]
         for name, controller in plan.controllers.items():
             self.names += [f"the derivative of state {k} of the controller of {name!r}"
@@ -352,12 +415,27 @@ class _Guard:
             raise SimulationError(f"max_evaluations: the integration evaluated the model {self.limit} times and "
                                   f"reached only t = {self.furthest:g} of {self.t_end:g}; pass a larger "
                                   "max_evaluations or check the model for stiffness")
+        if self.evaluations >= PACE_START and self.evaluations % 1000 == 0:
+            self._check_pace()
         dz = self.plan.derivative(t, z)
         if not np.all(np.isfinite(dz)):
             k = int(np.flatnonzero(~np.isfinite(dz))[0])
             raise SimulationError(f"{self.names[k]} is {dz[k]} at t = {t:g}; check the laws and parameters "
                                   "(a parameter that divides, such as an inertia or a capacitance, set to zero?)")
         return dz
+
+
+    def _check_pace(self) -> None:
+        """Stop a run that, at its pace so far, needs more than PACE_MARGIN times the evaluations allowed."""
+        done = (self.furthest - self.t_start) / (self.t_end - self.t_start)
+        if done * PACE_MARGIN * self.limit >= self.evaluations:
+            return
+        needed = self.evaluations / done if done > 0 else math.inf
+        raise SimulationError(f"max_evaluations: {self.evaluations} evaluations of the model reached only "
+                              f"t = {self.furthest:g} of {self.t_end:g}; at that pace the span needs about "
+                              f"{needed:.2g}, more than {PACE_MARGIN:g} times max_evaluations = {self.limit} "
+                              "(a long span for the model's fastest motion, or a stiff model: shorten the "
+                              "span, pass a larger max_evaluations or check the parameters)")
 
 
 def _initial_state(equations: StateEquations, x0: Mapping) -> np.ndarray:

@@ -232,3 +232,57 @@ def test_a_stalled_or_endless_integration_ends_with_an_error(monkeypatch):
     with pytest.raises(SimulationError, match=r"the integration makes no progress at t = 1000000.0: 200 evaluations"):
         simulate(dc_motor(), (1e6, 1e6 + 1e-3), {"U": 12.0}, max_step=1e-12,
                  max_evaluations=10**10)
+
+
+def test_lsoda_failing_on_a_very_stiff_model_is_retried_with_radau():
+    from bondgraph.simulation import SimulationWarning
+
+    # an open circuit: R = 1e12 makes L/R = 1e-12 s; LSODA fails with repeated convergence failures
+    with pytest.warns(SimulationWarning, match=r"LSODA failed at t = \S+ of 0.5: Repeated convergence failures.*"
+                                               r"integrated with Radau instead"):
+        result = simulate(rlc_circuit(), (0.0, 0.5), {"V": 2.0}, parameters={"R": 1e12})
+    assert result.solver.success
+    # after the L/R transient the current is V/R, minus the capacitor's share that still charges by V/R
+    assert result["i"][-1] == pytest.approx(2.0 / 1e12, rel=1e-3)
+    assert np.all(np.abs(result["i"][1:]) <= 2.0 / 1e12 * (1 + 1e-6))
+
+
+def test_a_failure_of_both_methods_names_both(monkeypatch):
+    from bondgraph import simulation
+
+    monkeypatch.setattr(simulation, "FALLBACK_METHOD", "LSODA")  # a retry that fails the same way
+    with pytest.raises(SimulationError, match=r"the integration LSODA failed at t = \S+ of 0.5: Repeated "
+                                              r"convergence failures.*, and LSODA failed at t = "):
+        simulate(rlc_circuit(), (0.0, 0.5), {"V": 1.0}, parameters={"C": 1e-300})
+
+
+def test_a_hopeless_pace_stops_the_integration_early():
+    from bondgraph import simulation
+
+    # an undamped LC circuit (period 2 pi sqrt(LC)) over a million seconds: about 1e9 evaluations
+    equations = rlc_circuit().state_equations()
+    with pytest.raises(SimulationError, match=rf"max_evaluations: {simulation.PACE_START} evaluations of the model "
+                                              r"reached only t = \S+ of 1e\+06; at that pace the span needs about"):
+        simulate(equations, (0.0, 1e6), {"V": 1.0}, parameters={"R": 0.0})
+    # the same circuit over a span it can finish is not stopped: the pace check does not misjudge it
+    result = simulate(equations, (0.0, 20.0), {"V": 1.0}, parameters={"R": 0.0}, t_eval=[0.0, 20.0])
+    assert result.solver.nfev > simulation.PACE_START
+
+
+def test_a_warning_of_an_input_is_passed_on_once_per_pass():
+    import warnings
+
+    calls = []
+
+    def drive(t):
+        calls.append(t)
+        warnings.warn("input clipped", UserWarning)
+        return 1.0
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("default")
+        simulate(rlc_circuit(), (0.0, 0.01), {"V": drive}, t_eval=[0.0, 0.01])
+    # called at every evaluation of the model; its warning shown once by the integration and at most once
+    # more by the evaluation of the result
+    assert len(calls) > 10
+    assert {str(w.message) for w in caught} == {"input clipped"} and len(caught) <= 2

@@ -295,6 +295,8 @@ def motor_json(**law):
     "e - R*f + [1, 2][0]",                                 # subscripts, lists
     "import os",                                           # a statement
     "e - R*f if e else f",                                 # conditional expression
+    "e/0 - f",                                             # a division by zero (found by test_fuzz.py)
+    "log(0)*e - f",                                        # an infinite constant
 ])
 def test_hostile_laws_are_rejected_with_the_node_named(law, tmp_path, capsys):
     with pytest.raises(LawError) as exc:
@@ -366,6 +368,31 @@ def test_demo_runs_the_chain_and_predicts_the_injected_end_of_life(tmp_path, cap
 def test_simulation_guards_name_the_option(capsys, argv, message):
     code, _, err = run(capsys, "--quiet", *argv)
     assert code == 2 and message in err and err.count("\n") == 1
+
+
+def test_an_open_circuit_or_a_tiny_capacitance_simulates_with_a_warning(tmp_path, capsys):
+    # LSODA gives up on both (issue 30); the CLI used to end in AttributeError, exit 1
+    for setting, column, expected in [("R=1e12", "i", 1.0 / 1e12), ("C=1e-300", "v_C", 1.0)]:
+        out = tmp_path / f"{setting}.csv"
+        code, _, err = run(capsys, "simulate", "rlc", "--set", setting, "--out", str(out))
+        assert code == 0, err
+        assert "bgphm: warning: LSODA failed" in err and "integrated with Radau instead" in err
+        header, *rows = out.read_text().splitlines()
+        last = dict(zip(header.split(","), map(float, rows[-1].split(","))))
+        # the source voltage is 1 V: through 1e12 ohm flows 1e-12 A; a 1e-300 F capacitor follows the source
+        assert last[column] == pytest.approx(expected, rel=1e-3)
+
+
+def test_a_hopeless_simulation_ends_in_one_line_naming_the_limit(tmp_path, capsys):
+    # an undamped LC circuit over 1.4e6 s, i.e. about 3e7 periods: found by test_fuzz.py, which it held for
+    # minutes of CPU; the pace check stops it after PACE_START evaluations
+    model = tmp_path / "rlc.json"
+    model.write_text(to_json(rlc_circuit(), inputs={"V": 1.0}, t_end=0.2))
+    code, _, err = run(capsys, "--quiet", "simulate", str(model), "--set", "R=0", "--t-end", "1436643",
+                       "--out", str(tmp_path / "o.csv"))
+    assert code == 2 and err.count("\n") == 1
+    assert err.startswith("bgphm: error: max_evaluations: ") and "at that pace" in err
+    assert not (tmp_path / "o.csv").exists()
 
 
 def test_uneven_sampling_is_resampled_on_request(motor_csv, tmp_path, capsys):

@@ -355,7 +355,7 @@ def test_ctrl_c_during_parallel_predictions_reaches_only_the_caller(tmp_path):
             print("interrupted", file=sys.stderr)
     """))
     run = subprocess.run([sys.executable, str(script)], start_new_session=True, capture_output=True, text=True,
-                         timeout=60)
+                         timeout=300)  # guards a hang only: a worker that ignored the interrupt fails the assert
     assert run.stderr.splitlines() == ["interrupted"]  # no KeyboardInterrupt traceback from a worker
 
 
