@@ -103,12 +103,7 @@ def smooth_record(signals: list[str], seed: int, samples: int = 101) -> dict:
 #: Defects the fuzzer found in ARR derivation or evaluation that are being fixed elsewhere (issue 30):
 #: (exception type, message pattern, where).  The random-model tests let them pass, so that they find
 #: other defects; :data:`FOUND` keeps an example of each, run strictly and expected to fail until fixed.
-KNOWN_DEFECTS = [
-    ("ValueError", r"cannot evaluate Derivative\((re|im)\(", "diagnosis/residuals.py: re/im terms of a signal"),
-    ("PrintMethodNotImplementedError", r"Integral", "diagnosis/residuals.py: an integral lambdify cannot print"),
-    ("NameError", r"DiracDelta", "diagnosis: the derivative of an orifice's sign() is a DiracDelta numpy lacks"),
-    ("ValueError", r"cannot evaluate Derivative\(sign\(", "diagnosis/residuals.py: a derivative of sign() in an ARR"),
-]
+KNOWN_DEFECTS: list = []  # the four the fuzzer found (re/im terms, Integral, DiracDelta, sign') are fixed
 
 
 def known_defect(error: Exception) -> str | None:
@@ -175,18 +170,18 @@ FOUND: list[tuple[dict, str | None]] = [
     ({"junctions": ["0", "0"], "links": [(0, "bond", 0.05)],
       "elements": [(0, "C", 0.05, None, None), (0, "I", 0.05, None, None),
                    (0, "R", 0.05, None, "f - {p}*sign(e)*sqrt(Abs(e))"), (1, "C", 0.05, None, None)],
-      "sources": [], "sensors": [0, 0, 0]}, KNOWN_DEFECTS[0][2]),
+      "sources": [], "sensors": [0, 0, 0]}, None),
     # an orifice between two inertias and a capacitor, four sensors: an ARR holds an Integral, another
-    # the DiracDelta of the orifice's sign(y1) differentiated (KNOWN_DEFECTS[2])
+    # the DiracDelta of the orifice's sign(y1) differentiated
     ({"junctions": ["0", "1"], "links": [(0, "bond", 0.5)],
       "elements": [(0, "I", 10.0, (-0.01, 0.01), None), (0, "I", 1.0, (-0.01, 0.01), None),
                    (0, "R", 4.0, None, "f - {p}*sign(e)*sqrt(Abs(e))"), (1, "C", 1.0, (-0.01, 0.01), None)],
-      "sources": [], "sensors": [0, 1, 1, 1]}, KNOWN_DEFECTS[1][2]),
+      "sources": [], "sensors": [0, 1, 1, 1]}, None),
     # an orifice behind a gyrator, one flow sensor: ARR_MSO_1 holds Derivative(sign(y1(t)/R2), t)
     ({"junctions": ["1", "1", "1"], "links": [(0, "GY", 0.2), (0, "bond", 0.5)],
       "elements": [(0, "I", 0.5, (0.0, 0.1), None), (1, "R", 1.0, None, "f - {p}*sign(e)*sqrt(Abs(e))"),
                    (2, "C", 0.05, (-0.05, 0.05), None)],
-      "sources": [], "sensors": [1]}, KNOWN_DEFECTS[3][2]),
+      "sources": [], "sensors": [1]}, None),
 ]
 
 SPEC_RLC = {"junctions": ["1", "0"], "links": [(0, "bond", 1.0)],

@@ -17,6 +17,9 @@ from tests.zoo.check_b import inside_box, load, simulation_errors
 from tests.zoo.identity import identity_error
 from tests.zoo.reference import simulate_reference
 
+# about 1-2 s of CPU per model: the fast tier keeps tests/zoo/test_chain.py's subset (issue 30)
+pytestmark = pytest.mark.slow
+
 # model -> shortened horizon of the test (s), about 300 samples: the reference's tight Radau sets the cost.
 # Each is a float multiple of the model's dt as reference.py's grid rounds it (0.06 s at dt = 2e-4 is not:
 # its last sample lies past t_end and stays NaN)
