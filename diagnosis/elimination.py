@@ -44,6 +44,7 @@ import networkx as nx
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from bondgraph.calculus import real_parts, time_derivative
 from bondgraph.equations import labelled_equations
 from bondgraph.errors import LawError
 from bondgraph.laws import signed_power_inverse, solve_for
@@ -315,7 +316,8 @@ class _Shared:
                              f"(more than {MAX_OPERATIONS})")
         r_true = _eliminate(model, self.true, assigned, residual)
         r_n, r_true, form = written_without_integrals(r_n, r_true, "elimination", avoid=self.avoid_integrals)
-        r_n, r_true = r_n.xreplace(self.plain), r_true.xreplace(self.plain)
+        # back to the model's plain signals; any re/im a sympy solve left of a real quantity is the quantity
+        r_n, r_true = real_parts(r_n.xreplace(self.plain)), real_parts(r_true.xreplace(self.plain))
         return split_relation(name, model.equations[residual].node, None, r_n, r_true, (), self.structure,
                               candidate_parameters(self.structure), parameter_intervals(self.structure),
                               origin=tuple(model.describe(rows)), form=form)
@@ -516,6 +518,5 @@ def _substituted(equation: sp.Eq, solution: dict) -> sp.Eq:
 
 
 def _time_derivative(expression: sp.Expr, count: int) -> sp.Expr:
-    """The ``count``-th time derivative; the Dirac pulses of a sign's derivative dropped (zero almost everywhere)."""
-    rate = sp.diff(expression, T, count)
-    return rate.xreplace({d: 0 for d in rate.atoms(sp.DiracDelta)})
+    """The ``count``-th time derivative, every quantity real (no ``re``/``im``), Dirac pulses dropped."""
+    return time_derivative(expression, count)
