@@ -283,11 +283,11 @@ class _Shared:
 
     @cached_property
     def nominal(self) -> list:
-        return [e.xreplace(self._real) for e in self._plain_nominal]
+        return [_rewritten(e, self._real) for e in self._plain_nominal]
 
     @cached_property
     def true(self) -> list:
-        return [e.xreplace(self._real) for e in self._plain_true]
+        return [_rewritten(e, self._real) for e in self._plain_true]
 
     @cached_property
     def plain(self) -> dict:
@@ -369,6 +369,7 @@ def _residual(shared: _Shared, rows: frozenset, attempts: int = 4):
     equation), which breaks the loop when the state's rate is known from outside it.
     """
     model = shared.model
+    _check_finite(model, shared.nominal, rows)
     for residual in _balances(model, rows):
         integral: frozenset = frozenset()
         for _ in range(attempts):
@@ -514,7 +515,24 @@ def _substituted(equation: sp.Eq, solution: dict) -> sp.Eq:
     """``equation`` with solved unknowns replaced, a state's derivative by the derivative of its value."""
     derivatives = {d: _time_derivative(solution[d.expr], d.derivative_count)
                    for d in equation.atoms(sp.Derivative) if d.expr in solution}
-    return equation.xreplace(derivatives).xreplace(solution)
+    return _rewritten(_rewritten(equation, derivatives), solution)
+
+
+def _rewritten(equation: sp.Eq, mapping: dict) -> sp.Eq:
+    """``equation`` with ``mapping`` applied to each side, left unevaluated.
+
+    ``Eq.xreplace`` evaluates the new equality, and a law sympy can decide (``e/0 - f``, a ``zoo`` times a
+    variable) becomes ``False``, which is no equation to solve.
+    """
+    return sp.Eq(equation.lhs.xreplace(mapping), equation.rhs.xreplace(mapping), evaluate=False)
+
+
+def _check_finite(model: StructuralModel, equations: list, rows) -> None:
+    """Raise a ValueError naming the first equation of ``rows`` that holds an infinity or NaN."""
+    for i in sorted(rows):
+        if equations[i].has(sp.zoo, sp.oo, -sp.oo, sp.nan):
+            m = model.equations[i]
+            raise ValueError(f"{m.node} {m.role}: {m.equation} is not finite (a division by zero in the law?)")
 
 
 def _time_derivative(expression: sp.Expr, count: int) -> sp.Expr:
