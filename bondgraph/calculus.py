@@ -58,7 +58,14 @@ def time_derivative(expression: sp.Expr, count: int = 1) -> sp.Expr:
 
 
 def _once(expression: sp.Expr) -> sp.Expr:
+    """One time derivative, addend by addend: each is differentiated by the stand-ins it holds only."""
+    return sp.Add(*(_once_term(term) for term in sp.Add.make_args(expression)))
+
+
+def _once_term(expression: sp.Expr) -> sp.Expr:
     """One time derivative by the chain rule over real stand-ins of the functions of time and the symbols."""
+    if not expression.has(T):
+        return sp.S.Zero
     rates = _rates(expression)
     stand_in = {atom: sp.Dummy(real=True) for atom in rates}
     # parameters (and any other symbol but t) are real constants: Abs(a x) then differentiates as sign(a x)

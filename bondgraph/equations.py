@@ -473,6 +473,14 @@ def solve_loop(equations: list, unknowns: list) -> dict:
     >>> solve_loop([x - a*y - 1, y - x/2], [x, y])
     {x: -2/(a - 2), y: -1/(a - 2)}
     """
+    looped = set(unknowns)
+    if any(d.free_symbols & looped for eq in equations for d in eq.atoms(ddt)):
+        # a loop variable under a derivative: a differential loop; eliminating a long one first costs
+        # minutes (an RLC ladder) to find the same
+        raise AlgebraicLoopError(
+            f"differential loop in {', '.join(map(str, unknowns))}: a variable depends on its own time derivative",
+            unknowns,
+        )
     pending, free, solution = list(equations), list(unknowns), {}
     progress = True
     while pending and progress:
