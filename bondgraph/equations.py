@@ -33,6 +33,7 @@ import networkx as nx
 import sympy as sp
 
 from . import elements as el
+from .calculus import time_derivative
 from .causality import INTEGRAL, Causality, assign_causality
 from .errors import CausalityError, EquationError, LawError
 from .laws import solve_for
@@ -233,7 +234,8 @@ class CausalEquations:
         """
         if self._resolved is None:
             try:
-                self._resolved, self.loops, self.unsolved = resolve(self.assignments, strict=not self.keep_blocked)
+                self._resolved, self.loops, self.unsolved = resolve(self.assignments, strict=not self.keep_blocked,
+                                                                    pending=set(self.blocked))
             except AlgebraicLoopError as exc:
                 names = ", ".join(dict.fromkeys(str(self.owners[v]) for v in exc.variables))
                 raise AlgebraicLoopError(f"{exc} [elements in the loop: {names}]", exc.variables) from None
@@ -241,7 +243,7 @@ class CausalEquations:
 
     def express(self, expression: sp.Expr) -> sp.Expr:
         """Rewrite ``expression`` (in bond variables) in known quantities."""
-        return substitute(expression, self.resolved, set(self.assignments))
+        return substitute(expression, self.resolved, set(self.assignments) | set(self.blocked))
 
 
 def causal_equations(bg: BondGraphLike, causality: Causality, structure=None, *,
@@ -410,29 +412,31 @@ def substitute(expression: sp.Expr, resolved: dict, unknowns: set = frozenset())
     if expression.has(ddt):
         expression = expression.replace(
             lambda e: isinstance(e, ddt) and not (e.free_symbols & unknowns),
-            lambda e: sp.diff(e.args[0], T),
+            lambda e: time_derivative(e.args[0]),
         )
     return expression
 
 
-def resolve(assignments: dict, *, strict: bool = True) -> tuple[dict, list, list]:
+def resolve(assignments: dict, *, strict: bool = True, pending: set = frozenset()) -> tuple[dict, list, list]:
     """Express every assigned variable in known quantities.
 
     Returns the resolved mapping, the algebraic loops solved and the loops
     left unsolved (``strict=False`` only), each a tuple of its variables.
     An unsolved loop's variables resolve to themselves, so whatever depends
-    on them visibly keeps an unknown.
+    on them visibly keeps an unknown.  ``pending``: further unknowns that no
+    assignment gives (the placeholders of blocked laws); a ``ddt`` of them
+    stays pending too, rather than differentiate them as constants.
 
     Raises
     ------
     AlgebraicLoopError
         with ``strict``, for a loop that has no unique explicit solution.
     """
-    unknowns = set(assignments)
     graph = nx.DiGraph()
     graph.add_nodes_from(assignments)
     for var, expression in assignments.items():
-        graph.add_edges_from((dep, var) for dep in expression.free_symbols & unknowns)
+        graph.add_edges_from((dep, var) for dep in expression.free_symbols & assignments.keys())
+    unknowns = set(assignments) | set(pending)
     condensed = nx.condensation(graph)
     resolved: dict = {}
     loops: list = []
@@ -469,6 +473,14 @@ def solve_loop(equations: list, unknowns: list) -> dict:
     >>> solve_loop([x - a*y - 1, y - x/2], [x, y])
     {x: -2/(a - 2), y: -1/(a - 2)}
     """
+    looped = set(unknowns)
+    if any(d.free_symbols & looped for eq in equations for d in eq.atoms(ddt)):
+        # a loop variable under a derivative: a differential loop; eliminating a long one first costs
+        # minutes (an RLC ladder) to find the same
+        raise AlgebraicLoopError(
+            f"differential loop in {', '.join(map(str, unknowns))}: a variable depends on its own time derivative",
+            unknowns,
+        )
     pending, free, solution = list(equations), list(unknowns), {}
     progress = True
     while pending and progress:

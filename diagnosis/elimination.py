@@ -44,6 +44,7 @@ import networkx as nx
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
+from bondgraph.calculus import real_parts, time_derivative
 from bondgraph.equations import labelled_equations
 from bondgraph.errors import LawError
 from bondgraph.laws import signed_power_inverse, solve_for
@@ -52,7 +53,7 @@ from bondgraph.structure import T, require_model
 from .junctions import junction_arrs
 from .relation import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
                        parameter_intervals, split_relation, uncertain_structure, written_without_integrals)
-from .structural import StructuralModel, sensor_fault, structural_model
+from .structural import StructuralLimitError, StructuralModel, sensor_fault, structural_model
 
 #: The default bound on the derivatives an ARR added for isolation may need: as high as the ARRs the model
 #: needs anyway (its junction ARRs and those added for detection), no higher.  A second derivative of a
@@ -64,6 +65,17 @@ MAX_ORDER = "auto"
 #: each pair of faults the ARRs cannot tell apart costs a search and an elimination, about a second on a
 #: chain of mass-spring stages, where the detection gaps cost one matching for the whole model.
 ISOLATION_LIMIT = 60
+
+#: The work one derivation spends on added ARRs, counted (not timed, so that the outcome does not depend
+#: on the machine): equations of the sets it tries to eliminate (a sympy elimination costs about a
+#: second per fifty equations of a long chain, and more as the derivatives it needs grow with the set)
+#: and gaps searched for minimal sets (each a structural search near the fault).  Past either, the ARRs
+#: found so far are returned and an ARRWarning names the faults left undetected.
+MAX_ELIMINATIONS = 150
+MAX_SEARCHES = 60
+#: The equations the searches for minimal sets of one derivation may visit together (each overdetermined
+#: subset explored counts its size: a matching over it).
+MAX_SEARCH_EQUATIONS = 12000
 
 #: An eliminated relation larger than this (sympy operations) is not kept: nested inverses of non-linear
 #: laws grow without bound, and a residual nobody can read or evaluate tightly helps no diagnosis.
@@ -134,25 +146,43 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
     model = structural_model(bg, sensor_faults=sensor_faults)
     shared = _Shared(bg, model, integrals == "avoid")   # lazy: built for the first gap
     supports = [faults_of_arr(model, arr) for arr in existing]
-    added, unrealizable, too_high = [], set(), []
+    added, unrealizable, stopped = [], set(), None
     for fault, other in _gaps(model, supports, isolation=isolation):
         if _told_apart(supports, fault, other):
             continue
         bound = max_order
         if max_order == "auto":
             bound = None if other is None else max((a.order for a in existing + added), default=0)
-        arr = _closing_arr(shared, fault, other, bound, unrealizable, f"ARR_MSO_{len(added) + 1}")
-        if arr is None:
-            too_high.append((fault, other, bound))
-            continue
-        supports.append(faults_of_arr(model, arr))
-        added.append(arr)
-    missed = [gap for gap, other, _ in too_high if other is None]
-    if missed:  # a fault nothing detects; isolation left is for the report (unreached) to say
-        unclosed = f"; {len(unrealizable)} set(s) give none: {'; '.join(sorted(unrealizable))}" if unrealizable else ""
-        warnings.warn(f"{bg.name}: {len(missed)} fault(s) the structure can detect have no closed-form ARR: "
-                      f"{', '.join(missed)}{unclosed}", ARRWarning, stacklevel=2)
+        try:
+            arr = _closing_arr(shared, fault, other, bound, unrealizable, f"ARR_MSO_{len(added) + 1}")
+        except _OutOfBudget as exc:
+            stopped = str(exc)
+            break
+        if arr is not None:
+            supports.append(faults_of_arr(model, arr))
+            added.append(arr)
+    _warn_left(bg.name, model, supports, unrealizable, stopped)
     return added
+
+
+def _warn_left(name: str, model: StructuralModel, supports: list, unrealizable: set, stopped: str | None) -> None:
+    """One ARRWarning naming the faults the structure detects and no ARR sees (counted at the end: an ARR
+    added for one gap may close another), why, and where the search stopped if it did."""
+    seen = set().union(*supports)
+    missed = [fault for fault in model.faults if fault not in seen and fault in model.detectable()]
+    if not missed and stopped is None:
+        return   # isolation left is for the report (unreached) to say
+    parts = [f"{name}: "]
+    if missed:
+        parts.append(f"{len(missed)} fault(s) the structure can detect have no closed-form ARR: {', '.join(missed)}")
+        if unrealizable:
+            shown = sorted(unrealizable)
+            more = f" and {len(shown) - 5} more" if len(shown) > 5 else ""
+            parts.append(f"; {len(shown)} set(s) give none: {'; '.join(shown[:5])}{more}")
+    if stopped is not None:
+        parts.append(f"{'; ' if missed else ''}the search for further ARRs stopped: {stopped} "
+                     "(diagnosis.elimination.unreached lists what is left)")
+    warnings.warn("".join(parts), ARRWarning, stacklevel=3)
 
 
 def unreached(bg, arrs: Sequence[ARR], *, sensor_faults: bool = True) -> dict:
@@ -226,7 +256,15 @@ def _closing_arr(shared: _Shared, fault: str, other: str | None, max_order: int 
     """The ARR of the lowest order, then the smallest set, that sees ``fault`` and not ``other``."""
     model = shared.model
     removed = model.faults[other] if other is not None else frozenset()
-    candidates = model.msos_through(model.faults[fault], removed)
+    shared.spend("searches", MAX_SEARCHES, "gap searches")
+    try:
+        candidates = model.msos_through(model.faults[fault], removed, budget=shared.search)
+    except StructuralLimitError as exc:   # too many sets near this fault: the gap stays open, named at the end
+        if shared.search["equations"] < 0:
+            raise _OutOfBudget(f"the searches visited {MAX_SEARCH_EQUATIONS} equations "
+                               "(diagnosis.elimination.MAX_SEARCH_EQUATIONS)") from None
+        unrealizable.add(f"near {fault}: {exc}")
+        return None
     estimates = {rows: shared.estimated_order(rows) for rows in candidates}
     for rows in sorted(candidates, key=lambda rows: (estimates[rows] is None, estimates[rows] or 0, len(rows))):
         if max_order is not None and estimates[rows] is not None and estimates[rows] > max_order:
@@ -247,6 +285,14 @@ class _Shared:
         self.bg, self.model, self.avoid_integrals = bg, model, avoid_integrals
         self.weights: dict = {}
         self.results: dict = {}
+        self.spent = {"searches": 0, "eliminations": 0}
+        self.search = {"equations": MAX_SEARCH_EQUATIONS}
+
+    def spend(self, what: str, limit: int, label: str, amount: int = 1) -> None:
+        """Count ``amount`` units of work; raise :class:`_OutOfBudget` rather than go over ``limit``."""
+        if self.spent[what] + amount > limit:
+            raise _OutOfBudget(f"{label} would go over {limit} (diagnosis.elimination.MAX_{what.upper()})")
+        self.spent[what] += amount
 
     @cached_property
     def structure(self):
@@ -282,11 +328,11 @@ class _Shared:
 
     @cached_property
     def nominal(self) -> list:
-        return [e.xreplace(self._real) for e in self._plain_nominal]
+        return [_rewritten(e, self._real) for e in self._plain_nominal]
 
     @cached_property
     def true(self) -> list:
-        return [e.xreplace(self._real) for e in self._plain_true]
+        return [_rewritten(e, self._real) for e in self._plain_true]
 
     @cached_property
     def plain(self) -> dict:
@@ -295,6 +341,7 @@ class _Shared:
     def cached(self, rows: frozenset, unrealizable: set) -> ARR | None:
         """The ARR of ``rows``, made once; None (and the set described in ``unrealizable``) if it has none."""
         if rows not in self.results:
+            self.spend("eliminations", MAX_ELIMINATIONS, "the equations eliminated", len(rows))
             try:
                 self.results[rows] = self.arr(rows, "ARR_MSO")
             except (NotImplementedError, ValueError) as exc:
@@ -315,7 +362,8 @@ class _Shared:
                              f"(more than {MAX_OPERATIONS})")
         r_true = _eliminate(model, self.true, assigned, residual)
         r_n, r_true, form = written_without_integrals(r_n, r_true, "elimination", avoid=self.avoid_integrals)
-        r_n, r_true = r_n.xreplace(self.plain), r_true.xreplace(self.plain)
+        # back to the model's plain signals; any re/im a sympy solve left of a real quantity is the quantity
+        r_n, r_true = real_parts(r_n.xreplace(self.plain)), real_parts(r_true.xreplace(self.plain))
         return split_relation(name, model.equations[residual].node, None, r_n, r_true, (), self.structure,
                               candidate_parameters(self.structure), parameter_intervals(self.structure),
                               origin=tuple(model.describe(rows)), form=form)
@@ -343,6 +391,10 @@ class _Shared:
         return min(orders) if orders else None
 
 
+class _OutOfBudget(Exception):
+    """The derivation spent its work budget: the gaps left are named, not searched."""
+
+
 class _DifferentialLoop(Exception):
     """A block of the matching holds a state: only an ODE of the set, not an elimination, would give it."""
 
@@ -367,6 +419,7 @@ def _residual(shared: _Shared, rows: frozenset, attempts: int = 4):
     equation), which breaks the loop when the state's rate is known from outside it.
     """
     model = shared.model
+    _check_finite(model, shared.nominal, rows)
     for residual in _balances(model, rows):
         integral: frozenset = frozenset()
         for _ in range(attempts):
@@ -512,10 +565,26 @@ def _substituted(equation: sp.Eq, solution: dict) -> sp.Eq:
     """``equation`` with solved unknowns replaced, a state's derivative by the derivative of its value."""
     derivatives = {d: _time_derivative(solution[d.expr], d.derivative_count)
                    for d in equation.atoms(sp.Derivative) if d.expr in solution}
-    return equation.xreplace(derivatives).xreplace(solution)
+    return _rewritten(_rewritten(equation, derivatives), solution)
+
+
+def _rewritten(equation: sp.Eq, mapping: dict) -> sp.Eq:
+    """``equation`` with ``mapping`` applied to each side, left unevaluated.
+
+    ``Eq.xreplace`` evaluates the new equality, and a law sympy can decide (``e/0 - f``, a ``zoo`` times a
+    variable) becomes ``False``, which is no equation to solve.
+    """
+    return sp.Eq(equation.lhs.xreplace(mapping), equation.rhs.xreplace(mapping), evaluate=False)
+
+
+def _check_finite(model: StructuralModel, equations: list, rows) -> None:
+    """Raise a ValueError naming the first equation of ``rows`` that holds an infinity or NaN."""
+    for i in sorted(rows):
+        if equations[i].has(sp.zoo, sp.oo, -sp.oo, sp.nan):
+            m = model.equations[i]
+            raise ValueError(f"{m.node} {m.role}: {m.equation} is not finite (a division by zero in the law?)")
 
 
 def _time_derivative(expression: sp.Expr, count: int) -> sp.Expr:
-    """The ``count``-th time derivative; the Dirac pulses of a sign's derivative dropped (zero almost everywhere)."""
-    rate = sp.diff(expression, T, count)
-    return rate.xreplace({d: 0 for d in rate.atoms(sp.DiracDelta)})
+    """The ``count``-th time derivative, every quantity real (no ``re``/``im``), Dirac pulses dropped."""
+    return time_derivative(expression, count)

@@ -106,11 +106,21 @@ def junction_arrs(bg, *, integrals: str = "avoid") -> list[ARR]:
         except _Unknown as exc:
             warnings.warn(f"{name}: cannot be expressed in known variables ({exc})", ARRWarning, stacklevel=2)
             continue
+        if _not_finite(r_n) or _not_finite(r_true):
+            culprits = [str(e) for e in structure.elements.values() if e.law is not None and _not_finite(e.law)]
+            warnings.warn(f"{name}: left out, its relation is not finite ({r_n}); "
+                          f"{', '.join(culprits) or 'a law'} divides by zero", ARRWarning, stacklevel=2)
+            continue
         r_n, r_true, form = written_without_integrals(r_n, r_true, "balance", avoid=integrals == "avoid")
         origin = _origin(users, junction, detector, r_n)
         arrs.append(split_relation(name, junction, detector, r_n, r_true, blocked_by, structure, candidates,
                                    uncertainties, origin=origin, form=form, sensors=sensors))
     return arrs
+
+
+def _not_finite(expression: sp.Expr) -> bool:
+    """Whether ``expression`` holds an infinity or NaN (a law that divides by zero)."""
+    return expression.has(sp.zoo, sp.oo, -sp.oo, sp.nan)
 
 
 def _users(structure: Structure) -> dict:

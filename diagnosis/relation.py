@@ -19,6 +19,7 @@ import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from bondgraph import elements as el
+from bondgraph.calculus import time_derivative
 from bondgraph.equations import constitutive_law
 from bondgraph.errors import PHMWarning
 from bondgraph.structure import Structure, T
@@ -259,7 +260,7 @@ def _rate(expression: sp.Expr) -> sp.Expr:
               and set(signal.variables) == {T}):
             terms.append(factor * sp.Derivative(signal.expr, (T, signal.derivative_count + 1)))
         else:
-            terms.append(sp.diff(term, T))
+            terms.append(time_derivative(term))
     return sp.Add(*terms)
 
 

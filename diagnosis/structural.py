@@ -112,13 +112,14 @@ class StructuralModel:
         return len(part) - len(frozenset().union(*(self.unknowns[i] for i in part)))
 
     def mso_sets(self, equations: Iterable[int] | None = None, *, keep: frozenset | None = None,
-                 limit: int = MSO_SEARCH_LIMIT) -> list[frozenset]:
+                 limit: int = MSO_SEARCH_LIMIT, budget: dict | None = None) -> list[frozenset]:
         """Every minimal structurally overdetermined subset of ``equations`` (all by default), smallest first.
 
         Each overdetermined set of redundancy above one is reduced by removing one equation at a
         time and taking the overdetermined part of the rest; sets already seen are not explored
         again.  With ``keep``, only sets holding one of those equations are explored.  Raises
-        :class:`StructuralLimitError` after ``limit`` sets.
+        :class:`StructuralLimitError` after ``limit`` sets, or when ``budget["equations"]`` (shared by
+        several searches, decremented by the size of each set explored: its cost) runs out.
         """
         found, seen = set(), set()
         stack = [self.overdetermined(equations)]
@@ -127,6 +128,11 @@ class StructuralModel:
             if current in seen or not current or (keep is not None and not current & keep):
                 continue
             seen.add(current)
+            if budget is not None:
+                budget["equations"] -= len(current)
+                if budget["equations"] < 0:
+                    raise StructuralLimitError("structural analysis: the shared budget of overdetermined subsets "
+                                               "is spent")
             if len(seen) > limit:
                 raise StructuralLimitError(f"structural analysis: more than {limit} overdetermined subsets; "
                                            "the full set of minimal ones is out of reach for this model")
@@ -222,12 +228,14 @@ class StructuralModel:
         graph.add_edges_from((("equation", i), ("unknown", x)) for i in equations for x in self.unknowns[i])
         return graph
 
-    def msos_through(self, rows: frozenset, removed: frozenset = frozenset(), limit: int = 200) -> list[frozenset]:
+    def msos_through(self, rows: frozenset, removed: frozenset = frozenset(), limit: int = 200,
+                     budget: dict | None = None) -> list[frozenset]:
         """Minimal overdetermined sets that hold one of ``rows`` and none of ``removed``, found near ``rows``.
 
         The search looks in the equations within a growing distance of ``rows`` until one of them is
         overdetermined there, then one step further, and reduces that neighbourhood to minimal sets
-        keeping one of ``rows`` (at most ``limit`` subsets explored).  Smallest sets first.
+        keeping one of ``rows`` (at most ``limit`` subsets explored, and ``budget`` as in :meth:`mso_sets`).
+        Smallest sets first.
         """
         rows = frozenset(rows) - removed
         ball, found = set(rows), False
@@ -240,7 +248,7 @@ class StructuralModel:
             if found:   # one step past the first neighbourhood where a row is overdetermined
                 break
         part = self.overdetermined(ball)
-        return self.mso_sets(part, keep=rows, limit=limit) if part & rows else []
+        return self.mso_sets(part, keep=rows, limit=limit, budget=budget) if part & rows else []
 
     def describe(self, rows: Iterable[int]) -> list[str]:
         """``"node role"`` of each equation in ``rows``: which junctions and elements a set uses."""
