@@ -126,11 +126,11 @@ def cmd_detect(args, progress: Progress) -> int:
     for w in caught:
         progress(f"warning: {w.message}")
     if args.margin is None:
-        steps = [n for n in spec.model.inputs if n in record.columns]
+        steps = result.steps
         for arr, e in zip(result.arrs, result.evaluations):
             options = {k: v for k, v in result.forms[e.name].items() if k == "window" and v}
             _check_calibration(arr, record, e, until, args, {"persistence": args.persistence, "steps": steps,
-                                                             **options})
+                                                             "ends": True, **options})
     evaluations = result.evaluations
     summary = {"model": spec.model.name, "data": str(args.data), "samples": len(record),
                "arrs": {e.name: _evaluation_summary(e) for e in evaluations}, **result.as_dict()}
@@ -143,6 +143,8 @@ def cmd_detect(args, progress: Progress) -> int:
         d = result.detectability[e.name]
         if d.blind:
             print(f"  blind on this record: {d.reason}")
+    for name, why in result.undecided.items():
+        print(f"{name}: undecided, left out ({why})")
     print(_detectable_line(result))
     if result.fired:
         print(f"faults consistent with {', '.join(result.fired)}: {', '.join(result.candidates) or 'none'}")
@@ -483,7 +485,7 @@ def _check_calibration(arr, record: Record, evaluation, until: float, args, opti
     first half under 20 samples is not checked.
     """
     from diagnosis.detection import noise_margin
-    from diagnosis.monitoring import SAFETY, quiet_margin
+    from diagnosis.monitoring import SAFETY, START_SHARE, quiet_margin
 
     t0 = float(record.t[0])
     half = t0 + 0.5 * (until - t0)
@@ -498,9 +500,9 @@ def _check_calibration(arr, record: Record, evaluation, until: float, args, opti
     if np.count_nonzero(record.t <= half) < 20:
         return
     first = record.between(end=half)
-    quarter = t0 + 0.25 * (until - t0)
+    start = t0 + START_SHARE * (half - t0)
     margin = max(noise_margin(arr, first, k=args.k, **options),
-                 SAFETY * quiet_margin(arr.evaluate(first, **options), after=quarter))
+                 SAFETY * quiet_margin(arr.evaluate(first, **options), after=start))
     check = arr.evaluate(record, margin=margin, **options)
     if _stays_in_alarm(check.alarm, last):
         when = float(record.t[last][check.alarm[last]][0])

@@ -28,6 +28,8 @@ __all__ = ["BLIND_CHANGE", "Detectability", "detectability"]
 
 #: An ARR that needs a larger relative change than this of every parameter is reported blind.
 BLIND_CHANGE = 1.0
+#: Relative step of the central difference that gives a residual's sensitivity to a parameter.
+STEP = 1e-6
 
 
 @dataclass(frozen=True)
@@ -71,11 +73,11 @@ class Detectability:
                 "rise": finite, "fall": {k: (None if not np.isfinite(v) else float(v)) for k, v in self.fall.items()}}
 
 
-def detectability(evaluation, arr) -> Detectability:
-    """The detectable changes of each parameter of ``arr`` on the record of ``evaluation``.
+def detectability(evaluation, arr, *, after: float = -np.inf) -> Detectability:
+    """The detectable changes of each parameter of ``arr`` on ``evaluation``'s record, from ``after`` on.
 
-    ``evaluation`` is ``arr.evaluate(record, margin=..., persistence=...)`` on a fault-free record
-    (the calibration stretch or the whole record): its point values, band and margin are used.
+    ``evaluation`` is ``arr.evaluate(record, margin=..., persistence=...)``: its point values, band and
+    margin are used; ``after`` restricts the figures to the monitored stretch (after calibration).
 
     Examples
     --------
@@ -99,7 +101,9 @@ def detectability(evaluation, arr) -> Detectability:
     lo = evaluation.lower - evaluation.margin
     hi = evaluation.upper + evaluation.margin
     rise, fall = {}, {}
+    late = np.asarray(evaluation.t) > after
     for parameter, s in sensitivities.items():
+        s = np.where(late, s, np.nan)
         with np.errstate(divide="ignore", invalid="ignore"):
             up = np.where(s > 0, hi / s, -lo / -s)      # epsilon > 0 moves -r_n by epsilon * s
             down = np.where(s > 0, -lo / s, hi / -s)    # epsilon < 0 by -|epsilon| * s
@@ -112,20 +116,28 @@ def detectability(evaluation, arr) -> Detectability:
 
 
 def _sensitivities(arr, points: list) -> dict:
-    """Parameter -> ``theta_n dr_n/dtheta`` at every sample, from the ARR's point values."""
+    """Parameter -> ``theta_n dr_n/dtheta`` at every sample, from the ARR's point values.
+
+    A central difference of ``r_n`` in the parameter (relative step :data:`STEP`) rather than sympy's
+    derivative: laws with ``sign`` and ``Abs`` differentiate to pulses and unevaluated derivatives.
+    """
     compiled = arr.compiled
-    values = {sp.Symbol(p): v for p, v in arr.values.items()}
     out = {}
     for parameter in sorted(arr.parameters):
         theta = sp.Symbol(parameter)
-        slope = sp.diff(arr.nominal, theta).xreplace(compiled.symbols).xreplace(values)
-        if slope.has(sp.Integral, sp.Derivative):
+        if any(theta in i.function.free_symbols for i in arr.nominal.atoms(sp.Integral)):
             # the parameter sits inside an integral: its sensitivity is not a point value of this ARR,
             # so no change of it is claimed detectable (the figure is conservative, never optimistic)
             out[parameter] = np.full(np.shape(points[0]), np.nan)
             continue
-        f = sp.lambdify(compiled.points, float(arr.values[parameter]) * slope, modules="numpy")
-        out[parameter] = np.broadcast_to(np.asarray(f(*points), float), np.shape(points[0])).copy()
+        others = {sp.Symbol(p): v for p, v in arr.values.items() if p != parameter}
+        residual = arr.nominal.xreplace(compiled.symbols).xreplace(others)
+        f = sp.lambdify([*compiled.points, theta], residual, modules="numpy")
+        nominal = float(arr.values[parameter])
+        with np.errstate(all="ignore"):
+            up = np.asarray(f(*points, nominal * (1 + STEP)), float)
+            down = np.asarray(f(*points, nominal * (1 - STEP)), float)
+        out[parameter] = np.broadcast_to((up - down) / (2 * STEP), np.shape(points[0])).copy()
     return out
 
 

@@ -44,6 +44,10 @@ from .steps import step_mask
 from .thresholds import bglft_threshold, interval_threshold
 
 
+class CalibrationError(RecordError):
+    """A fault-free record that gives no residual to calibrate a margin on (every value undecided)."""
+
+
 @dataclass
 class Evaluation:
     """An ARR evaluated over a record.
@@ -138,7 +142,7 @@ class Evaluation:
 def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, polyorder: int = 3,
              exact_derivatives: Mapping | None = None, antiderivatives: Mapping | None = None,
              margin: float = 0.0, persistence: int = 1, threshold: str = "interval",
-             steps: bool | Iterable[str] = True) -> Evaluation:
+             steps: bool | Iterable[str] = True, ends: bool = False) -> Evaluation:
     """Residual, thresholds and alarms of one ARR over a record.
 
     Parameters
@@ -164,6 +168,9 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
         (:mod:`diagnosis.steps`): True (default) looks for steps in the ARR's input signals (those not
         measured), an iterable names the record columns to look in (a model's inputs, say), False
         judges every sample.  Only an ARR that estimates derivatives is affected.
+    ends : bool
+        Leave undecided as well the samples as close to either end of the record, where the estimate
+        extrapolates a one-sided fit (:func:`diagnosis.detect` does; a stream cannot know its end).
 
     Returns
     -------
@@ -194,7 +201,7 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     points = compiled.point_values(data, method=method, window=window, polyorder=polyorder,
                                    exact=exact_derivatives, antiderivatives=antiderivatives)
     masked = _across_steps(arr, data, _step_columns(arr, record, steps), method, window, polyorder,
-                           exact_derivatives)
+                           exact_derivatives, ends)
     if masked.any():
         points = [np.where(masked, np.nan, p) for p in points]
     residual, lower, upper, bglft, violation = judge(compiled, points, margin, threshold)
@@ -229,14 +236,18 @@ def _has_column(record, name: str) -> bool:
 
 
 def _across_steps(arr, data, inputs: Mapping, method: str, window: int | None, polyorder: int,
-                  exact) -> np.ndarray:
-    """The samples whose derivative estimates reach across a step of an input (see :func:`evaluate`)."""
+                  exact, ends: bool = False) -> np.ndarray:
+    """The samples whose derivative estimates reach across a step of an input, or an end (see :func:`evaluate`)."""
     estimated = [order for name, order in arr.derivatives.items() if order and not _known(name, order, exact)]
-    if not inputs or not estimated:
+    if not (inputs or ends) or not estimated:
         return np.zeros(len(data), bool)
     order = max(estimated)
     reach = ((window or default_window(polyorder)) // 2 if method == "savgol" else 1) + order
-    return step_mask({"t": data.t, **inputs}, list(inputs), reach)
+    masked = step_mask({"t": data.t, **inputs}, list(inputs), reach)
+    if ends:
+        masked[:reach] = True
+        masked[len(masked) - reach:] = True
+    return masked
 
 
 def _known(name: str, order: int, exact) -> bool:
@@ -383,7 +394,7 @@ def noise_margin(arr, nominal_record, k: float = 3.0, **options) -> float:
         raise ValueError(f"k: the number of standard deviations must be a finite number > 0, got {k!r}")
     result = evaluate(arr, nominal_record, **options)
     if np.isfinite(result.residual).sum() < 2:
-        raise RecordError(f"{arr.name}: the nominal record gives fewer than 2 finite residual values")
+        raise CalibrationError(f"{arr.name}: the nominal record gives fewer than 2 finite residual values")
     return k * robust_std(result.residual)
 
 

@@ -5,9 +5,9 @@
 1. **Forms from the record.** Each ARR is tried in its differentiated form with several derivative
    windows (:data:`WINDOWS`) and, when its relation holds integrals, in integral form; each
    candidate's margin is calibrated on the fault-free stretch (``k`` robust standard deviations of
-   the residual, and at least :data:`SAFETY` times the margin that keeps the second half of that
-   stretch free of alarms: a derivative estimate's bias at a transient is not noise) and the form
-   that detects the smallest parameter changes over the record (:mod:`diagnosis.detectability`) is
+   the residual, and at least :data:`SAFETY` times the margin that keeps that stretch, but for its
+   start, free of alarms: a derivative estimate's bias at a transient is not noise) and the form
+   that detects the smallest parameter changes after that stretch (:mod:`diagnosis.detectability`) is
    kept. An integral form is kept only where every differentiated form is blind: an integral of
    measured noise is a random walk, so its margin is widened by ``(record span / calibration span)
    ** (n - 1/2)`` for an ``n``-fold integral (how the spread of integrated white noise grows).
@@ -31,7 +31,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from .arrs import derive_arrs
 from .detectability import Detectability, detectability
-from .detection import Evaluation, noise_margin
+from .detection import CalibrationError, Evaluation, noise_margin
 from .signatures import SignatureMatrix, signature_matrix
 from .signals import Record, RecordWarning, as_record
 
@@ -43,6 +43,9 @@ WINDOWS = (None, 21, 41, 81, 161)
 #: The calibrated margin is at least this multiple of the smallest margin that keeps the fault-free stretch
 #: quiet (:func:`quiet_margin`): estimator bias at transients, which the noise's robust spread ignores.
 SAFETY = 1.25
+#: The share of the calibration stretch at its start that the quiet margin leaves out (a start from rest).
+START_SHARE = 0.1
+STEPS_IN_SENSORS = True
 #: The share of the record that calibrates the margins when no calibration stretch is given.
 CALIBRATION_SHARE = 0.2
 
@@ -67,6 +70,10 @@ class Detection:
     candidates : list of str
         Faults consistent with ``fired`` (empty when nothing fired).
     calibration_end : float
+    undecided : dict
+        ARR name -> why the record cannot evaluate it in any form (it is left out, not guessed).
+    steps : list of str
+        The record columns whose steps were looked for (inputs and sensors).
     """
 
     evaluations: list
@@ -77,6 +84,8 @@ class Detection:
     candidates: list
     calibration_end: float
     arrs: list = field(default_factory=list, repr=False)
+    undecided: dict = field(default_factory=dict)
+    steps: list = field(default_factory=list)
 
     @property
     def detection_time(self) -> float | None:
@@ -94,6 +103,7 @@ class Detection:
         """Plain data for JSON."""
         return {"detection_time": self.detection_time, "calibration_end": self.calibration_end,
                 "fired": list(self.fired), "candidates": list(self.candidates), "blind": self.blind,
+                "undecided": dict(self.undecided),
                 "forms": self.forms, "detectability": {k: d.as_dict() for k, d in self.detectability.items()}}
 
 
@@ -144,12 +154,16 @@ def detect(bg, record, *, calibrate: float | None = None, margin: float | None =
     kept = {"avoid": {a.name: a for a in first}}
     if integrals == "auto" and not given:
         kept["keep"] = {a.name: a for a in derive_arrs(bg, integrals="keep")}
-    step_inputs = [n for n in inputs if n in data.columns] if steps else False
-    evaluations, forms, seen, used = [], {}, {}, []
+    watched = inputs + list(bg.outputs) if STEPS_IN_SENSORS else inputs
+    step_inputs = [n for n in watched if n in data.columns] if steps else False
+    evaluations, forms, seen, used, undecided = [], {}, {}, [], {}
     for arr in first:
         candidates = [kept[form][arr.name] for form in kept if arr.name in kept[form]]
         chosen, options, d, evaluation, reason = _choose(candidates, healthy, data, until, margin, k, persistence,
                                                          window, step_inputs)
+        if chosen is None:
+            undecided[arr.name] = reason.removeprefix("undecided: ")
+            continue
         evaluations.append(evaluation)
         forms[arr.name] = {"form": chosen.form, "window": options.get("window"), "margin": options["margin"],
                            "reason": reason}
@@ -157,7 +171,8 @@ def detect(bg, record, *, calibrate: float | None = None, margin: float | None =
         used.append(chosen)
     signatures = signature_matrix(used)
     fired = [e.name for e in evaluations if _first_alarm(e, until) is not None]
-    return Detection(evaluations, forms, seen, signatures, fired, consistent_faults(signatures, fired), until, used)
+    return Detection(evaluations, forms, seen, signatures, fired, consistent_faults(signatures, fired), until, used,
+                     undecided, list(step_inputs or []))
 
 
 def quiet_margin(evaluation: Evaluation, after: float = -np.inf) -> float:
@@ -206,25 +221,24 @@ def consistent_faults(signatures: SignatureMatrix, fired: Sequence[str]) -> list
 def _choose(candidates, healthy: Record, data: Record, until: float, margin, k, persistence, window, steps):
     """``(arr, options, detectability, evaluation, reason)``: the form that sees the smallest changes.
 
-    Margins come from ``healthy``; the detectable changes are read over the whole record ``data``.
+    Margins come from ``healthy``; the detectable changes are read over the whole record ``data``.  A
+    form the record cannot calibrate (a derivative estimate undecided everywhere, say) is passed over;
+    when every form is, the result is ``(None, ..., reason)``.
     """
-    trials = []
+    trials, failures = [], []
     for arr in candidates:
         windows = [window] if window is not None or arr.order == 0 else [
             w for w in WINDOWS if w is None or w <= len(healthy) // 10]
         for w in windows:
-            options = {"persistence": persistence, "steps": steps, **({"window": w} if w else {})}
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", RecordWarning)
-                m = margin if margin is not None else noise_margin(arr, healthy, k=k, **options)
-                if margin is None:
-                    half = float(healthy.t[0] + 0.5 * (healthy.t[-1] - healthy.t[0]))
-                    m = max(m, SAFETY * quiet_margin(arr.evaluate(healthy, **options), after=half))
-                if margin is None and arr.integrals:
-                    m *= (_span(data) / max(_span(healthy), 1e-300)) ** (_integral_depth(arr) - 0.5)
-                evaluation = arr.evaluate(data, margin=m, **options)
-            # what a change would show over the whole record (its excitation), at the healthy stretch's margin
-            trials.append((arr, {**options, "margin": float(m)}, detectability(evaluation, arr), evaluation))
+            options = {"persistence": persistence, "steps": steps, "ends": True, **({"window": w} if w else {}),
+                       # Savitzky-Golay needs a polynomial of at least the derivative's order
+                       **({"polyorder": arr.order} if arr.order > 3 else {})}
+            try:
+                trials.append(_trial(arr, options, healthy, data, margin, k))
+            except CalibrationError as exc:
+                failures.append(str(exc).removeprefix(f"{arr.name}: "))
+    if not trials:
+        return None, {}, None, None, f"undecided: {failures[0]}"
     if len(trials) == 1:
         return (*trials[0], "the only form")
     differentiated = [t for t in trials if not t[0].integrals]
@@ -234,6 +248,21 @@ def _choose(candidates, healthy: Record, data: Record, until: float, margin, k, 
     if arr.integrals and differentiated:
         reason = "every differentiated form is blind on this record"
     return arr, options, d, evaluation, reason
+
+
+def _trial(arr, options: dict, healthy: Record, data: Record, margin, k) -> tuple:
+    """``(arr, options with the margin, detectability, evaluation)`` of one form of an ARR."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RecordWarning)
+        m = margin if margin is not None else noise_margin(arr, healthy, k=k, **options)
+        if margin is None:
+            start = float(healthy.t[0] + START_SHARE * (healthy.t[-1] - healthy.t[0]))
+            m = max(m, SAFETY * quiet_margin(arr.evaluate(healthy, **options), after=start))
+        if margin is None and arr.integrals:
+            m *= (_span(data) / max(_span(healthy), 1e-300)) ** (_integral_depth(arr) - 0.5)
+        evaluation = arr.evaluate(data, margin=m, **options)
+    # what a change would show over the monitored stretch (its excitation), at the healthy stretch's margin
+    return arr, {**options, "margin": float(m)}, detectability(evaluation, arr, after=healthy.t[-1]), evaluation
 
 
 def _score(d: Detectability) -> float:

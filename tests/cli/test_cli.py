@@ -80,7 +80,9 @@ def test_detect_finds_a_friction_fault(tmp_path, capsys):
     # residuals.csv: the band is on the residual it sits next to, so every sample in alarm lies outside it
     table = np.genfromtxt(tmp_path / "detect" / "residuals.csv", delimiter=",", names=True)
     residual, lower, upper, alarm = (table[f"ARR_1_m{c}"] for c in ("residual", "lower", "upper", "alarm"))
-    assert np.all(lower < upper) and alarm.any() and not np.allclose(lower, -upper)  # a one-sided band
+    decided = np.isfinite(lower)  # the ends, where a derivative estimate extrapolates, are left undecided
+    assert decided[100:-100].all() and np.all(lower[decided] < upper[decided]) and alarm.any()
+    assert not np.allclose(lower[decided], -upper[decided])  # a one-sided band
     outside = (residual < lower) | (residual > upper)
     assert np.all(outside | (alarm == 0))
     summary = json.loads((tmp_path / "detect" / "detection.json").read_text())

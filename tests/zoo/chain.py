@@ -23,7 +23,7 @@ from .identity import identity_error
 from .reference import record, simulate_reference
 
 CHANGE = 0.3  # the relative change of a parameter in the faulty records
-CALIBRATE, FAULT_AT = 0.45, 0.5  # shares of the record: end of the fault-free stretch, onset of the fault
+CALIBRATE = FAULT_AT = 0.45  # share of the record: the end of the fault-free stretch, the fault's onset
 
 
 def cases() -> list:
