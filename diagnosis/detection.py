@@ -139,7 +139,7 @@ class Evaluation:
         return int(np.count_nonzero(onsets & (self.t < before)))
 
 
-def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, polyorder: int = 3,
+def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, polyorder: int | None = None,
              exact_derivatives: Mapping | None = None, antiderivatives: Mapping | None = None,
              margin: float = 0.0, persistence: int = 1, threshold: str = "interval",
              steps: bool | Iterable[str] = True, ends: bool = False) -> Evaluation:
@@ -150,7 +150,8 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     arr : ARR
     record : mapping or DataFrame
         Column ``t`` and one column per signal of the ARR.
-    method, window, polyorder : derivative estimator (``"savgol"`` or ``"central"``).
+    method, window, polyorder : derivative estimator (``"savgol"`` or ``"central"``); ``polyorder``
+        defaults to 3, or the ARR's highest derivative order when above (:func:`fitting_order`).
     exact_derivatives : mapping, optional
         Signal name (``"x"``, or ``"x:2"`` for the second derivative) -> exact values.
     antiderivatives : mapping, optional
@@ -196,6 +197,7 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     """
     check_options(arr, "evaluate", method=method, antiderivatives=antiderivatives, margin=margin,
                   persistence=persistence, threshold=threshold)
+    polyorder = fitting_order(arr, polyorder)
     data = read_record(arr, record, extra=tuple((antiderivatives or {}).values()))
     compiled = arr.compiled
     points = compiled.point_values(data, method=method, window=window, polyorder=polyorder,
@@ -253,6 +255,23 @@ def _across_steps(arr, data, inputs: Mapping, method: str, window: int | None, p
 def _known(name: str, order: int, exact) -> bool:
     """Whether every derivative of ``name`` up to ``order`` is given exactly."""
     return bool(exact) and all((name if k == 1 else f"{name}:{k}") in exact for k in range(1, order + 1))
+
+
+def fitting_order(arr, polyorder):
+    """The Savitzky-Golay polynomial order for ``arr``: ``polyorder`` if given, else 3 or the ARR's order.
+
+    An ARR the library offers is evaluated with the defaults: one that needs a fourth derivative gets
+    a quartic fit rather than an error (a fit of lower order has no such derivative).  A polyorder the
+    caller gives is used as given (and checked).
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> fitting_order(derive_arrs(rlc_circuit())[0], None), fitting_order(derive_arrs(rlc_circuit())[0], 5)
+    (3, 5)
+    """
+    if polyorder is None:
+        return max(3, getattr(arr, "order", 0))
+    return polyorder
 
 
 def check_options(arr, caller: str, *, method: str = "savgol", antiderivatives: Mapping | None = None,

@@ -66,7 +66,7 @@ from numpy.typing import ArrayLike
 from scipy.ndimage import convolve1d
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from .detection import Evaluation, check_options, judge
+from .detection import Evaluation, check_options, fitting_order, judge
 from .residuals import antiderivative_integral, trusted_edge
 from .signals import (MAX_MAGNITUDE, TIME, UNIFORM_RTOL, RecordError, RecordWarning, as_record, central_derivative,
                       check_savgol_settings, default_window)
@@ -174,7 +174,7 @@ class StreamingEvaluation:
     [False, False, False, False, False, True, True, True]
     """
 
-    def __init__(self, arr, *, method: str = "savgol", window: int | None = None, polyorder: int = 3,
+    def __init__(self, arr, *, method: str = "savgol", window: int | None = None, polyorder: int | None = None,
                  exact_derivatives: Mapping | None = None, antiderivatives: Mapping | None = None,
                  margin: float = 0.0, persistence: int = 1, threshold: str = "interval",
                  dt: float | None = None) -> None:
@@ -187,6 +187,7 @@ class StreamingEvaluation:
                                or dt <= 0):
             raise RecordError(f"{arr.name}: dt: the sampling step must be a finite number > 0, got {dt!r}")
         self.arr = arr
+        polyorder = fitting_order(arr, polyorder)
         self._options = {"method": method, "window": window, "polyorder": polyorder,
                          "antiderivatives": dict(antiderivatives or {}), "margin": float(margin),
                          "persistence": int(persistence), "threshold": threshold,
