@@ -132,6 +132,11 @@ def _sensitivities(arr, points: list) -> dict:
             continue
         others = {sp.Symbol(p): v for p, v in arr.values.items() if p != parameter}
         residual = arr.nominal.xreplace(compiled.symbols).xreplace(others)
+        if _scales_an_integral(residual, theta, compiled.integrals):
+            # theta scales an integral from the record's start: a change that comes later acts on part of
+            # it only (how much depends on what the integral accumulates), so no figure is claimed
+            out[parameter] = np.full(np.shape(points[0]), np.nan)
+            continue
         f = sp.lambdify([*compiled.points, theta], residual, modules="numpy")
         nominal = float(arr.values[parameter])
         with np.errstate(all="ignore"):
@@ -139,6 +144,14 @@ def _sensitivities(arr, points: list) -> dict:
             down = np.asarray(f(*points, nominal * (1 - STEP)), float)
         out[parameter] = np.broadcast_to((up - down) / (2 * STEP), np.shape(points[0])).copy()
     return out
+
+
+def _scales_an_integral(residual: sp.Expr, theta: sp.Symbol, integrals) -> bool:
+    """Whether the residual's sensitivity to ``theta`` holds one of the ARR's integrals."""
+    held = set(integrals)
+    if not held or not residual.free_symbols & held:
+        return False
+    return bool(sp.diff(residual, theta).free_symbols & held)
 
 
 def _smallest(required: np.ndarray, persistence: int) -> float:

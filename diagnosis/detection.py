@@ -244,7 +244,9 @@ def _across_steps(arr, data, inputs: Mapping, method: str, window: int | None, p
     if not (inputs or ends) or not estimated:
         return np.zeros(len(data), bool)
     order = max(estimated)
-    reach = ((window or default_window(polyorder)) // 2 if method == "savgol" else 1) + order
+    # half a window reaches the step itself; the signals' fast transient right after it bends them as
+    # sharply, so a whole window (and the derivative's order) is left undecided on each side
+    reach = ((window or default_window(polyorder)) if method == "savgol" else 2) + order
     masked = step_mask({"t": data.t, **inputs}, list(inputs), reach)
     if ends:
         masked[:reach] = True

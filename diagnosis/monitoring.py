@@ -33,6 +33,7 @@ from .arrs import derive_arrs
 from .detectability import Detectability, detectability
 from .detection import CalibrationError, Evaluation, noise_margin
 from .signatures import SignatureMatrix, signature_matrix
+from .structural import sensor_fault
 from .signals import Record, RecordWarning, as_record
 
 __all__ = ["SAFETY", "WINDOWS", "Detection", "consistent_faults", "detect", "quiet_margin"]
@@ -169,7 +170,9 @@ def detect(bg, record, *, calibrate: float | None = None, margin: float | None =
                            "reason": reason}
         seen[arr.name] = d
         used.append(chosen)
-    signatures = signature_matrix(used)
+    # every parameter can fail, law constants included (a gas precharge, a cubic stiffness), and every sensor
+    rows = list(bg.parameters) + [sensor_fault(s) for s in bg.outputs]
+    signatures = signature_matrix(used, rows=rows)
     fired = [e.name for e in evaluations if _first_alarm(e, until) is not None]
     return Detection(evaluations, forms, seen, signatures, fired, consistent_faults(signatures, fired), until, used,
                      undecided, list(step_inputs or []))
