@@ -39,7 +39,7 @@ import numpy as np
 from bondgraph._optional import pandas_for
 
 from .residuals import read_record
-from .signals import RecordError, default_window
+from .signals import RecordError, default_window, has_column
 from .steps import step_mask
 from .thresholds import bglft_threshold, interval_threshold
 
@@ -222,19 +222,11 @@ def _step_columns(arr, record, steps) -> dict:
         raise ValueError(f"steps must be True, False or a list of input names, got {steps!r}")
     else:
         names = list(dict.fromkeys(steps))
-    present = [n for n in names if n in arr.signals or _has_column(record, n)]
+    present = [n for n in names if n in arr.signals or has_column(record, n)]
     if not present:
         return {}
     data = read_record(arr, record, extra=tuple(n for n in present if n not in arr.signals))
     return {n: data[n] for n in present}
-
-
-def _has_column(record, name: str) -> bool:
-    columns = getattr(record, "columns", record)
-    try:
-        return name in columns
-    except TypeError:
-        return False
 
 
 def _across_steps(arr, data, inputs: Mapping, method: str, window: int | None, polyorder: int,

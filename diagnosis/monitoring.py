@@ -34,7 +34,7 @@ from .detectability import Detectability, detectability
 from .detection import CalibrationError, Evaluation, noise_margin
 from .signatures import SignatureMatrix, signature_matrix
 from .structural import sensor_fault
-from .signals import Record, RecordWarning, as_record
+from .signals import Record, RecordWarning, as_record, has_column
 
 __all__ = ["SAFETY", "WINDOWS", "Detection", "consistent_faults", "detect", "quiet_margin"]
 
@@ -149,7 +149,7 @@ def detect(bg, record, *, calibrate: float | None = None, margin: float | None =
     given = arrs is not None
     first = list(arrs) if given else derive_arrs(bg, integrals="avoid" if integrals == "auto" else integrals)
     names = list(dict.fromkeys(s for arr in first for s in arr.signals))
-    data = as_record(record, names + [n for n in inputs if _has(record, n) and n not in names])
+    data = as_record(record, names + [n for n in inputs if has_column(record, n) and n not in names])
     until = _calibration_end(data, calibrate)
     healthy = data.between(end=until)
     kept = {"avoid": {a.name: a for a in first}}
@@ -296,11 +296,3 @@ def _integral_depth(arr) -> int:
 
 def _span(data: Record) -> float:
     return float(data.t[-1] - data.t[0])
-
-
-def _has(record, name: str) -> bool:
-    columns = getattr(record, "columns", record)
-    try:
-        return name in columns
-    except TypeError:
-        return False

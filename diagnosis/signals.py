@@ -270,6 +270,19 @@ _SPECIAL_NUMBER = re.compile(r"[+-]?(?:inf|infinity|nan)", re.IGNORECASE)
 _OTHER_SEPARATORS = ((";", "';'"), ("\t", "tabs"), ("|", "'|'"))
 
 
+def has_column(record, name: str) -> bool:
+    """Whether ``record`` (a Record, a mapping or a DataFrame) has a column ``name``, before any validation.
+
+    >>> has_column({"t": [0.0], "x": [1.0]}, "x"), has_column(None, "x")
+    (True, False)
+    """
+    columns = getattr(record, "columns", record)
+    try:
+        return name in columns
+    except TypeError:
+        return False
+
+
 def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None) -> Record:
     r"""Read a CSV file with a header row and a time column ``t`` into a :class:`Record`.
 
