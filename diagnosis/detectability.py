@@ -7,9 +7,11 @@ model of Jha et al. (2016), eq. 27, per unit of relative change).  The alarm nee
 
     epsilon > (B_hi + m) / s        (s > 0),   or   (m - B_lo) / |s|   (s < 0)
 
-on every sample of some run of ``persistence`` samples: the smallest such epsilon over the record is
-the **detectable rise**; a fall likewise.  Both are read on the record at hand (its excitation, its
-noise through the calibrated margin ``m``), so they say what this ARR can see on this machine.
+on every sample of some run of ``persistence`` samples, with the margin counted ``1 +
+NOISE_ALLOWANCE`` times (the residual's own noise must not make the alarm a coin toss): the smallest
+such epsilon over the record is the **detectable rise**; a fall likewise. Both are read on the
+record at hand (its excitation, its noise through the calibrated margin ``m``), so they say what
+this ARR can see on this machine.
 
 An ARR that cannot detect a change of any parameter below :data:`BLIND_CHANGE` is **blind** on the
 record: typically the noise of a second derivative inflates its margin beyond any plausible fault.
@@ -28,6 +30,8 @@ __all__ = ["BLIND_CHANGE", "Detectability", "detectability"]
 
 #: An ARR that needs a larger relative change than this of every parameter is reported blind.
 BLIND_CHANGE = 1.0
+#: Extra margins a change must clear beyond the band's edge to be claimed detectable (see detectability).
+NOISE_ALLOWANCE = 0.5
 #: Relative step of the central difference that gives a residual's sensitivity to a parameter.
 STEP = 1e-6
 
@@ -98,8 +102,12 @@ def detectability(evaluation, arr, *, after: float = -np.inf) -> Detectability:
     True
     """
     sensitivities = _sensitivities(arr, evaluation.points)
-    lo = evaluation.lower - evaluation.margin
-    hi = evaluation.upper + evaluation.margin
+    # the residual carries its noise too: a change is claimed where it clears the band by an allowance
+    # of NOISE_ALLOWANCE margins more (the margin is k noise deviations), so that the alarm is likely,
+    # not a coin toss on each of the persistence samples
+    widened = evaluation.margin * (1.0 + NOISE_ALLOWANCE)
+    lo = evaluation.lower - widened
+    hi = evaluation.upper + widened
     rise, fall = {}, {}
     late = np.asarray(evaluation.t) > after
     for parameter, s in sensitivities.items():
