@@ -72,12 +72,13 @@ def _segments(case: ZooCase, inputs: str, t_end: float, cuts: tuple = ()) -> lis
 
 def simulate_reference(case: ZooCase, *, parameters: Mapping | None = None, inputs: str = "smooth",
                        t_end: float | None = None, dt: float | None = None, order: int = ORDER,
-                       fault_at: float | None = None) -> ReferenceRun:
+                       fault_at: float | None = None, ramp: float = 0.0) -> ReferenceRun:
     """Integrate the case's physics and sample its inputs, outputs and their exact derivatives.
 
     ``parameters``: parameter -> a number or a sympy expression in ``t`` (a drifting parameter);
     the others keep their nominal values; with ``fault_at``, they take these values from that time on
-    (an abrupt fault), nominal before.  ``inputs``: ``"smooth"`` or ``"step"``.
+    (an abrupt fault), nominal before, or move to them linearly over ``ramp`` seconds from that time
+    (a fast wear: no discontinuity of the state's derivatives).  ``inputs``: ``"smooth"`` or ``"step"``.
     """
     t_end = case.t_end if t_end is None else t_end
     dt = case.dt if dt is None else dt
@@ -96,8 +97,12 @@ def simulate_reference(case: ZooCase, *, parameters: Mapping | None = None, inpu
     samples = {n: np.full(grid.size, np.nan) for n in names}
     derivs = {n: [np.full(grid.size, np.nan) for _ in range(order)] for n in names}
     # a closed loop: an input written in sensor signals (a controller) reads them from the states
-    for start, end, u in _segments(case, inputs, t_end, () if fault_at is None else (fault_at,)):
+    cuts = () if fault_at is None else (fault_at, fault_at + ramp) if ramp > 0 else (fault_at,)
+    for start, end, u in _segments(case, inputs, t_end, cuts):
         params = healthy if fault_at is not None and start < fault_at else psubs
+        if fault_at is not None and ramp > 0 and fault_at <= start < fault_at + ramp:
+            share = (t - fault_at) / ramp  # healthy at fault_at, faulty at fault_at + ramp
+            params = {k: healthy[k] + share * (psubs[k] - healthy[k]) for k in psubs}
         sensors = {sp.Symbol(k): sp.sympify(v).xreplace(params) for k, v in case.outputs.items()}
         u = {k: v.xreplace(sensors) for k, v in u.items()}
         subs = {**params, **u}
