@@ -147,7 +147,7 @@ def cmd_detect(args, progress: Progress) -> int:
         print(f"{name}: undecided, left out ({why})")
     print(_detectable_line(result))
     if result.fired:
-        print(f"faults consistent with {', '.join(result.fired)}: {', '.join(result.candidates) or 'none'}")
+        print(f"faults consistent with {', '.join(result.isolating)}: {', '.join(result.candidates) or 'none'}")
     if out is not None:
         write_text(out / "detection.json", json.dumps(summary, indent=2, default=_json_value))
         columns = {"t": record.t}

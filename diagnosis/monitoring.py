@@ -16,8 +16,9 @@
 3. **Detectability**: per ARR and parameter, the smallest relative change detected at its margin; an
    ARR that sees no change below 100 % is reported blind, with the reason.
 4. **Isolation**: the faults (parameters and sensors) consistent with the ARRs that fired: every
-   fired ARR is sensitive to them.  An ARR that did not fire exonerates nothing (a sensitive ARR may
-   still be blind to a small change), so the list is the faults that explain every alarm.
+   fired ARR whose alarm is sustained (not a lone burst at a transient) is sensitive to them. An ARR
+   that did not fire exonerates nothing (a sensitive ARR may still be blind to a small change), so
+   the list is the faults that explain every alarm.
 """
 
 from __future__ import annotations
@@ -44,6 +45,8 @@ WINDOWS = (None, 21, 41, 81, 161)
 #: The calibrated margin is at least this multiple of the smallest margin that keeps the fault-free stretch
 #: quiet (:func:`quiet_margin`): estimator bias at transients, which the noise's robust spread ignores.
 SAFETY = 1.25
+#: A fired ARR takes part in isolation when its alarms last this many times ``persistence`` samples in all.
+SUSTAINED = 3
 #: The share of the calibration stretch at its start that the quiet margin leaves out (a start from rest).
 START_SHARE = 0.1
 STEPS_IN_SENSORS = True
@@ -69,12 +72,15 @@ class Detection:
     fired : list of str
         ARRs in alarm after the calibration stretch.
     candidates : list of str
-        Faults consistent with ``fired`` (empty when nothing fired).
+        Faults consistent with the ARRs in ``isolating`` (empty when nothing fired).
     calibration_end : float
     undecided : dict
         ARR name -> why the record cannot evaluate it in any form (it is left out, not guessed).
     steps : list of str
         The record columns whose steps were looked for (inputs and sensors).
+    isolating : list of str
+        The fired ARRs whose alarms last at least :data:`SUSTAINED` times ``persistence`` samples (all of
+        ``fired`` if none does): ``candidates`` must explain these.
     """
 
     evaluations: list
@@ -87,6 +93,7 @@ class Detection:
     arrs: list = field(default_factory=list, repr=False)
     undecided: dict = field(default_factory=dict)
     steps: list = field(default_factory=list)
+    isolating: list = field(default_factory=list)
 
     @property
     def detection_time(self) -> float | None:
@@ -103,7 +110,8 @@ class Detection:
     def as_dict(self) -> dict:
         """Plain data for JSON."""
         return {"detection_time": self.detection_time, "calibration_end": self.calibration_end,
-                "fired": list(self.fired), "candidates": list(self.candidates), "blind": self.blind,
+                "fired": list(self.fired), "isolating": list(self.isolating), "candidates": list(self.candidates),
+                "blind": self.blind,
                 "undecided": dict(self.undecided),
                 "forms": self.forms, "detectability": {k: d.as_dict() for k, d in self.detectability.items()}}
 
@@ -174,8 +182,13 @@ def detect(bg, record, *, calibrate: float | None = None, margin: float | None =
     rows = list(bg.parameters) + [sensor_fault(s) for s in bg.outputs]
     signatures = signature_matrix(used, rows=rows)
     fired = [e.name for e in evaluations if _first_alarm(e, until) is not None]
-    return Detection(evaluations, forms, seen, signatures, fired, consistent_faults(signatures, fired), until, used,
-                     undecided, list(step_inputs or []))
+    # isolation reads the sustained alarms: a lone burst (a transient's estimator bias) would exclude the
+    # true fault, whereas leaving a fired ARR out only widens the consistent set (nothing is exonerated)
+    sustained = [e.name for e in evaluations if e.name in fired
+                 and int(np.count_nonzero(e.alarm & (e.t > until))) >= SUSTAINED * e.persistence]
+    isolating = sustained or fired
+    return Detection(evaluations, forms, seen, signatures, fired, consistent_faults(signatures, isolating), until,
+                     used, undecided, list(step_inputs or []), isolating)
 
 
 def quiet_margin(evaluation: Evaluation, after: float = -np.inf) -> float:
