@@ -71,7 +71,7 @@ ISOLATION_LIMIT = 60
 #: second per fifty equations of a long chain, and more as the derivatives it needs grow with the set)
 #: and gaps searched for minimal sets (each a structural search near the fault).  Past either, the ARRs
 #: found so far are returned and an ARRWarning names the faults left undetected.
-MAX_ELIMINATIONS = 150
+MAX_ELIMINATIONS = 300
 MAX_SEARCHES = 60
 #: The equations the searches for minimal sets of one derivation may visit together (each overdetermined
 #: subset explored counts its size: a matching over it).

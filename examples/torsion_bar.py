@@ -399,9 +399,11 @@ def _rul_hits(result, case: Case) -> dict:
 def _threshold_widths(evaluation) -> dict:
     """Median widths of the interval and BG-LFT thresholds on the nominal record (issue 3)."""
     width = evaluation.upper - evaluation.lower
-    return {"interval_width_median": float(np.median(width)),
-            "bglft_width_median": float(np.median(2 * evaluation.bglft)),
-            "interval_never_wider_than_bglft": bool(np.all(width <= 2 * evaluation.bglft * (1 + 1e-12)))}
+    decided = np.isfinite(width) & np.isfinite(evaluation.bglft)  # samples left undecided (input steps) aside
+    return {"interval_width_median": float(np.median(width[decided])),
+            "bglft_width_median": float(np.median(2 * evaluation.bglft[decided])),
+            "interval_never_wider_than_bglft": bool(np.all(width[decided] <= 2 * evaluation.bglft[decided]
+                                                           * (1 + 1e-12)))}
 
 
 def summarize(figures: list[dict]) -> dict:
