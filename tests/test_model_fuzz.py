@@ -25,7 +25,7 @@ from bondgraph.errors import PHMError
 
 FAST = settings(max_examples=12, deadline=None, derandomize=True, database=None,
                 suppress_health_check=list(HealthCheck))
-SLOW = settings(FAST, max_examples=100)
+SLOW = settings(FAST, max_examples=50)
 
 #: Nonlinear laws of an R element named ``{p}``: a cubic damper and an orifice.
 R_LAWS = ["e - {p}*f**3", "f - {p}*sign(e)*sqrt(Abs(e))", "e - {p}*Abs(f)*f"]

@@ -23,7 +23,7 @@ from tests.zoo.reference import record, simulate_reference
 BY_NAME = {case.name: case for case in cases()}
 FAST = ["flywheel_speed_loop"]
 #: about 20 s of CPU each: one per domain and feature here, every model in benchmarks/zoo_cli.py
-SLOW = ["quarter_car", "two_tank_orifice", "level_loop", "buck_averaged", "loudspeaker", "wall_two_layer"]
+SLOW = ["quarter_car", "level_loop", "loudspeaker"]
 
 
 def bgphm(*argv: str) -> tuple[int, str]:
