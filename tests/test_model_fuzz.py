@@ -23,7 +23,7 @@ import diagnosis
 from bondgraph import BondGraph
 from bondgraph.errors import PHMError
 
-FAST = settings(max_examples=12, deadline=None, derandomize=True, database=None,
+FAST = settings(max_examples=6, deadline=None, derandomize=True, database=None,
                 suppress_health_check=list(HealthCheck))
 SLOW = settings(FAST, max_examples=50)
 

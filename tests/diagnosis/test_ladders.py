@@ -32,6 +32,7 @@ def named_missing(messages) -> set:
     return found
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("sections, sensors", [(4, ("i_1", "v_mid", "v_end")), (4, ADJACENT)])
 def test_the_warning_names_only_faults_no_returned_arr_sees(sections, sensors):
     bg = rlc_ladder(sections, sensors)

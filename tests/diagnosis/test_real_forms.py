@@ -78,6 +78,7 @@ def tanks_arrs():
     return {"default": derive_arrs(TANKS.build()), "isolation": derive_arrs(TANKS.build(), **ISOLATION)}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("settings", ["default", "isolation"])
 def test_orifice_tank_arrs_are_real_and_hold_on_the_reference(settings, tanks_arrs, tanks_run):
     arrs = tanks_arrs[settings]
@@ -147,6 +148,7 @@ def duffing_oscillator() -> BondGraph:
     return bg
 
 
+@pytest.mark.slow
 def test_orifice_on_a_pumped_path_gives_real_arrs_that_hold():
     case = pump_case()
     run = simulate_reference(case)

@@ -19,6 +19,7 @@ from tests.zoo.models.quarter_car import build as quarter_car
     pytest.param(lambda: derive_arrs(dc_motor(), max_order=2), id="dc-motor-second-order"),
     pytest.param(lambda: derive_arrs(three_tank()), id="three-tank"),
 ])
+@pytest.mark.slow
 def test_same_signature_is_empty_exactly_for_the_isolable_rows(arrs):
     arrs = arrs()
     signatures = signature_matrix(arrs)
