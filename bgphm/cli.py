@@ -164,11 +164,7 @@ def cmd_detect(args, progress: Progress) -> int:
 
 def _detectable_line(result) -> str:
     """``smallest detectable change: b 12 %, J 85 %, k_m none`` over every ARR of the detection."""
-    best: dict = {}
-    for d in result.detectability.values():
-        for p in d.rise:
-            best[p] = min(best.get(p, float("inf")), d.change(p))
-    parts = [f"{p} {v:.0%}" if np.isfinite(v) else f"{p} none" for p, v in sorted(best.items())]
+    parts = [f"{p} {v:.0%}" if np.isfinite(v) else f"{p} none" for p, v in sorted(result.smallest_changes.items())]
     return "smallest detectable change: " + (", ".join(parts) if parts else "no parameter")
 
 

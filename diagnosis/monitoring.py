@@ -31,8 +31,9 @@ import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
 
 from .arrs import derive_arrs
-from .detectability import Detectability, detectability
+from .detectability import Detectability, detectability, summary
 from .detection import CalibrationError, Evaluation, noise_margin
+from .residuals import integral_depth as _integral_depth
 from .signatures import SignatureMatrix, signature_matrix
 from .structural import sensor_fault
 from .signals import Record, RecordWarning, as_record, has_column
@@ -101,6 +102,11 @@ class Detection:
         times = [_first_alarm(e, self.calibration_end) for e in self.evaluations]
         times = [t for t in times if t is not None]
         return min(times) if times else None
+
+    @property
+    def smallest_changes(self) -> dict:
+        """Parameter -> the smallest relative change (whichever sign) any of the ARRs detects."""
+        return summary(self.detectability)
 
     @property
     def blind(self) -> list:
@@ -275,7 +281,7 @@ def _trial(arr, options: dict, healthy: Record, data: Record, margin, k) -> tupl
             start = float(healthy.t[0] + START_SHARE * (healthy.t[-1] - healthy.t[0]))
             m = max(m, SAFETY * quiet_margin(arr.evaluate(healthy, **options), after=start))
         if margin is None and arr.integrals:
-            m *= (_span(data) / max(_span(healthy), 1e-300)) ** (_integral_depth(arr) - 0.5)
+            m *= (_span(data) / max(_span(healthy), 1e-300)) ** (_integral_depth(arr.nominal) - 0.5)
         evaluation = arr.evaluate(data, margin=m, **options)
     # what a change would show over the monitored stretch (its excitation), at the healthy stretch's margin
     return arr, {**options, "margin": float(m)}, detectability(evaluation, arr, after=healthy.t[-1]), evaluation
@@ -295,16 +301,6 @@ def _first_alarm(evaluation: Evaluation, after: float) -> float | None:
 def _calibration_end(data: Record, calibrate: float | None) -> float:
     t0, t1 = float(data.t[0]), float(data.t[-1])
     return t0 + CALIBRATION_SHARE * (t1 - t0) if calibrate is None else float(calibrate)
-
-
-def _integral_depth(arr) -> int:
-    """How many integrations deep the ARR's deepest integral is (an n-fold integral of white noise spreads as
-    ``t^(n - 1/2)``)."""
-    import sympy as sp
-
-    def depth(e) -> int:
-        return max((len(i.limits) + depth(i.function) for i in e.atoms(sp.Integral)), default=0)
-    return depth(arr.nominal)
 
 
 def _span(data: Record) -> float:

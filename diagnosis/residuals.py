@@ -235,6 +235,16 @@ def _depth(integral: sp.Integral) -> int:
     return inner + len(integral.limits)
 
 
+def integral_depth(expression: sp.Expr) -> int:
+    """How many integrations deep ``expression``'s deepest integral is (0 without integrals).
+
+    >>> t = sp.Symbol("t"); x = sp.Function("x")
+    >>> integral_depth(x(t) + sp.Integral(sp.Integral(x(t), (t, 0, t)), (t, 0, t)))
+    2
+    """
+    return max((_depth(i) for i in expression.atoms(sp.Integral)), default=0)
+
+
 def _check_numeric(name: str, nominal: sp.Expr, uncertain: sp.Expr, integrals: Mapping) -> None:
     """Raise an :class:`ARRError` unless every part of the relation is a function numpy can compute."""
     for where, expression in [("r_n", nominal), ("Psi_2", uncertain), *(
