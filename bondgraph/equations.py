@@ -26,6 +26,7 @@ and are solved for them.
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Hashable
 from dataclasses import dataclass, field
 
@@ -37,6 +38,7 @@ from .calculus import time_derivative
 from .causality import INTEGRAL, Causality, assign_causality
 from .errors import CausalityError, EquationError, LawError
 from .laws import solve_for
+from .memo import ContentCache, content_key
 from .structure import PORT_SYMBOLS, T, BondGraphLike, Element, require_model, signal_function
 
 E_, F_, Q_, P_ = (PORT_SYMBOLS[n] for n in "efqp")
@@ -583,6 +585,8 @@ class StateEquations:
     causality: Causality
     algebraic_loops: list
     ports: dict = field(default_factory=dict)
+    #: Numeric functions compiled from these equations (by :func:`~bondgraph.simulation.simulate`), shared by copies.
+    compiled: dict = field(default_factory=dict, repr=False, compare=False)
 
     @property
     def dependent_storage(self) -> list:
@@ -663,10 +667,35 @@ def state_equations(bg: BondGraphLike, causality: Causality | None = None) -> St
     >>> eqs = rlc_circuit().state_equations()
     >>> eqs.states, eqs.rhs[0]
     ([p_L, q_C], V(t) - R*p_L/L - q_C/C)
+
+    The equations of the last :data:`REMEMBERED` models (by content) are remembered: asking again, say
+    for each run of a parameter sweep, returns a copy at no cost.
     """
     require_model(bg, "state_equations")
     if causality is None:
-        causality = assign_causality(bg, INTEGRAL, dualize_detectors=False)
+        remembered = _REMEMBERED.get(content_key(("state_equations", bg.structure())),
+                                     lambda: _state_equations(bg, assign_causality(bg, INTEGRAL,
+                                                                                   dualize_detectors=False)))
+        return _copy(remembered)
+    return _state_equations(bg, causality)
+
+
+#: How many models' state equations :func:`state_equations` remembers.
+REMEMBERED = 64
+_REMEMBERED = ContentCache(REMEMBERED)
+
+
+def _copy(equations: StateEquations) -> StateEquations:
+    """A copy whose lists and dicts the caller may change; the causality and compiled functions are shared."""
+    twin = copy.copy(equations)
+    for name in ("states", "elements", "rhs", "inputs", "algebraic_loops"):
+        setattr(twin, name, list(getattr(equations, name)))
+    for name in ("outputs", "efforts", "flows", "parameters", "ports"):
+        setattr(twin, name, dict(getattr(equations, name)))
+    return twin
+
+
+def _state_equations(bg: BondGraphLike, causality: Causality) -> StateEquations:
     if causality.dualized:
         raise CausalityError("state equations need detectors as measurements, not dualized sources")
     structure = bg.structure()

@@ -499,6 +499,25 @@ class _Plan:
         eq = self.equations
         u_symbols = [sp.Symbol(f"_u_{name}") for name in self.input_names]
         to_symbol = {signal_function(name): s for name, s in zip(self.input_names, u_symbols)}
+        # a sweep simulates one model's equations many times: lambdify once (the expressions are in the
+        # key, so equations edited in place are compiled afresh)
+        key = (tuple(self.input_names), tuple(self.parameter_names), tuple(eq.states), tuple(eq.rhs),
+               tuple(eq.outputs.items()), tuple(eq.efforts.items()), tuple(eq.flows.items()))
+        if key not in eq.compiled:
+            eq.compiled[key] = self._lambdified(to_symbol, u_symbols)
+        self.f_rhs, self.f_outputs, outputs, self.f_bonds = eq.compiled[key]
+        self.output_names = list(eq.outputs)
+        self.labels = list(eq.efforts)
+        closed = {to_symbol[signal_function(n)] for n in (*self.feedback, *self.controllers)}
+        for name, expression in zip(self.output_names, outputs):
+            if expression.free_symbols & closed:
+                raise SimulationError(
+                    f"measured signal {name!r} depends directly on a feedback input; the loop is algebraic"
+                )
+
+    def _lambdified(self, to_symbol: dict, u_symbols: list) -> tuple:
+        """The right-hand sides, outputs (with their expressions in plain input symbols) and bond variables."""
+        eq = self.equations
         theta = [sp.Symbol(name) for name in self.parameter_names]
         args = (T, eq.states, u_symbols, theta)
 
@@ -514,18 +533,11 @@ class _Plan:
             expressions = [x.xreplace(to_symbol) for x in expressions]
             return sp.lambdify(args, expressions, modules="numpy", cse=True), expressions
 
-        self.f_rhs, _ = compile_list(eq.rhs, [f"d{x}/dt" for x in eq.states])
-        self.output_names = list(eq.outputs)
-        self.f_outputs, outputs = compile_list(eq.outputs.values(), [f"signal {n!r}" for n in eq.outputs])
-        closed = {to_symbol[signal_function(n)] for n in (*self.feedback, *self.controllers)}
-        for name, expression in zip(self.output_names, outputs):
-            if expression.free_symbols & closed:
-                raise SimulationError(
-                    f"measured signal {name!r} depends directly on a feedback input; the loop is algebraic"
-                )
-        self.labels = list(eq.efforts)
+        f_rhs, _ = compile_list(eq.rhs, [f"d{x}/dt" for x in eq.states])
+        f_outputs, outputs = compile_list(eq.outputs.values(), [f"signal {n!r}" for n in eq.outputs])
         what = [f"effort of bond {k}" for k in eq.efforts] + [f"flow of bond {k}" for k in eq.flows]
-        self.f_bonds, _ = compile_list([*eq.efforts.values(), *eq.flows.values()], what)
+        f_bonds, _ = compile_list([*eq.efforts.values(), *eq.flows.values()], what)
+        return f_rhs, f_outputs, outputs, f_bonds
 
     def _theta(self, t):
         return [v(t) if callable(v) else v for v in (self.parameter_values[n] for n in self.parameter_names)]

@@ -25,12 +25,10 @@ Example
 from __future__ import annotations
 
 import copy
-import dataclasses
 import warnings
-from collections import OrderedDict
-from collections.abc import Mapping
 
 from bondgraph import BondGraph
+from bondgraph.memo import ContentCache, content_key
 from bondgraph.structure import require_model
 
 from . import elimination, relation, structural
@@ -104,25 +102,13 @@ def derive_arrs(bg: BondGraph, *, complete: bool = True, sensor_faults: bool = T
     """
     require_model(bg, "derive_arrs")
     key = _key(bg, complete, sensor_faults, max_order, integrals, isolation)
-    if key is None:   # content Python cannot hash (say an array as a value): derived every time
-        return _derive(bg, complete, sensor_faults, max_order, integrals, isolation)
-    if key not in _REMEMBERED_ARRS:
-        with warnings.catch_warnings(record=True) as said:
-            warnings.simplefilter("always")
-            arrs = _derive(bg, complete, sensor_faults, max_order, integrals, isolation)
-        _REMEMBERED_ARRS[key] = (arrs, [(w.message, w.category) for w in said])
-        while len(_REMEMBERED_ARRS) > REMEMBERED:
-            _REMEMBERED_ARRS.popitem(last=False)
-    _REMEMBERED_ARRS.move_to_end(key)
-    arrs, said = _REMEMBERED_ARRS[key]
-    for message, category in said:
-        warnings.warn(message, category, stacklevel=2)
+    arrs = _REMEMBERED.get(key, lambda: _derive(bg, complete, sensor_faults, max_order, integrals, isolation))
     return [_copy(arr) for arr in arrs]
 
 
 #: How many models' ARRs :func:`derive_arrs` remembers (the least recently asked for is forgotten first).
 REMEMBERED = 64
-_REMEMBERED_ARRS: OrderedDict = OrderedDict()
+_REMEMBERED = ContentCache(REMEMBERED)
 
 
 def _derive(bg, complete: bool, sensor_faults: bool, max_order, integrals: str, isolation) -> list[ARR]:
@@ -137,31 +123,13 @@ def _derive(bg, complete: bool, sensor_faults: bool, max_order, integrals: str, 
                                             integrals=integrals, isolation=isolation))
 
 
-def _key(bg, *options) -> tuple | None:
+def _key(bg, *options):
     """The model's content, the options and the search budgets: everything the derivation depends on."""
     budgets = (elimination.MAX_ELIMINATIONS, elimination.MAX_SEARCHES, elimination.MAX_SEARCH_EQUATIONS,
                elimination.MAX_OPERATIONS, elimination.ISOLATION_LIMIT, structural.MSO_SEARCH_LIMIT,
                relation.TIDY_LIMIT)
-    key = (type(bg).__name__, _hashable(getattr(bg, "name", None)), _hashable(bg.structure()),
-           _hashable(options), budgets)
-    try:
-        hash(key)
-    except TypeError:
-        return None
-    return key
-
-
-def _hashable(value):
-    """A hashable image of a structure that is equal only for equal content, types and order included."""
-    if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        return (type(value).__name__, *(_hashable(getattr(value, f.name)) for f in dataclasses.fields(value)))
-    if isinstance(value, Mapping):
-        return ("mapping", *((_hashable(k), _hashable(v)) for k, v in value.items()))
-    if isinstance(value, (list, tuple)):
-        return (type(value).__name__, *(_hashable(v) for v in value))
-    if isinstance(value, (set, frozenset)):
-        return frozenset(_hashable(v) for v in value)
-    return (type(value).__name__, value)   # 1, 1.0 and True are equal to Python, not to a model
+    return content_key(("derive_arrs", type(bg).__name__, getattr(bg, "name", None), bg.structure(), options,
+                        budgets))
 
 
 def _copy(arr: ARR) -> ARR:

@@ -8,6 +8,7 @@ counts as much as one at the top of a module.
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -39,6 +40,7 @@ def _enclosing_module(name: str) -> str | None:
     return name or None
 
 
+@functools.cache   # the tests read the same files: parse each once
 def _imports(module: str) -> list[tuple[str, str | None, int]]:
     """(imported module, imported name or None, line) for every import statement of ``module``."""
     path, is_package = MODULES[module]

@@ -26,6 +26,8 @@ from bondgraph.errors import PHMError
 FAST = settings(max_examples=6, deadline=None, derandomize=True, database=None,
                 suppress_health_check=list(HealthCheck))
 SLOW = settings(FAST, max_examples=50)
+#: The fast tier's share of random models (the slow tier runs 50, benchmarks none).
+FEW = settings(FAST, max_examples=3)
 
 #: Nonlinear laws of an R element named ``{p}``: a cubic damper and an orifice.
 R_LAWS = ["e - {p}*f**3", "f - {p}*sign(e)*sqrt(Abs(e))", "e - {p}*Abs(f)*f"]
@@ -189,7 +191,7 @@ SPEC_RLC = {"junctions": ["1", "0"], "links": [(0, "bond", 1.0)],
             "sources": [(0, "Se")], "sensors": [0, 1]}
 
 
-@FAST
+@FEW
 @given(spec=model_specs(), seed=st.integers(0, 2**16))
 @example(spec=SPEC_RLC, seed=0)
 def test_random_models_end_every_stage_in_a_value_or_a_phm_error(spec, seed):

@@ -34,7 +34,7 @@ def flow_into(bg, result, element):
     return result.flows[bond.label]
 
 
-@pytest.mark.parametrize("corner", [0, 1, 2])
+@pytest.mark.parametrize("corner", [0, *(pytest.param(c, marks=pytest.mark.slow) for c in (1, 2))])
 def test_torsion_bar_identity_at_points_of_the_box(corner):
     bg = torsion_bar_monitorable()
     rng = np.random.default_rng(corner)

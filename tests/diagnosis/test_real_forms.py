@@ -89,6 +89,7 @@ def test_orifice_tank_arrs_are_real_and_hold_on_the_reference(settings, tanks_ar
         assert identity_error(arr, tanks_run) < 1e-6, arr.name
 
 
+@pytest.mark.slow
 def test_orifice_tank_arrs_under_isolation_need_second_derivatives_of_one_level(tanks_arrs, tanks_run):
     # the ARRs that tell the orifices apart invert one orifice law and differentiate it: where sympy wrote
     # Derivative(im(Derivative(h2(t), t)), t), the chain rule over real signals writes sign(...) h2''

@@ -1,7 +1,8 @@
 """Every stage on zoo models with the defaults (issue 30): the chain of tests/zoo/chain.py.
 
 The whole zoo runs in ``benchmarks/zoo.py`` (docs/zoo.md); here, models that cover a closed loop and a
-nonlinear law in the fast tier, and more in the slow tier.
+nonlinear law (the speed loop with quadratic drag, and more) in the slow tier; the fast tier runs the
+speed loop through the command line (test_cli_chain.py).
 """
 
 import pytest
@@ -28,11 +29,7 @@ def test_the_zoo_is_wide():
     assert {"electrical", "translational", "rotational", "hydraulic", "pneumatic", "thermal", "mixed"} <= domains
 
 
-def test_a_speed_loop_with_quadratic_drag():
-    check_chain("flywheel_speed_loop")
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["quarter_car", "two_tank_orifice"])
+@pytest.mark.parametrize("name", ["flywheel_speed_loop", "quarter_car", "two_tank_orifice"])
 def test_the_chain(name):
     check_chain(name)
