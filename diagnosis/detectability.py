@@ -8,10 +8,13 @@ model of Jha et al. (2016), eq. 27, per unit of relative change).  The alarm nee
     epsilon > (B_hi + m) / s        (s > 0),   or   (m - B_lo) / |s|   (s < 0)
 
 on every sample of some run of ``persistence`` samples, with the margin counted ``1 +
-NOISE_ALLOWANCE`` times (the residual's own noise must not make the alarm a coin toss): the smallest
-such epsilon over the record is the **detectable rise**; a fall likewise. Both are read on the
-record at hand (its excitation, its noise through the calibrated margin ``m``), so they say what
-this ARR can see on this machine.
+NOISE_ALLOWANCE`` times (the residual's own noise must not make the alarm a coin toss).  That first-order
+figure is one estimate; the other is the smallest epsilon whose *finite* effect on the record's own
+signals, ``r_n`` at ``theta_n (1 + epsilon)`` less ``r_n`` at ``theta_n``, clears the band so (a resistance
+enters as ``1/R``: a 30 % rise changes it by 23 % until the signals answer the change).  The **detectable
+rise** is the larger of the two, so the claim never promises more than either; a fall likewise.  Both
+are read on the record at hand (its excitation, its noise through the calibrated margin ``m``), so they
+say what this ARR can see on this machine.
 
 An ARR that cannot detect a change of any parameter below :data:`BLIND_CHANGE` is **blind** on the
 record: typically the noise of a second derivative inflates its margin beyond any plausible fault.
@@ -101,7 +104,7 @@ def detectability(evaluation, arr, *, after: float = -np.inf) -> Detectability:
     >>> 0.2 < d.rise["b"] < 0.3   # b's box is (0, +20 %): a rise must clear it first
     True
     """
-    sensitivities = _sensitivities(arr, evaluation.points)
+    responses = _responses(arr, evaluation.points)
     # the residual carries its noise too: a change is claimed where it clears the band by an allowance
     # of NOISE_ALLOWANCE margins more (the margin is k noise deviations), so that the alarm is likely,
     # not a coin toss on each of the persistence samples
@@ -110,48 +113,102 @@ def detectability(evaluation, arr, *, after: float = -np.inf) -> Detectability:
     hi = evaluation.upper + widened
     rise, fall = {}, {}
     late = np.asarray(evaluation.t) > after
-    for parameter, s in sensitivities.items():
-        s = np.where(late, s, np.nan)
+    for parameter, moved in responses.items():
+        if moved is None:
+            rise[parameter] = fall[parameter] = float("inf")
+            continue
+        s = np.where(late, (moved(STEP) - moved(-STEP)) / (2 * STEP), np.nan)
         with np.errstate(divide="ignore", invalid="ignore"):
             up = np.where(s > 0, hi / s, -lo / -s)      # epsilon > 0 moves -r_n by epsilon * s
             down = np.where(s > 0, -lo / s, hi / -s)    # epsilon < 0 by -|epsilon| * s
-        rise[parameter] = _smallest(up, evaluation.persistence)
-        fall[parameter] = _smallest(down, evaluation.persistence)
+        # the finite change moves the residual otherwise than first order (a 30 % rise of R changes 1/R by
+        # 23 %) as long as the signals have not answered it; once they have, the effect can be linear again
+        # (a current source through R: the voltage rises by 30 %).  The record cannot tell which, so the
+        # claim is the larger of the two figures: it promises less, never more, than either
+        for sign, first_order, claims in ((1.0, up, rise), (-1.0, down, fall)):
+            guess = _smallest(first_order, evaluation.persistence)
+            claims[parameter] = max(guess, _finite(moved, sign, guess, lo, hi, late, evaluation.persistence))
     worst = [max(rise[p], fall[p]) for p in rise]
     blind = not worst or min(worst) > BLIND_CHANGE
     return Detectability(evaluation.name, rise, fall, float(evaluation.margin), blind,
                          _blind_reason(arr, evaluation.margin) if blind else "")
 
 
-def _sensitivities(arr, points: list) -> dict:
-    """Parameter -> ``theta_n dr_n/dtheta`` at every sample, from the ARR's point values.
+def _responses(arr, points: list) -> dict:
+    """Parameter -> ``moved(epsilon)``, the shift of ``-r_n`` at every sample when the parameter is ``theta_n (1 +
+    epsilon)`` on the machine that made the record; None where no figure is claimed.
 
-    A central difference of ``r_n`` in the parameter (relative step :data:`STEP`) rather than sympy's
-    derivative: laws with ``sign`` and ``Abs`` differentiate to pulses and unevaluated derivatives.
+    The record obeys the true parameter while ``r_n`` is evaluated at the nominal one, so ``-r_n`` moves by
+    ``r_n(theta_n (1 + epsilon)) - r_n(theta_n)`` on the record's point values.  Central differences of it
+    give the sensitivity (sympy's derivative of laws with ``sign`` and ``Abs`` gives pulses).
     """
     compiled = arr.compiled
-    out = {}
+    shape = np.shape(points[0])
+    out: dict = {}
     for parameter in sorted(arr.parameters):
         theta = sp.Symbol(parameter)
         if any(theta in i.function.free_symbols for i in arr.nominal.atoms(sp.Integral)):
             # the parameter sits inside an integral: its sensitivity is not a point value of this ARR,
             # so no change of it is claimed detectable (the figure is conservative, never optimistic)
-            out[parameter] = np.full(np.shape(points[0]), np.nan)
+            out[parameter] = None
             continue
         others = {sp.Symbol(p): v for p, v in arr.values.items() if p != parameter}
         residual = arr.nominal.xreplace(compiled.symbols).xreplace(others)
         if _scales_an_integral(residual, theta, compiled.integrals):
             # theta scales an integral from the record's start: a change that comes later acts on part of
             # it only (how much depends on what the integral accumulates), so no figure is claimed
-            out[parameter] = np.full(np.shape(points[0]), np.nan)
+            out[parameter] = None
             continue
         f = sp.lambdify([*compiled.points, theta], residual, modules="numpy")
         nominal = float(arr.values[parameter])
         with np.errstate(all="ignore"):
-            up = np.asarray(f(*points, nominal * (1 + STEP)), float)
-            down = np.asarray(f(*points, nominal * (1 - STEP)), float)
-        out[parameter] = np.broadcast_to((up - down) / (2 * STEP), np.shape(points[0])).copy()
+            base = np.asarray(f(*points, nominal), float)
+
+        def moved(epsilon: float, f=f, nominal=nominal, base=base) -> np.ndarray:
+            with np.errstate(all="ignore"):
+                return np.broadcast_to(np.asarray(f(*points, nominal * (1.0 + epsilon)), float) - base, shape)
+
+        out[parameter] = moved
     return out
+
+
+#: The finite-change figure is looked for from half to :data:`SEARCH_SPAN` times the first-order figure, in steps of
+#: :data:`SEARCH_RATIO`, then bisects to :data:`SEARCH_TOLERANCE` (relative).
+SEARCH_SPAN, SEARCH_RATIO, SEARCH_TOLERANCE = 8.0, 1.1, 0.005
+
+
+def _finite(moved, sign: float, guess: float, lo: np.ndarray, hi: np.ndarray, late: np.ndarray,
+           persistence: int) -> float:
+    """The smallest relative change (of sign ``sign``) whose finite effect clears the band on ``persistence``
+    samples in a row, looked for around the first-order ``guess``; inf if none up to SEARCH_SPAN times it."""
+    if not np.isfinite(guess):
+        return float("inf")
+
+    def seen(epsilon: float) -> bool:
+        shift = moved(sign * epsilon)
+        with np.errstate(invalid="ignore"):
+            outside = late & ((shift > hi) | (shift < lo))
+        return _sustained(outside, persistence)
+
+    ceiling = 1.0 if sign < 0 else np.inf   # a parameter cannot fall by 100 % or more
+    below, epsilon = 0.0, guess / 2.0
+    while not seen(epsilon):
+        below, epsilon = epsilon, epsilon * SEARCH_RATIO
+        if epsilon > SEARCH_SPAN * guess or epsilon >= ceiling:
+            return float("inf")
+    while epsilon - below > SEARCH_TOLERANCE * epsilon:
+        middle = (below + epsilon) / 2.0
+        below, epsilon = (below, middle) if seen(middle) else (middle, epsilon)
+    return float(epsilon)
+
+
+def _sustained(outside: np.ndarray, persistence: int) -> bool:
+    """Whether ``outside`` holds on ``persistence`` consecutive samples somewhere."""
+    if persistence <= 1:
+        return bool(outside.any())
+    if outside.size < persistence:
+        return False
+    return bool(sliding_window_view(outside, persistence).all(axis=1).any())
 
 
 def _scales_an_integral(residual: sp.Expr, theta: sp.Symbol, integrals) -> bool:
