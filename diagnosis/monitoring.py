@@ -12,7 +12,10 @@
    measured noise is a random walk, so its margin is widened by ``(record span / calibration span)
    ** (n - 1/2)`` for an ``n``-fold integral (how the spread of integrated white noise grows).
 2. **Steps of the inputs** are found in the record and the samples whose derivative estimates reach
-   across them are left undecided (:mod:`diagnosis.steps`).
+   across them are left undecided (:mod:`diagnosis.steps`).  An alarm needs ``persistence`` violations
+   in a row and, for an ARR that estimates derivatives, at least half the derivative window:
+   neighbouring estimates share most of their samples, so a shorter run is a single piece of evidence
+   (a burst of estimator bias where the signals ring after a step, say).
 3. **Detectability**: per ARR and parameter, the smallest relative change detected at its margin; an
    ARR that sees no change below 100 % is reported blind, with the reason.
 4. **Isolation**: the faults (parameters and sensors) consistent with the ARRs that fired: every
@@ -36,7 +39,7 @@ from .detection import CalibrationError, Evaluation, noise_margin
 from .residuals import integral_depth as _integral_depth
 from .signatures import SignatureMatrix, signature_matrix
 from .structural import sensor_fault
-from .signals import Record, RecordWarning, as_record, has_column
+from .signals import Record, RecordWarning, as_record, default_window, has_column
 
 __all__ = ["SAFETY", "WINDOWS", "Detection", "consistent_faults", "detect", "quiet_margin"]
 
@@ -252,9 +255,9 @@ def _choose(candidates, healthy: Record, data: Record, until: float, margin, k, 
         windows = [window] if window is not None or arr.order == 0 else [
             w for w in WINDOWS if w is None or w <= len(healthy) // 10]
         for w in windows:
-            options = {"persistence": persistence, "steps": steps, "ends": True, **({"window": w} if w else {}),
-                       # Savitzky-Golay needs a polynomial of at least the derivative's order
-                       **({"polyorder": arr.order} if arr.order > 3 else {})}
+            polyorder = {"polyorder": arr.order} if arr.order > 3 else {}  # Savitzky-Golay: at least the order
+            options = {"persistence": _persistence(arr, persistence, w, polyorder), "steps": steps, "ends": True,
+                       **({"window": w} if w else {}), **polyorder}
             try:
                 trials.append(_trial(arr, options, healthy, data, margin, k))
             except CalibrationError as exc:
@@ -270,6 +273,15 @@ def _choose(candidates, healthy: Record, data: Record, until: float, margin, k, 
     if arr.integrals and differentiated:
         reason = "every differentiated form is blind on this record"
     return arr, options, d, evaluation, reason
+
+
+def _persistence(arr, persistence: int, window: int | None, polyorder: dict) -> int:
+    """``persistence`` violations in a row, and at least half the derivative window for an ARR that estimates
+    derivatives: neighbouring estimates share most of their window, so a shorter run is one piece of evidence
+    (a burst of estimator bias where the signals bend, not a fault)."""
+    if arr.order == 0:
+        return persistence
+    return max(persistence, (window or default_window(polyorder.get("polyorder", 3))) // 2)
 
 
 def _trial(arr, options: dict, healthy: Record, data: Record, margin, k) -> tuple:
