@@ -828,7 +828,9 @@ def build_parser() -> argparse.ArgumentParser:
         p.add_argument("--calibrate", type=float, metavar="T",
                        help="calibrate the margin on t <= T, assumed fault-free (default: the first 20 %%)")
         p.add_argument("--k", type=float, default=4.0, help="margin = k robust std of the residual (default 4)")
-        p.add_argument("--persistence", type=int, default=5, help="consecutive violations for an alarm (default 5)")
+        p.add_argument("--persistence", type=int, default=5,
+                       help="consecutive violations for an alarm (default 5; detect: at least half the derivative "
+                            "window)")
         if name == "detect":
             p.add_argument("--window", type=int, help="Savitzky-Golay window for derivatives (odd; default: "
                                                       "chosen per ARR from the record)")
