@@ -627,11 +627,12 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
                                        "theta_mean": float(result.theta["mean"][-1, row]),
                                        "gamma_mean": float(result.gamma["mean"][-1, row])}
     best = result.monitor_result()
-    percentiles = best.rul_percentiles((5, 50, 95))
+    percentiles = best.rul_percentiles((5, 25, 50, 75, 95))
     for k, t in enumerate(result.rul_t):
         summary["predictions"].append({
             "t": float(t), "rul_mean": _finite(best.rul_mean[k]), "rul_p5": _finite(percentiles[k, 0]),
-            "rul_median": _finite(percentiles[k, 1]), "rul_p95": _finite(percentiles[k, 2]),
+            "rul_p25": _finite(percentiles[k, 1]), "rul_median": _finite(percentiles[k, 2]),
+            "rul_p75": _finite(percentiles[k, 3]), "rul_p95": _finite(percentiles[k, 4]),
             "censored": float(result.rul[k].censored_weight[0])})
         d = result.decisions[k]
         summary["decisions"].append({"t": float(t), "candidate": d.candidate, "status": d.status,
