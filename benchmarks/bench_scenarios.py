@@ -3,9 +3,9 @@
     python benchmarks/bench_scenarios.py [--json] [--seeds 10] [--particles 300] [--rul-every 10]
                                          [--jobs 2] [NAME ...]
 
-Each scenario (tests/scenarios/run.py) is a parameter wearing by a law (linear, exponential, power,
+Each scenario (tests/wear/run.py) is a parameter wearing by a law (linear, exponential, power,
 logistic, step then drift, intermittent) on the torsion bar's mechanics under a digital PI loop, written
-from the physics (tests/scenarios/torsion.py), with a clean residual (noise on the speeds only) or a
+from the physics (tests/wear/torsion.py), with a clean residual (noise on the speeds only) or a
 noisy one (on the measured torque too).  Every seed draws its own noise and the filter's own streams.
 The user's side is a model file, a CSV and ``--fail`` values, nothing of the truth.
 
@@ -31,7 +31,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from tests.scenarios.run import run, scenarios, score  # noqa: E402
+from tests.wear.run import run, scenarios, score  # noqa: E402
 
 SEED_BASE = 20261126   # seeds SEED_BASE + k: each its own noise and its own filter streams
 
