@@ -4,10 +4,7 @@ State arrays are batched over independent assets: ``theta`` (A, N),
 ``gamma`` (A, N, G), log-weights (A, N); one asset is a batch of one.  A step:
 
 1. predict: ``gamma_k = gamma_{k-1} + xi``, ``xi ~ N(0, var_xi)`` (random
-   walk), ``theta_k = g(theta_{k-1}, gamma_{k-1}) + v``; not at the first step:
-   the particles are drawn for the time of its measurement (the alarm), and a
-   prediction first would leave them a full step of drift behind, which on a
-   clean residual the likelihood never forgives;
+   walk), ``theta_k = g(theta_{k-1}, gamma_{k-1}) + v``;
 2. update: ``log w += -(y - h(theta_k))^2 / (2 c sigma_w^2)``, with ``c`` the
    inflation of the residual noise variance (the paper uses 4 and 9);
    a missing measurement (NaN) skips the update;
@@ -173,8 +170,7 @@ def _spread(values: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """RMAD (eq. 35) along the last axis; after resampling the weights are equal and a plain median does."""
     if np.all(weights == weights[..., :1]):
         median = np.median(values, axis=-1, keepdims=True)
-        with np.errstate(invalid="ignore", divide="ignore"):   # relative to a median of 0: NaN, no adaptation
-            return np.median(np.abs(values - median), axis=-1) / median[..., 0]
+        return np.median(np.abs(values - median), axis=-1) / median[..., 0]
     return rmad(values, weights[:, None, :])
 
 
@@ -300,7 +296,6 @@ class ParticleFilter:
         self.log_weights = np.full((assets, self.n), -np.log(self.n))
         self.log_evidence = np.zeros(assets)
         self.variance = np.broadcast_to(self.initial_variance, (assets, self.model.n_gamma)).copy()
-        self._predicted = False   # the first measurement is of the time the particles are drawn for
         if self.adaptation is not None:
             self.adaptation.reset()
 
@@ -332,9 +327,7 @@ class ParticleFilter:
         self._initialized()
         y = np.asarray(y, float)
         y = y if y.ndim == 2 else np.broadcast_to(y, (self.assets,))
-        if getattr(self, "_predicted", True):   # the first measurement is of the particles as drawn
-            self._predict()
-        self._predicted = True
+        self._predict()
         finite = np.isfinite(y)
         updated = finite.any(axis=1) if y.ndim == 2 else finite
         if updated.any():

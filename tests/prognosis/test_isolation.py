@@ -83,10 +83,10 @@ def test_evidence_of_a_point_hypothesis_is_its_likelihood():
     pf = ParticleFilter(LinearDegradation(), lambda theta, points: theta, n_particles=10, dt=1.0, noise_std=0.2,
                         inflation=1.0, gamma_std=0.0, seed=0)
     pf.initialize((1.0, 1.0), gamma0=0.5)
-    y = np.array([0.9, 1.6, 2.1])
+    y = np.array([1.4, 2.1, 2.6])
     for value in y:
         pf.step(value)
-    predicted = np.array([1.0, 1.5, 2.0])   # the first measurement is of the particles as drawn
+    predicted = np.array([1.5, 2.0, 2.5])
     expected = np.sum(-0.5 * ((y - predicted) / 0.2) ** 2 - 0.5 * math.log(2 * math.pi * 0.04))
     assert pf.log_evidence[0] == pytest.approx(expected, rel=1e-9)
 
