@@ -29,6 +29,8 @@ import numpy as np
 import sympy as sp
 from numpy.lib.stride_tricks import sliding_window_view
 
+from .detection import persistent
+
 __all__ = ["BLIND_CHANGE", "Detectability", "detectability"]
 
 #: An ARR that needs a larger relative change than this of every parameter is reported blind.
@@ -188,7 +190,7 @@ def _finite(moved, sign: float, guess: float, lo: np.ndarray, hi: np.ndarray, la
         shift = moved(sign * epsilon)
         with np.errstate(invalid="ignore"):
             outside = late & ((shift > hi) | (shift < lo))
-        return _sustained(outside, persistence)
+        return bool(persistent(outside, persistence).any())
 
     ceiling = 1.0 if sign < 0 else np.inf   # a parameter cannot fall by 100 % or more
     below, epsilon = 0.0, guess / 2.0
@@ -200,15 +202,6 @@ def _finite(moved, sign: float, guess: float, lo: np.ndarray, hi: np.ndarray, la
         middle = (below + epsilon) / 2.0
         below, epsilon = (below, middle) if seen(middle) else (middle, epsilon)
     return float(epsilon)
-
-
-def _sustained(outside: np.ndarray, persistence: int) -> bool:
-    """Whether ``outside`` holds on ``persistence`` consecutive samples somewhere."""
-    if persistence <= 1:
-        return bool(outside.any())
-    if outside.size < persistence:
-        return False
-    return bool(sliding_window_view(outside, persistence).all(axis=1).any())
 
 
 def _scales_an_integral(residual: sp.Expr, theta: sp.Symbol, integrals) -> bool:
