@@ -1,7 +1,7 @@
 """Prognosis scenarios (issue 31): wear laws simulated from the physics, run through ``bgphm prognose``.
 
     python benchmarks/bench_scenarios.py [--json] [--seeds 10] [--particles 300] [--rul-every 10]
-                                         [--jobs 2] [NAME ...]
+                                         [--jobs 2] [--filter sir|resample-move] [NAME ...]
 
 Each scenario (tests/wear/run.py) is a parameter wearing by a law (linear, exponential, power,
 logistic, step then drift, intermittent) on the torsion bar's mechanics under a digital PI loop, written
@@ -37,10 +37,10 @@ SEED_BASE = 20261126   # seeds SEED_BASE + k: each its own noise and its own fil
 
 
 def one(arguments: tuple) -> dict:
-    scenario, seed, particles, rul_every = arguments
+    scenario, seed, particles, rul_every, method = arguments
     started = time.process_time()
-    figures = score(scenario, run(scenario, seed, particles=particles, rul_every=rul_every))
-    return {**figures, "seed": seed, "cpu_s": round(time.process_time() - started, 1)}
+    figures = score(scenario, run(scenario, seed, particles=particles, rul_every=rul_every, method=method))
+    return {**figures, "seed": seed, "filter": method, "cpu_s": round(time.process_time() - started, 1)}
 
 
 def pooled(name: str, rows: list[dict]) -> dict:
@@ -50,7 +50,7 @@ def pooled(name: str, rows: list[dict]) -> dict:
 
     within, ra = values("within_20pct_second_half"), values("ra")
     return {
-        "scenario": name, "seeds": len(rows),
+        "scenario": name, "seeds": len(rows), "filter": rows[0]["filter"] if rows else None,
         "found": float(np.mean([r["found"] for r in rows])),
         "statuses": dict(Counter(str(r.get("status")) for r in rows)),
         "laws": dict(Counter(str(r.get("degradation")) for r in rows)),
@@ -77,9 +77,10 @@ def main() -> int:
     parser.add_argument("--particles", type=int, default=300)
     parser.add_argument("--rul-every", type=int, default=10)
     parser.add_argument("--jobs", type=int, default=1)
+    parser.add_argument("--filter", choices=("sir", "resample-move"), default="sir", help="bgphm prognose --filter")
     args = parser.parse_args()
     chosen = [s for s in scenarios() if not args.names or s.name in args.names]
-    tasks = [(s, SEED_BASE + k, args.particles, args.rul_every) for s in chosen for k in range(args.seeds)]
+    tasks = [(s, SEED_BASE + k, args.particles, args.rul_every, args.filter) for s in chosen for k in range(args.seeds)]
     with ProcessPoolExecutor(args.jobs) as pool:
         results = list(pool.map(one, tasks)) if args.jobs > 1 else [one(t) for t in tasks]
     for s in chosen:

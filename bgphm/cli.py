@@ -197,7 +197,8 @@ def cmd_prognose(args, progress: Progress) -> int:
     monitor = IsolatingMonitor(arrs, failures, noise_std=noise, laws=laws, candidates=candidates, dt=dt,
                                n_particles=args.particles, rate=None if args.rate is None else tuple(args.rate),
                                rul_every=args.rul_every, horizon=args.horizon, detection=detection,
-                               healthy_until=until, domains=spec.model.domains, seed=args.seed)
+                               healthy_until=until, domains=spec.model.domains, method=args.filter,
+                               seed=args.seed)
     progress(f"particle filter from the first alarm after t = {until:g} s: {len(laws)} law(s) per candidate, "
              f"{args.particles} particles each, dt = {dt:g} s")
     result = monitor.run(record, evaluations=evaluations, progress=_filter_progress(progress))
@@ -613,7 +614,8 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
                    "no candidate" if decision is None else decision.status),
                "degradation": None if decision is None else decision.degradation,
                "same_signature": [] if decision is None else list(decision.same_signature),
-               "failure_values": failures, "filter_step": dt, "particles_per_hypothesis": args.particles,
+               "failure_values": failures, "filter_step": dt, "filter": args.filter,
+               "particles_per_hypothesis": args.particles,
                "residual_noise_std": noise, "seed": args.seed, "evidence": {}, "predictions": [], "decisions": []}
     if decision is None:
         return summary
@@ -864,6 +866,10 @@ def build_parser() -> argparse.ArgumentParser:
                    help="uniform prior interval of the rate (default: the life from nominal to failure "
                         "log-uniform over 10 to 1e5 filter steps)")
     p.add_argument("--particles", type=int, default=500, help="particles per hypothesis (default 500)")
+    p.add_argument("--filter", choices=("sir", "resample-move"), default="sir",
+                   help="sir: random-walk particle filter (Jha et al. 2016, the default); resample-move: the "
+                        "law's parameters weighed on the whole history, moved by MCMC, with the residual noise "
+                        "measured on the healthy stretch")
     p.add_argument("--dt", type=float, help="filter step in s, a multiple of the record's (default: one "
                    "derivative window of samples)")
     p.add_argument("--rul-every", type=int, default=10, help="predict the RUL every N filter steps (default 10)")

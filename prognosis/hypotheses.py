@@ -263,10 +263,36 @@ class HypothesisObservation:
                                        for a in self.arrs]
         self.models = [models[h.candidate] for h in self.hypotheses]
 
-    def __call__(self, theta: np.ndarray, points) -> np.ndarray:
+    @property
+    def rates(self) -> bool:
+        """Some prediction depends on theta's rate of change (a differentiated ARR, ``rate_coefficient``)."""
+        return any(m is not None and m.rate_coefficient is not None for models in self.models for m in models)
+
+    def __call__(self, theta: np.ndarray, points, rate: np.ndarray | None = None) -> np.ndarray:
         out = np.zeros((*np.shape(theta), len(self.arrs)))
         for row, models in enumerate(self.models):
             for m, model in enumerate(models):
                 if model is not None:
-                    out[row, :, m] = model(theta[row], points[m])
+                    out[row, :, m] = model(theta[row], points[m], None if rate is None else rate[row])
+        return out
+
+    def trajectory(self, theta: np.ndarray, points: Sequence, rate: np.ndarray | None = None) -> np.ndarray:
+        """Predictions (H, N, K, M) along paths ``theta`` (H, N, K) (rates ``rate`` alike), with ``points`` the
+        K steps' point lists.
+
+        >>> from bondgraph.library import rlc_circuit
+        >>> from diagnosis import derive_arrs
+        >>> arrs = derive_arrs(rlc_circuit(), complete=False, integrals="keep")[:1]
+        >>> h = HypothesisObservation(arrs, [Hypothesis("R", "linear", 20.0, 10.0)])
+        >>> steps = [[[1.0, 0.5, 0.0, 0.0]], [[1.0, 2.0, 0.0, 0.0]]]   # i = 0.5 A, then 2 A
+        >>> h.trajectory(np.array([[[11.0, 12.0]]]), steps)[0, 0, :, 0].tolist()
+        [-0.5, -4.0]
+        """
+        out = np.zeros((*np.shape(theta), len(self.arrs)))
+        stacked = [np.asarray([step[m] for step in points], float) for m in range(len(self.arrs))]  # (K, P_m)
+        for row, models in enumerate(self.models):
+            for m, model in enumerate(models):
+                if model is not None:
+                    out[row, :, :, m] = model(theta[row].T, list(stacked[m].T),
+                                              None if rate is None else rate[row].T).T
         return out

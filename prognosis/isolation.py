@@ -35,19 +35,26 @@ from . import seeds
 from .degradation import PerAssetDegradation, degradation_model
 from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, rate_prior,
                          same_signature, sensitivity, signature_candidates)
+from .likelihood import ResidualNoise, healthy_noise
 from .monitor import MonitorResult, filter_stride
 from .observation import observation_model
 from .particle_filter import KernelSmoothing, ParticleFilter, check_particles, check_positive
+from .resample_move import ResampleMoveFilter
 from .rul import RULDistribution, RULPredictor
 from .seeds import check_seed
 from .errors import PrognosisError
 
 __all__ = ["Decision", "IsolatingMonitor", "IsolationResult", "decide"]
 
+METHODS = ("resample-move", "sir")
+
 EVIDENCE_RATIO = 100.0  # "decisive" on Jeffreys' scale: a hypothesis is declared beyond this ratio
 MIXTURE_FLOOR = 1e-3  # hypotheses less probable than this are left out of the RUL mixture
 PROCESS_NOISE = 0.1  # sigma_v per filter step, as a fraction of the candidate's resolution per sample
 HORIZON_STEPS = 2000  # RUL horizon cap in filter steps, unless given
+#: log evidence behind the best hypothesis beyond which a hypothesis' particles are no longer moved
+#: (its evidence still accumulates): 1e-8 of the best's probability, beyond any decision
+FREEZE_BELOW = 8 * math.log(10.0)
 DRIFT_AWAY_STEPS = 5  # consecutive filter steps beyond the healthy box, away from failure, that reject a hypothesis
 
 
@@ -183,6 +190,11 @@ class IsolationResult:
         Hypothesis name -> why it was rejected.
     evaluations : list
         The detection :class:`~diagnosis.detection.Evaluation` of every ARR.
+    ess : ndarray (K, H)
+        Smallest effective sample size of each hypothesis' cloud within each filter step.
+    collapsed : dict
+        Hypothesis name -> first time (s) its cloud collapsed (too few distinct particles to stand
+        for a distribution); its RUL band is withheld from then on.
     """
 
     detection_time: float | None
@@ -202,6 +214,8 @@ class IsolationResult:
     rejected: dict = field(default_factory=dict)
     evaluations: list = field(default_factory=list)
     min_ratio: float = EVIDENCE_RATIO
+    ess: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
+    collapsed: dict = field(default_factory=dict)
 
     @property
     def decision(self) -> Decision | None:
@@ -255,17 +269,18 @@ class IsolatingMonitor:
         Filter step (s), a multiple of the record's step.
     n_particles : int
         Particles per hypothesis.
-    inflation : float
-        Multiplier of the residual noise variance in the likelihood (Jha et al. (2016): 4).
+    inflation : float, optional
+        Multiplier of the residual noise covariance in the likelihood; default 4 with ``method="sir"``
+        (Jha et al. (2016)), 1 with ``"resample-move"`` (the noise as measured on the healthy stretch).
     life : (float, float)
         Prior of the life from nominal to failure, in filter steps (log-uniform).
     rate : (float, float), optional
         A prior interval of the rate instead (uniform; the same for every hypothesis).
     process_noise : float
-        sigma_v per step as a fraction of the candidate's resolution per sample (the residual
-        noise over the sensitivity of the residual to it at the alarm).
+        ``method="sir"`` only: sigma_v per step as a fraction of the candidate's resolution per
+        sample (the residual noise over the sensitivity of the residual to it at the alarm).
     discount : float
-        Kernel smoothing of the rate (:class:`~prognosis.particle_filter.KernelSmoothing`).
+        ``method="sir"`` only: kernel smoothing of the rate (:class:`~prognosis.particle_filter.KernelSmoothing`).
     rul_every : int
         Predict the RUL every this many filter steps.
     horizon : float, optional
@@ -278,6 +293,13 @@ class IsolatingMonitor:
     healthy_until : float, optional
         End of the stretch the user declares fault-free (the one the noise was calibrated on):
         alarms there are not faults (a start-up transient) and start nothing.
+    method : {"resample-move", "sir"}
+        The filter: ``"resample-move"`` (default) weighs each law's static parameters, theta at the
+        alarm and the rate, by their posterior on the whole history and moves its particles by MCMC
+        (:class:`~prognosis.resample_move.ResampleMoveFilter`), with the residual noise measured on
+        the healthy stretch, correlated between ARRs and growing with the candidate
+        (:mod:`~prognosis.likelihood`); ``"sir"`` is the random-walk SIR filter of Jha et al. (2016)
+        with kernel smoothing of the rate (:class:`~prognosis.particle_filter.ParticleFilter`).
     domains : mapping, optional
         Parameter -> open interval ``(lo, hi)`` of its physical domain, as the model declares it
         (:attr:`bondgraph.BondGraph.domains`); a hypothesis whose estimate leaves it is rejected.
@@ -310,11 +332,15 @@ class IsolatingMonitor:
 
     def __init__(self, arrs: Sequence, failures: Mapping[str, float], *, noise_std: Mapping[str, float],
                  laws: Sequence[str] | Mapping = ("linear", "exponential"), candidates: Sequence[str] | None = None,
-                 dt: float = 0.1, n_particles: int = 500, inflation: float = 4.0, life: tuple = LIFE_PRIOR,
+                 dt: float = 0.1, n_particles: int = 500, inflation: float | None = None, life: tuple = LIFE_PRIOR,
                  rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
                  rul_every: int = 10, horizon: float | None = None, detection: Mapping | None = None,
                  min_ratio: float = EVIDENCE_RATIO, healthy_until: float | None = None,
-                 domains: Mapping[str, tuple] | None = None, seed: int | np.random.SeedSequence = 0):
+                 domains: Mapping[str, tuple] | None = None, method: str = "resample-move",
+                 seed: int | np.random.SeedSequence = 0):
+        if method not in METHODS:
+            raise PrognosisError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+        self.method = method
         self.arrs = list(arrs)
         self.failures = {str(k): float(v) for k, v in failures.items()}
         parameters = {p: a.values[p] for a in self.arrs for p in a.parameters}
@@ -343,7 +369,10 @@ class IsolatingMonitor:
                                      f"{', '.join(self.failures)})")
         self.candidates = None if candidates is None else list(candidates)
         self.dt, self.n_particles = check_positive(dt, "dt"), check_particles(n_particles)
-        self.inflation = check_positive(inflation, "inflation")
+        # the random walk's likelihood is widened as in Jha et al. (2016); the resample-move one takes the
+        # noise as measured
+        self.inflation = check_positive((4.0 if method == "sir" else 1.0) if inflation is None else inflation,
+                                        "inflation")
         self.life, self.rate, self.process_noise, self.discount = life, rate, process_noise, discount
         if isinstance(rul_every, bool) or int(rul_every) != rul_every or rul_every < 1:
             raise PrognosisError(f"rul_every must be a positive whole number of filter steps, got {rul_every!r}")
@@ -414,29 +443,44 @@ class IsolatingMonitor:
 
     def _filter(self, result: IsolationResult, evaluations: list, arrs: list, k0: int, progress) -> None:
         hypotheses = result.hypotheses
-        rng = seeds.generator(self.seed, seeds.RATE_PRIOR)
         noise = np.array([self.noise_std[a.name] for a in arrs])
         starts = [self.start_interval(h, evaluations, arrs, k0, noise) for h in hypotheses]
-        # a model per row: sigma_v is on the scale of each candidate
-        models = tuple(self.law(h.law, s[2]) for h, s in zip(hypotheses, starts))
-        model = PerAssetDegradation(models, tuple(range(len(models))))
-        pf = ParticleFilter(model, HypothesisObservation(arrs, hypotheses), n_particles=self.n_particles, dt=self.dt,
-                            noise_std=noise, inflation=self.inflation, gamma_std=0.0,
-                            adaptation=KernelSmoothing(self.discount), seed=seeds.spawn(self.seed, seeds.FILTER))
-        gamma0 = np.stack([self.rate_particles(h, rng) for h in hypotheses])[..., None]
-        pf.initialize((np.array([s[0] for s in starts]), np.array([s[1] for s in starts])), gamma0=gamma0,
-                      assets=len(hypotheses))
         t = evaluations[0].t
         stride = filter_stride(t, self.dt)
+        bounds = (np.array([s[0] for s in starts]), np.array([s[1] for s in starts]))
+        observation = HypothesisObservation(arrs, hypotheses)
+        if self.method == "sir":
+            # a model per row: sigma_v is on the scale of each candidate
+            models = tuple(self.law(h.law, s[2]) for h, s in zip(hypotheses, starts))
+            pf = ParticleFilter(PerAssetDegradation(models, tuple(range(len(models)))), observation,
+                                n_particles=self.n_particles, dt=self.dt, noise_std=noise, inflation=self.inflation,
+                                gamma_std=0.0, adaptation=KernelSmoothing(self.discount),
+                                seed=seeds.spawn(self.seed, seeds.FILTER))
+            rng = seeds.generator(self.seed, seeds.RATE_PRIOR)
+            gamma0 = np.stack([self.rate_particles(h, rng) for h in hypotheses])[..., None]
+            pf.initialize(bounds, gamma0=gamma0, assets=len(hypotheses))
+        else:
+            models = tuple(self.law(h.law, 0.0) for h in hypotheses)  # the law itself: no random walk
+            pf = ResampleMoveFilter(PerAssetDegradation(models, tuple(range(len(models)))), observation,
+                                    noise=self.residual_noise(hypotheses, evaluations, arrs, stride), dt=self.dt,
+                                    n_particles=self.n_particles, seed=seeds.spawn(self.seed, seeds.FILTER))
+            rates = np.array([self.rate_bounds(h) for h in hypotheses])
+            pf.initialize(bounds, gamma_bounds=(rates[:, 0], rates[:, 1]), assets=len(hypotheses),
+                          log_gamma=self.rate is None)
         steps = range(k0, t.size, stride)
         every = -(-len(steps) // 100)
-        rows, rul_t, rul, decisions = [], [], [], []
+        rows, rul_t, rul, decisions, ess = [], [], [], [], []
         predictors, away = {}, np.zeros(len(hypotheses), int)
         boxes = np.array([self.healthy_box(h, arrs) for h in hypotheses])
         for done, k in enumerate(steps, 1):
             y = np.array([-e.residual[k] for e in evaluations])
             points = [[p[k] for p in e.points] for e in evaluations]
-            pf.step(np.broadcast_to(y, (len(hypotheses), y.size)), points)
+            if self.method != "sir":  # a hypothesis far behind the best is weighed on, not moved
+                pf.frozen = pf.log_evidence < pf.log_evidence.max() - FREEZE_BELOW
+            diagnostics = pf.step(np.broadcast_to(y, (len(hypotheses), y.size)), points)
+            ess.append(diagnostics.ess)
+            for row in np.flatnonzero(diagnostics.collapsed):
+                result.collapsed.setdefault(hypotheses[row].name, float(t[k]))
             estimate = pf.estimate()
             self._reject(result, hypotheses, estimate, float(t[k]))
             away = self._reject_drift_away(result, hypotheses, estimate, float(t[k]), boxes, away)
@@ -457,6 +501,7 @@ class IsolatingMonitor:
             quantiles = np.array([r[2][f"{key}_quantiles"] for r in rows]).reshape(len(rows), -1, 3)
             setattr(result, name, {"mean": mean, "rmad": rmad, "quantiles": quantiles})
         result.rul_t, result.rul, result.decisions = np.array(rul_t), rul, decisions
+        result.ess = np.array(ess)
 
     def start_interval(self, h: Hypothesis, evaluations: list, arrs: list, k: int, noise: np.ndarray):
         """(lo, hi) of theta at the alarm and sigma_v, for one hypothesis.
@@ -520,6 +565,46 @@ class IsolatingMonitor:
         """The degradation model of law ``name``: the user's, or the built-in one with ``process_noise``."""
         model = self.laws[name]
         return degradation_model(name, process_noise) if model is None else model
+
+    def rate_bounds(self, h: Hypothesis) -> tuple[float, float]:
+        """(lo, hi) of a hypothesis' rate: the ``rate`` interval, or the rates of the prior on the life.
+
+        The life from nominal to failure in ``life`` filter steps gives the rate ``distance / (T dt)``,
+        with the distance ``failure - nominal`` (linear and other laws) or ``log(failure / nominal)``
+        (exponential), as :func:`~prognosis.hypotheses.rate_prior` draws it.
+        """
+        if self.rate is not None:
+            return float(self.rate[0]), float(self.rate[1])
+        distance = (math.log(h.failure / h.nominal) if h.law == "exponential" and h.failure * h.nominal > 0
+                    else h.failure - h.nominal)
+        ends = sorted(distance / (steps * self.dt) for steps in self.life)
+        return ends[0], ends[1]
+
+    def residual_noise(self, hypotheses: list, evaluations: list, arrs: list, stride: int) -> ResidualNoise:
+        """The likelihood's noise per hypothesis: ``noise_std`` with, from the healthy stretch, the residuals'
+        correlations and how their noise grows with the candidate (:func:`~prognosis.likelihood.healthy_noise`).
+
+        Without a healthy stretch of at least three filter steps the residuals are independent with
+        ``noise_std`` and their noise does not grow.
+        """
+        std = np.array([self.noise_std[a.name] for a in arrs])
+        t = evaluations[0].t
+        healthy = np.flatnonzero(t <= self.healthy_until)[::stride]
+        if healthy.size < 3:
+            return ResidualNoise.independent(std, self.inflation)
+        residuals = np.column_stack([e.residual[healthy] for e in evaluations])
+        covariance, cross, growth = [], [], []
+        for h in hypotheses:
+            columns = [sensitivity(observation_model(a, h.candidate), [p[healthy] for p in e.points])
+                       if h.candidate in a.parameters else np.zeros(healthy.size) for a, e in zip(arrs, evaluations)]
+            estimate = healthy_noise(residuals, np.column_stack(columns))
+            scale = np.sqrt(np.diagonal(estimate["covariance"]))
+            # the user's noise_std sets each residual's level; the stretch gives the correlations
+            covariance.append(estimate["covariance"] / np.outer(scale, scale) * np.outer(std, std))
+            cross.append(estimate["cross"])
+            growth.append(estimate["growth"])
+        return ResidualNoise(np.array(covariance), np.array(cross), np.array(growth),
+                             np.array([h.nominal for h in hypotheses]), self.inflation)
 
     def rate_particles(self, h: Hypothesis, rng: np.random.Generator) -> np.ndarray:
         """Initial rate particles of a hypothesis: the ``rate`` interval, or the prior on the life."""

@@ -41,6 +41,12 @@ class ObservationModel:
         ``h`` in the ARR's signals and the symbol of the candidate.
     coefficient : sympy.Expr or None
         ``a_1 = d r_n / d theta`` when ``h`` is linear in theta, else None.
+    rate_coefficient : sympy.Expr or None
+        For an ARR written as the time derivative of a balance (``form`` ``"differentiated ..."``),
+        the balance's own coefficient ``x`` with ``dx/dt = a_1``: there a drifting theta adds
+        ``theta' x`` to ``y``, since ``d(theta x)/dt = theta x' + theta' x`` while the ARR assumed
+        theta constant.  None for an ARR not differentiated, or when ``x`` is not among the ARR's
+        point values (the rate's term is then left out, a first-order model of a slow drift).
 
     Examples
     --------
@@ -70,11 +76,13 @@ class ObservationModel:
     nominal: float
     expression: sp.Expr
     coefficient: sp.Expr | None
+    rate_coefficient: sp.Expr | None = None
     _function: object = field(default=None, init=False, repr=False)
+    _rate_function: object = field(default=None, init=False, repr=False)
 
     def __getstate__(self) -> dict:
         """The state without the lambdified ``h`` (generated code does not pickle); :meth:`function` rebuilds it."""
-        return {**self.__dict__, "_function": None}
+        return {**self.__dict__, "_function": None, "_rate_function": None}
 
     @property
     def symbol(self) -> sp.Symbol:
@@ -90,10 +98,25 @@ class ObservationModel:
             self._function = sp.lambdify([self.symbol, *compiled.points], numeric, modules="numpy", cse=True)
         return self._function
 
-    def __call__(self, theta: np.ndarray, points) -> np.ndarray:
-        """Predicted measurement for particles ``theta`` (..., N) with point values (...,) per asset."""
+    def rate_function(self):
+        """``x(*points)``, the factor of theta's rate (see ``rate_coefficient``), vectorized."""
+        if self._rate_function is None:
+            compiled = self.arr.compiled
+            values = {sp.Symbol(p): v for p, v in self.arr.values.items()}
+            numeric = self.rate_coefficient.xreplace(compiled.symbols).xreplace(values)
+            self._rate_function = sp.lambdify(compiled.points, numeric, modules="numpy")
+        return self._rate_function
+
+    def __call__(self, theta: np.ndarray, points, rate: np.ndarray | None = None) -> np.ndarray:
+        """Predicted measurement for particles ``theta`` (..., N) with point values (...,) per asset.
+
+        ``rate``: theta's rate of change (like ``theta``), for an ARR with a ``rate_coefficient``.
+        """
         values = [np.asarray(p, float)[..., None] for p in points]
-        return np.broadcast_to(np.asarray(self.function()(theta, *values), float), np.shape(theta))
+        y = np.broadcast_to(np.asarray(self.function()(theta, *values), float), np.shape(theta))
+        if rate is not None and self.rate_coefficient is not None:
+            y = y + rate * np.asarray(self.rate_function()(*values), float)
+        return y
 
 
     def invert(self, y: np.ndarray, points, bracket: tuple[float, float] | None = None) -> np.ndarray:
@@ -156,7 +179,26 @@ def observation_model(arr, candidate: str) -> ObservationModel:
     if coefficient is not None:
         h = (theta - nominal) * coefficient
         coefficient = coefficient.xreplace(back)
-    return ObservationModel(arr, candidate, nominal, h.xreplace(back), coefficient)
+    rate = _antiderivative(coefficient, arr) if str(getattr(arr, "form", "")).startswith("differentiated ") else None
+    return ObservationModel(arr, candidate, nominal, h.xreplace(back), coefficient, rate)
+
+
+def _antiderivative(coefficient: sp.Expr | None, arr) -> sp.Expr | None:
+    """``x`` with ``dx/dt = coefficient``, each derivative one order down; None unless that is exact
+    and every atom of ``x`` is one of the ARR's point values."""
+    if coefficient is None or str(arr.form).count("differentiated") != 1:
+        return None
+    t = sp.Symbol("t")
+
+    def lower(d):
+        count = sum(n for v, n in d.variable_count if v == t)
+        return d.expr if count == 1 else sp.Derivative(d.expr, (t, count - 1))
+    x = coefficient.replace(lambda e: isinstance(e, sp.Derivative), lower)
+    if sp.simplify(sp.diff(x, t) - coefficient) != 0:
+        return None
+    known = set(arr.compiled.symbols)
+    atoms = x.atoms(sp.Integral, sp.Derivative, AppliedUndef)
+    return x if atoms <= known else None
 
 
 def _opaque(expression: sp.Expr) -> tuple[sp.Expr, dict]:

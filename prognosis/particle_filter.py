@@ -187,6 +187,10 @@ class StepDiagnostics:
     resampled : ndarray of bool (A,)
     degenerate : ndarray of bool (A,)
         Every weight was zero or NaN and the weights were reset to uniform.
+    collapsed : ndarray of bool (A,)
+        The cloud collapsed: the effective sample size of an update fell below
+        :data:`COLLAPSE_BELOW` N (a resample-move filter: fewer distinct particles than that
+        after its move).  Its spread is then not a band.
 
     Examples
     --------
@@ -207,6 +211,11 @@ class StepDiagnostics:
     ess: np.ndarray
     resampled: np.ndarray
     degenerate: np.ndarray
+    collapsed: np.ndarray | None = None
+
+
+#: An update whose effective sample size falls below this share of the particles has collapsed.
+COLLAPSE_BELOW = 0.1
 
 
 class ParticleFilter:
@@ -343,7 +352,8 @@ class ParticleFilter:
         self.log_weights = np.log(np.maximum(weights, np.finfo(float).tiny))
         if self.adaptation is not None:
             self.variance = self.adaptation(self.gamma, weights, self.variance, self.initial_variance)
-        return StepDiagnostics(updated, ess, resampled, degenerate)
+        collapsed = updated & (ess < COLLAPSE_BELOW * self.n)
+        return StepDiagnostics(updated, ess, resampled, degenerate, collapsed)
 
     def _log_likelihood(self, y: np.ndarray, finite: np.ndarray, predicted: np.ndarray) -> np.ndarray:
         """Gaussian log-likelihood (A, N) of each particle, with inflated variance c sigma_w^2."""

@@ -120,7 +120,7 @@ class FleetMonitor:
                                          dt=dt, n_particles=n_particles, inflation=inflation, life=life, rate=rate,
                                          process_noise=process_noise, discount=discount, rul_every=rul_every,
                                          horizon=horizon, detection=detection, min_ratio=min_ratio,
-                                         healthy_until=healthy_until, domains=domains, seed=seed)
+                                         healthy_until=healthy_until, domains=domains, method="sir", seed=seed)
         s = self.settings
         if report_every is None:
             report_every = s.rul_every

@@ -185,6 +185,7 @@ def rlc_arrs():
     ({"dt": 0.0}, r"dt must be a finite number > 0, got 0.0"),
     ({"dt": np.nan}, r"dt must be a finite number > 0, got nan"),
     ({"horizon": -5.0}, r"horizon must be a finite number > 0, got -5.0"),
+    ({"method": "kalman"}, r"method must be one of resample-move, sir, got 'kalman'"),
 ])
 def test_isolating_monitor_refuses_bad_filter_settings_by_name(rlc_arrs, options, message):
     from prognosis.isolation import IsolatingMonitor
@@ -205,3 +206,16 @@ def test_the_models_domains_decide_what_is_rejected():
         IsolatingMonitor(arrs, {"R": -5.0}, noise_std=noise, domains={"R": (0.0, np.inf)})
     monitor = IsolatingMonitor(arrs, {"R": 20.0}, noise_std=noise, domains={"R": (0.0, 50.0)})
     assert monitor.domains == {"R": (0.0, 50.0)}
+
+
+@pytest.mark.slow  # simulates the torsion bar under its PI loop (tests/wear) and runs bgphm prognose
+def test_resample_move_follows_a_clean_linear_wear_that_collapsed_the_random_walk_filter():
+    """Issue 31: noise on the speeds only, the alarm within a filter step of the onset."""
+    from tests.wear import run as wear
+
+    scenario = wear.Scenario("b_Md", "linear", "clean")
+    figures = wear.score(scenario, wear.run(scenario, seed=20261127, particles=150, rul_every=40,
+                                            method="resample-move"))
+    assert figures["found"] and figures["degradation"] == "linear"
+    assert figures["within_20pct_second_half"] >= 0.8
+    assert figures["ra"] >= 0.9

@@ -60,7 +60,7 @@ def record(scenario: Scenario, seed: int) -> dict:
     return torsion.simulate({scenario.parameter: law}, t_end=T_END, dt=DT, noise=noise, seed=seed)
 
 
-def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int = 10) -> dict:
+def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int = 10, method: str = "sir") -> dict:
     """``prognosis.json`` of ``bgphm prognose`` on the scenario's record (exit code under ``"exit"``)."""
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -69,7 +69,7 @@ def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int =
         fails = [f"--fail={p}={v:g}" for p, v in FAILURES.items()]
         argv = ["--quiet", "prognose", str(folder / "model.json"), str(folder / "data.csv"), *fails,
                 "--calibrate", f"{CALIBRATE:g}", "--particles", str(particles), "--rul-every", str(rul_every),
-                "--seed", str(seed), "--out", str(folder / "out")]
+                "--seed", str(seed), "--filter", method, "--out", str(folder / "out")]
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
             code = bgphm(argv)
         if code != 0:

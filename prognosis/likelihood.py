@@ -1,0 +1,196 @@
+"""The residuals' noise as the likelihood sees it: correlated between ARRs, growing with the parameter.
+
+A hypothesis predicts ``y = h(theta, s)`` from the measured signals ``s``.  The gap ``y - h`` is the
+residual evaluated at the hypothesis' value of theta, so its noise is what the sensors' noise makes
+of it *at that value*: for an ARR linear in theta, ``r(theta) = r(theta_n) + (theta - theta_n) S(s)``
+with ``S = dh/dtheta`` read on noisy signals, hence
+
+    Cov(y - h) = C + D (X + X^T) + D^2 G,      D = theta - theta_n,
+
+with ``C`` the covariance of the residuals on a healthy stretch, ``G`` that of the sensitivities'
+noise and ``X`` their cross-covariance (:func:`healthy_noise` estimates all three from the healthy
+stretch).  A viscous friction seen through a noisy speed is the usual case: ten times the friction,
+ten times the speed noise in the residual.  ARRs that share a signal share its noise, hence the full
+matrices: weighing them as independent counts the same evidence twice.  For an ARR that is not
+linear in theta the same form holds to first order.
+
+:class:`ResidualNoise` evaluates the Gaussian log-density of the gaps, normalizing constant included
+(the covariance depends on theta, so the constant differs between particles and belongs in the
+weights).  A missing measurement (NaN) is left out of the density (its marginal over the others).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .errors import PrognosisError
+
+__all__ = ["ResidualNoise", "healthy_noise"]
+
+_LOG_2PI = float(np.log(2 * np.pi))
+DIFFERENCES = 4  # order of the differences the sensitivities' noise is read from
+
+
+@dataclass(frozen=True)
+class ResidualNoise:
+    """Gaussian noise of M residuals per asset, its covariance growing with ``theta - nominal``.
+
+    Parameters
+    ----------
+    covariance : array (A, M, M) or (M, M)
+        ``C``: the residuals' covariance at the nominal value.
+    cross, growth : array like ``covariance``, optional
+        ``X`` and ``G``: cross-covariance of residual and sensitivity noise, covariance of the
+        sensitivities' noise.  Without them the noise does not depend on theta.
+    nominal : array (A,) or float
+        ``theta_n`` of each asset (row).
+    inflation : float
+        Multiplier of the whole covariance (1: the noise as measured).
+
+    Examples
+    --------
+    One residual of std 0.1 whose sensitivity carries noise of std 0.01: at ``theta - theta_n = 10``
+    the std is ``sqrt(0.01 + 100 * 1e-4) = 0.141``.
+
+    >>> noise = ResidualNoise(covariance=[[0.01]], growth=[[1e-4]], nominal=1.0)
+    >>> round(float(np.sqrt(noise.covariance_at(np.array([[11.0]]))[0, 0, 0, 0])), 3)
+    0.141
+    >>> log_p = noise.log_density(np.array([[[0.0], [0.0]]]), np.array([[1.0, 11.0]]))
+    >>> bool(log_p[0, 0] > log_p[0, 1])   # the same gap is less likely where the noise is wider... at 0
+    True
+    """
+
+    covariance: np.ndarray
+    cross: np.ndarray | None = None
+    growth: np.ndarray | None = None
+    nominal: np.ndarray | float = 0.0
+    inflation: float = 1.0
+
+    def __post_init__(self):
+        c = np.asarray(self.covariance, float)
+        c = c if c.ndim == 3 else c[None]
+        if c.shape[-1] != c.shape[-2]:
+            raise PrognosisError(f"covariance must be square (M, M) per asset, got shape {c.shape}")
+        diagonal = np.diagonal(c, axis1=-2, axis2=-1)
+        if not (np.all(np.isfinite(c)) and np.all(diagonal > 0)):
+            raise PrognosisError("covariance must be finite with a positive diagonal (each residual's noise "
+                                 "variance)")
+        if not self.inflation > 0:
+            raise PrognosisError(f"inflation must be positive, got {self.inflation!r}")
+        object.__setattr__(self, "covariance", c)
+        for name in ("cross", "growth"):
+            value = getattr(self, name)
+            if value is not None:
+                value = np.asarray(value, float)
+                object.__setattr__(self, name, np.broadcast_to(value if value.ndim == 3 else value[None], c.shape))
+        object.__setattr__(self, "nominal", np.atleast_1d(np.asarray(self.nominal, float)))
+
+    @classmethod
+    def independent(cls, std, inflation: float = 1.0) -> "ResidualNoise":
+        """Independent residuals of standard deviation ``std`` (M,) or (A, M), not growing with theta.
+
+        >>> ResidualNoise.independent([0.1, 0.2]).covariance.round(4).tolist()
+        [[[0.01, 0.0], [0.0, 0.04]]]
+        """
+        std = np.atleast_1d(np.asarray(std, float))
+        return cls(np.einsum("...m,mn->...mn", np.square(std), np.eye(std.shape[-1])), inflation=inflation)
+
+    @property
+    def size(self) -> int:
+        """M, the number of residuals."""
+        return self.covariance.shape[-1]
+
+    def covariance_at(self, theta: np.ndarray) -> np.ndarray:
+        """``Sigma(theta)`` (A, N, ..., M, M) for ``theta`` (A, N, ...), kept positive definite."""
+        theta = np.asarray(theta, float)
+        extra = (slice(None),) + (None,) * (theta.ndim - 1) + (Ellipsis,)
+        sigma = np.broadcast_to(self.covariance[extra], (*theta.shape, self.size, self.size))
+        if self.cross is None and self.growth is None:
+            return self.inflation * sigma
+        d = (theta - self.nominal.reshape((-1,) + (1,) * (theta.ndim - 1)))[..., None, None]
+        if self.cross is not None:
+            sigma = sigma + d * (self.cross + np.swapaxes(self.cross, -1, -2))[extra]
+        if self.growth is not None:
+            sigma = sigma + np.square(d) * self.growth[extra]
+        # the cross term can only lower the variance as far as the correlation allows; estimates from
+        # a short stretch may overshoot, so the diagonal stays at least at the healthy one's share
+        floor = 0.25 * np.diagonal(self.covariance, axis1=-2, axis2=-1)[extra]
+        diagonal = np.diagonal(sigma, axis1=-2, axis2=-1)
+        sigma = sigma + np.einsum("...m,mn->...mn", np.maximum(floor - diagonal, 0.0), np.eye(self.size))
+        return self.inflation * sigma
+
+    def log_density(self, gap: np.ndarray, theta: np.ndarray) -> np.ndarray:
+        """``log N(gap; 0, Sigma(theta))`` (A, N, ...) for ``gap`` (A, N, ..., M); NaN entries marginalized."""
+        gap = np.asarray(gap, float)
+        missing = ~np.isfinite(gap)
+        sigma = self.covariance_at(theta)
+        if self.size == 1:
+            variance = sigma[..., 0, 0]
+            value = -0.5 * (np.square(gap[..., 0]) / variance + np.log(variance) + _LOG_2PI)
+            return np.where(missing[..., 0], 0.0, value)
+        if missing.any():  # the marginal of the measured ones: their rows and columns alone
+            keep = ~missing
+            sigma = np.where(keep[..., :, None] & keep[..., None, :], sigma,
+                             np.where(np.eye(self.size, dtype=bool), 1.0, 0.0))
+            gap = np.where(keep, gap, 0.0)
+        chol = np.linalg.cholesky(sigma)
+        z = np.linalg.solve(chol, gap[..., None])[..., 0]
+        log_det = 2 * np.sum(np.log(np.diagonal(chol, axis1=-2, axis2=-1)), axis=-1)
+        used = np.sum(~missing, axis=-1)
+        return -0.5 * (np.sum(np.square(z), axis=-1) + log_det + used * _LOG_2PI)
+
+
+def healthy_noise(residuals: np.ndarray, sensitivities: np.ndarray | None = None) -> dict:
+    """``C``, ``X`` and ``G`` of :class:`ResidualNoise` from a healthy stretch at the filter's step.
+
+    ``residuals`` (K, M): the residuals on the healthy stretch, sampled every filter step;
+    ``sensitivities`` (K, M): ``dh/dtheta`` of each ARR there (zero for an ARR blind to the candidate).
+    The residuals are noise about zero: ``C`` is their covariance, with each variance the square of
+    a robust std (a start-up spike does not inflate it).  A sensitivity follows the signals (a
+    speed's set-point swing): its noise is read from fourth differences, in which a signal smooth
+    over a few steps cancels while white noise keeps 70 times its variance; ``X`` alike, from the
+    differences of both.
+
+    Examples
+    --------
+    >>> rng = np.random.default_rng(0)
+    >>> e = rng.normal(0, 0.01, 4000)                      # a speed sensor's noise
+    >>> speed = 30 + np.sin(np.arange(4000) / 300) + e     # a speed seen by it
+    >>> r = 0.5 * e + rng.normal(0, 0.002, 4000)          # the residual, through the same sensor
+    >>> noise = healthy_noise(r[:, None], speed[:, None])
+    >>> [round(float(np.sqrt(noise[k][0, 0])), 4) for k in ("covariance", "growth")]
+    [0.0054, 0.01]
+    >>> correlation = noise["cross"][0, 0] / np.sqrt(noise["covariance"][0, 0] * noise["growth"][0, 0])
+    >>> round(float(correlation), 1)   # the residual's share of the speed noise, 0.005, over its std 0.0054
+    0.9
+    """
+    residuals = np.asarray(residuals, float)
+    keep = np.all(np.isfinite(residuals), axis=1)
+    r = residuals[keep]
+    if r.shape[0] < 3:
+        raise PrognosisError(f"the healthy stretch has {r.shape[0]} usable filter steps; at least 3 are needed "
+                             "to estimate the residuals' noise")
+    centred = r - np.median(r, axis=0)
+    robust = 1.4826 * np.median(np.abs(centred), axis=0)
+    plain = np.std(centred, axis=0)
+    std = np.where(robust > 0, robust, plain)
+    std = np.where(std > 0, std, 1e-300)
+    clipped = np.clip(centred, -5 * std, 5 * std)
+    correlation = np.corrcoef(clipped, rowvar=False) if r.shape[1] > 1 else np.ones((1, 1))
+    correlation = np.nan_to_num(np.atleast_2d(correlation), nan=0.0)
+    np.fill_diagonal(correlation, 1.0)
+    out = {"covariance": correlation * np.outer(std, std)}
+    if sensitivities is None:
+        return out
+    s = np.asarray(sensitivities, float)[keep]
+    # fourth differences: a smooth signal (a set-point swing) nearly cancels, white noise keeps a
+    # variance of C(8, 4) = 70 times its own
+    order = min(DIFFERENCES, r.shape[0] - 1)
+    dr, ds = np.diff(r, order, axis=0), np.diff(s, order, axis=0)
+    gain = float(math.comb(2 * order, order))
+    out["growth"] = ds.T @ ds / (gain * ds.shape[0])
+    out["cross"] = dr.T @ ds / (gain * ds.shape[0])
+    return out

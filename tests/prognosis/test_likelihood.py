@@ -1,0 +1,48 @@
+"""The likelihood's noise: the Gaussian density it claims, its growth with theta, and what a healthy stretch says."""
+
+import numpy as np
+import pytest
+from scipy.stats import multivariate_normal
+
+from prognosis.errors import PrognosisError
+from prognosis.likelihood import ResidualNoise, healthy_noise
+
+
+def test_log_density_is_the_multivariate_normal_at_each_theta():
+    c = np.array([[0.04, 0.01], [0.01, 0.09]])
+    x = np.array([[0.001, 0.0], [0.002, 0.003]])
+    g = np.array([[1e-4, 2e-5], [2e-5, 4e-4]])
+    noise = ResidualNoise(c, x, g, nominal=2.0)
+    theta = np.array([[2.0, 5.0, -1.0]])
+    gap = np.array([[[0.1, -0.2], [0.3, 0.1], [-0.05, 0.4]]])
+    got = noise.log_density(gap, theta)
+    for n, value in enumerate(theta[0]):
+        d = value - 2.0
+        sigma = c + d * (x + x.T) + d**2 * g
+        assert got[0, n] == pytest.approx(multivariate_normal(np.zeros(2), sigma).logpdf(gap[0, n]), rel=1e-10)
+
+
+def test_a_missing_residual_leaves_the_marginal_of_the_others():
+    c = np.array([[0.04, 0.01], [0.01, 0.09]])
+    noise = ResidualNoise(c)
+    got = noise.log_density(np.array([[[np.nan, 0.2]]]), np.zeros((1, 1)))
+    assert got[0, 0] == pytest.approx(multivariate_normal(0.0, 0.09).logpdf(0.2), rel=1e-12)
+
+
+def test_healthy_noise_reads_sensor_noise_through_a_swinging_signal():
+    rng = np.random.default_rng(7)
+    k = np.arange(5000)
+    speed_noise = rng.normal(0.0, 0.02, k.size)
+    speed = 100.0 + 10.0 * np.sin(2 * np.pi * k / 70) + speed_noise   # a swing of 70 steps, ten times the noise
+    residual = -0.3 * speed_noise + rng.normal(0.0, 0.01, k.size)
+    noise = healthy_noise(residual[:, None], speed[:, None])
+    assert np.sqrt(noise["growth"][0, 0]) == pytest.approx(0.02, rel=0.1)
+    assert noise["cross"][0, 0] == pytest.approx(-0.3 * 0.02**2, rel=0.15)
+    assert np.sqrt(noise["covariance"][0, 0]) == pytest.approx(np.hypot(0.006, 0.01), rel=0.1)
+
+
+def test_bad_noise_is_named():
+    with pytest.raises(PrognosisError, match="positive diagonal"):
+        ResidualNoise([[0.0]])
+    with pytest.raises(PrognosisError, match="usable filter steps"):
+        healthy_noise(np.full((5, 1), np.nan))

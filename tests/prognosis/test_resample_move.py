@@ -1,0 +1,114 @@
+"""The resample-move filter against closed forms: a straight line seen through Gaussian noise.
+
+With ``theta_k = theta_0 + gamma k dt`` measured directly, the posterior of ``(theta_0, gamma)`` under
+a flat prior is the least-squares Gaussian and the evidence is its closed-form integral: the filter
+must find both, keep distinct particles when the noise is tiny, and say so when it cannot.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from prognosis.degradation import ExponentialDegradation, LinearDegradation
+from prognosis.errors import PrognosisError
+from prognosis.resample_move import ResampleMoveFilter
+
+DT, STEPS = 0.5, 40
+THETA0, GAMMA = 1.0, 0.2
+BOX = ((0.0, 3.0), (-1.0, 1.0))
+
+
+def line(noise: float, seed: int) -> np.ndarray:
+    rng = np.random.default_rng(seed)
+    return THETA0 + GAMMA * DT * np.arange(STEPS) + rng.normal(0.0, noise, STEPS)
+
+
+def run(y: np.ndarray, noise: float, seed: int, particles: int = 400) -> ResampleMoveFilter:
+    f = ResampleMoveFilter(LinearDegradation(), lambda theta, points: theta, noise=noise, dt=DT,
+                           n_particles=particles, seed=seed)
+    f.initialize(BOX[0], gamma_bounds=BOX[1], assets=1)
+    for value in y:
+        f.step(value)
+    return f
+
+
+def least_squares(y: np.ndarray, noise: float):
+    """Posterior mean and covariance of (theta_0, gamma), and log p(y) under the flat prior on BOX."""
+    x = np.column_stack([np.ones(y.size), DT * np.arange(y.size)])
+    precision = x.T @ x / noise**2
+    covariance = np.linalg.inv(precision)
+    mean = covariance @ x.T @ y / noise**2
+    rss = float(np.sum(np.square(y - x @ mean)))
+    volume = (BOX[0][1] - BOX[0][0]) * (BOX[1][1] - BOX[1][0])
+    log_z = (-0.5 * rss / noise**2 - 0.5 * y.size * math.log(2 * math.pi * noise**2)
+             + 0.5 * math.log(np.linalg.det(2 * math.pi * covariance)) - math.log(volume))
+    return mean, covariance, log_z
+
+
+def test_posterior_and_evidence_match_least_squares():
+    noise = 0.05
+    y = line(noise, seed=3)
+    f = run(y, noise, seed=11)
+    mean, covariance, log_z = least_squares(y, noise)
+    gamma = f.gamma[0, :, 0]
+    w = f.weights[0]
+    g_mean = float(np.sum(w * gamma))
+    g_std = float(np.sqrt(np.sum(w * np.square(gamma - g_mean))))
+    assert abs(g_mean - mean[1]) < 0.25 * math.sqrt(covariance[1, 1])
+    assert 0.8 < g_std / math.sqrt(covariance[1, 1]) < 1.25
+    assert abs(float(f.log_evidence[0]) - log_z) < 0.5
+
+
+def test_a_clean_line_keeps_distinct_particles_and_finds_the_rate():
+    noise = 1e-6  # six orders of magnitude below the change: the case that collapsed the SIR filter
+    y = line(noise, seed=4)
+    f = ResampleMoveFilter(LinearDegradation(), lambda theta, points: theta, noise=noise, dt=DT, n_particles=300,
+                           seed=5)
+    f.initialize(BOX[0], gamma_bounds=BOX[1], assets=1)
+    collapsed = [bool(f.step(value).collapsed[0]) for value in y]
+    assert not any(collapsed)
+    assert np.unique(f.gamma[0, :, 0]).size > 0.3 * f.n
+    mean, covariance, _ = least_squares(y, noise)
+    w = f.weights[0]
+    assert abs(float(np.sum(w * f.gamma[0, :, 0])) - mean[1]) < 3 * math.sqrt(covariance[1, 1])
+    assert abs(float(np.sum(w * f.theta[0])) - (THETA0 + GAMMA * DT * (STEPS - 1))) < 1e-5
+
+
+@pytest.mark.slow
+def test_the_90_percent_interval_of_the_rate_covers_at_its_level():
+    noise, runs, covered = 0.05, 60, 0
+    for seed in range(runs):
+        f = run(line(noise, seed=100 + seed), noise, seed=200 + seed, particles=300)
+        w, gamma = f.weights[0], f.gamma[0, :, 0]
+        order = np.argsort(gamma)
+        cdf = np.cumsum(w[order])
+        lo, hi = gamma[order][np.searchsorted(cdf, 0.05)], gamma[order][np.searchsorted(cdf, 0.95)]
+        covered += lo <= GAMMA <= hi
+    assert 0.8 * runs <= covered <= 0.98 * runs   # binomial(60, 0.9): 47-59 at the 1 % level
+
+
+def test_assets_are_independent_and_log_uniform_rates_keep_their_sign():
+    y = np.stack([line(0.01, seed=1), 2.0 * np.exp(-0.1 * DT * np.arange(STEPS))])
+    f = ResampleMoveFilter(ExponentialDegradation(), lambda theta, points: theta, noise=0.01, dt=DT,
+                           n_particles=300, seed=2)
+    f.initialize((0.5, 3.0), gamma_bounds=(np.array([1e-3, -1.0]), np.array([1.0, -1e-3])), assets=2,
+                  log_gamma=True)
+    assert np.all(f.gamma[0] > 0) and np.all(f.gamma[1] < 0)
+    for k in range(STEPS):
+        f.step(y[:, k])
+    estimate = f.estimate()
+    assert abs(float(estimate["gamma_mean"][1, 0]) + 0.1) < 0.01
+    assert np.all(f.gamma[1] < 0)
+
+
+def test_bad_settings_are_named():
+    with pytest.raises(PrognosisError, match="moves"):
+        ResampleMoveFilter(LinearDegradation(), lambda t, p: t, noise=0.1, dt=1.0, moves=0)
+    with pytest.raises(PrognosisError, match="ess_target"):
+        ResampleMoveFilter(LinearDegradation(), lambda t, p: t, noise=0.1, dt=1.0, ess_target=1.5)
+    f = ResampleMoveFilter(LinearDegradation(), lambda t, p: t, noise=0.1, dt=1.0)
+    with pytest.raises(PrognosisError, match="one sign"):
+        f.initialize((0.0, 1.0), gamma_bounds=(-1.0, 1.0), log_gamma=True)
+    with pytest.raises(RuntimeError, match="initialize"):
+        f.step(1.0)
