@@ -626,16 +626,21 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
         summary["evidence"][h.name] = {"log_evidence": _finite(result.log_evidence[-1, row]),
                                        "probability": decision.probabilities[h.name],
                                        "rejected": result.rejected.get(h.name),
+                                       "inadequate": result.inadequate.get(h.name),
                                        "theta_mean": float(result.theta["mean"][-1, row]),
                                        "gamma_mean": float(result.gamma["mean"][-1, row])}
     best = result.monitor_result()
     percentiles = best.rul_percentiles((5, 25, 50, 75, 95))
     for k, t in enumerate(result.rul_t):
-        summary["predictions"].append({
-            "t": float(t), "rul_mean": _finite(best.rul_mean[k]), "rul_p5": _finite(percentiles[k, 0]),
-            "rul_p25": _finite(percentiles[k, 1]), "rul_median": _finite(percentiles[k, 2]),
-            "rul_p75": _finite(percentiles[k, 3]), "rul_p95": _finite(percentiles[k, 4]),
-            "censored": float(result.rul[k].censored_weight[0])})
+        withheld = result.withheld[k] if k < len(result.withheld) else None
+        if withheld:  # undecided: no figure rather than a band from a law the data contradict
+            summary["predictions"].append({"t": float(t), **{key: None for key in RUL_KEYS}, "withheld": withheld})
+        else:
+            summary["predictions"].append({
+                "t": float(t), "rul_mean": _finite(best.rul_mean[k]), "rul_p5": _finite(percentiles[k, 0]),
+                "rul_p25": _finite(percentiles[k, 1]), "rul_median": _finite(percentiles[k, 2]),
+                "rul_p75": _finite(percentiles[k, 3]), "rul_p95": _finite(percentiles[k, 4]),
+                "censored": float(result.rul[k].censored_weight[0])})
         d = result.decisions[k]
         summary["decisions"].append({"t": float(t), "candidate": d.candidate, "status": d.status,
                                      "degradation": d.degradation})
@@ -645,6 +650,9 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
                        "theta_mean": float(result.theta["mean"][-1, top]),
                        "gamma_mean": float(result.gamma["mean"][-1, top])}
     return summary
+
+
+RUL_KEYS = ("rul_mean", "rul_p5", "rul_p25", "rul_median", "rul_p75", "rul_p95", "censored")
 
 
 def _prognosis_line(result, summary: dict) -> str:
@@ -660,6 +668,9 @@ def _prognosis_line(result, summary: dict) -> str:
     status = summary["status"]
     if summary["same_signature"]:   # isolable in the model only when no other fault shares the signature
         status = f"indistinguishable from {', '.join(summary['same_signature'])} (same signature)"
+    if last.get("withheld"):
+        return (f"{head}; candidate {summary['candidate']} ({status}), degradation {law}; at t = "
+                f"{last['t']:g} s no RUL (undecided: {last['withheld']})")
     return (f"{head}; candidate {summary['candidate']} ({status}), degradation {law}; at t = "
             f"{last['t']:g} s RUL median {_fmt(last['rul_median'])} s, 5-95 % [{_fmt(last['rul_p5'])}, "
             f"{_fmt(last['rul_p95'])}] s")

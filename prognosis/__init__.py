@@ -3,9 +3,11 @@
 The core chain lives at the top of the package: a degradation law of the prognostic candidate
 ``theta`` (:mod:`.degradation`), the observation equation ``y = -r_n`` derived from the ARR
 (:mod:`.observation`), the SIR particle filter with its resampling schemes and variance adaptation
-(:mod:`.particle_filter`, :mod:`.resampling`), the RUL by propagating the particles to the failure
-value (:mod:`.rul`), the prognostic metrics (:mod:`.metrics`) and the health monitor that runs
-detection, estimation and RUL on a record (:mod:`.monitor`).
+(:mod:`.particle_filter`, :mod:`.resampling`), the resample-move filter over a law's static
+parameters with the residual noise it weighs them by (:mod:`.resample_move`, :mod:`.likelihood`),
+the RUL by propagating the particles to the failure value (:mod:`.rul`), the prognostic metrics
+(:mod:`.metrics`) and the health monitor that runs detection, estimation and RUL on a record
+(:mod:`.monitor`).
 
 Three method families sit beside it as subpackages:
 
@@ -29,14 +31,16 @@ from .degradation import CustomDegradation, ExponentialDegradation, LinearDegrad
 from .metrics import alpha_lambda, prognostic_horizon, relative_accuracy, relative_rmse, rmad
 from .monitor import HealthMonitor, MonitorResult
 from .observation import ObservationModel, observation_model
+from .likelihood import ResidualNoise
 from .particle_filter import ParticleFilter, StepDiagnostics, VarianceAdaptation
+from .resample_move import ResampleMoveFilter
 from .resampling import effective_sample_size
 from .rul import RULDistribution, RULPredictor, predict_rul
 
 __all__ = [
     "CustomDegradation", "ExponentialDegradation", "HealthMonitor", "LinearDegradation", "MonitorResult",
-    "ObservationModel", "ParticleFilter", "PrognosisError", "RULDistribution", "RULPredictor", "StepDiagnostics",
-    "VarianceAdaptation",
+    "ObservationModel", "ParticleFilter", "PrognosisError", "RULDistribution", "RULPredictor", "ResampleMoveFilter",
+    "ResidualNoise", "StepDiagnostics", "VarianceAdaptation",
     "alpha_lambda", "degradation_model", "effective_sample_size", "observation_model", "predict_rul",
     "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad",
 ]

@@ -52,6 +52,10 @@ EVIDENCE_RATIO = 100.0  # "decisive" on Jeffreys' scale: a hypothesis is declare
 MIXTURE_FLOOR = 1e-3  # hypotheses less probable than this are left out of the RUL mixture
 PROCESS_NOISE = 0.1  # sigma_v per filter step, as a fraction of the candidate's resolution per sample
 HORIZON_STEPS = 2000  # RUL horizon cap in filter steps, unless given
+ADEQUACY_WINDOW = 30  # filter steps of standardized innovations a law's fit is judged on
+#: mean standardized innovation over the window beyond which the law does not follow the residual: a
+#: fitting law stays within about 1 (clean or noisy torsion-bar wear), a law that lags drifts to tens
+ADEQUACY_LIMIT = 3.0
 #: log evidence behind the best hypothesis beyond which a hypothesis' particles are no longer moved
 #: (its evidence still accumulates): 1e-8 of the best's probability, beyond any decision
 FREEZE_BELOW = 8 * math.log(10.0)
@@ -194,7 +198,13 @@ class IsolationResult:
         Smallest effective sample size of each hypothesis' cloud within each filter step.
     collapsed : dict
         Hypothesis name -> first time (s) its cloud collapsed (too few distinct particles to stand
-        for a distribution); its RUL band is withheld from then on.
+        for a distribution); it is left out of the RUL from then on.
+    inadequate : dict
+        Hypothesis name -> why its law does not follow the residuals (its standardized innovations
+        drift, :data:`ADEQUACY_LIMIT`); it is left out of the RUL from then on.
+    withheld : list of str or None
+        Per RUL prediction: None, or why no RUL is given (every probable hypothesis inadequate or
+        collapsed): the answer is then "undecided", not a band.
     """
 
     detection_time: float | None
@@ -216,6 +226,8 @@ class IsolationResult:
     min_ratio: float = EVIDENCE_RATIO
     ess: np.ndarray = field(default_factory=lambda: np.empty((0, 0)))
     collapsed: dict = field(default_factory=dict)
+    inadequate: dict = field(default_factory=dict)
+    withheld: list = field(default_factory=list)
 
     @property
     def decision(self) -> Decision | None:
@@ -469,16 +481,21 @@ class IsolatingMonitor:
                           log_gamma=self.rate is None)
         steps = range(k0, t.size, stride)
         every = -(-len(steps) // 100)
-        rows, rul_t, rul, decisions, ess = [], [], [], [], []
+        rows, rul_t, rul, decisions, ess, innovations = [], [], [], [], [], []
         predictors, away = {}, np.zeros(len(hypotheses), int)
         boxes = np.array([self.healthy_box(h, arrs) for h in hypotheses])
         for done, k in enumerate(steps, 1):
             y = np.array([-e.residual[k] for e in evaluations])
             points = [[p[k] for p in e.points] for e in evaluations]
-            if self.method != "sir":  # a hypothesis far behind the best is weighed on, not moved
-                pf.frozen = pf.log_evidence < pf.log_evidence.max() - FREEZE_BELOW
+            if self.method != "sir":  # far behind the best, or not following the data: weighed on, not moved
+                names = [h.name for h in hypotheses]
+                pf.frozen = ((pf.log_evidence < pf.log_evidence.max() - FREEZE_BELOW)
+                             | np.array([n in result.inadequate for n in names]))
             diagnostics = pf.step(np.broadcast_to(y, (len(hypotheses), y.size)), points)
             ess.append(diagnostics.ess)
+            if diagnostics.innovation is not None:
+                innovations.append(diagnostics.innovation)
+                self._check_adequacy(result, hypotheses, arrs, innovations, float(t[k]))
             for row in np.flatnonzero(diagnostics.collapsed):
                 result.collapsed.setdefault(hypotheses[row].name, float(t[k]))
             estimate = pf.estimate()
@@ -488,7 +505,10 @@ class IsolatingMonitor:
             if (done - 1) % self.rul_every == 0:
                 decision = decide(hypotheses, pf.log_evidence, result.groups, result.rejected, self.min_ratio,
                                   result.same_signature)
-                rul.append(self._mixture(pf, hypotheses, decision, predictors, models, key=done))
+                distribution, reason = self._mixture(pf, hypotheses, decision, predictors, models, key=done,
+                                                     left_out={**result.collapsed, **result.inadequate})
+                rul.append(distribution)
+                result.withheld.append(reason)
                 rul_t.append(float(t[k]))
                 decisions.append(decision)
             if progress is not None and (done % every == 0 or done == len(steps)):
@@ -621,14 +641,51 @@ class IsolatingMonitor:
                 result.rejected[h.name] = (f"at t = {time:g} s the estimate of {h.candidate} is {value:.3g}, "
                                            f"outside its physical domain ({lo:g}, {hi:g})")
 
+    def _check_adequacy(self, result: IsolationResult, hypotheses: list, arrs: list, innovations: list,
+                        time: float) -> None:
+        """Flag the hypotheses whose standardized innovations drift over the last ADEQUACY_WINDOW steps.
+
+        A law that fits leaves innovations near N(0, 1) about zero; one the data contradict leaves
+        them on one side (a power-law wear seen through a linear law lags more and more).  The test
+        is on the window's mean, in predictive sd: beyond ADEQUACY_LIMIT it is no chance (white
+        innovations give a mean of sd 1/sqrt(window)) nor a small misfit of the model (a clean
+        residual shows those at about 1 sd).
+        """
+        if len(innovations) < ADEQUACY_WINDOW:
+            return
+        window = np.array(innovations[-ADEQUACY_WINDOW:])  # (W, H, M)
+        with np.errstate(invalid="ignore"):
+            count = np.sum(np.isfinite(window), axis=0)
+            drift = np.nansum(window, axis=0) / np.sqrt(np.maximum(count, 1))
+        for row, h in enumerate(hypotheses):
+            if h.name in result.inadequate or h.name in result.rejected:
+                continue
+            worst = int(np.nanargmax(np.abs(np.nan_to_num(drift[row], nan=0.0))))
+            if abs(drift[row, worst]) > ADEQUACY_LIMIT * math.sqrt(ADEQUACY_WINDOW):
+                mean = np.nanmean(window[:, row, worst])
+                result.inadequate[h.name] = (
+                    f"at t = {time:g} s the {h.law} law leaves the residual of {arrs[worst].name} "
+                    f"{'above' if mean > 0 else 'below'} its prediction by {abs(mean):.2g} sd on average over "
+                    f"{ADEQUACY_WINDOW} filter steps: the data contradict the law")
+
     def _mixture(self, pf: ParticleFilter, hypotheses: list, decision: Decision, predictors: dict, models: tuple,
-                 key: int) -> RULDistribution:
-        """The RUL of every hypothesis with posterior probability above MIXTURE_FLOOR, mixed by probability."""
+                 key: int, left_out: Mapping = {}) -> tuple[RULDistribution, str | None]:
+        """The RUL of every probable hypothesis not ``left_out`` (collapsed, inadequate), mixed by probability.
+
+        Returns the distribution and None, or, when every probable hypothesis is left out, a
+        distribution censored at the horizon and the reason no RUL is given.
+        """
         weights = pf.weights
         samples, mixed = [], []
+        probable = [h.name for h in hypotheses if decision.probabilities[h.name] >= MIXTURE_FLOOR]
+        if probable and all(name in left_out for name in probable):
+            reason = "; ".join(f"{name}: " + (f"its cloud collapsed at t = {left_out[name]:g} s"
+                                              if isinstance(left_out[name], float) else left_out[name])
+                               for name in probable)
+            return RULDistribution(np.full((1, 1), np.inf), np.ones((1, 1)), self.horizon), reason
         for row, h in enumerate(hypotheses):
             p = decision.probabilities[h.name]
-            if p < MIXTURE_FLOOR:
+            if p < MIXTURE_FLOOR or h.name in left_out:
                 continue
             if row not in predictors:
                 predictors[row] = RULPredictor(models[row], dt=self.dt, theta_fail=h.failure,
@@ -639,8 +696,9 @@ class IsolatingMonitor:
             samples.append(prediction.samples[0])
             mixed.append(p * weights[row])
         if not samples:  # every hypothesis rejected
-            return RULDistribution(np.full((1, 1), np.inf), np.ones((1, 1)), self.horizon)
-        return RULDistribution(np.concatenate(samples)[None, :], np.concatenate(mixed)[None, :], self.horizon)
+            return RULDistribution(np.full((1, 1), np.inf), np.ones((1, 1)), self.horizon), None
+        return (RULDistribution(np.concatenate(samples)[None, :], np.concatenate(mixed)[None, :], self.horizon),
+                None)
 
 
 def _softmax(log_z: np.ndarray) -> np.ndarray:

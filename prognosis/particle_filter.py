@@ -191,6 +191,10 @@ class StepDiagnostics:
         The cloud collapsed: the effective sample size of an update fell below
         :data:`COLLAPSE_BELOW` N (a resample-move filter: fewer distinct particles than that
         after its move).  Its spread is then not a band.
+    innovation : ndarray (A, M) or None
+        The measurement's standardized innovation ``(y - E[y]) / sd[y]`` under the one-step
+        predictive distribution (the particles before the update and the noise): near N(0, 1) and
+        white when the model fits (a resample-move filter gives it).
 
     Examples
     --------
@@ -212,6 +216,7 @@ class StepDiagnostics:
     resampled: np.ndarray
     degenerate: np.ndarray
     collapsed: np.ndarray | None = None
+    innovation: np.ndarray | None = None
 
 
 #: An update whose effective sample size falls below this share of the particles has collapsed.

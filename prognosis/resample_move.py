@@ -188,7 +188,9 @@ class ResampleMoveFilter:
         if self.history:
             self.theta = self.model.step(self.theta, self.prior.gamma(self.z), self.dt)
         self.history.append((y, points))
-        increment = self._log_likelihood(y, self._observe(self.theta, points, self.z), self.theta)
+        predicted = self._observe(self.theta, points, self.z)
+        innovation = self._innovation(y, predicted)
+        increment = self._log_likelihood(y, predicted, self.theta)
         updated = np.isfinite(y).any(axis=1) if y.ndim == 2 else np.isfinite(y)
         increment = np.where(updated[:, None], increment, 0.0)
         done = np.zeros(self.assets)  # the share phi of the increment already in the weights
@@ -219,7 +221,18 @@ class ResampleMoveFilter:
                 distinct = np.where(low, self._distinct(), distinct)
         self.past = self.past + increment
         collapsed = moved & (distinct < COLLAPSE_BELOW * self.n)
-        return StepDiagnostics(updated, ess_min, moved, np.zeros(self.assets, bool), collapsed)
+        return StepDiagnostics(updated, ess_min, moved, np.zeros(self.assets, bool), collapsed, innovation)
+
+    def _innovation(self, y: np.ndarray, predicted: np.ndarray) -> np.ndarray:
+        """``(y - E[y]) / sd[y]`` (A, M) under the predictive: the cloud's spread of ``h`` plus the noise."""
+        weights = normalize_log_weights(self.log_weights)[0]
+        if y.ndim == 1:
+            y, predicted = y[:, None], predicted[..., None]
+        mean = np.einsum("an,anm->am", weights, predicted)
+        spread = np.einsum("an,anm->am", weights, np.square(predicted - mean[:, None, :]))
+        noise = np.einsum("an,anm->am", weights,
+                          np.diagonal(self.noise.covariance_at(self.theta), axis1=-2, axis2=-1))
+        return (y - mean) / np.sqrt(spread + noise)
 
     def _next_share(self, increment: np.ndarray, done: np.ndarray) -> np.ndarray:
         """The share of the increment that brings the ESS to the target (the rest of it if that stays above)."""

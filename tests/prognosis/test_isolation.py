@@ -219,3 +219,23 @@ def test_resample_move_follows_a_clean_linear_wear_that_collapsed_the_random_wal
     assert figures["found"] and figures["degradation"] == "linear"
     assert figures["within_20pct_second_half"] >= 0.8
     assert figures["ra"] >= 0.9
+
+
+
+@pytest.mark.slow  # simulates the torsion bar under its PI loop (tests/wear) and runs bgphm prognose
+@pytest.mark.parametrize("law, flagged", [("linear", False), ("exponential", True)])
+def test_a_law_the_data_contradict_is_inadequate_and_gives_no_rul(law, flagged):
+    """Only the linear law may compete: it follows a linear wear, and lags an exponential one."""
+    from tests.wear import run as wear
+
+    scenario = wear.Scenario("b_Md", law, "noisy")
+    answer = wear.run(scenario, seed=20261128, particles=150, rul_every=40, method="resample-move",
+                      degradation="linear")
+    inadequate = answer["evidence"]["b_Md/linear"]["inadequate"]
+    withheld = [p["withheld"] for p in answer["predictions"] if p.get("withheld")]
+    if flagged:
+        assert inadequate and "the data contradict the law" in inadequate
+        assert withheld and answer["predictions"][-1]["rul_median"] is None
+    else:
+        assert inadequate is None and not withheld
+        assert wear.score(scenario, answer)["within_20pct_second_half"] >= 0.8

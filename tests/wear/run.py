@@ -60,7 +60,8 @@ def record(scenario: Scenario, seed: int) -> dict:
     return torsion.simulate({scenario.parameter: law}, t_end=T_END, dt=DT, noise=noise, seed=seed)
 
 
-def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int = 10, method: str = "sir") -> dict:
+def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int = 10, method: str = "sir",
+        degradation: str | None = None) -> dict:
     """``prognosis.json`` of ``bgphm prognose`` on the scenario's record (exit code under ``"exit"``)."""
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -69,7 +70,8 @@ def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int =
         fails = [f"--fail={p}={v:g}" for p, v in FAILURES.items()]
         argv = ["--quiet", "prognose", str(folder / "model.json"), str(folder / "data.csv"), *fails,
                 "--calibrate", f"{CALIBRATE:g}", "--particles", str(particles), "--rul-every", str(rul_every),
-                "--seed", str(seed), "--filter", method, "--out", str(folder / "out")]
+                "--seed", str(seed), "--filter", method, "--out", str(folder / "out"),
+                *(["--degradation", degradation] if degradation else [])]
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
             code = bgphm(argv)
         if code != 0:
@@ -85,11 +87,13 @@ def score(scenario: Scenario, answer: dict) -> dict:
     # an honest "indistinguishable" names a group; a decided answer names the parameter
     group = set(named) if isinstance(named, list) else {named} | set(answer.get("same_signature") or [])
     found = named is not None and scenario.parameter in group
-    predictions = [p for p in answer.get("predictions", []) if ONSET < p["t"] < EOL]
+    given = [p for p in answer.get("predictions", []) if ONSET < p["t"] < EOL]
+    # a withheld prediction ("undecided: no law fits") is honest but gives no figure: counted apart
+    predictions = [p for p in given if not p.get("withheld")]
     truth = np.array([EOL - p["t"] for p in predictions])
     figures = {"found": bool(found), "candidate": named, "status": answer.get("status"),
                "degradation": answer.get("degradation"), "detection_time": answer.get("detection_time"),
-               "predictions": len(predictions)}
+               "predictions": len(predictions), "withheld": len(given) - len(predictions)}
     if not predictions:
         return figures
     median = np.array([_number(p["rul_median"]) for p in predictions])
