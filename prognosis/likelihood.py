@@ -87,6 +87,26 @@ class ResidualNoise:
                 value = np.asarray(value, float)
                 object.__setattr__(self, name, np.broadcast_to(value if value.ndim == 3 else value[None], c.shape))
         object.__setattr__(self, "nominal", np.atleast_1d(np.asarray(self.nominal, float)))
+        if self.cross is not None or self.growth is not None:
+            self._make_joint_positive()
+
+    def _make_joint_positive(self) -> None:
+        """Make ``[[C, X], [X^T, G]]`` positive semi-definite by raising G alone.
+
+        ``Sigma(theta) = [I, D I] J [I, D I]^T`` is a covariance for every D only if the joint ``J`` of
+        the residual and sensitivity noise is one; C, X and G come from different estimators (a
+        robust std, fourth differences), so their joint may not be.  With C positive definite, J is
+        positive semi-definite exactly when the Schur complement ``G - X^T C^-1 X`` is: its negative
+        eigenvalues are set to zero, which raises G (more noise, never less) and keeps C and X.
+        """
+        x = np.zeros_like(self.covariance) if self.cross is None else self.cross
+        g = np.zeros_like(self.covariance) if self.growth is None else self.growth
+        explained = np.swapaxes(x, -1, -2) @ np.linalg.solve(self.covariance, x)
+        schur = g - explained
+        values, vectors = np.linalg.eigh(0.5 * (schur + np.swapaxes(schur, -1, -2)))
+        schur = np.einsum("aij,aj,akj->aik", vectors, np.maximum(values, 0.0), vectors)
+        object.__setattr__(self, "cross", np.array(x))
+        object.__setattr__(self, "growth", explained + schur)
 
     @classmethod
     def independent(cls, std, inflation: float = 1.0) -> "ResidualNoise":
@@ -111,15 +131,18 @@ class ResidualNoise:
         if self.cross is None and self.growth is None:
             return self.inflation * sigma
         d = (theta - self.nominal.reshape((-1,) + (1,) * (theta.ndim - 1)))[..., None, None]
-        if self.cross is not None:
-            sigma = sigma + d * (self.cross + np.swapaxes(self.cross, -1, -2))[extra]
-        if self.growth is not None:
-            sigma = sigma + np.square(d) * self.growth[extra]
+        with np.errstate(over="ignore", invalid="ignore"):  # a theta far out overflows: no density there
+            if self.cross is not None:
+                sigma = sigma + d * (self.cross + np.swapaxes(self.cross, -1, -2))[extra]
+            if self.growth is not None:
+                sigma = sigma + np.square(d) * self.growth[extra]
         # the cross term can only lower the variance as far as the correlation allows; estimates from
         # a short stretch may overshoot, so the diagonal stays at least at the healthy one's share
-        floor = 0.25 * np.diagonal(self.covariance, axis1=-2, axis2=-1)[extra]
+        healthy = np.diagonal(self.covariance, axis1=-2, axis2=-1)[extra]
         diagonal = np.diagonal(sigma, axis1=-2, axis2=-1)
-        sigma = sigma + np.einsum("...m,mn->...mn", np.maximum(floor - diagonal, 0.0), np.eye(self.size))
+        # plus a millionth of the healthy variance: a positive semi-definite sum stays invertible
+        lift = np.maximum(0.25 * healthy - diagonal, 0.0) + 1e-6 * healthy
+        sigma = sigma + np.einsum("...m,mn->...mn", lift, np.eye(self.size))
         return self.inflation * sigma
 
     def log_density(self, gap: np.ndarray, theta: np.ndarray) -> np.ndarray:
@@ -136,11 +159,26 @@ class ResidualNoise:
             sigma = np.where(keep[..., :, None] & keep[..., None, :], sigma,
                              np.where(np.eye(self.size, dtype=bool), 1.0, 0.0))
             gap = np.where(keep, gap, 0.0)
-        chol = np.linalg.cholesky(sigma)
-        z = np.linalg.solve(chol, gap[..., None])[..., 0]
+        # a particle whose theta is so far out that its covariance overflows has no density
+        bad = ~np.all(np.isfinite(sigma), axis=(-2, -1)) | ~np.all(np.isfinite(np.where(missing, 0.0, gap)), axis=-1)
+        sigma = np.where(bad[..., None, None], np.eye(self.size), sigma)
+        chol = _cholesky(sigma)
+        z = np.linalg.solve(chol, np.where(bad[..., None], 0.0, gap)[..., None])[..., 0]
         log_det = 2 * np.sum(np.log(np.diagonal(chol, axis1=-2, axis2=-1)), axis=-1)
         used = np.sum(~missing, axis=-1)
-        return -0.5 * (np.sum(np.square(z), axis=-1) + log_det + used * _LOG_2PI)
+        return np.where(bad, -np.inf, -0.5 * (np.sum(np.square(z), axis=-1) + log_det + used * _LOG_2PI))
+
+
+def _cholesky(sigma: np.ndarray) -> np.ndarray:
+    """Cholesky factors of covariances (..., M, M); rounding that leaves one not quite positive
+    definite is met with a ridge of a growing share of its trace."""
+    for ridge in (0.0, 1e-12, 1e-9, 1e-6):
+        try:
+            lifted = sigma + ridge * np.trace(sigma, axis1=-2, axis2=-1)[..., None, None] * np.eye(sigma.shape[-1])
+            return np.linalg.cholesky(lifted)
+        except np.linalg.LinAlgError:
+            continue
+    raise PrognosisError("a residual covariance is not positive definite even with a ridge of 1e-6 of its trace")
 
 
 def healthy_noise(residuals: np.ndarray, sensitivities: np.ndarray | None = None) -> dict:

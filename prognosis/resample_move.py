@@ -269,7 +269,7 @@ class ResampleMoveFilter:
                            1e-9 * np.maximum(np.abs(self.prior.hi - self.prior.lo), 1e-300))
         # a ridge on the diagonal: a collapsed cloud still proposes along every coordinate
         proposal = spread + np.einsum("ad,de->ade", np.square(1e-3 * width), np.eye(width.shape[1]))
-        chol = np.linalg.cholesky(proposal)
+        chol = _cholesky(proposal)
         accepted = np.zeros(self.assets)
         for _ in range(self.moves):
             step = np.einsum("ade,ane->and", chol, self.rng.standard_normal(self.z.shape))
@@ -381,6 +381,19 @@ def _weighted_covariance(z: np.ndarray, weights: np.ndarray) -> np.ndarray:
     mean = np.einsum("an,and->ad", weights, z)
     centred = z - mean[:, None, :]
     return np.einsum("an,and,ane->ade", weights, centred, centred)
+
+
+def _cholesky(matrices: np.ndarray) -> np.ndarray:
+    """Cholesky factors of covariances (A, D, D); an asset whose covariance is not positive definite
+    (rounding in a near-degenerate cloud) falls back to its diagonal."""
+    diagonal = np.sqrt(np.maximum(np.diagonal(matrices, axis1=-2, axis2=-1), 0.0))
+    factors = np.einsum("ad,de->ade", diagonal, np.eye(matrices.shape[-1]))
+    for a in range(matrices.shape[0]):
+        try:
+            factors[a] = np.linalg.cholesky(matrices[a])
+        except np.linalg.LinAlgError:
+            pass
+    return factors
 
 
 def _ess(log_weights: np.ndarray) -> np.ndarray:

@@ -12,14 +12,24 @@ def test_log_density_is_the_multivariate_normal_at_each_theta():
     c = np.array([[0.04, 0.01], [0.01, 0.09]])
     x = np.array([[0.001, 0.0], [0.002, 0.003]])
     g = np.array([[1e-4, 2e-5], [2e-5, 4e-4]])
+    assert np.all(np.linalg.eigvalsh(np.block([[c, x], [x.T, g]])) > 0)   # a joint covariance: kept as given
     noise = ResidualNoise(c, x, g, nominal=2.0)
     theta = np.array([[2.0, 5.0, -1.0]])
     gap = np.array([[[0.1, -0.2], [0.3, 0.1], [-0.05, 0.4]]])
     got = noise.log_density(gap, theta)
     for n, value in enumerate(theta[0]):
         d = value - 2.0
-        sigma = c + d * (x + x.T) + d**2 * g
+        sigma = c + d * (x + x.T) + d**2 * g + 1e-6 * np.diag(np.diag(c))   # the millionth that keeps it invertible
         assert got[0, n] == pytest.approx(multivariate_normal(np.zeros(2), sigma).logpdf(gap[0, n]), rel=1e-10)
+
+
+def test_a_joint_that_is_no_covariance_is_made_one_and_overflow_has_no_density():
+    c, x, g = np.eye(2), np.array([[2.0, 0.0], [0.0, 0.0]]), np.eye(2) * 1e-2   # |X| beyond sqrt(C G)
+    noise = ResidualNoise(c, x, g, nominal=0.0)
+    sigma = noise.covariance_at(np.array([[-3.0, 1e200]]))
+    assert np.all(np.linalg.eigvalsh(sigma[0, 0]) > 0)
+    log_p = noise.log_density(np.zeros((1, 2, 2)), np.array([[-3.0, 1e200]]))
+    assert np.isfinite(log_p[0, 0]) and log_p[0, 1] == -np.inf
 
 
 def test_a_missing_residual_leaves_the_marginal_of_the_others():
