@@ -54,6 +54,8 @@ def pooled(name: str, rows: list[dict]) -> dict:
         "found": float(np.mean([r["found"] for r in rows])),
         "statuses": dict(Counter(str(r.get("status")) for r in rows)),
         "laws": dict(Counter(str(r.get("degradation")) for r in rows)),
+        # predictions withheld as undecided (every probable law contradicted by the data): no figure
+        "withheld": _share_withheld(rows),
         "within_20pct_mean": float(np.mean(within)) if within else None,
         "within_20pct_worst": float(np.min(within)) if within else None,
         # pooled: every prediction of every seed counts once
@@ -61,6 +63,11 @@ def pooled(name: str, rows: list[dict]) -> dict:
         "ra_mean": float(np.mean(ra)) if ra else None, "ra_worst": float(np.min(ra)) if ra else None,
         "cpu_s": float(sum(r["cpu_s"] for r in rows)),
     }
+
+
+def _share_withheld(rows: list[dict]) -> float | None:
+    given = sum(r.get("predictions", 0) + r.get("withheld", 0) for r in rows)
+    return float(sum(r.get("withheld", 0) for r in rows) / given) if given else None
 
 
 def _pooled(rows: list[dict], key: str) -> float | None:
@@ -88,7 +95,8 @@ def main() -> int:
         if args.json:
             print(json.dumps(line))
         else:
-            print(f"{line['scenario']:42s} found {line['found']:.0%}  within20 {_pct(line['within_20pct_mean'])} "
+            print(f"{line['scenario']:42s} found {line['found']:.0%}  withheld {_pct(line['withheld'])}  "
+                  f"within20 {_pct(line['within_20pct_mean'])} "
                   f"(worst {_pct(line['within_20pct_worst'])})  cov90 {_pct(line['coverage_90'])}  "
                   f"cov50 {_pct(line['coverage_50'])}  RA {_pct(line['ra_mean'])} (worst {_pct(line['ra_worst'])})  "
                   f"{line['statuses']} {line['laws']}")

@@ -607,7 +607,8 @@ def _candidates(args, arrs: list, failures: dict, parameters: dict) -> list | No
 def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> dict:
     """What ``prognosis.json`` holds: the decision, the evidence, the predictions and the settings."""
     decision = result.decision
-    summary = {"detection_time": result.detection_time, "fired": result.fired, "candidates": result.candidates,
+    summary = {"detection_time": result.detection_time, "fired": result.fired, "transient": result.transient,
+               "candidates": result.candidates,
                "indistinguishable": [g for g in result.groups if len(g) > 1], "arrs": result.arrs,
                "candidate": None if decision is None else decision.candidate,
                "status": "no alarm" if result.detection_time is None else (

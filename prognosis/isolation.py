@@ -4,7 +4,8 @@
 fault-free stretch, and the failure value of each parameter that can fail.  At the first alarm
 
 1. the candidates are the parameters with a failure value that every fired ARR is sensitive to
-   (:func:`~prognosis.hypotheses.signature_candidates`);
+   (:func:`~prognosis.hypotheses.signature_candidates`), the fired ARRs those in alarm over most of a
+   confirmation window after the first alarm (a transient rules nothing out);
 2. every candidate with every degradation law is a hypothesis; all of them run as the rows of one
    vectorized particle filter (:class:`~prognosis.particle_filter.ParticleFilter`), each
    predicting every residual an ARR sensitive to a candidate gives
@@ -52,6 +53,7 @@ EVIDENCE_RATIO = 100.0  # "decisive" on Jeffreys' scale: a hypothesis is declare
 MIXTURE_FLOOR = 1e-3  # hypotheses less probable than this are left out of the RUL mixture
 PROCESS_NOISE = 0.1  # sigma_v per filter step, as a fraction of the candidate's resolution per sample
 HORIZON_STEPS = 2000  # RUL horizon cap in filter steps, unless given
+CONFIRM_STEPS = 20  # filter steps after the first alarm over which the fired ARRs are read
 ADEQUACY_WINDOW = 30  # filter steps of standardized innovations a law's fit is judged on
 #: mean standardized innovation over the window beyond which the law does not follow the residual: a
 #: fitting law stays within about 1 (clean or noisy torsion-bar wear), a law that lags drifts to tens
@@ -171,7 +173,10 @@ class IsolationResult:
     detection_time : float or None
         First alarm of any ARR.
     fired : list of str
-        The ARRs alarming at that time (the signature the candidates come from).
+        The ARRs in alarm over at least half of the CONFIRM_STEPS filter steps from the first alarm
+        (the signature the candidates come from; :meth:`IsolatingMonitor.signature`).
+    transient : list of str
+        The ARRs that alarmed in that window without staying in alarm: they rule nothing out.
     candidates, groups : list
         Candidates from the signature; their groups of indistinguishable ones.
     same_signature : dict
@@ -209,6 +214,7 @@ class IsolationResult:
 
     detection_time: float | None
     fired: list = field(default_factory=list)
+    transient: list = field(default_factory=list)
     candidates: list = field(default_factory=list)
     groups: list = field(default_factory=list)
     same_signature: dict = field(default_factory=dict)
@@ -305,13 +311,14 @@ class IsolatingMonitor:
     healthy_until : float, optional
         End of the stretch the user declares fault-free (the one the noise was calibrated on):
         alarms there are not faults (a start-up transient) and start nothing.
-    method : {"resample-move", "sir"}
-        The filter: ``"resample-move"`` (default) weighs each law's static parameters, theta at the
+    method : {"sir", "resample-move"}
+        The filter: ``"resample-move"`` weighs each law's static parameters, theta at the
         alarm and the rate, by their posterior on the whole history and moves its particles by MCMC
         (:class:`~prognosis.resample_move.ResampleMoveFilter`), with the residual noise measured on
         the healthy stretch, correlated between ARRs and growing with the candidate
         (:mod:`~prognosis.likelihood`); ``"sir"`` is the random-walk SIR filter of Jha et al. (2016)
-        with kernel smoothing of the rate (:class:`~prognosis.particle_filter.ParticleFilter`).
+        with kernel smoothing of the rate (:class:`~prognosis.particle_filter.ParticleFilter`), the
+        default until the resample-move filter's bands are measured calibrated (issue 31).
     domains : mapping, optional
         Parameter -> open interval ``(lo, hi)`` of its physical domain, as the model declares it
         (:attr:`bondgraph.BondGraph.domains`); a hypothesis whose estimate leaves it is rejected.
@@ -348,7 +355,7 @@ class IsolatingMonitor:
                  rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
                  rul_every: int = 10, horizon: float | None = None, detection: Mapping | None = None,
                  min_ratio: float = EVIDENCE_RATIO, healthy_until: float | None = None,
-                 domains: Mapping[str, tuple] | None = None, method: str = "resample-move",
+                 domains: Mapping[str, tuple] | None = None, method: str = "sir",
                  seed: int | np.random.SeedSequence = 0):
         if method not in METHODS:
             raise PrognosisError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
@@ -419,7 +426,7 @@ class IsolatingMonitor:
             return result
         k = min(firsts)
         result.detection_time = float(t[k])
-        result.fired = [a.name for a, e in zip(self.arrs, evaluations) if e.alarm[k]]
+        result.fired, result.transient = self.signature(evaluations, k, filter_stride(t, self.dt))
         result.candidates = (self.candidates if self.candidates is not None
                              else signature_candidates(self.arrs, self.failures, result.fired))
         if not result.candidates:
@@ -433,6 +440,22 @@ class IsolatingMonitor:
         result.hypotheses, result.rejected = self.hypotheses_for(result.candidates)
         self._filter(result, [evaluations[i] for i in used], arrs, k, progress)
         return result
+
+    def signature(self, evaluations: list, k: int, stride: int) -> tuple[list, list]:
+        """The ARRs that fired, read over CONFIRM_STEPS filter steps from the first alarm at sample ``k``.
+
+        An ARR in alarm over at least half of the window has fired; one that alarmed only in part of
+        it is a transient (an input's discontinuity, the ringing of a step) and rules nothing out: a
+        step of one parameter can upset, for a few samples, an ARR blind to it.  When no ARR stays in
+        alarm over half of the window, those alarming at ``k`` are the signature.  Returns (fired,
+        transient).
+        """
+        window = slice(k, k + CONFIRM_STEPS * stride)
+        share = {a.name: float(np.mean(e.alarm[window])) for a, e in zip(self.arrs, evaluations)}
+        fired = [name for name, s in share.items() if s >= 0.5]
+        if not fired:
+            fired = [a.name for a, e in zip(self.arrs, evaluations) if e.alarm[k]]
+        return fired, [name for name, s in share.items() if s > 0 and name not in fired]
 
     def options_for(self, arr) -> dict:
         """This ARR's detection options: its own entry when ``detection`` is keyed by ARR name, else the shared ones."""
