@@ -47,7 +47,7 @@ __all__ = ["ResampleMoveFilter"]
 ESS_TARGET = 0.5  # share of N the ESS is kept at by tempering
 MOVES = 4  # Metropolis-Hastings steps per move
 MAX_STAGES = 60  # tempering stages per filter step before the rest of the increment is taken at once
-CHUNK = 4096  # filter steps evaluated at once when the whole history is replayed
+CHUNK = 1024  # filter steps evaluated at once when the whole history is replayed (bounds the memory)
 
 
 @dataclass(frozen=True)

@@ -112,3 +112,13 @@ def test_bad_settings_are_named():
         f.initialize((0.0, 1.0), gamma_bounds=(-1.0, 1.0), log_gamma=True)
     with pytest.raises(RuntimeError, match="initialize"):
         f.step(1.0)
+
+
+def test_replaying_the_history_in_chunks_changes_nothing(monkeypatch):
+    import prognosis.resample_move as module
+
+    y = line(0.05, seed=8)
+    whole = run(y, 0.05, seed=9, particles=100)
+    monkeypatch.setattr(module, "CHUNK", 7)   # 40 steps in six chunks, the last one short
+    chunked = run(y, 0.05, seed=9, particles=100)
+    assert np.array_equal(whole.z, chunked.z) and np.allclose(whole.log_evidence, chunked.log_evidence, rtol=1e-12)
