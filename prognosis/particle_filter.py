@@ -393,16 +393,20 @@ class ParticleFilter:
 
     def estimate(self) -> dict:
         """Weighted mean, median and RMAD of theta and each gamma, per asset."""
-        weights = self.weights
-        gamma = np.moveaxis(self.gamma, -1, 1)  # (A, G, N)
-        return {
-            "theta_mean": np.sum(weights * self.theta, axis=1),
-            "theta_rmad": rmad(self.theta, weights),
-            "gamma_mean": np.einsum("an,agn->ag", weights, gamma),
-            "gamma_rmad": rmad(gamma, weights[:, None, :]),
-            "theta_quantiles": weighted_quantiles(self.theta, weights, (0.05, 0.5, 0.95)),
-            "gamma_quantiles": weighted_quantiles(gamma, weights[:, None, :], (0.05, 0.5, 0.95)),
-        }
+        return cloud_estimate(self.theta, self.gamma, self.weights)
+
+
+def cloud_estimate(theta: np.ndarray, gamma: np.ndarray, weights: np.ndarray) -> dict:
+    """Weighted mean, RMAD and 5/50/95 % quantiles of ``theta`` (A, N) and each gamma (A, N, G), per asset."""
+    gamma = np.moveaxis(gamma, -1, 1)  # (A, G, N)
+    return {
+        "theta_mean": np.sum(weights * theta, axis=1),
+        "theta_rmad": rmad(theta, weights),
+        "gamma_mean": np.einsum("an,agn->ag", weights, gamma),
+        "gamma_rmad": rmad(gamma, weights[:, None, :]),
+        "theta_quantiles": weighted_quantiles(theta, weights, (0.05, 0.5, 0.95)),
+        "gamma_quantiles": weighted_quantiles(gamma, weights[:, None, :], (0.05, 0.5, 0.95)),
+    }
 
 
 def check_positive(value: object, option: str) -> float:

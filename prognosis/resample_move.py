@@ -37,8 +37,7 @@ import numpy as np
 
 from .errors import PrognosisError
 from .likelihood import ResidualNoise
-from .metrics import rmad, weighted_quantiles
-from .particle_filter import COLLAPSE_BELOW, StepDiagnostics, check_particles, check_positive
+from .particle_filter import COLLAPSE_BELOW, StepDiagnostics, check_particles, check_positive, cloud_estimate
 from .resampling import effective_sample_size, get_scheme, normalize_log_weights
 from .seeds import check_seed
 
@@ -356,16 +355,7 @@ class ResampleMoveFilter:
 
     def estimate(self) -> dict:
         """Weighted mean, median and RMAD of theta (now) and each gamma, per asset."""
-        weights = self.weights
-        gamma = np.moveaxis(self.gamma, -1, 1)  # (A, G, N)
-        return {
-            "theta_mean": np.sum(weights * self.theta, axis=1),
-            "theta_rmad": rmad(self.theta, weights),
-            "gamma_mean": np.einsum("an,agn->ag", weights, gamma),
-            "gamma_rmad": rmad(gamma, weights[:, None, :]),
-            "theta_quantiles": weighted_quantiles(self.theta, weights, (0.05, 0.5, 0.95)),
-            "gamma_quantiles": weighted_quantiles(gamma, weights[:, None, :], (0.05, 0.5, 0.95)),
-        }
+        return cloud_estimate(self.theta, self.gamma, self.weights)
 
 
 def _per_asset(bound, assets: int, g: int) -> np.ndarray:
