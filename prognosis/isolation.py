@@ -202,8 +202,9 @@ class IsolationResult:
     ess : ndarray (K, H)
         Smallest effective sample size of each hypothesis' cloud within each filter step.
     collapsed : dict
-        Hypothesis name -> first time (s) its cloud collapsed (too few distinct particles to stand
-        for a distribution); it is left out of the RUL from then on.
+        Hypothesis name -> first time (s) its cloud collapsed (an update's effective sample size, or
+        the distinct particles after a move, below a tenth of them: no distribution); a prediction
+        made at a step where it is collapsed leaves it out.
     inadequate : dict
         Hypothesis name -> why its law does not follow the residuals (its standardized innovations
         drift, :data:`ADEQUACY_LIMIT`); it is left out of the RUL from then on.
@@ -519,8 +520,10 @@ class IsolatingMonitor:
             if diagnostics.innovation is not None:
                 innovations.append(diagnostics.innovation)
                 self._check_adequacy(result, hypotheses, arrs, innovations, float(t[k]))
-            for row in np.flatnonzero(diagnostics.collapsed):
-                result.collapsed.setdefault(hypotheses[row].name, float(t[k]))
+            # a cloud collapsed at this step is no band now (a random-walk cloud may spread again later)
+            collapsed_now = {hypotheses[row].name: float(t[k]) for row in np.flatnonzero(diagnostics.collapsed)}
+            for name, time in collapsed_now.items():
+                result.collapsed.setdefault(name, time)
             estimate = pf.estimate()
             self._reject(result, hypotheses, estimate, float(t[k]))
             away = self._reject_drift_away(result, hypotheses, estimate, float(t[k]), boxes, away)
@@ -529,7 +532,7 @@ class IsolatingMonitor:
                 decision = decide(hypotheses, pf.log_evidence, result.groups, result.rejected, self.min_ratio,
                                   result.same_signature)
                 distribution, reason = self._mixture(pf, hypotheses, decision, predictors, models, key=done,
-                                                     left_out={**result.collapsed, **result.inadequate})
+                                                     left_out={**collapsed_now, **result.inadequate})
                 rul.append(distribution)
                 result.withheld.append(reason)
                 rul_t.append(float(t[k]))
@@ -702,7 +705,7 @@ class IsolatingMonitor:
         samples, mixed = [], []
         probable = [h.name for h in hypotheses if decision.probabilities[h.name] >= MIXTURE_FLOOR]
         if probable and all(name in left_out for name in probable):
-            reason = "; ".join(f"{name}: " + (f"its cloud collapsed at t = {left_out[name]:g} s"
+            reason = "; ".join(f"{name}: " + (f"its particle cloud has collapsed (t = {left_out[name]:g} s)"
                                               if isinstance(left_out[name], float) else left_out[name])
                                for name in probable)
             return RULDistribution(np.full((1, 1), np.inf), np.ones((1, 1)), self.horizon), reason
