@@ -498,7 +498,7 @@ class IsolatingMonitor:
         else:
             models = tuple(self.law(h.law, 0.0) for h in hypotheses)  # the law itself: no random walk
             pf = ResampleMoveFilter(PerAssetDegradation(models, tuple(range(len(models)))), observation,
-                                    noise=self.residual_noise(hypotheses, evaluations, arrs, stride), dt=self.dt,
+                                    noise=self.residual_noise(observation, evaluations, stride), dt=self.dt,
                                     n_particles=self.n_particles, seed=seeds.spawn(self.seed, seeds.FILTER))
             rates = np.array([self.rate_bounds(h) for h in hypotheses])
             pf.initialize(bounds, gamma_bounds=(rates[:, 0], rates[:, 1]), assets=len(hypotheses),
@@ -626,13 +626,14 @@ class IsolatingMonitor:
         ends = sorted(distance / (steps * self.dt) for steps in self.life)
         return ends[0], ends[1]
 
-    def residual_noise(self, hypotheses: list, evaluations: list, arrs: list, stride: int) -> ResidualNoise:
+    def residual_noise(self, observation: HypothesisObservation, evaluations: list, stride: int) -> ResidualNoise:
         """The likelihood's noise per hypothesis: ``noise_std`` with, from the healthy stretch, the residuals'
         correlations and how their noise grows with the candidate (:func:`~prognosis.likelihood.healthy_noise`).
 
         Without a healthy stretch of at least three filter steps the residuals are independent with
         ``noise_std`` and their noise does not grow.
         """
+        hypotheses, arrs = observation.hypotheses, observation.arrs
         std = np.array([self.noise_std[a.name] for a in arrs])
         t = evaluations[0].t
         healthy = np.flatnonzero(t <= self.healthy_until)[::stride]
@@ -640,9 +641,9 @@ class IsolatingMonitor:
             return ResidualNoise.independent(std, self.inflation)
         residuals = np.column_stack([e.residual[healthy] for e in evaluations])
         covariance, cross, growth = [], [], []
-        for h in hypotheses:
-            columns = [sensitivity(observation_model(a, h.candidate), [p[healthy] for p in e.points])
-                       if h.candidate in a.parameters else np.zeros(healthy.size) for a, e in zip(arrs, evaluations)]
+        for models in observation.models:  # each hypothesis' observation model per ARR (None: blind to it)
+            columns = [sensitivity(model, [p[healthy] for p in e.points]) if model is not None
+                       else np.zeros(healthy.size) for model, e in zip(models, evaluations)]
             estimate = healthy_noise(residuals, np.column_stack(columns))
             scale = np.sqrt(np.diagonal(estimate["covariance"]))
             # the user's noise_std sets each residual's level; the stretch gives the correlations

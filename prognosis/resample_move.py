@@ -298,12 +298,14 @@ class ResampleMoveFilter:
         steps = len(self.history)
         for start in range(0, steps, CHUNK):
             stop = min(start + CHUNK, steps)
-            path, rate = np.empty((*theta.shape, stop - start)), np.empty((*theta.shape, stop - start))
+            path = np.empty((*theta.shape, stop - start))
+            rate = np.empty_like(path) if getattr(self.observation, "rates", False) else None
             for j in range(start, stop):
                 if j:
                     theta = self.model.step(theta, gamma, self.dt)
                 path[..., j - start] = theta
-                rate[..., j - start] = self._rate(theta, gamma)
+                if rate is not None:  # theta's rate only where an ARR sees it (a differentiated one)
+                    rate[..., j - start] = self._rate(theta, gamma)
             terms = self._history_terms(path, rate, start, stop)
             if stop == steps:
                 return past + terms[..., :-1].sum(axis=-1), terms[..., -1], theta
@@ -314,7 +316,7 @@ class ResampleMoveFilter:
         """log p(y_j | theta_j) (A, N, K) for the steps ``start..stop`` of the history."""
         ys = np.stack([self.history[j][0] for j in range(start, stop)], axis=1)  # (A, K) or (A, K, M)
         trajectory = getattr(self.observation, "trajectory", None)
-        rates = rate if getattr(self.observation, "rates", False) else None
+        rates = rate
         if trajectory is not None:
             predicted = trajectory(path, [self.history[j][1] for j in range(start, stop)],
                                    **({} if rates is None else {"rate": rates}))
