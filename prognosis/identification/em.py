@@ -220,7 +220,7 @@ def fit_em(y: ArrayLike, u: ArrayLike | None, n_states: int, *, initial: LinearG
     ...                             Q=0.01 * np.eye(2), R=[[0.01]])
     >>> u = np.random.default_rng(0).standard_normal((500, 1))
     >>> _, y = truth.simulate(u, rng=0)
-    >>> fit = fit_em(y, u, 2, cross_covariance=False)
+    >>> fit = fit_em(y, u, 2, cross_covariance=False, max_iter=30)
     >>> bool(np.allclose(np.sort(fit.model.eigenvalues.real), [0.5, 0.9], atol=0.1))
     True
     >>> fit.log_likelihood.shape == (fit.iterations + 1,)

@@ -61,7 +61,8 @@ def test_prognose_does_not_call_the_quarter_car_damper_isolated(tmp_path, capsys
     (tmp_path / "data.csv").write_text(csv_text({"t": noisy.t, **noisy.columns}))
     (tmp_path / "model.py").write_text("from tests.zoo.models.quarter_car import build\nmodel = build\n")
     code = main(["--quiet", "prognose", str(tmp_path / "model.py"), str(tmp_path / "data.csv"), "--arr", "ARR_1_s",
-                 "--integrals", "keep", "--fail", "c_s=750", "--calibrate", "1.5", "--particles", "100"])
+                 "--integrals", "keep", "--fail", "c_s=750", "--calibrate", "1.5", "--particles", "100",
+                 "--rul-every", "100"])   # the test is about the status: few RUL predictions
     out, err = capsys.readouterr()
     assert code == 0, err
     assert "candidate c_s (indistinguishable from C_s, m_s, sensor v_u, sensor v_s (same signature))" in out

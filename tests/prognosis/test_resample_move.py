@@ -90,8 +90,8 @@ def test_the_90_percent_interval_of_the_rate_covers_at_its_level():
 
 def test_assets_are_independent_and_log_uniform_rates_keep_their_sign():
     y = np.stack([line(0.01, seed=1), 2.0 * np.exp(-0.1 * DT * np.arange(STEPS))])
-    f = ResampleMoveFilter(ExponentialDegradation(), lambda theta, points: theta, noise=0.01, dt=DT,
-                           n_particles=150, seed=2)
+    f = ResampleMoveFilter(ExponentialDegradation(), lambda theta, points: theta, noise=0.03, dt=DT,
+                           n_particles=100, seed=2)
     f.initialize((0.5, 3.0), gamma_bounds=(np.array([1e-3, -1.0]), np.array([1.0, -1e-3])), assets=2,
                   log_gamma=True)
     assert np.all(f.gamma[0] > 0) and np.all(f.gamma[1] < 0)
