@@ -499,7 +499,8 @@ class IsolatingMonitor:
             models = tuple(self.law(h.law, 0.0) for h in hypotheses)  # the law itself: no random walk
             pf = ResampleMoveFilter(PerAssetDegradation(models, tuple(range(len(models)))), observation,
                                     noise=self.residual_noise(observation, evaluations, stride), dt=self.dt,
-                                    n_particles=self.n_particles, seed=seeds.spawn(self.seed, seeds.FILTER))
+                                    n_particles=self.n_particles, discrepancy="shared",
+                                    seed=seeds.spawn(self.seed, seeds.FILTER))
             rates = np.array([self.rate_bounds(h) for h in hypotheses])
             pf.initialize(bounds, gamma_bounds=(rates[:, 0], rates[:, 1]), assets=len(hypotheses),
                           log_gamma=self.rate is None)

@@ -28,10 +28,11 @@ import numpy as np
 
 from .errors import PrognosisError
 
-__all__ = ["ResidualNoise", "healthy_noise"]
+__all__ = ["ResidualNoise", "healthy_noise", "information_excess"]
 
 _LOG_2PI = float(np.log(2 * np.pi))
 DIFFERENCES = 4  # order of the differences the sensitivities' noise is read from
+MIN_STEPS = 8  # standardized gaps below which their long-run variance is not estimated (taken as 1)
 
 
 @dataclass(frozen=True)
@@ -232,3 +233,46 @@ def healthy_noise(residuals: np.ndarray, sensitivities: np.ndarray | None = None
     out["growth"] = ds.T @ ds / (gain * ds.shape[0])
     out["cross"] = dr.T @ ds / (gain * ds.shape[0])
     return out
+
+
+def information_excess(gaps: np.ndarray) -> np.ndarray:
+    """How many times the likelihood overstates what the residuals know: their long-run variance, at least 1.
+
+    ``gaps`` (A, K, M): the residuals' gaps to a hypothesis' prediction at its best estimate,
+    standardized by the noise's sd, over K filter steps (NaN where not measured).  If the noise model
+    were right they would be white N(0, 1) and every step would add its full information.  A model
+    error that the noise model does not know of (a derivative's lag, a friction law's shape, a law
+    that bends away) leaves gaps that are too large or that persist over many steps; the posterior
+    from a likelihood taken as white is then too narrow by the factor returned here, the long-run
+    variance ``lim K Var(mean of K gaps)``, read by batch means of ``ceil(sqrt(K))`` steps about zero
+    (not about their own mean: a persistent offset is part of the excess), or their mean square if
+    larger (it has more degrees of freedom).  Dividing the
+    log-likelihood by it is the sandwich correction of a misspecified likelihood.  The largest over
+    the M residuals, per asset (A,); 1 with fewer than :data:`MIN_STEPS` steps.
+
+    Examples
+    --------
+    White gaps know what they say; an offset of one sd that persists, or gaps of twice the sd, do not:
+
+    >>> rng = np.random.default_rng(0)
+    >>> white = rng.standard_normal((1, 400, 1))
+    >>> information_excess(np.concatenate([white, white + 1.0, 2.0 * white])).round(1).tolist()
+    [1.1, 19.7, 4.6]
+    """
+    gaps = np.asarray(gaps, float)
+    assets, steps, m = gaps.shape
+    if steps < MIN_STEPS:
+        return np.ones(assets)
+    size = math.ceil(math.sqrt(steps))
+    count = steps // size
+    batches = gaps[:, steps - count * size:].reshape(assets, count, size, m)  # the most recent whole batches
+    with np.errstate(invalid="ignore"):
+        seen = np.sum(np.isfinite(batches), axis=2)
+        means = np.nansum(batches, axis=2) / np.maximum(seen, 1)
+        # a batch's mean over n measured steps has variance 1 / n for white gaps: n mean^2 is 1 on average
+        scaled = np.where(seen > 0, seen * np.square(means), np.nan)
+        # batch means see persistence but have few degrees of freedom; the plain mean square has many:
+        # the larger of the two, so that gaps merely too wide are not missed by a lucky draw of batches
+        variance = np.fmax(np.nanmean(scaled, axis=1), np.nanmean(np.square(gaps), axis=1))
+    return np.maximum(1.0, np.nan_to_num(np.nanmax(np.where(np.isfinite(variance), variance, -np.inf), axis=1,
+                                                   initial=1.0), nan=1.0, neginf=1.0))

@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import PrognosisError
-from .likelihood import ResidualNoise
+from .likelihood import MIN_STEPS, ResidualNoise, information_excess
 from .particle_filter import COLLAPSE_BELOW, StepDiagnostics, check_particles, check_positive, cloud_estimate
 from .resampling import effective_sample_size, get_scheme, normalize_log_weights
 from .seeds import check_seed
@@ -47,6 +47,7 @@ ESS_TARGET = 0.5  # share of N the ESS is kept at by tempering
 MOVES = 4  # Metropolis-Hastings steps per move
 MAX_STAGES = 60  # tempering stages per filter step before the rest of the increment is taken at once
 CHUNK = 1024  # filter steps evaluated at once when the whole history is replayed (bounds the memory)
+DISCREPANCY = ("each", "shared", None)  # whose information excess divides an asset's likelihood
 
 
 @dataclass(frozen=True)
@@ -89,6 +90,11 @@ class ResampleMoveFilter:
     ess_target : float
         Tempering keeps the ESS at this share of N.
     resampling : str
+    discrepancy : {"each", "shared", None}
+        Divide the log-likelihood by the information excess of the residuals' gaps
+        (:func:`~prognosis.likelihood.information_excess`): each asset by its own ("each"), every
+        row by that of the row with the largest evidence ("shared": rows that are hypotheses about
+        one asset, whose evidence stays comparable), or not at all (None: the noise model is trusted).
     seed : int or numpy.random.SeedSequence
 
     Examples
@@ -111,7 +117,7 @@ class ResampleMoveFilter:
     """
 
     def __init__(self, model, observation, *, noise, dt: float, n_particles: int = 500, moves: int = MOVES,
-                 ess_target: float = ESS_TARGET, resampling: str = "systematic",
+                 ess_target: float = ESS_TARGET, resampling: str = "systematic", discrepancy: str | None = "each",
                  seed: int | np.random.SeedSequence = 0):
         self.model, self.observation = model, observation
         self.noise = noise if isinstance(noise, ResidualNoise) else ResidualNoise.independent(noise)
@@ -121,6 +127,9 @@ class ResampleMoveFilter:
         if not 0.0 < ess_target < 1.0:
             raise PrognosisError(f"ess_target must lie in (0, 1), got {ess_target!r}")
         self.moves, self.ess_target = int(moves), float(ess_target)
+        if discrepancy not in DISCREPANCY:
+            raise PrognosisError(f"discrepancy must be one of {', '.join(map(repr, DISCREPANCY))}, got {discrepancy!r}")
+        self.discrepancy = discrepancy
         self.resample = get_scheme(resampling)
         self.rng = np.random.default_rng(check_seed(seed))
         self.z = self.theta = self.log_weights = self.log_evidence = None
@@ -158,6 +167,7 @@ class ResampleMoveFilter:
         self.acceptance = np.full(assets, np.nan)
         self.frozen = np.zeros(assets, bool)
         self.scale = np.full(assets, 2.38 / np.sqrt(self.z.shape[-1]))
+        self.excess = np.ones(assets)  # what the likelihood is divided by (information_excess)
 
     @property
     def assets(self) -> int:
@@ -192,7 +202,9 @@ class ResampleMoveFilter:
         increment = self._log_likelihood(y, predicted, self.theta)
         updated = np.isfinite(y).any(axis=1) if y.ndim == 2 else np.isfinite(y)
         increment = np.where(updated[:, None], increment, 0.0)
-        done = np.zeros(self.assets)  # the share phi of the increment already in the weights
+        # the target moves from exp(past / excess_before) to exp((past + increment) / excess_after)
+        before, after = 1.0 / self.excess, 1.0 / self._excess_now()
+        done = np.zeros(self.assets)  # the share phi of the way already in the weights
         ess_min = np.full(self.assets, float(self.n))
         moved = np.zeros(self.assets, bool)
         distinct = np.full(self.assets, float(self.n))
@@ -200,14 +212,15 @@ class ResampleMoveFilter:
             rows = done < 1.0
             if not rows.any():
                 break
+            slope = (after - before)[:, None] * self.past + after[:, None] * increment  # d log target / d phi
             # a frozen asset is not moved, so it takes its increment at once
             share = 1.0 - done if stage == MAX_STAGES else np.where(self.frozen, 1.0 - done,
-                                                                     self._next_share(increment, done))
+                                                                     self._next_share(slope, done))
             share = np.where(rows, share, 0.0)
-            weights = normalize_log_weights(self.log_weights)[0]
-            log_sum = _logsumexp(np.log(np.maximum(weights, 1e-300)) + share[:, None] * increment)
+            # in log-weights: a particle whose weight underflows may carry a past the new temperature raises
+            log_sum = _logsumexp(self.log_weights + share[:, None] * slope) - _logsumexp(self.log_weights)
             self.log_evidence = self.log_evidence + np.where(rows, log_sum, 0.0)
-            self.log_weights = self.log_weights + share[:, None] * increment
+            self.log_weights = self.log_weights + share[:, None] * slope
             done = np.where(rows, np.minimum(done + share, 1.0), done)
             done = np.where(np.isclose(done, 1.0, rtol=0, atol=1e-12), 1.0, done)
             weights = normalize_log_weights(self.log_weights)[0]
@@ -215,12 +228,32 @@ class ResampleMoveFilter:
             ess_min = np.minimum(ess_min, ess)
             low = rows & (ess < self.ess_target * self.n * (1 + 1e-9)) & ~self.frozen
             if low.any():
-                increment = self._resample_move(weights, low, increment, done)
+                increment = self._resample_move(weights, low, increment, (1 - done) * before + done * after,
+                                                done * after)
                 moved |= low
                 distinct = np.where(low, self._distinct(), distinct)
         self.past = self.past + increment
+        self.excess = 1.0 / after
         collapsed = moved & (distinct < COLLAPSE_BELOW * self.n)
         return StepDiagnostics(updated, ess_min, moved, np.zeros(self.assets, bool), collapsed, innovation)
+
+    def _excess_now(self) -> np.ndarray:
+        """The information excess (A,) the likelihood is divided by from this step on (all 1 without ``discrepancy``).
+
+        Read from the standardized gaps of the history at the cloud's mean (:func:`information_excess`):
+        every step while the history is short, then about twenty times per tenfold of history (the
+        replay it takes costs as much as the history is long).
+        """
+        steps = len(self.history)
+        if self.discrepancy is None or steps < MIN_STEPS or (steps - MIN_STEPS) % max(1, steps // 20):
+            return self.excess
+        weights = normalize_log_weights(self.log_weights)[0]
+        mean = np.einsum("an,and->ad", weights, self.z)[:, None, :]
+        excess = information_excess(self._standardized_gaps(mean))
+        if self.discrepancy == "shared":  # rows are hypotheses of one asset: the best one's excess for all
+            best = np.where(self.frozen, -np.inf, self.log_evidence)
+            excess = np.full(self.assets, excess[int(np.argmax(best))])
+        return excess
 
     def _innovation(self, y: np.ndarray, predicted: np.ndarray) -> np.ndarray:
         """``(y - E[y]) / sd[y]`` (A, M) under the predictive: the cloud's spread of ``h`` plus the noise."""
@@ -254,8 +287,11 @@ class ResampleMoveFilter:
 
     # -- resample and move ---------------------------------------------------------------------
     def _resample_move(self, weights: np.ndarray, rows: np.ndarray, increment: np.ndarray,
-                       done: np.ndarray) -> np.ndarray:
-        """Resample the ``rows`` assets, then move them by MH on the tempered posterior; returns the new increment."""
+                       on_past: np.ndarray, on_increment: np.ndarray) -> np.ndarray:
+        """Resample the ``rows`` assets, then move them by MH on the tempered posterior; returns the new increment.
+
+        The target is ``prior exp(on_past past + on_increment increment)``, exponents (A,).
+        """
         spread = _weighted_covariance(self.z, weights)  # (A, D, D): the proposal's shape, before resampling
         index = self.resample(weights, self.rng)
         index = np.where(rows[:, None], index, np.arange(self.n))
@@ -276,7 +312,8 @@ class ResampleMoveFilter:
             inside = self.prior.inside(z_new) & rows[:, None]
             # a proposal outside the prior is rejected; replayed inside it, so that no law overflows
             past, last, theta = self._replay(np.clip(z_new, self.prior.lo[:, None, :], self.prior.hi[:, None, :]))
-            log_ratio = (past + done[:, None] * last) - (self.past + done[:, None] * increment)
+            a, b = on_past[:, None], on_increment[:, None]
+            log_ratio = (a * past + b * last) - (a * self.past + b * increment)
             accept = inside & (np.log(self.rng.random(log_ratio.shape)) < np.nan_to_num(log_ratio, nan=-np.inf))
             self.z = np.where(accept[..., None], z_new, self.z)
             self.theta = np.where(accept, theta, self.theta)
@@ -292,9 +329,28 @@ class ResampleMoveFilter:
 
     def _replay(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Log-likelihood of particles ``z`` over the history before this step, of this step, and theta now."""
+        past = np.zeros(z.shape[:2])
+        for path, rate, start, stop in self._paths(z):
+            terms = self._history_terms(path, rate, start, stop)
+            if stop == len(self.history):
+                return past + terms[..., :-1].sum(axis=-1), terms[..., -1], path[..., -1]
+            past = past + terms.sum(axis=-1)
+        raise RuntimeError("no history to replay")
+
+    def _standardized_gaps(self, z: np.ndarray) -> np.ndarray:
+        """``(y - h) / sd`` (A, K, M) over the history of one particle per asset, ``z`` (A, 1, D)."""
+        pieces = []
+        for path, rate, start, stop in self._paths(z):
+            gaps = self._history_gaps(path, rate, start, stop)  # (A, 1, K, M)
+            sd = np.sqrt(np.diagonal(self.noise.covariance_at(path), axis1=-2, axis2=-1))
+            pieces.append((gaps / sd)[:, 0])
+        return np.concatenate(pieces, axis=1)
+
+    def _paths(self, z: np.ndarray):
+        """theta's path (A, N, K) under particles ``z`` and its rate (or None), CHUNK steps at a time,
+        with the steps ``start, stop`` of the history they cover."""
         gamma = self.prior.gamma(z)
         theta = z[..., 0]
-        past = np.zeros(theta.shape)
         steps = len(self.history)
         for start in range(0, steps, CHUNK):
             stop = min(start + CHUNK, steps)
@@ -306,29 +362,29 @@ class ResampleMoveFilter:
                 path[..., j - start] = theta
                 if rate is not None:  # theta's rate only where an ARR sees it (a differentiated one)
                     rate[..., j - start] = self._rate(theta, gamma)
-            terms = self._history_terms(path, rate, start, stop)
-            if stop == steps:
-                return past + terms[..., :-1].sum(axis=-1), terms[..., -1], theta
-            past = past + terms.sum(axis=-1)
-        raise RuntimeError("no history to replay")
+            yield path, rate, start, stop
 
     def _history_terms(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int) -> np.ndarray:
         """log p(y_j | theta_j) (A, N, K) for the steps ``start..stop`` of the history."""
+        gaps = self._history_gaps(path, rate, start, stop)
+        terms = self.noise.log_density(gaps, path)
+        measured = np.isfinite(gaps).any(axis=-1)
+        return np.where(measured, terms, 0.0)
+
+    def _history_gaps(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int) -> np.ndarray:
+        """``y_j - h(theta_j)`` (A, N, K, M) for the steps ``start..stop`` of the history."""
         ys = np.stack([self.history[j][0] for j in range(start, stop)], axis=1)  # (A, K) or (A, K, M)
         trajectory = getattr(self.observation, "trajectory", None)
-        rates = rate
         if trajectory is not None:
             predicted = trajectory(path, [self.history[j][1] for j in range(start, stop)],
-                                   **({} if rates is None else {"rate": rates}))
+                                   **({} if rate is None else {"rate": rate}))
         else:
             predicted = np.stack([self._call(path[..., j], self.history[start + j][1],
-                                             None if rates is None else rates[..., j])
+                                             None if rate is None else rate[..., j])
                                   for j in range(stop - start)], axis=2)
         if ys.ndim == 2:
             ys, predicted = ys[..., None], predicted[..., None] if predicted.ndim == 3 else predicted
-        terms = self.noise.log_density(ys[:, None] - predicted, path)
-        measured = np.isfinite(ys).any(axis=-1)[:, None, :]
-        return np.where(measured, terms, 0.0)
+        return ys[:, None] - predicted
 
     # -- pieces ----------------------------------------------------------------------------------
     def _observe(self, theta: np.ndarray, points, z: np.ndarray) -> np.ndarray:
