@@ -12,7 +12,9 @@ The user's side is a model file, a CSV and ``--fail`` values, nothing of the tru
 Per scenario, over the seeds: the share of runs that name the degrading parameter (or an honest
 indistinguishable group holding it), the statuses and laws said, over the second half of life the
 share of predictions whose median RUL is within 20 % of the truth (mean and worst over the seeds),
-the pooled coverage of the 5-95 % and 25-75 % bands, and the relative accuracy (mean and worst).  The
+the pooled coverage of the 5-95 % and 25-75 % bands, the PIT histogram per quarter of the life (the
+truth's place among the predicted 5, 25, 50, 75 and 95 % quantiles: 5, 20, 25, 25, 20, 5 % when
+calibrated), and the relative accuracy (mean and worst).  The
 targets of issue 31: found in every run, within-20 % >= 0.8, coverage 0.85-0.97 and 0.40-0.65.
 ``--json`` prints one JSON object per scenario, one per line.
 """
@@ -61,6 +63,9 @@ def pooled(name: str, rows: list[dict]) -> dict:
         # pooled: every prediction of every seed counts once
         "coverage_90": _pooled(rows, "coverage_90"), "coverage_50": _pooled(rows, "coverage_50"),
         "ra_mean": float(np.mean(ra)) if ra else None, "ra_worst": float(np.min(ra)) if ra else None,
+        # the truth's place among the 5, 25, 50, 75, 95 % quantiles (six bins), per quarter of the life
+        "pit_by_quarter": np.sum([r["pit"] for r in rows if "pit" in r], axis=0).tolist()
+        if any("pit" in r for r in rows) else None,
         "cpu_s": float(sum(r["cpu_s"] for r in rows)),
     }
 

@@ -108,7 +108,27 @@ def score(scenario: Scenario, answer: dict) -> dict:
     if all("rul_p25" in p for p in predictions):
         p25, p75 = (np.array([_number(p[k]) for p in predictions]) for k in ("rul_p25", "rul_p75"))
         figures["coverage_50"] = float(np.mean((p25 <= truth) & (truth <= p75)))
+        figures["pit"] = pit_histogram(predictions, truth)
     return figures
+
+
+PIT_EDGES = (0.05, 0.25, 0.5, 0.75, 0.95)  # the predicted quantiles: six bins of the PIT between them
+QUARTERS = 4
+
+
+def pit_histogram(predictions: list[dict], truth: np.ndarray) -> list[list[int]]:
+    """Counts of the truth's place among the predicted quantiles, per quarter of the life after onset.
+
+    Row q: predictions made in the q-th quarter of (ONSET, EOL); column b: the truth below the 5 %
+    quantile (b = 0), between the 5 and 25 % ones (1), ..., above the 95 % one (5).  A calibrated
+    band fills the bins as 5, 20, 25, 25, 20, 5 % in every quarter.
+    """
+    keys = ("rul_p5", "rul_p25", "rul_median", "rul_p75", "rul_p95")
+    counts = np.zeros((QUARTERS, len(PIT_EDGES) + 1), int)
+    for p, true in zip(predictions, truth):
+        quarter = min(QUARTERS - 1, int((p["t"] - ONSET) / (EOL - ONSET) * QUARTERS))
+        counts[quarter, int(np.searchsorted([_number(p[k]) for k in keys], true))] += 1
+    return counts.tolist()
 
 
 def _number(value) -> float:
