@@ -610,6 +610,8 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
     summary = {"detection_time": result.detection_time, "fired": result.fired, "transient": result.transient,
                "candidates": result.candidates,
                "indistinguishable": [g for g in result.groups if len(g) > 1], "arrs": result.arrs,
+               # pairs the structure tells apart but this record's operating regime does not
+               "indistinguishable_on_record": result.on_record,
                "candidate": None if decision is None else decision.candidate,
                "status": "no alarm" if result.detection_time is None else (
                    "no candidate" if decision is None else decision.status),
@@ -669,6 +671,9 @@ def _prognosis_line(result, summary: dict) -> str:
     status = summary["status"]
     if summary["same_signature"]:   # isolable in the model only when no other fault shares the signature
         status = f"indistinguishable from {', '.join(summary['same_signature'])} (same signature)"
+    reported = summary["candidate"] if isinstance(summary["candidate"], list) else [summary["candidate"]]
+    if any(set(pair.split(" ~ ")) <= set(reported) for pair in summary["indistinguishable_on_record"]):
+        status += ", on this record (the operating regime does not tell them apart)"
     if last.get("withheld"):
         return (f"{head}; candidate {summary['candidate']} ({status}), degradation {law}; at t = "
                 f"{last['t']:g} s no RUL (undecided: {last['withheld']})")

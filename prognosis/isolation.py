@@ -35,7 +35,7 @@ import numpy as np
 from . import seeds
 from .degradation import PerAssetDegradation, degradation_model
 from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, rate_prior,
-                         same_signature, sensitivity, signature_candidates)
+                         record_separation, same_signature, sensitivity, signature_candidates)
 from .likelihood import ResidualNoise, healthy_noise
 from .monitor import MonitorResult, filter_stride
 from .observation import observation_model
@@ -211,6 +211,11 @@ class IsolationResult:
     withheld : list of str or None
         Per RUL prediction: None, or why no RUL is given (every probable hypothesis inadequate or
         collapsed): the answer is then "undecided", not a band.
+    on_record : dict
+        ``"a ~ b"`` -> why candidates that the structure tells apart are indistinguishable on this
+        record (each one's estimated change imitated by the other to within the decisive ratio,
+        :func:`~prognosis.hypotheses.record_separation`, over the filter steps up to the end);
+        ``record_groups`` are ``groups`` merged with those pairs, the groups the final decision uses.
     """
 
     detection_time: float | None
@@ -235,14 +240,16 @@ class IsolationResult:
     collapsed: dict = field(default_factory=dict)
     inadequate: dict = field(default_factory=dict)
     withheld: list = field(default_factory=list)
+    on_record: dict = field(default_factory=dict)
+    record_groups: list = field(default_factory=list)
 
     @property
     def decision(self) -> Decision | None:
         """The decision on all the data (None without an alarm or a candidate)."""
         if not self.t.size:
             return None
-        return decide(self.hypotheses, self.log_evidence[-1], self.groups, self.rejected, self.min_ratio,
-                      self.same_signature)
+        return decide(self.hypotheses, self.log_evidence[-1], self.record_groups or self.groups, self.rejected,
+                      self.min_ratio, self.same_signature)
 
     def index(self, name: str) -> int:
         """Row of the hypothesis ``"candidate/law"``."""
@@ -505,6 +512,7 @@ class IsolatingMonitor:
             pf.initialize(bounds, gamma_bounds=(rates[:, 0], rates[:, 1]), assets=len(hypotheses),
                           log_gamma=self.rate is None)
         steps = range(k0, t.size, stride)
+        information = self._information(result, observation, evaluations, noise, steps)
         every = -(-len(steps) // 100)
         rows, rul_t, rul, decisions, ess, innovations = [], [], [], [], [], []
         predictors, away = {}, np.zeros(len(hypotheses), int)
@@ -529,8 +537,12 @@ class IsolatingMonitor:
             self._reject(result, hypotheses, estimate, float(t[k]))
             away = self._reject_drift_away(result, hypotheses, estimate, float(t[k]), boxes, away)
             rows.append((float(t[k]), pf.log_evidence.copy(), estimate))
+            if (done - 1) % self.rul_every == 0 or done == len(steps):
+                groups, result.on_record = self._record_groups(result, information[done - 1], pf.log_evidence,
+                                                               np.ravel(estimate["theta_mean"]))
+                result.record_groups = groups
             if (done - 1) % self.rul_every == 0:
-                decision = decide(hypotheses, pf.log_evidence, result.groups, result.rejected, self.min_ratio,
+                decision = decide(hypotheses, pf.log_evidence, groups, result.rejected, self.min_ratio,
                                   result.same_signature)
                 distribution, reason = self._mixture(pf, hypotheses, decision, predictors, models, key=done,
                                                      left_out={**collapsed_now, **result.inadequate})
@@ -549,6 +561,62 @@ class IsolatingMonitor:
             setattr(result, name, {"mean": mean, "rmad": rmad, "quantiles": quantiles})
         result.rul_t, result.rul, result.decisions = np.array(rul_t), rul, decisions
         result.ess = np.array(ess)
+
+    def _information(self, result: IsolationResult, observation: HypothesisObservation, evaluations: list,
+                     noise: np.ndarray, steps: range) -> np.ndarray:
+        """The record's Fisher information about the candidates' changes (K, C, C), summed up to each step.
+
+        Each candidate's sensitivities ``dy/dtheta`` at its nominal value, per ARR over its noise sd,
+        at the filter's steps; a step where a sensitivity cannot be evaluated adds nothing.
+        """
+        index = list(steps)
+        rows = [next(i for i, h in enumerate(result.hypotheses) if h.candidate == c) for c in result.candidates]
+        scaled = np.zeros((len(index), len(rows), len(evaluations)))
+        for ci, row in enumerate(rows):
+            for m, (model, e) in enumerate(zip(observation.models[row], evaluations)):
+                if model is not None:
+                    with np.errstate(all="ignore"):
+                        scaled[:, ci, m] = sensitivity(model, [np.asarray(p)[index] for p in e.points]) / noise[m]
+        scaled = np.nan_to_num(scaled, nan=0.0, posinf=0.0, neginf=0.0)
+        return np.cumsum(np.einsum("kcm,kdm->kcd", scaled, scaled), axis=0)
+
+    def _record_groups(self, result: IsolationResult, information: np.ndarray, log_evidence: np.ndarray,
+                       theta: np.ndarray) -> tuple[list, dict]:
+        """``result.groups`` merged with the pairs this record cannot tell apart, and why (pair -> reason).
+
+        Each candidate's change is its estimate under its most probable hypothesis (``theta`` (H,));
+        two candidates are indistinguishable when each one's change is imitated by the other to within
+        the decisive evidence ratio (:func:`~prognosis.hypotheses.record_separation`): the evidence
+        between them can then come only from what the residuals do not carry (the laws' shapes, the
+        priors, a model error), so it does not single either out.  Candidates whose every hypothesis
+        is rejected take no part.
+        """
+        hypotheses, candidates = result.hypotheses, result.candidates
+        changes = np.zeros(len(candidates))
+        alive = np.zeros(len(candidates), bool)
+        for ci, c in enumerate(candidates):
+            rows = [i for i, h in enumerate(hypotheses) if h.candidate == c and h.name not in result.rejected]
+            if rows:
+                best = max(rows, key=lambda i: log_evidence[i])
+                changes[ci], alive[ci] = float(theta[best]) - self.nominal[c], True
+        separation = record_separation(information, changes)
+        limit = math.log(self.min_ratio)
+        groups = [list(g) for g in result.groups]
+        reasons = {}
+        for a, b in ((a, b) for a in range(len(candidates)) for b in range(a + 1, len(candidates))):
+            first, second = candidates[a], candidates[b]
+            if not (alive[a] and alive[b]) or any(first in g and second in g for g in groups):
+                continue
+            apart = float(max(separation[a, b], separation[b, a]))
+            if apart >= limit:
+                continue
+            reasons[f"{first} ~ {second}"] = (
+                f"{first} and {second} act on the residuals nearly in proportion over this record: each one's "
+                f"estimated change is imitated by a change of the other to within {apart:.2g} nats of evidence "
+                f"(decisive: {limit:.2g}); the operating regime does not excite what tells them apart")
+            merged = [c for g in groups if first in g or second in g for c in g]
+            groups = [g for g in groups if first not in g and second not in g] + [merged]
+        return groups, reasons
 
     def start_interval(self, h: Hypothesis, evaluations: list, arrs: list, k: int, noise: np.ndarray):
         """(lo, hi) of theta at the alarm and sigma_v, for one hypothesis.

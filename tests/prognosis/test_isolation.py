@@ -213,7 +213,7 @@ def test_resample_move_follows_a_clean_linear_wear_that_collapsed_the_random_wal
     """Issue 31: noise on the speeds only, the alarm within a filter step of the onset."""
     from tests.wear import run as wear
 
-    scenario = wear.Scenario("b_Md", "linear", "clean")
+    scenario = wear.Scenario("torsion_bar", "b_Md", "linear", "clean")
     figures = wear.score(scenario, wear.run(scenario, seed=20261127, particles=150, rul_every=40,
                                             method="resample-move"))
     assert figures["found"] and figures["degradation"] == "linear"
@@ -228,7 +228,7 @@ def test_a_law_the_data_contradict_is_inadequate_and_gives_no_rul(law, flagged):
     """Only the linear law may compete: it follows a linear wear, and lags an exponential one."""
     from tests.wear import run as wear
 
-    scenario = wear.Scenario("b_Md", law, "noisy")
+    scenario = wear.Scenario("torsion_bar", "b_Md", law, "noisy")
     answer = wear.run(scenario, seed=20261128, particles=150, rul_every=40, method="resample-move",
                       degradation="linear")
     inadequate = answer["evidence"]["b_Md/linear"]["inadequate"]
@@ -239,3 +239,33 @@ def test_a_law_the_data_contradict_is_inadequate_and_gives_no_rul(law, flagged):
     else:
         assert inadequate is None and not withheld
         assert wear.score(scenario, answer)["within_20pct_second_half"] >= 0.8
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("wave", [0.0, 0.1])
+def test_two_frictions_at_a_steady_speed_are_indistinguishable_on_that_record(tmp_path, monkeypatch, wave):
+    """The load's friction wears (independent simulator).  At a steady speed ``omega_Ld = omega_m / k``, so
+    it acts on the residual as the motor disk's friction does, though the structure tells them apart:
+    the answer says so, with the reason.  A set-point swinging by 10 % excites the difference."""
+    from tests.wear import torsion
+    from tests.wear.laws import LAWS
+
+    monkeypatch.setattr(torsion, "WAVE", wave)
+    failures = {"b_Md": 0.45, "b_Ld": 0.01, "f_m": 10 * torsion.NOMINAL["f_m"]}   # a load bearing seizing
+    law = LAWS["linear"](torsion.NOMINAL["b_Ld"], failures["b_Ld"], 10.0, 30.0)
+    record = torsion.simulate({"b_Ld": law}, t_end=40.0, dt=0.01, noise=torsion.NOISE, seed=5)
+    (tmp_path / "model.json").write_text(to_json(torsion_bar_monitorable()))
+    (tmp_path / "data.csv").write_text(csv_text(record))
+    code = main(["--quiet", "prognose", str(tmp_path / "model.json"), str(tmp_path / "data.csv"),
+                 *[f"--fail={k}={v:g}" for k, v in failures.items()], "--calibrate", "8", "--particles", "100",
+                 "--rul-every", "100", "--out", str(tmp_path / "out")])
+    assert code == 0
+    answer = json.loads((tmp_path / "out" / "prognosis.json").read_text())
+    named = answer["candidate"] if isinstance(answer["candidate"], list) else [answer["candidate"]]
+    assert "b_Ld" in named and "b_Ld" not in {c for g in answer["indistinguishable"] for c in g}
+    pairs = [pair for pair in answer["indistinguishable_on_record"] if "b_Ld" in pair.split(" ~ ")]
+    if wave == 0.0:
+        assert answer["status"] != "isolated" and pairs == ["b_Md ~ b_Ld"]
+        assert "operating regime" in answer["indistinguishable_on_record"]["b_Md ~ b_Ld"]
+    else:
+        assert named == ["b_Ld"] and not pairs
