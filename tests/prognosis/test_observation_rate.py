@@ -25,17 +25,17 @@ def test_rate_coefficient_is_the_antiderivative_and_only_for_differentiated_arrs
 
 
 def test_a_linear_wear_is_explained_by_value_and_rate_on_an_independent_simulation():
-    scenario = wear.Scenario("b_Md", "linear", "clean")
+    scenario = wear.Scenario("torsion_bar", "b_Md", "linear", "clean")
     record = wear.record(scenario, seed=3)
     arr = next(a for a in derive_arrs(torsion_bar_monitorable()) if a.name == "ARR_1_1")
     evaluation = arr.evaluate(record)
     h = observation_model(arr, "b_Md")
-    nominal, failure = h.nominal, wear.FAILURES["b_Md"]
-    rate = (failure - nominal) / (wear.EOL - wear.ONSET)
+    nominal, failure, onset = h.nominal, scenario.facts.failures["b_Md"], scenario.onset
+    rate = (failure - nominal) / (scenario.eol - onset)
     t = evaluation.t
-    theta = nominal + rate * np.clip(t - wear.ONSET, 0.0, None)
+    theta = nominal + rate * np.clip(t - onset, 0.0, None)
     points = [np.asarray(p) for p in evaluation.points]
-    with_rate = h(theta[:, None], points, rate=np.where(t > wear.ONSET, rate, 0.0)[:, None])[:, 0]
+    with_rate = h(theta[:, None], points, rate=np.where(t > onset, rate, 0.0)[:, None])[:, 0]
     static = h(theta[:, None], points)[:, 0]
     y = -evaluation.residual
     for lo, hi in ((10.5, 12.0), (20.0, 30.0)):

@@ -1,7 +1,8 @@
 """One prognosis scenario, run as a user would: a model file, a CSV, ``bgphm prognose --fail ...``.
 
-The truth (the parameter's law, hence the end of life) comes from the scenario, the answer from the
-command's ``prognosis.json``; :func:`score` compares them: whether the degrading parameter was named
+A scenario names a system (:data:`SYSTEMS`: the torsion bar), the parameter that wears, its law and the
+noise.  The truth (the parameter's law, hence the end of life) comes from the scenario, the answer from
+the command's ``prognosis.json``; :func:`score` compares them: whether the degrading parameter was named
 (or honestly called undecided or indistinguishable), the share of the second half of life where the
 median RUL is within 20 % of the truth, and how often the 5-95 % and 25-75 % bands hold the truth.
 """
@@ -12,6 +13,7 @@ import contextlib
 import io
 import json
 import tempfile
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -25,39 +27,106 @@ from bondgraph.library import torsion_bar_monitorable
 from . import torsion
 from .laws import LAWS
 
-ONSET, EOL = 10.0, 100.0        # s: wear from the onset to the failure value at the end of life
-T_END, DT = 100.0, 0.01         # s: the record, sampled at 100 Hz
-CALIBRATE = 8.0                 # s of healthy record before the onset
 WITHIN = 0.2                    # the median RUL is "within" when off by at most this share of the truth
-#: Failure values the user gives: the paper's for b_Md (Jha et al. (2016), 6.3), ten times nominal for the
-#: other frictions (what an engineer would call worn out).
-FAILURES = {"b_Md": 0.45, "b_Ld": 10 * torsion.NOMINAL["b_Ld"], "f_m": 10 * torsion.NOMINAL["f_m"]}
+
+
+@dataclass(frozen=True)
+class System:
+    """What a scenario needs of a system: the user's model, the physics, the life and the sensors' noise.
+
+    Attributes
+    ----------
+    model : callable
+        ``model() -> BondGraph``: the model the user writes (as JSON for ``bgphm prognose``).
+    simulate : callable
+        ``simulate(parameters, *, t_end, dt, noise, seed) -> columns``, written from the physics;
+        ``parameters`` maps a name to a value or a law ``theta(t)``.
+    nominal : mapping
+        Parameter -> nominal value (where every law starts).
+    failures : mapping
+        ``--fail`` values, one for every parameter an ARR sees; the law reaches its parameter's at ``eol``.
+    wearing : tuple of str
+        The parameters the scenarios wear.
+    onset, eol : float
+        s: the wear runs from ``onset`` to ``eol``, where the parameter reaches its failure value.
+    t_end, dt : float
+        s: the record's length and sample time.
+    calibrate : float
+        s: the healthy stretch given as ``--calibrate`` (before the onset).
+    noise : mapping
+        ``"clean"`` and ``"noisy"`` -> signal -> standard deviation of its Gaussian noise.
+    """
+
+    model: Callable
+    simulate: Callable
+    nominal: Mapping
+    failures: Mapping
+    wearing: tuple
+    onset: float
+    eol: float
+    t_end: float
+    dt: float
+    calibrate: float
+    noise: Mapping
+
+
+_TORSION_NOISE = {"clean": {k: v for k, v in torsion.NOISE.items() if k != "tau_m"}, "noisy": dict(torsion.NOISE)}
+
+SYSTEMS = {
+    # Jha et al. (2016), 6.3: the motor disk's friction b_Md to the paper's 0.45; ten times nominal for the
+    # other frictions (what an engineer would call worn out).  "clean": the encoders' noise on the speeds
+    # only; "noisy": the measured torque too, which enters the residual undifferentiated.
+    "torsion_bar": System(
+        model=torsion_bar_monitorable, simulate=torsion.simulate, nominal=torsion.NOMINAL,
+        failures={"b_Md": 0.45, "b_Ld": 10 * torsion.NOMINAL["b_Ld"], "f_m": 10 * torsion.NOMINAL["f_m"]},
+        wearing=("b_Md",), onset=10.0, eol=100.0, t_end=100.0, dt=0.01, calibrate=8.0, noise=_TORSION_NOISE),
+}
 
 
 @dataclass(frozen=True)
 class Scenario:
-    """A parameter wearing by a law, residual noise ("clean": speeds only; "noisy": torque as well)."""
+    """A system's parameter wearing by a law, with a "clean" or a "noisy" residual (:data:`SYSTEMS`)."""
 
+    system: str
     parameter: str
     law: str
     noise: str
 
     @property
     def name(self) -> str:
-        return f"torsion_bar/{self.parameter}/{self.law}/{self.noise}"
+        return f"{self.system}/{self.parameter}/{self.law}/{self.noise}"
+
+    @property
+    def facts(self) -> System:
+        return SYSTEMS[self.system]
+
+    @property
+    def onset(self) -> float:
+        return self.facts.onset
+
+    @property
+    def eol(self) -> float:
+        return self.facts.eol
 
 
 def scenarios() -> list[Scenario]:
-    """The torsion bar's b_Md under every law, with a clean and a noisy residual."""
-    return [Scenario("b_Md", law, noise) for law in LAWS for noise in ("clean", "noisy")]
+    """Every system's wearing parameters under every law, with a clean and a noisy residual."""
+    return [Scenario(system, parameter, law, noise) for system, facts in SYSTEMS.items()
+            for parameter in facts.wearing for law in LAWS for noise in ("clean", "noisy")]
 
 
-def record(scenario: Scenario, seed: int) -> dict:
-    nominal = torsion.NOMINAL[scenario.parameter]
-    law = LAWS[scenario.law](nominal, FAILURES[scenario.parameter], ONSET, EOL)
-    noise = dict(torsion.NOISE) if scenario.noise == "noisy" else {k: v for k, v in torsion.NOISE.items()
-                                                                   if k != "tau_m"}
-    return torsion.simulate({scenario.parameter: law}, t_end=T_END, dt=DT, noise=noise, seed=seed)
+def truth(scenario: Scenario) -> Callable:
+    """The wearing parameter's law ``theta(t)``: nominal up to the onset, the failure value at the end of life."""
+    facts = scenario.facts
+    return LAWS[scenario.law](facts.nominal[scenario.parameter], facts.failures[scenario.parameter],
+                              facts.onset, facts.eol)
+
+
+def record(scenario: Scenario, seed: int, *, noise: Mapping | None = None) -> dict:
+    """The scenario's record (the CSV's columns); ``noise`` replaces the scenario's (``{}``: noise-free)."""
+    facts = scenario.facts
+    return facts.simulate({scenario.parameter: truth(scenario)}, t_end=facts.t_end, dt=facts.dt,
+                          noise=facts.noise[scenario.noise] if noise is None else noise, seed=seed)
 
 
 def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int = 10, method: str = "sir",
@@ -65,11 +134,12 @@ def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int =
     """``prognosis.json`` of ``bgphm prognose`` on the scenario's record (exit code under ``"exit"``)."""
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        (folder / "model.json").write_text(to_json(torsion_bar_monitorable()))
+        facts = scenario.facts
+        (folder / "model.json").write_text(to_json(facts.model()))
         (folder / "data.csv").write_text(csv_text(record(scenario, seed)))
-        fails = [f"--fail={p}={v:g}" for p, v in FAILURES.items()]
+        fails = [f"--fail={p}={v:g}" for p, v in facts.failures.items()]
         argv = ["--quiet", "prognose", str(folder / "model.json"), str(folder / "data.csv"), *fails,
-                "--calibrate", f"{CALIBRATE:g}", "--particles", str(particles), "--rul-every", str(rul_every),
+                "--calibrate", f"{facts.calibrate:g}", "--particles", str(particles), "--rul-every", str(rul_every),
                 "--seed", str(seed), "--filter", method, "--out", str(folder / "out"),
                 *(["--degradation", degradation] if degradation else [])]
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
@@ -87,10 +157,11 @@ def score(scenario: Scenario, answer: dict) -> dict:
     # an honest "indistinguishable" names a group; a decided answer names the parameter
     group = set(named) if isinstance(named, list) else {named} | set(answer.get("same_signature") or [])
     found = named is not None and scenario.parameter in group
-    given = [p for p in answer.get("predictions", []) if ONSET < p["t"] < EOL]
+    onset, eol = scenario.onset, scenario.eol
+    given = [p for p in answer.get("predictions", []) if onset < p["t"] < eol]
     # a withheld prediction ("undecided: no law fits") is honest but gives no figure: counted apart
     predictions = [p for p in given if not p.get("withheld")]
-    truth = np.array([EOL - p["t"] for p in predictions])
+    truth = np.array([eol - p["t"] for p in predictions])
     figures = {"found": bool(found), "candidate": named, "status": answer.get("status"),
                "degradation": answer.get("degradation"), "detection_time": answer.get("detection_time"),
                "predictions": len(predictions), "withheld": len(given) - len(predictions)}
@@ -98,7 +169,7 @@ def score(scenario: Scenario, answer: dict) -> dict:
         return figures
     median = np.array([_number(p["rul_median"]) for p in predictions])
     p5, p95 = (np.array([_number(p[k]) for p in predictions]) for k in ("rul_p5", "rul_p95"))
-    second = np.array([p["t"] >= (ONSET + EOL) / 2 for p in predictions])
+    second = np.array([p["t"] >= (onset + eol) / 2 for p in predictions])
     within = np.abs(median - truth) <= WITHIN * truth
     figures.update({
         "within_20pct_second_half": float(np.mean(within[second])) if second.any() else None,
@@ -108,7 +179,7 @@ def score(scenario: Scenario, answer: dict) -> dict:
     if all("rul_p25" in p for p in predictions):
         p25, p75 = (np.array([_number(p[k]) for p in predictions]) for k in ("rul_p25", "rul_p75"))
         figures["coverage_50"] = float(np.mean((p25 <= truth) & (truth <= p75)))
-        figures["pit"] = pit_histogram(predictions, truth)
+        figures["pit"] = pit_histogram(predictions, truth, onset=onset, eol=eol)
     return figures
 
 
@@ -116,17 +187,17 @@ PIT_EDGES = (0.05, 0.25, 0.5, 0.75, 0.95)  # the predicted quantiles: six bins o
 QUARTERS = 4
 
 
-def pit_histogram(predictions: list[dict], truth: np.ndarray) -> list[list[int]]:
+def pit_histogram(predictions: list[dict], truth: np.ndarray, *, onset: float, eol: float) -> list[list[int]]:
     """Counts of the truth's place among the predicted quantiles, per quarter of the life after onset.
 
-    Row q: predictions made in the q-th quarter of (ONSET, EOL); column b: the truth below the 5 %
+    Row q: predictions made in the q-th quarter of (onset, eol); column b: the truth below the 5 %
     quantile (b = 0), between the 5 and 25 % ones (1), ..., above the 95 % one (5).  A calibrated
     band fills the bins as 5, 20, 25, 25, 20, 5 % in every quarter.
     """
     keys = ("rul_p5", "rul_p25", "rul_median", "rul_p75", "rul_p95")
     counts = np.zeros((QUARTERS, len(PIT_EDGES) + 1), int)
     for p, true in zip(predictions, truth):
-        quarter = min(QUARTERS - 1, int((p["t"] - ONSET) / (EOL - ONSET) * QUARTERS))
+        quarter = min(QUARTERS - 1, int((p["t"] - onset) / (eol - onset) * QUARTERS))
         counts[quarter, int(np.searchsorted([_number(p[k]) for k in keys], true))] += 1
     return counts.tolist()
 
