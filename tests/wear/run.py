@@ -1,15 +1,17 @@
 """One prognosis scenario, run as a user would: a model file, a CSV, ``bgphm prognose --fail ...``.
 
-A scenario names a system (:data:`SYSTEMS`: the torsion bar), the parameter that wears, its law and the
-noise.  The truth (the parameter's law, hence the end of life) comes from the scenario, the answer from
-the command's ``prognosis.json``; :func:`score` compares them: whether the degrading parameter was named
-(or honestly called undecided or indistinguishable), the share of the second half of life where the
-median RUL is within 20 % of the truth, and how often the 5-95 % and 25-75 % bands hold the truth.
+A scenario names a system (:data:`SYSTEMS`: the torsion bar, the heat exchanger and the pipe feeding a
+tank of the model zoo), the parameter that wears, its law and the noise.  The truth (the parameter's
+law, hence the end of life) comes from the scenario, the answer from the command's ``prognosis.json``;
+:func:`score` compares them: whether the degrading parameter was named (or honestly called undecided or
+indistinguishable), the share of the second half of life where the median RUL is within 20 % of the
+truth, and how often the 5-95 % and 25-75 % bands hold the truth.
 """
 
 from __future__ import annotations
 
 import contextlib
+import functools
 import io
 import json
 import tempfile
@@ -23,8 +25,9 @@ from bgphm.cli import main as bgphm
 from bgphm.files import csv_text
 from bondgraph import to_json
 from bondgraph.library import torsion_bar_monitorable
+from tests.zoo.check import load_case
 
-from . import torsion
+from . import torsion, zoo
 from .laws import LAWS
 
 WITHIN = 0.2                    # the median RUL is "within" when off by at most this share of the truth
@@ -70,6 +73,17 @@ class System:
     noise: Mapping
 
 
+def _zoo(name: str, **facts) -> System:
+    """A zoo case's model and physics (:mod:`tests.wear.zoo`) under its smooth inputs (a start-up, then
+    periodic swings that keep every term of its ARRs excited over the whole life); every parameter fails
+    at twice nominal, as tests/zoo/test_cli_chain.py gives them."""
+    case = load_case(name)
+    nominal = zoo.nominal(case)
+    physics = functools.partial(zoo.simulate, case, inputs=case.smooth_inputs, breaks=(facts["onset"],))
+    return System(model=case.build, simulate=physics, nominal=nominal,
+                  failures={p: 2 * v for p, v in nominal.items()}, **facts)
+
+
 _TORSION_NOISE = {"clean": {k: v for k, v in torsion.NOISE.items() if k != "tau_m"}, "noisy": dict(torsion.NOISE)}
 
 SYSTEMS = {
@@ -80,6 +94,26 @@ SYSTEMS = {
         model=torsion_bar_monitorable, simulate=torsion.simulate, nominal=torsion.NOMINAL,
         failures={"b_Md": 0.45, "b_Ld": 10 * torsion.NOMINAL["b_Ld"], "f_m": 10 * torsion.NOMINAL["f_m"]},
         wearing=("b_Md",), onset=10.0, eol=100.0, t_end=100.0, dt=0.01, calibrate=8.0, noise=_TORSION_NOISE),
+    # Fouling of the wall: R_w rises until the conductance UA is half the clean one, when the plate pack is
+    # cleaned; the other parameters fail at twice nominal too (a stream's flow halved for R_h, R_c).
+    # Noise: the four temperatures are Pt100 class A through 16-bit transmitters, 0.05 K rms; the heat
+    # rates (a thermopile heat-flux meter scaled to the wall, a flow meter times a temperature rise) 20 W,
+    # 0.3 % of the 6 kW duty, for "clean"; "noisy" puts them at 1 % of the duty, 60 W, an ordinary field
+    # instrument: the wall's ARR R_w q_w = T_h - T_c then carries its noise mostly through q_w (0.12 K
+    # against the thermometers' 0.07 K).
+    "heat_exchanger": _zoo(
+        "heat_exchanger", wearing=("R_w",), onset=60.0, eol=600.0, t_end=600.0, dt=0.1, calibrate=50.0,
+        noise={"clean": {"T_hi": 0.05, "T_h": 0.05, "T_ci": 0.05, "T_c": 0.05, "q_w": 20.0, "q_c": 20.0},
+               "noisy": {"T_hi": 0.05, "T_h": 0.05, "T_ci": 0.05, "T_c": 0.05, "q_w": 60.0, "q_c": 60.0}}),
+    # Clogging of the pipe's strainer: R_f rises to twice its clean value, the usual change criterion (the
+    # pressure drop at rated flow doubled); the other parameters at twice nominal too.  Noise: the supply
+    # and tank pressures are 0.1 %-class transmitters on a 25 kPa span, 20 Pa; the flow, 3e-4 m^3/s, is
+    # read by an electromagnetic meter at 0.3 % of reading, 1e-6 m^3/s, for "clean", by a turbine meter at
+    # 1 %, 3e-6 m^3/s, for "noisy": the flow carries the residual's noise (R_f Q and L_f dQ/dt, where the
+    # derivative amplifies it).
+    "pipe_tank": _zoo(
+        "pipe_tank", wearing=("R_f",), onset=30.0, eol=300.0, t_end=300.0, dt=0.05, calibrate=25.0,
+        noise={"clean": {"P_s": 20.0, "p_t": 20.0, "Q": 1e-6}, "noisy": {"P_s": 20.0, "p_t": 20.0, "Q": 3e-6}}),
 }
 
 
