@@ -1,13 +1,16 @@
 """Prognosis scenarios (issue 31): wear laws simulated from the physics, run through ``bgphm prognose``.
 
     python benchmarks/bench_scenarios.py [--json] [--seeds 10] [--particles 300] [--rul-every 10]
-                                         [--jobs 2] [--filter sir|resample-move] [NAME ...]
+                                         [--jobs 2] [--filter sir|resample-move] [--system NAME] [NAME ...]
 
 Each scenario (tests/wear/run.py) is a parameter wearing by a law (linear, exponential, power,
-logistic, step then drift, intermittent) on the torsion bar's mechanics under a digital PI loop, written
-from the physics (tests/wear/torsion.py), with a clean residual (noise on the speeds only) or a
-noisy one (on the measured torque too).  Every seed draws its own noise and the filter's own streams.
-The user's side is a model file, a CSV and ``--fail`` values, nothing of the truth.
+logistic, step then drift, intermittent) on one of three systems, each simulated from its physics, never
+by the library: the torsion bar's mechanics under a digital PI loop (tests/wear/torsion.py; the motor
+disk's friction wears), and two systems of the model zoo integrated from their hand-written equations
+(tests/wear/zoo.py): a heat exchanger whose wall fouls, a pipe feeding a tank whose strainer clogs.
+Each runs with a clean residual (small noise on the sensors a real machine always has) or a noisy one
+(more noise on the signal that carries the residual's noise).  Every seed draws its own noise and the
+filter's own streams.  The user's side is a model file, a CSV and ``--fail`` values, nothing of the truth.
 
 Per scenario, over the seeds: the share of runs that name the degrading parameter (or an honest
 indistinguishable group holding it), the statuses and laws said, over the second half of life the
@@ -33,7 +36,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from tests.wear.run import run, scenarios, score  # noqa: E402
+from tests.wear.run import SYSTEMS, run, scenarios, score  # noqa: E402
 
 SEED_BASE = 20261126   # seeds SEED_BASE + k: each its own noise and its own filter streams
 
@@ -84,6 +87,8 @@ def _pooled(rows: list[dict], key: str) -> float | None:
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("names", nargs="*", help="scenario names (default: all), e.g. torsion_bar/b_Md/linear/clean")
+    parser.add_argument("--system", action="append", choices=sorted(SYSTEMS),
+                        help="only this system's scenarios (repeatable; default: every system)")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--seeds", type=int, default=10)
     parser.add_argument("--particles", type=int, default=300)
@@ -91,7 +96,8 @@ def main() -> int:
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--filter", choices=("sir", "resample-move"), default="sir", help="bgphm prognose --filter")
     args = parser.parse_args()
-    chosen = [s for s in scenarios() if not args.names or s.name in args.names]
+    chosen = [s for s in scenarios() if (not args.names or s.name in args.names)
+              and (not args.system or s.system in args.system)]
     tasks = [(s, SEED_BASE + k, args.particles, args.rul_every, args.filter) for s in chosen for k in range(args.seeds)]
     with ProcessPoolExecutor(args.jobs) as pool:
         results = list(pool.map(one, tasks)) if args.jobs > 1 else [one(t) for t in tasks]
@@ -100,7 +106,7 @@ def main() -> int:
         if args.json:
             print(json.dumps(line))
         else:
-            print(f"{line['scenario']:42s} found {line['found']:.0%}  withheld {_pct(line['withheld'])}  "
+            print(f"{line['scenario']:48s} found {line['found']:.0%}  withheld {_pct(line['withheld'])}  "
                   f"within20 {_pct(line['within_20pct_mean'])} "
                   f"(worst {_pct(line['within_20pct_worst'])})  cov90 {_pct(line['coverage_90'])}  "
                   f"cov50 {_pct(line['coverage_50'])}  RA {_pct(line['ra_mean'])} (worst {_pct(line['ra_worst'])})  "
