@@ -7,10 +7,11 @@ Each scenario (tests/wear/run.py) is a parameter wearing by a law (linear, expon
 logistic, step then drift, intermittent) on one of three systems, each simulated from its physics, never
 by the library: the torsion bar's mechanics under a digital PI loop (tests/wear/torsion.py; the motor
 disk's friction wears), and two systems of the model zoo integrated from their hand-written equations
-(tests/wear/zoo.py): a heat exchanger whose wall fouls, a pipe feeding a tank whose strainer clogs.
-Each runs with a clean residual (small noise on the sensors a real machine always has) or a noisy one
-(more noise on the signal that carries the residual's noise).  Every seed draws its own noise and the
-filter's own streams.  The user's side is a model file, a CSV and ``--fail`` values, nothing of the truth.
+(tests/wear/zoo.py): a DC motor driving a pump whose brushes wear, a pipe feeding a tank whose strainer
+clogs.  Each runs with a clean residual (small noise on the sensors a real machine always has) or a
+noisy one (more noise on the signal that carries the residual's noise).  Every seed draws its own noise
+and the filter's own streams.  The user's side is a model file, a CSV and ``--fail`` values, nothing of
+the truth.
 
 Per scenario, over the seeds: the share of runs that name the degrading parameter (or an honest
 indistinguishable group holding it), the statuses and laws said, over the second half of life the

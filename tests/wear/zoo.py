@@ -84,8 +84,8 @@ def simulate(case: ZooCase, parameters: Mapping[str, float | Callable], *, input
     trajectory = np.empty((len(states), grid.size))
     cuts = sorted({0.0, float(grid[-1]), *(b for b in breaks if 0.0 < b < grid[-1])})
     for start, end in zip(cuts[:-1], cuts[1:]):
-        # explicit and of high order: the systems chosen are not stiff (time constants of seconds against
-        # samples of 0.05-0.1 s), so long steps keep the law's evaluations, the cost here, few
+        # explicit and of high order: the systems chosen are not stiff (their fastest time constant spans
+        # several samples), so long steps keep the law's evaluations, the cost here, few
         mask = (grid >= start) & ((grid <= end) if end == cuts[-1] else (grid < end))
         solution = solve_ivp(lambda s, y: np.asarray(rhs(s, y, at(s)), float).ravel(), (start, end), x,
                              method="DOP853", t_eval=grid[mask], rtol=RTOL, atol=ATOL, dense_output=True)
