@@ -182,6 +182,25 @@ def _cholesky(sigma: np.ndarray) -> np.ndarray:
     raise PrognosisError("a residual covariance is not positive definite even with a ridge of 1e-6 of its trace")
 
 
+INDEPENDENT = 0.01  # least share of a combination of residuals' noise taken as its own (eigenvalue floor)
+
+
+def _independent_share(correlation: np.ndarray) -> np.ndarray:
+    """The correlation matrix with every eigenvalue at least :data:`INDEPENDENT`, back to a unit diagonal.
+
+    More ARRs than sensors make some combination of the residuals noise-free on the healthy
+    stretch (six ARRs over four sensors: a singular correlation).  Taken as exact, that combination
+    would weigh any model error infinitely; at least a hundredth of its variance is its own.
+    """
+    np.fill_diagonal(correlation, 1.0)
+    values, vectors = np.linalg.eigh(0.5 * (correlation + correlation.T))
+    if values.min() >= INDEPENDENT:
+        return correlation
+    lifted = np.einsum("ij,j,kj->ik", vectors, np.maximum(values, INDEPENDENT), vectors)
+    scale = np.sqrt(np.diagonal(lifted))
+    return lifted / np.outer(scale, scale)
+
+
 def healthy_noise(residuals: np.ndarray, sensitivities: np.ndarray | None = None) -> dict:
     """``C``, ``X`` and ``G`` of :class:`ResidualNoise` from a healthy stretch at the filter's step.
 
@@ -219,8 +238,7 @@ def healthy_noise(residuals: np.ndarray, sensitivities: np.ndarray | None = None
     std = np.where(std > 0, std, 1e-300)
     clipped = np.clip(centred, -5 * std, 5 * std)
     correlation = np.corrcoef(clipped, rowvar=False) if r.shape[1] > 1 else np.ones((1, 1))
-    correlation = np.nan_to_num(np.atleast_2d(correlation), nan=0.0)
-    np.fill_diagonal(correlation, 1.0)
+    correlation = _independent_share(np.nan_to_num(np.atleast_2d(correlation), nan=0.0))
     out = {"covariance": correlation * np.outer(std, std)}
     if sensitivities is None:
         return out

@@ -56,3 +56,21 @@ def test_bad_noise_is_named():
         ResidualNoise([[0.0]])
     with pytest.raises(PrognosisError, match="usable filter steps"):
         healthy_noise(np.full((5, 1), np.nan))
+
+
+def test_more_arrs_than_sensors_give_a_covariance_that_stays_invertible():
+    """Three residuals over two sensors: the third is the sum of the others, a singular correlation on
+    the healthy stretch.  The likelihood keeps a hundredth of each combination's variance its own."""
+    rng = np.random.default_rng(3)
+    a, b = rng.normal(0, 0.1, 2000), rng.normal(0, 0.2, 2000)
+    residuals = np.column_stack([a, b, a + b])
+    estimate = healthy_noise(residuals, np.column_stack([a, b, a + b]) + 1.0)
+    covariance = estimate["covariance"]
+    scale = np.sqrt(np.diagonal(covariance))
+    values = np.linalg.eigvalsh(covariance / np.outer(scale, scale))
+    assert values.min() >= 0.0099 and np.allclose(np.diagonal(covariance / np.outer(scale, scale)), 1.0)
+    noise = ResidualNoise(covariance, estimate["cross"], estimate["growth"], nominal=1.0)
+    log_p = noise.log_density(np.zeros((1, 2, 3)), np.array([[1.0, 3.0]]))
+    assert np.all(np.isfinite(log_p))
+    # the correlations themselves are kept, up to the floor
+    assert np.corrcoef(a + b, a)[0, 1] == pytest.approx(covariance[0, 2] / (scale[0] * scale[2]), abs=0.02)
