@@ -884,9 +884,9 @@ def build_parser() -> argparse.ArgumentParser:
                         "log-uniform over 10 to 1e5 filter steps)")
     p.add_argument("--particles", type=int, default=500, help="particles per hypothesis (default 500)")
     p.add_argument("--filter", choices=("sir", "resample-move"), default="sir",
-                   help="sir: random-walk particle filter (Jha et al. 2016, the default); resample-move: the "
-                        "law's parameters weighed on the whole history, moved by MCMC, with the residual noise "
-                        "measured on the healthy stretch")
+                   help="sir: the random-walk particle filter of Jha et al. 2016 (the default; cheaper, collapses "
+                        "on a clean residual); resample-move: the law's parameters weighed on the whole history, "
+                        "moved by MCMC, with the residual noise measured on the healthy stretch")
     p.add_argument("--dt", type=float, help="filter step in s, a multiple of the record's (default: one "
                    "derivative window of samples)")
     p.add_argument("--rul-every", type=int, default=10, help="predict the RUL every N filter steps (default 10)")

@@ -320,13 +320,15 @@ class IsolatingMonitor:
         End of the stretch the user declares fault-free (the one the noise was calibrated on):
         alarms there are not faults (a start-up transient) and start nothing.
     method : {"sir", "resample-move"}
-        The filter: ``"resample-move"`` weighs each law's static parameters, theta at the
-        alarm and the rate, by their posterior on the whole history and moves its particles by MCMC
+        The filter: ``"resample-move"`` weighs each law's static parameters, theta at the alarm and
+        the rate, by their posterior on the whole history and moves its particles by MCMC
         (:class:`~prognosis.resample_move.ResampleMoveFilter`), with the residual noise measured on
         the healthy stretch, correlated between ARRs and growing with the candidate
-        (:mod:`~prognosis.likelihood`); ``"sir"`` is the random-walk SIR filter of Jha et al. (2016)
-        with kernel smoothing of the rate (:class:`~prognosis.particle_filter.ParticleFilter`), the
-        default until the resample-move filter's bands are measured calibrated (issue 31).
+        (:mod:`~prognosis.likelihood`), divided by the gaps' information excess; it does not collapse
+        on a clean residual.  ``"sir"`` (the default, until the resample-move filter picks the law as
+        well on every demo) is the random-walk SIR filter of Jha et al. (2016) with kernel smoothing
+        of the rate (:class:`~prognosis.particle_filter.ParticleFilter`): cheaper, but its cloud
+        collapses when the residual is much sharper than its process noise.
     domains : mapping, optional
         Parameter -> open interval ``(lo, hi)`` of its physical domain, as the model declares it
         (:attr:`bondgraph.BondGraph.domains`); a hypothesis whose estimate leaves it is rejected.
@@ -488,6 +490,7 @@ class IsolatingMonitor:
         hypotheses = result.hypotheses
         noise = np.array([self.noise_std[a.name] for a in arrs])
         starts = [self.start_interval(h, evaluations, arrs, k0, noise) for h in hypotheses]
+        self._reject_wrong_side(result, evaluations, arrs, k0, noise)
         t = evaluations[0].t
         stride = filter_stride(t, self.dt)
         bounds = (np.array([s[0] for s in starts]), np.array([s[1] for s in starts]))
@@ -626,6 +629,19 @@ class IsolatingMonitor:
         ``start="residual"``), inverting the observation equation of the ARR that resolves the
         candidate best there: the largest sensitivity ``|d y / d theta|`` over the residual's noise.
         """
+        model, points, residual, total = self._resolving(h, evaluations, arrs, k, noise)
+        box = self.healthy_box(h, [model.arr])
+        bracket = (min(box[0], h.failure), max(box[1], h.failure))
+        explained = model.invert(-residual, points, bracket)
+        explained = np.clip(explained[np.isfinite(explained)], *bracket)
+        start = (min(box[0], float(explained.min())), max(box[1], float(explained.max()))) if explained.size else box
+        distance = abs(h.failure - h.nominal)
+        resolution = min(1.0 / math.sqrt(total), distance) if total > 0 else distance
+        return start[0], start[1], self.process_noise * resolution
+
+    def _resolving(self, h: Hypothesis, evaluations: list, arrs: list, k: int, noise: np.ndarray):
+        """The observation model of the ARR that resolves ``h``'s candidate best on the samples that raised
+        the alarm at ``k``, its point values and residual there, and the information of all ARRs per sample."""
         window = slice(max(0, k - evaluations[0].persistence + 1), k + 1)
         seeing = [m for m, a in enumerate(arrs) if h.candidate in a.parameters]
         models = {m: observation_model(arrs[m], h.candidate) for m in seeing}
@@ -634,16 +650,31 @@ class IsolatingMonitor:
         information = {m: float(np.nanmedian(np.square(sensitivity(models[m], points[m]) / noise[m])))
                        for m in seeing}
         best = max(seeing, key=lambda m: information[m] if np.isfinite(information[m]) else -1.0)
-        arr, evaluation = arrs[best], evaluations[best]
-        box = self.healthy_box(h, [arr])
-        bracket = (min(box[0], h.failure), max(box[1], h.failure))
-        explained = models[best].invert(-evaluation.residual[window], points[best], bracket)
-        explained = np.clip(explained[np.isfinite(explained)], *bracket)
-        start = (min(box[0], float(explained.min())), max(box[1], float(explained.max()))) if explained.size else box
         total = sum(v for v in information.values() if np.isfinite(v))
-        distance = abs(h.failure - h.nominal)
-        resolution = min(1.0 / math.sqrt(total), distance) if total > 0 else distance
-        return start[0], start[1], self.process_noise * resolution
+        return models[best], points[best], evaluations[best].residual[window], total
+
+    def _reject_wrong_side(self, result: IsolationResult, evaluations: list, arrs: list, k: int,
+                           noise: np.ndarray) -> None:
+        """Reject the hypotheses whose failure value lies on the other side of the change the alarm shows.
+
+        The residual that raised the alarm, inverted for the candidate (an observation equation linear
+        in it), puts it beyond its healthy values on one side; a law from there to a failure value on
+        the other side would first have to undo the change.  The resample-move filter cannot follow a
+        drift away from failure (its rates point toward it), so this is said at the alarm.
+        """
+        for h in result.hypotheses:
+            model, points, residual, _ = self._resolving(h, evaluations, arrs, k, noise)
+            if h.name in result.rejected or model.coefficient is None:
+                continue
+            value = float(np.nanmedian(model.invert(-residual, points)))
+            lo, hi = self.healthy_box(h, [model.arr])
+            if (value < lo and h.direction == "up") or (value > hi and h.direction == "down"):
+                side = "below" if value < lo else "above"
+                result.rejected[h.name] = (
+                    f"at the alarm (t = {result.detection_time:g} s) the residual of {model.arr.name} puts "
+                    f"{h.candidate} at {value:.3g}, {side} its healthy values [{lo:.3g}, {hi:.3g}], while its failure "
+                    f"value {h.failure:g} is {'above' if h.direction == 'up' else 'below'} them: the drift goes away "
+                    "from failure (a failure value on the wrong side?)")
 
     @staticmethod
     def healthy_box(h: Hypothesis, arrs: list) -> tuple[float, float]:
@@ -793,8 +824,21 @@ class IsolatingMonitor:
             mixed.append(p * weights[row])
         if not samples:  # every hypothesis rejected
             return RULDistribution(np.full((1, 1), np.inf), np.ones((1, 1)), self.horizon), None
-        return (RULDistribution(np.concatenate(samples)[None, :], np.concatenate(mixed)[None, :], self.horizon),
-                None)
+        return (RULDistribution(self._resolved(np.concatenate(samples), key)[None, :], np.concatenate(mixed)[None, :],
+                                self.horizon), None)
+
+    def _resolved(self, rul: np.ndarray, key: int) -> np.ndarray:
+        """The RUL samples spread uniformly over one filter step about each (censored ones kept).
+
+        The filter reads the residual once a step, and by default a step is the derivative window
+        the residual is computed over: the record resolves the time of the change no finer than that.
+        A lag of the residual within the window (a zero-order hold, a sensor's filter) is a shift of
+        theta at the alarm that no gap shows, and on a clean residual it is all the error there is;
+        a band narrower than the step would claim what the record cannot tell.
+        """
+        rng = seeds.generator(self.seed, seeds.RESOLUTION, key)
+        spread = self.dt * (rng.random(rul.shape) - 0.5)
+        return np.where(np.isfinite(rul), np.maximum(rul + spread, 0.0), rul)
 
 
 def _softmax(log_z: np.ndarray) -> np.ndarray:

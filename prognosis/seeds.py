@@ -30,7 +30,7 @@ import numpy as np
 
 from .errors import PrognosisError
 
-__all__ = ["ASSETS", "FILTER", "PREDICTORS", "RATE_PRIOR", "RUL", "check_seed", "generator", "spawn"]
+__all__ = ["ASSETS", "FILTER", "PREDICTORS", "RATE_PRIOR", "RESOLUTION", "RUL", "check_seed", "generator", "spawn"]
 
 #: Spawn keys of a monitor's consumers (the first element of the key under the monitor's seed).
 FILTER = 0  # the particle filter: initial particles, moves, resampling
@@ -38,6 +38,7 @@ RUL = 1  # the RUL predictor of a HealthMonitor
 RATE_PRIOR = 2  # the initial rate particles of an IsolatingMonitor's hypotheses
 PREDICTORS = 3  # an IsolatingMonitor's RUL predictors, one per hypothesis row: key (PREDICTORS, row)
 ASSETS = 4  # a fleet's per-asset streams (prognosis.streams): key (ASSETS, asset key)
+RESOLUTION = 5  # an IsolatingMonitor's spread of a RUL over the filter step: key (RESOLUTION, prediction)
 
 
 def check_seed(seed: object, option: str = "seed") -> int | np.random.SeedSequence:
