@@ -662,16 +662,20 @@ class IsolatingMonitor:
         the other side would first have to undo the change.  The resample-move filter cannot follow a
         drift away from failure (its rates point toward it), so this is said at the alarm.
         """
+        values = {}  # candidate -> (its value at the alarm, the ARR it is read on): one inversion per candidate
         for h in result.hypotheses:
-            model, points, residual, _ = self._resolving(h, evaluations, arrs, k, noise)
-            if h.name in result.rejected or model.coefficient is None:
+            if h.candidate not in values:
+                model, points, residual, _ = self._resolving(h, evaluations, arrs, k, noise)
+                values[h.candidate] = (float(np.nanmedian(model.invert(-residual, points)))
+                                       if model.coefficient is not None else math.nan, model.arr)
+            value, arr = values[h.candidate]
+            if h.name in result.rejected or not math.isfinite(value):
                 continue
-            value = float(np.nanmedian(model.invert(-residual, points)))
-            lo, hi = self.healthy_box(h, [model.arr])
+            lo, hi = self.healthy_box(h, [arr])
             if (value < lo and h.direction == "up") or (value > hi and h.direction == "down"):
                 side = "below" if value < lo else "above"
                 result.rejected[h.name] = (
-                    f"at the alarm (t = {result.detection_time:g} s) the residual of {model.arr.name} puts "
+                    f"at the alarm (t = {result.detection_time:g} s) the residual of {arr.name} puts "
                     f"{h.candidate} at {value:.3g}, {side} its healthy values [{lo:.3g}, {hi:.3g}], while its failure "
                     f"value {h.failure:g} is {'above' if h.direction == 'up' else 'below'} them: the drift goes away "
                     "from failure (a failure value on the wrong side?)")
