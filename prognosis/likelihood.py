@@ -153,8 +153,10 @@ class ResidualNoise:
         sigma = self.covariance_at(theta)
         if self.size == 1:
             variance = sigma[..., 0, 0]
-            value = -0.5 * (np.square(gap[..., 0]) / variance + np.log(variance) + _LOG_2PI)
-            return np.where(missing[..., 0], 0.0, value)
+            with np.errstate(over="ignore", invalid="ignore"):
+                value = -0.5 * (np.square(gap[..., 0]) / variance + np.log(variance) + _LOG_2PI)
+            # an overflowing covariance (or gap) has no density, as with several residuals: -inf, never NaN
+            return np.where(missing[..., 0], 0.0, np.where(np.isfinite(value), value, -np.inf))
         if missing.any():  # the marginal of the measured ones: their rows and columns alone
             keep = ~missing
             sigma = np.where(keep[..., :, None] & keep[..., None, :], sigma,

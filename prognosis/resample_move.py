@@ -212,7 +212,9 @@ class ResampleMoveFilter:
             rows = done < 1.0
             if not rows.any():
                 break
-            slope = (after - before)[:, None] * self.past + after[:, None] * increment  # d log target / d phi
+            # d log target / d phi; a particle without density (a past of -inf) keeps none at any temperature
+            retempered = np.where(np.isfinite(self.past), (after - before)[:, None] * self.past, 0.0)
+            slope = retempered + after[:, None] * increment
             # a frozen asset is not moved, so it takes its increment at once
             share = 1.0 - done if stage == MAX_STAGES else np.where(self.frozen, 1.0 - done,
                                                                      self._next_share(slope, done))

@@ -182,3 +182,23 @@ def test_replaying_the_history_in_chunks_changes_nothing(monkeypatch):
     # the same particles up to the order of summation (the past is summed chunk by chunk)
     assert np.allclose(whole.z, chunked.z, rtol=0, atol=1e-12)
     assert np.allclose(whole.log_evidence, chunked.log_evidence, rtol=1e-10)
+
+
+def test_particles_without_density_stay_without_it_when_the_temperature_changes():
+    """A covariance growing with theta overflows far out: those particles have no density (-inf).  Re-tempering
+    the past for the information excess must leave them at -inf, not make NaN weights (0 x -inf)."""
+    from prognosis.likelihood import ResidualNoise
+
+    noise = ResidualNoise(covariance=[[0.05**2]], growth=[[1e-6]], nominal=1.0)
+    y = line(0.05, seed=41) + 0.3 * np.sin(np.arange(STEPS))   # gaps that persist: the excess moves
+    f = ResampleMoveFilter(LinearDegradation(), lambda theta, points: theta, noise=noise, dt=DT, n_particles=200,
+                           seed=42)
+    f.initialize((0.0, 1e200), gamma_bounds=BOX[1], assets=1)   # the prior's far end overflows the covariance
+    f.z[0, :100, 0] = np.linspace(0.0, 3.0, 100)                 # half the cloud where the line is
+    f.theta = f.z[..., 0].copy()
+    f.frozen[:] = True   # weighed, never resampled or moved: the particles without density stay in the cloud
+    for value in y:
+        f.step(value)
+    assert np.isfinite(f.log_evidence[0]) and np.all(np.isfinite(f.weights))
+    assert np.all(np.isneginf(f.past[0, 100:])) and np.all(np.isfinite(f.past[0, :100]))
+    assert np.all(f.weights[0, 100:] == 0.0)
