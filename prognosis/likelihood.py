@@ -294,5 +294,5 @@ def information_excess(gaps: np.ndarray) -> np.ndarray:
         # batch means see persistence but have few degrees of freedom; the plain mean square has many:
         # the larger of the two, so that gaps merely too wide are not missed by a lucky draw of batches
         variance = np.fmax(np.nanmean(scaled, axis=1), np.nanmean(np.square(gaps), axis=1))
-    return np.maximum(1.0, np.nan_to_num(np.nanmax(np.where(np.isfinite(variance), variance, -np.inf), axis=1,
-                                                   initial=1.0), nan=1.0, neginf=1.0))
+    # an ARR never measured in the history says nothing: 1, as does every variance below it
+    return np.max(np.where(np.isfinite(variance), variance, 1.0), axis=1, initial=1.0)
