@@ -1,7 +1,8 @@
 """Prognosis scenarios (issue 31): wear laws simulated from the physics, run through ``bgphm prognose``.
 
     python benchmarks/bench_scenarios.py [--json] [--seeds 10] [--particles 300] [--rul-every 10]
-                                         [--jobs 2] [--filter sir|resample-move] [--system NAME] [NAME ...]
+                                         [--jobs 2] [--filter sir|resample-move] [--system NAME]
+                                         [--degradation LAW ...] [NAME ...]
 
 Each scenario (tests/wear/run.py) is a parameter wearing by a law (linear, exponential, power,
 logistic, step then drift, intermittent) on one of three systems, each simulated from its physics, never
@@ -43,9 +44,10 @@ SEED_BASE = 20261126   # seeds SEED_BASE + k: each its own noise and its own fil
 
 
 def one(arguments: tuple) -> dict:
-    scenario, seed, particles, rul_every, method = arguments
+    scenario, seed, particles, rul_every, method, laws = arguments
     started = time.process_time()
-    figures = score(scenario, run(scenario, seed, particles=particles, rul_every=rul_every, method=method))
+    figures = score(scenario, run(scenario, seed, particles=particles, rul_every=rul_every, method=method,
+                                  degradation=laws))
     return {**figures, "seed": seed, "filter": method, "cpu_s": round(time.process_time() - started, 1)}
 
 
@@ -96,10 +98,13 @@ def main() -> int:
     parser.add_argument("--rul-every", type=int, default=10)
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--filter", choices=("sir", "resample-move"), default="sir", help="bgphm prognose --filter")
+    parser.add_argument("--degradation", action="append", default=[], choices=("linear", "exponential", "power"),
+                        help="bgphm prognose --degradation (repeatable; default the command's laws)")
     args = parser.parse_args()
     chosen = [s for s in scenarios() if (not args.names or s.name in args.names)
               and (not args.system or s.system in args.system)]
-    tasks = [(s, SEED_BASE + k, args.particles, args.rul_every, args.filter) for s in chosen for k in range(args.seeds)]
+    tasks = [(s, SEED_BASE + k, args.particles, args.rul_every, args.filter, tuple(args.degradation))
+             for s in chosen for k in range(args.seeds)]
     with ProcessPoolExecutor(args.jobs) as pool:
         results = list(pool.map(one, tasks)) if args.jobs > 1 else [one(t) for t in tasks]
     for s in chosen:

@@ -549,8 +549,15 @@ def _what_can_fail(args, progress: Progress) -> tuple:
     parameters, domains = spec.model.parameters, spec.model.domains
     failures = _failures(args, parameters, domains)
     candidates = _candidates(args, arrs, failures, parameters)
-    laws = [args.degradation] if args.degradation else ["linear", "exponential"]
-    return spec, arrs, failures, candidates, laws
+    return spec, arrs, failures, candidates, _laws(args)
+
+
+def _laws(args) -> list:
+    """The competing laws: ``--degradation`` (once in ``fleet``, repeatable in ``prognose``), else linear and
+    exponential."""
+    if not args.degradation:
+        return ["linear", "exponential"]
+    return list(dict.fromkeys(args.degradation if isinstance(args.degradation, list) else [args.degradation]))
 
 
 def _failures(args, parameters: dict, domains: dict) -> dict:
@@ -581,7 +588,7 @@ def _candidates(args, arrs: list, failures: dict, parameters: dict) -> list | No
     from diagnosis.signatures import signature_matrix
 
     for name, value in failures.items():
-        if args.degradation == "exponential" and value * parameters[name] <= 0:
+        if _laws(args) == ["exponential"] and value * parameters[name] <= 0:
             raise UsageError(f"--fail {name}={value:g}: an exponential degradation keeps the sign of {name!r} "
                              f"(nominal {parameters[name]:g}); the failure value must have the same sign")
     if args.candidate is None:
@@ -875,8 +882,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="failure value of a parameter that can fail (repeatable); the candidates are those whose "
                         "signature matches the ARRs that fired")
     p.add_argument("--candidate", help="only this candidate (it needs a failure value; a bare --fail VALUE is its)")
-    p.add_argument("--degradation", choices=("exponential", "linear"),
-                   help="only this law (default: linear and exponential compete on evidence)")
+    p.add_argument("--degradation", choices=("exponential", "linear", "power"), action="append",
+                   help="a law that competes (repeatable; default: linear and exponential compete on evidence); "
+                        "power: a power of the time since onset whose exponent is estimated too")
     p.add_argument("--direction", choices=("up", "down"), help="check that --candidate's failure value lies on "
                    "this side of nominal")
     p.add_argument("--rate", type=float, nargs=2, metavar=("LO", "HI"),

@@ -27,7 +27,8 @@ Three method families sit beside it as subpackages:
 """
 
 from .errors import PrognosisError
-from .degradation import CustomDegradation, ExponentialDegradation, LinearDegradation, degradation_model
+from .degradation import (CustomDegradation, ExponentialDegradation, LinearDegradation, PowerDegradation,
+                          degradation_model)
 from .metrics import alpha_lambda, prognostic_horizon, relative_accuracy, relative_rmse, rmad
 from .monitor import HealthMonitor, MonitorResult
 from .observation import ObservationModel, observation_model
@@ -39,7 +40,8 @@ from .rul import RULDistribution, RULPredictor, predict_rul
 
 __all__ = [
     "CustomDegradation", "ExponentialDegradation", "HealthMonitor", "LinearDegradation", "MonitorResult",
-    "ObservationModel", "ParticleFilter", "PrognosisError", "RULDistribution", "RULPredictor", "ResampleMoveFilter",
+    "ObservationModel", "ParticleFilter", "PowerDegradation", "PrognosisError", "RULDistribution", "RULPredictor",
+    "ResampleMoveFilter",
     "ResidualNoise", "StepDiagnostics", "VarianceAdaptation",
     "alpha_lambda", "degradation_model", "effective_sample_size", "observation_model", "predict_rul",
     "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad",

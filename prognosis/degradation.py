@@ -5,6 +5,9 @@ A model maps ``theta_{k-1}`` and the degradation progression parameters
 
 * :class:`LinearDegradation` ``theta_k = theta_{k-1} + gamma dt + v``           (Jha et al. (2016), eq. 60)
 * :class:`ExponentialDegradation` ``theta_k = theta_{k-1} exp(gamma dt) + v``        (Jha et al. (2016), eq. 53)
+* :class:`PowerDegradation` ``theta = origin + span (a tau)^q``, tau the time since onset: a power law in
+  time whose exponent ``q`` is estimated with the rate ``a`` (gamma = (a, q)); it holds the linear law
+  (q = 1) and bends either way, the flexible law that takes over when the data contradict the others
 * :class:`CustomDegradation` ``theta_k = g(theta_{k-1}, gamma, dt) + v``
 
 Arrays are vectorized over assets and particles: ``theta`` has shape
@@ -106,6 +109,74 @@ class ExponentialDegradation:
         return level, carry
 
 
+#: exponents q of the power law a hypothesis weighs (log-uniform): from a wear slowing like a square root
+#: of time to one accelerating like its fifth power
+POWER_EXPONENTS = (0.5, 5.0)
+
+
+@dataclass(frozen=True)
+class PowerDegradation:
+    """``theta = origin + span u``, ``u = (a tau)^q``: a power law of the time ``tau`` since onset.
+
+    ``u`` is the share of the way from ``origin`` (the nominal value) to ``origin + span`` (the
+    failure value), ``a`` one over the life from onset to failure (1/s) and ``q`` the exponent:
+    1 is the linear law, above 1 a wear that accelerates, below 1 one that slows.  The onset is
+    not a parameter: the law is stepped from the current theta, since ``u^(1/q)`` grows by ``a dt``
+    a step whatever the time since onset,
+
+        u_{k+1} = (u_k^(1/q) + a dt)^q,
+
+    exact at any step.  gamma is ``(a, q)``; a theta on the nominal side of ``origin`` steps as from
+    ``u = 0``.
+
+    >>> import numpy as np
+    >>> model = PowerDegradation(origin=1.0, span=1.0)
+    >>> gamma = np.array([[0.1, 2.0]])                   # fails 10 s after onset, as tau^2
+    >>> theta = np.array([1.0])
+    >>> for _ in range(5):
+    ...     theta = model.step(theta, gamma, dt=1.0)
+    >>> round(float(theta[0]), 6)                        # u = (0.1 * 5)^2
+    1.25
+    """
+
+    origin: float
+    span: float
+    process_noise: float = 0.0
+    n_gamma: int = 2
+
+    def __post_init__(self):
+        if not (np.isfinite(self.origin) and np.isfinite(self.span) and self.span != 0):
+            raise PrognosisError(f"a power law needs a finite origin and a nonzero span, got origin {self.origin}, "
+                                 f"span {self.span}")
+
+    def step(self, theta: np.ndarray, gamma: np.ndarray, dt: float) -> np.ndarray:
+        """``u_{k+1} = (u_k^(1/q) + a dt)^q`` with ``a, q = gamma[..., 0], gamma[..., 1]``."""
+        share = np.maximum((theta - self.origin) / self.span, 0.0)
+        rate, exponent = gamma[..., 0], gamma[..., 1]
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            clock = np.maximum(share ** (1.0 / exponent) + rate * dt, 0.0)  # a tau, up to the step's end
+            return self.origin + self.span * clock ** exponent
+
+    def path(self, theta: np.ndarray, gamma: np.ndarray, noise: np.ndarray, dt: float) -> np.ndarray:
+        """theta over a horizon: ``gamma`` (..., N, H, 2) used at each step, ``noise`` (..., N, H); returns (..., N, H).
+
+        Without process noise the clock ``a tau`` is a cumulative sum of the rates (no loop over
+        steps); with it, one step at a time.
+        """
+        if not np.any(noise):
+            share = np.maximum((theta - self.origin) / self.span, 0.0)
+            exponent = gamma[..., 0, 1]
+            with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+                clock = (share ** (1.0 / exponent))[..., None] + dt * np.cumsum(gamma[..., 0], axis=-1)
+                return self.origin + self.span * np.maximum(clock, 0.0) ** exponent[..., None]
+        out = np.empty(noise.shape)
+        current = theta
+        for step in range(noise.shape[-1]):
+            current = self.step(current, gamma[..., step, :], dt) + noise[..., step]
+            out[..., step] = current
+        return out
+
+
 @dataclass(frozen=True)
 class CustomDegradation:
     """``theta_k = g(theta_{k-1}, gamma_{k-1}, dt) + v`` for a user function ``g``.
@@ -151,8 +222,9 @@ class CustomDegradation:
 class PerAssetDegradation:
     """A law per row of the particle arrays: competing hypotheses batched in one filter.
 
-    ``models[laws[a]]`` moves row ``a`` of ``theta`` (A, N) and ``gamma`` (A, N, G); every model has the
-    same number of gammas.  Each law's rows move in one vectorized call.
+    ``models[laws[a]]`` moves row ``a`` of ``theta`` (A, N) and ``gamma`` (A, N, G); G is the largest
+    number of gammas of the models, and a model with fewer reads the first of them (its rows carry the
+    others unused).  Each law's rows move in one vectorized call.
 
     >>> import numpy as np
     >>> bank = PerAssetDegradation((LinearDegradation(), ExponentialDegradation()), laws=(0, 1, 0))
@@ -165,13 +237,9 @@ class PerAssetDegradation:
     models: tuple
     laws: tuple  # index into models, per asset row
 
-    def __post_init__(self):
-        if len({m.n_gamma for m in self.models}) > 1:
-            raise PrognosisError("every law of a PerAssetDegradation must have the same number of gammas")
-
     @property
     def n_gamma(self) -> int:
-        return self.models[0].n_gamma
+        return max(m.n_gamma for m in self.models)
 
     @property
     def process_noise(self) -> np.ndarray:
@@ -185,7 +253,7 @@ class PerAssetDegradation:
         for index, model in enumerate(self.models):
             mine = rows == index
             if mine.any():
-                out[mine] = model.step(theta[mine], gamma[mine], dt)
+                out[mine] = model.step(theta[mine], gamma[mine][..., :model.n_gamma], dt)
         return out
 
 _BLOCK = 16
@@ -214,21 +282,24 @@ def prefix_sum(x: np.ndarray) -> np.ndarray:
     return blocks.reshape(rows, h)
 
 
-MODELS = {"linear": LinearDegradation, "exponential": ExponentialDegradation}
+MODELS = {"linear": LinearDegradation, "exponential": ExponentialDegradation, "power": PowerDegradation}
 
 
-def degradation_model(name: str, process_noise: float = 0.0):
-    """A built-in model by name: ``"linear"`` or ``"exponential"``.
+def degradation_model(name: str, process_noise: float = 0.0, *, nominal: float | None = None,
+                      failure: float | None = None):
+    """A built-in model by name: ``"linear"``, ``"exponential"`` or ``"power"``.
 
     Parameters
     ----------
-    name : {"linear", "exponential"}
+    name : {"linear", "exponential", "power"}
     process_noise : float
         Standard deviation of the additive process noise ``v``.
+    nominal, failure : float
+        ``"power"`` only: the parameter's nominal and failure values, between which the law runs.
 
     Returns
     -------
-    LinearDegradation or ExponentialDegradation
+    LinearDegradation, ExponentialDegradation or PowerDegradation
 
     Examples
     --------
@@ -240,8 +311,14 @@ def degradation_model(name: str, process_noise: float = 0.0):
     2.0
     >>> degradation_model("linear").step(np.array([1.0]), np.array([[0.5]]), dt=2.0).tolist()
     [2.0]
+    >>> degradation_model("power", nominal=1.0, failure=3.0)
+    PowerDegradation(origin=1.0, span=2.0, process_noise=0.0, n_gamma=2)
     """
     if name not in MODELS:
         raise PrognosisError(f"unknown degradation model {name!r}; choose from {sorted(MODELS)} "
                              "or use CustomDegradation(g)")
+    if name == "power":
+        if nominal is None or failure is None:
+            raise PrognosisError("the power law runs from the nominal to the failure value: give nominal= and failure=")
+        return PowerDegradation(float(nominal), float(failure) - float(nominal), process_noise=process_noise)
     return MODELS[name](process_noise=process_noise)

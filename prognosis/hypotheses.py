@@ -94,8 +94,9 @@ def rate_prior(hypothesis: Hypothesis, dt: float, particles: int, rng: np.random
     """Initial rate particles (particles,): the life from nominal to failure log-uniform over ``life`` steps.
 
     The rate is the one that takes the parameter from its nominal value to its failure value in
-    that life: ``(failure - nominal) / T`` for the linear law, ``log(failure / nominal) / T`` for the
-    exponential one, so both laws get the same prior on the life, and nothing comes from the
+    that life, ``law_distance / T``: ``(failure - nominal) / T`` for the linear law,
+    ``log(failure / nominal) / T`` for the exponential one, ``1 / T`` for the power law (its rate is
+    one over the life), so every law gets the same prior on the life, and nothing comes from the
     simulated truth or the record's length.  Other laws get the linear law's rate.
 
     >>> h = Hypothesis("R", "exponential", failure=2.0, nominal=1.0)
@@ -105,9 +106,25 @@ def rate_prior(hypothesis: Hypothesis, dt: float, particles: int, rng: np.random
     """
     lo, hi = life
     steps = np.exp(rng.uniform(np.log(lo), np.log(hi), particles))
-    distance = (math.log(hypothesis.failure / hypothesis.nominal) if hypothesis.law == "exponential"
-                else hypothesis.failure - hypothesis.nominal)
-    return distance / (steps * dt)
+    return law_distance(hypothesis) / (steps * dt)
+
+
+def law_distance(hypothesis: Hypothesis) -> float:
+    """How far the hypothesis' law goes from nominal to failure, in its rate's units times time.
+
+    ``log(failure / nominal)`` for the exponential law (of one sign), 1 for the power law (a share
+    of the way), ``failure - nominal`` for the others.
+
+    >>> law_distance(Hypothesis("R", "exponential", failure=2.0, nominal=1.0)) == math.log(2.0)
+    True
+    >>> law_distance(Hypothesis("R", "linear", 2.0, 1.5)), law_distance(Hypothesis("R", "power", 2.0, 1.5))
+    (0.5, 1.0)
+    """
+    if hypothesis.law == "exponential" and hypothesis.failure * hypothesis.nominal > 0:
+        return math.log(hypothesis.failure / hypothesis.nominal)
+    if hypothesis.law == "power":
+        return 1.0
+    return hypothesis.failure - hypothesis.nominal
 
 
 def signature_candidates(arrs: Sequence, failures: Mapping[str, float], fired: Iterable[str]) -> list[str]:

@@ -33,9 +33,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import seeds
-from .degradation import PerAssetDegradation, degradation_model
-from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, rate_prior,
-                         record_separation, same_signature, sensitivity, signature_candidates)
+from .degradation import POWER_EXPONENTS, PerAssetDegradation, degradation_model
+from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, law_distance,
+                         rate_prior, record_separation, same_signature, sensitivity, signature_candidates)
 from .likelihood import ResidualNoise, healthy_noise
 from .monitor import MonitorResult, filter_stride
 from .observation import observation_model
@@ -497,23 +497,27 @@ class IsolatingMonitor:
         observation = HypothesisObservation(arrs, hypotheses)
         if self.method == "sir":
             # a model per row: sigma_v is on the scale of each candidate
-            models = tuple(self.law(h.law, s[2]) for h, s in zip(hypotheses, starts))
-            pf = ParticleFilter(PerAssetDegradation(models, tuple(range(len(models)))), observation,
+            models = tuple(self.law(h, s[2]) for h, s in zip(hypotheses, starts))
+            bank = PerAssetDegradation(models, tuple(range(len(models))))
+            pf = ParticleFilter(bank, observation,
                                 n_particles=self.n_particles, dt=self.dt, noise_std=noise, inflation=self.inflation,
-                                gamma_std=0.0, adaptation=KernelSmoothing(self.discount),
+                                gamma_std=np.zeros(bank.n_gamma), adaptation=KernelSmoothing(self.discount),
                                 seed=seeds.spawn(self.seed, seeds.FILTER))
             rng = seeds.generator(self.seed, seeds.RATE_PRIOR)
-            gamma0 = np.stack([self.rate_particles(h, rng) for h in hypotheses])[..., None]
+            gamma0 = np.stack([self.rate_particles(h, rng, bank.n_gamma) for h in hypotheses])
             pf.initialize(bounds, gamma0=gamma0, assets=len(hypotheses))
         else:
-            models = tuple(self.law(h.law, 0.0) for h in hypotheses)  # the law itself: no random walk
-            pf = ResampleMoveFilter(PerAssetDegradation(models, tuple(range(len(models)))), observation,
+            models = tuple(self.law(h, 0.0) for h in hypotheses)  # the law itself: no random walk
+            bank = PerAssetDegradation(models, tuple(range(len(models))))
+            pf = ResampleMoveFilter(bank, observation,
                                     noise=self.residual_noise(observation, evaluations, stride), dt=self.dt,
                                     n_particles=self.n_particles, discrepancy="shared",
                                     seed=seeds.spawn(self.seed, seeds.FILTER))
-            rates = np.array([self.rate_bounds(h) for h in hypotheses])
+            rates = np.array([self.gamma_bounds(h, bank.n_gamma) for h in hypotheses])  # (H, 2, G)
+            # the rate log-uniform on the prior of the life (uniform on a given interval), other gammas log-uniform
+            log_gamma = np.arange(bank.n_gamma) > 0 if self.rate is not None else True
             pf.initialize(bounds, gamma_bounds=(rates[:, 0], rates[:, 1]), assets=len(hypotheses),
-                          log_gamma=self.rate is None)
+                          log_gamma=log_gamma)
         steps = range(k0, t.size, stride)
         information = self._information(result, observation, evaluations, noise, steps)
         every = -(-len(steps) // 100)
@@ -557,11 +561,12 @@ class IsolatingMonitor:
                 progress(done, len(steps), float(t[k]))
         result.t = np.array([r[0] for r in rows])
         result.log_evidence = np.array([r[1] for r in rows])
-        for name, key in (("theta", "theta"), ("gamma", "gamma")):
-            mean = np.array([r[2][f"{key}_mean"] for r in rows]).reshape(len(rows), -1)
-            rmad = np.array([r[2][f"{key}_rmad"] for r in rows]).reshape(len(rows), -1)
-            quantiles = np.array([r[2][f"{key}_quantiles"] for r in rows]).reshape(len(rows), -1, 3)
-            setattr(result, name, {"mean": mean, "rmad": rmad, "quantiles": quantiles})
+        for key in ("theta", "gamma"):  # of gamma, the rate (a law's other gammas are not reported)
+            first = (lambda v: v) if key == "theta" else (lambda v: v[:, 0])
+            mean = np.array([first(r[2][f"{key}_mean"]) for r in rows]).reshape(len(rows), -1)
+            rmad = np.array([first(r[2][f"{key}_rmad"]) for r in rows]).reshape(len(rows), -1)
+            quantiles = np.array([first(r[2][f"{key}_quantiles"]) for r in rows]).reshape(len(rows), -1, 3)
+            setattr(result, key, {"mean": mean, "rmad": rmad, "quantiles": quantiles})
         result.rul_t, result.rul, result.decisions = np.array(rul_t), rul, decisions
         result.ess = np.array(ess)
 
@@ -711,24 +716,31 @@ class IsolatingMonitor:
                     "on the wrong side?)")
         return away
 
-    def law(self, name: str, process_noise: float):
-        """The degradation model of law ``name``: the user's, or the built-in one with ``process_noise``."""
-        model = self.laws[name]
-        return degradation_model(name, process_noise) if model is None else model
+    def law(self, h: Hypothesis, process_noise: float):
+        """The degradation model of ``h``'s law: the user's, or the built-in one with ``process_noise``."""
+        model = self.laws[h.law]
+        if model is not None:
+            return model
+        return degradation_model(h.law, process_noise, nominal=h.nominal, failure=h.failure)
 
-    def rate_bounds(self, h: Hypothesis) -> tuple[float, float]:
-        """(lo, hi) of a hypothesis' rate: the ``rate`` interval, or the rates of the prior on the life.
+    def gamma_bounds(self, h: Hypothesis, count: int) -> tuple[list, list]:
+        """(lo, hi), each of ``count`` gammas, of a hypothesis' prior: its rate's, then its law's other gammas.
 
-        The life from nominal to failure in ``life`` filter steps gives the rate ``distance / (T dt)``,
-        with the distance ``failure - nominal`` (linear and other laws) or ``log(failure / nominal)``
-        (exponential), as :func:`~prognosis.hypotheses.rate_prior` draws it.
+        The rate: the ``rate`` interval, or the rates of the prior on the life (the life from
+        nominal to failure in ``life`` filter steps gives the rate ``distance / (T dt)``, with the
+        distance ``failure - nominal`` (linear and other laws), ``log(failure / nominal)``
+        (exponential) or 1 (power: ``a`` is one over the life), as
+        :func:`~prognosis.hypotheses.rate_prior` draws it).  The power law's exponent spans
+        :data:`~prognosis.degradation.POWER_EXPONENTS`; a gamma the law does not have is fixed at 1.
         """
         if self.rate is not None:
-            return float(self.rate[0]), float(self.rate[1])
-        distance = (math.log(h.failure / h.nominal) if h.law == "exponential" and h.failure * h.nominal > 0
-                    else h.failure - h.nominal)
-        ends = sorted(distance / (steps * self.dt) for steps in self.life)
-        return ends[0], ends[1]
+            ends = sorted(float(r) / (h.failure - h.nominal if h.law == "power" else 1.0) for r in self.rate)
+        else:
+            ends = sorted(law_distance(h) / (steps * self.dt) for steps in self.life)
+        lo, hi = [ends[0]] + [1.0] * (count - 1), [ends[1]] + [1.0] * (count - 1)
+        if h.law == "power" and self.laws[h.law] is None:
+            lo[1], hi[1] = POWER_EXPONENTS
+        return lo, hi
 
     def residual_noise(self, observation: HypothesisObservation, evaluations: list, stride: int) -> ResidualNoise:
         """The likelihood's noise per hypothesis: ``noise_std`` with, from the healthy stretch, the residuals'
@@ -757,11 +769,16 @@ class IsolatingMonitor:
         return ResidualNoise(np.array(covariance), np.array(cross), np.array(growth),
                              np.array([h.nominal for h in hypotheses]), self.inflation)
 
-    def rate_particles(self, h: Hypothesis, rng: np.random.Generator) -> np.ndarray:
-        """Initial rate particles of a hypothesis: the ``rate`` interval, or the prior on the life."""
-        if self.rate is not None:
-            return rng.uniform(*self.rate, self.n_particles)
-        return rate_prior(h, self.dt, self.n_particles, rng, self.life)
+    def rate_particles(self, h: Hypothesis, rng: np.random.Generator, count: int = 1) -> np.ndarray:
+        """Initial gamma particles (N, ``count``) of a hypothesis: the rate from the ``rate`` interval or the
+        prior on the life, the power law's exponent log-uniform (:meth:`gamma_bounds`), other gammas 1."""
+        lo, hi = self.gamma_bounds(h, count)
+        gamma = np.ones((self.n_particles, count))
+        gamma[:, 0] = (rng.uniform(lo[0], hi[0], self.n_particles) if self.rate is not None
+                       else rate_prior(h, self.dt, self.n_particles, rng, self.life))
+        if count > 1 and lo[1] < hi[1]:
+            gamma[:, 1] = np.exp(rng.uniform(math.log(lo[1]), math.log(hi[1]), self.n_particles))
+        return gamma
 
     def _reject(self, result: IsolationResult, hypotheses: list, estimate: dict, time: float) -> None:
         """Reject the hypotheses whose median estimate left the candidate's physical domain."""

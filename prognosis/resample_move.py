@@ -52,7 +52,10 @@ DISCREPANCY = ("each", "shared", None)  # whose information excess divides an as
 
 @dataclass(frozen=True)
 class Prior:
-    """Uniform over the box ``[lo, hi]`` (A, D) of working coordinates; ``log[g]``: gamma_g as sign * exp(u)."""
+    """Uniform over the box ``[lo, hi]`` (A, D) of working coordinates; ``log[g]``: gamma_g as sign * exp(u).
+
+    A coordinate with ``lo == hi`` is fixed: a gamma of a row whose law does not have it.
+    """
 
     lo: np.ndarray
     hi: np.ndarray
@@ -62,6 +65,11 @@ class Prior:
     def draw(self, n: int, rng: np.random.Generator) -> np.ndarray:
         shape = (self.lo.shape[0], n, self.lo.shape[1])
         return self.lo[:, None, :] + (self.hi - self.lo)[:, None, :] * rng.random(shape)
+
+    @property
+    def free(self) -> np.ndarray:
+        """(A, D): the coordinates the prior does not fix (``lo < hi``)."""
+        return self.hi > self.lo
 
     def inside(self, z: np.ndarray) -> np.ndarray:
         return np.all((z >= self.lo[:, None, :]) & (z <= self.hi[:, None, :]), axis=-1)
@@ -166,7 +174,7 @@ class ResampleMoveFilter:
         self.history = []  # (y, points) of every step
         self.acceptance = np.full(assets, np.nan)
         self.frozen = np.zeros(assets, bool)
-        self.scale = np.full(assets, 2.38 / np.sqrt(self.z.shape[-1]))
+        self.scale = 2.38 / np.sqrt(np.maximum(self.prior.free.sum(axis=1), 1))
         self.excess = np.ones(assets)  # what the likelihood is divided by (information_excess)
 
     @property
@@ -242,16 +250,18 @@ class ResampleMoveFilter:
     def _excess_now(self) -> np.ndarray:
         """The information excess (A,) the likelihood is divided by from this step on (all 1 without ``discrepancy``).
 
-        Read from the standardized gaps of the history at the cloud's mean (:func:`information_excess`):
+        Read from the standardized gaps of the history at the particle that explains it best, the
+        largest likelihood of the past (:func:`information_excess`), not at the cloud's mean: a
+        posterior along a curved ridge (a power law's rate, exponent and start trade off) has its
+        mean off the ridge, where the gaps show the curvature, not the noise.  Read
         every step while the history is short, then about twenty times per tenfold of history (the
         replay it takes costs as much as the history is long).
         """
         steps = len(self.history)
         if self.discrepancy is None or steps < MIN_STEPS or (steps - MIN_STEPS) % max(1, steps // 20):
             return self.excess
-        weights = normalize_log_weights(self.log_weights)[0]
-        mean = np.einsum("an,and->ad", weights, self.z)[:, None, :]
-        excess = information_excess(self._standardized_gaps(mean))
+        best = np.argmax(np.where(np.isfinite(self.past), self.past, -np.inf), axis=1)
+        excess = information_excess(self._standardized_gaps(self.z[np.arange(self.assets), best][:, None, :]))
         if self.discrepancy == "shared":  # rows are hypotheses of one asset: the best one's excess for all
             best = np.where(self.frozen, -np.inf, self.log_evidence)
             excess = np.full(self.assets, excess[int(np.argmax(best))])
@@ -306,7 +316,11 @@ class ResampleMoveFilter:
                            1e-9 * np.maximum(np.abs(self.prior.hi - self.prior.lo), 1e-300))
         # a ridge on the diagonal: a collapsed cloud still proposes along every coordinate
         proposal = spread + np.einsum("ad,de->ade", np.square(1e-3 * width), np.eye(width.shape[1]))
-        chol = _cholesky(proposal)
+        # a coordinate the prior fixes (a gamma the row's law does not have) is not proposed along
+        free = self.prior.free
+        both = free[:, :, None] & free[:, None, :]
+        proposal = np.where(both, proposal, np.eye(width.shape[1]))
+        chol = _cholesky(proposal) * free[:, :, None]
         accepted = np.zeros(self.assets)
         for _ in range(self.moves):
             step = np.einsum("ade,ane->and", chol, self.rng.standard_normal(self.z.shape))
@@ -409,8 +423,9 @@ class ResampleMoveFilter:
         return self.noise.log_density(y[:, None, :] - predicted, theta)
 
     def _distinct(self) -> np.ndarray:
-        """Distinct particles per asset (A,)."""
-        ordered = np.sort(self.z[..., -1], axis=1)
+        """Distinct particles per asset (A,), counted on a coordinate the prior leaves free (a move changes all)."""
+        coordinate = np.argmax(self.prior.free, axis=1)
+        ordered = np.sort(np.take_along_axis(self.z, coordinate[:, None, None], axis=2)[..., 0], axis=1)
         return 1.0 + np.count_nonzero(np.diff(ordered, axis=1) != 0, axis=1)
 
     def estimate(self) -> dict:

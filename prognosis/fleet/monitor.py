@@ -122,6 +122,9 @@ class FleetMonitor:
                                          horizon=horizon, detection=detection, min_ratio=min_ratio,
                                          healthy_until=healthy_until, domains=domains, method="sir", seed=seed)
         s = self.settings
+        for name, model in s.laws.items():  # the fleet filter carries one gamma per particle: a rate
+            if (model is None and name == "power") or (model is not None and model.n_gamma != 1):
+                raise PrognosisError(f"laws: the fleet filter weighs laws with one rate; {name!r} has more gammas")
         if report_every is None:
             report_every = s.rul_every
         if isinstance(report_every, bool) or int(report_every) != report_every or report_every < 1:
@@ -401,7 +404,7 @@ class FleetMonitor:
     def _new_filter(self) -> FleetFilter:
         s = self.settings
         if self._laws is None:
-            self._laws = [s.law(h.law, 0.0) for h in self.hypotheses]
+            self._laws = [s.law(h, 0.0) for h in self.hypotheses]
         return FleetFilter(self._laws, self.observations, noise_std=self.noise, n_particles=s.n_particles, dt=s.dt,
                            inflation=s.inflation, discount=s.discount, streams=self.streams)
 
@@ -420,7 +423,7 @@ class FleetMonitor:
                 sigma_v.append(noise if law is None else law.process_noise)
                 owner.append(a)
                 rng = self.streams.generator(item.asset, 0, RATES, lane=h)
-                rates.append(s.rate_particles(self.hypotheses[h], rng)[None, :])
+                rates.append(s.rate_particles(self.hypotheses[h], rng)[None, :, 0])
         rows = pf.add(ids, hypothesis=hypotheses, lo=lo, hi=hi, rates=np.stack(rates), process_noise=sigma_v)
         return rows, np.array(owner)
 
