@@ -173,7 +173,7 @@ def cmd_prognose(args, progress: Progress) -> int:
 
     ``--fail PARAM=VALUE`` (repeatable) gives the failure value of each parameter that can fail; the
     candidates are those whose fault signature matches the ARRs that fired, each with each law
-    (linear, exponential), weighed in one particle filter from the first alarm
+    (linear, exponential, power), weighed in one particle filter from the first alarm
     (:class:`~prognosis.isolation.IsolatingMonitor`).  ``--candidate`` and ``--degradation`` restrict
     them.  Prints the decision and the last RUL; with ``--out`` writes ``prognosis.json``,
     ``estimates.csv``, ``rul.csv`` and plots.  Returns 0.
@@ -553,10 +553,12 @@ def _what_can_fail(args, progress: Progress) -> tuple:
 
 
 def _laws(args) -> list:
-    """The competing laws: ``--degradation`` (once in ``fleet``, repeatable in ``prognose``), else linear and
-    exponential."""
+    """The competing laws: ``--degradation`` (once in ``fleet``, repeatable in ``prognose``), else the library's
+    default (``fleet``: the laws with one rate)."""
+    from prognosis.isolation import LAWS
+
     if not args.degradation:
-        return ["linear", "exponential"]
+        return list(LAWS) if args.command == "prognose" else ["linear", "exponential"]
     return list(dict.fromkeys(args.degradation if isinstance(args.degradation, list) else [args.degradation]))
 
 
@@ -883,8 +885,8 @@ def build_parser() -> argparse.ArgumentParser:
                         "signature matches the ARRs that fired")
     p.add_argument("--candidate", help="only this candidate (it needs a failure value; a bare --fail VALUE is its)")
     p.add_argument("--degradation", choices=("exponential", "linear", "power"), action="append",
-                   help="a law that competes (repeatable; default: linear and exponential compete on evidence); "
-                        "power: a power of the time since onset whose exponent is estimated too")
+                   help="a law that competes (repeatable; default: linear, exponential and power compete on "
+                        "evidence); power: a power of the time since onset, its exponent estimated too")
     p.add_argument("--direction", choices=("up", "down"), help="check that --candidate's failure value lies on "
                    "this side of nominal")
     p.add_argument("--rate", type=float, nargs=2, metavar=("LO", "HI"),

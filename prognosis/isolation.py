@@ -48,6 +48,9 @@ from .errors import PrognosisError
 __all__ = ["Decision", "IsolatingMonitor", "IsolationResult", "decide"]
 
 METHODS = ("resample-move", "sir")
+#: the competing laws by default: the two of Jha et al. (2016) and the flexible power law, which holds the
+#: linear one and takes over where the data bend away from both
+LAWS = ("linear", "exponential", "power")
 
 EVIDENCE_RATIO = 100.0  # "decisive" on Jeffreys' scale: a hypothesis is declared beyond this ratio
 MIXTURE_FLOOR = 1e-3  # hypotheses less probable than this are left out of the RUL mixture
@@ -287,8 +290,10 @@ class IsolatingMonitor:
     noise_std : mapping
         Standard deviation of each ARR's residual on healthy data (by ARR name).
     laws : sequence of str or mapping
-        Competing degradation laws: names of built-in ones, or ``{name: model}`` (any model of
-        :mod:`prognosis.degradation`, e.g. a :class:`~prognosis.degradation.CustomDegradation`).
+        Competing degradation laws: names of built-in ones (default :data:`LAWS`: linear,
+        exponential and the power law of the time since onset, whose exponent is estimated), or
+        ``{name: model}`` (any model of :mod:`prognosis.degradation`, e.g. a
+        :class:`~prognosis.degradation.CustomDegradation`).
     candidates : sequence of str, optional
         Only these candidates (each needs a failure value), instead of those of the signature.
     dt : float
@@ -360,7 +365,7 @@ class IsolatingMonitor:
     """
 
     def __init__(self, arrs: Sequence, failures: Mapping[str, float], *, noise_std: Mapping[str, float],
-                 laws: Sequence[str] | Mapping = ("linear", "exponential"), candidates: Sequence[str] | None = None,
+                 laws: Sequence[str] | Mapping = LAWS, candidates: Sequence[str] | None = None,
                  dt: float = 0.1, n_particles: int = 500, inflation: float | None = None, life: tuple = LIFE_PRIOR,
                  rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
                  rul_every: int = 10, horizon: float | None = None, detection: Mapping | None = None,
@@ -448,8 +453,22 @@ class IsolatingMonitor:
         # isolable in the model: over every ARR given, not only those the filter weighs
         result.same_signature = {c: same_signature(self.arrs, c) for c in result.candidates}
         result.hypotheses, result.rejected = self.hypotheses_for(result.candidates)
-        self._filter(result, [evaluations[i] for i in used], arrs, k, progress)
+        start = self.settled(evaluations, k, filter_stride(t, self.dt), result.transient)
+        self._filter(result, [evaluations[i] for i in used], arrs, start, progress)
         return result
+
+    def settled(self, evaluations: list, k: int, stride: int, transient: Sequence[str]) -> int:
+        """The sample the filter starts from: after the last alarm of a transient ARR in the confirmation window.
+
+        A transient (an ARR blind to the fault alarming for a few samples) shows a discontinuity: a
+        step of the parameter, an input's jump.  Over it the residuals carry the ringing and the
+        derivative windows that straddle the kink, which no law of theta explains; a law fitted
+        through them is wrong from its start.  Without a transient, the first alarm ``k``.
+        """
+        window = slice(k, k + CONFIRM_STEPS * stride)
+        last = [k + int(np.flatnonzero(e.alarm[window])[-1]) for a, e in zip(self.arrs, evaluations)
+                if a.name in transient and e.alarm[window].any()]
+        return max(last) + 1 if last else k
 
     def signature(self, evaluations: list, k: int, stride: int) -> tuple[list, list]:
         """The ARRs that fired, read over CONFIRM_STEPS filter steps from the first alarm at sample ``k``.
@@ -597,13 +616,14 @@ class IsolatingMonitor:
         the decisive evidence ratio (:func:`~prognosis.hypotheses.record_separation`): the evidence
         between them can then come only from what the residuals do not carry (the laws' shapes, the
         priors, a model error), so it does not single either out.  Candidates whose every hypothesis
-        is rejected take no part.
+        is rejected or contradicted by the data (inadequate) take no part: the residuals told them apart.
         """
         hypotheses, candidates = result.hypotheses, result.candidates
         changes = np.zeros(len(candidates))
         alive = np.zeros(len(candidates), bool)
         for ci, c in enumerate(candidates):
-            rows = [i for i, h in enumerate(hypotheses) if h.candidate == c and h.name not in result.rejected]
+            rows = [i for i, h in enumerate(hypotheses) if h.candidate == c and h.name not in result.rejected
+                    and h.name not in result.inadequate]
             if rows:
                 best = max(rows, key=lambda i: log_evidence[i])
                 changes[ci], alive[ci] = float(theta[best]) - self.nominal[c], True
