@@ -617,7 +617,7 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
     """What ``prognosis.json`` holds: the decision, the evidence, the predictions and the settings."""
     decision = result.decision
     summary = {"detection_time": result.detection_time, "fired": result.fired, "transient": result.transient,
-               "candidates": result.candidates,
+               "late": result.late, "candidates": result.candidates,
                "indistinguishable": [g for g in result.groups if len(g) > 1], "arrs": result.arrs,
                # pairs the structure tells apart but this record's operating regime does not
                "indistinguishable_on_record": result.on_record,
@@ -626,6 +626,8 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
                    "no candidate" if decision is None else decision.status),
                "degradation": None if decision is None else decision.degradation,
                "same_signature": [] if decision is None else list(decision.same_signature),
+               # ARRs that fired later and that no candidate sees: another fault than the one decided on
+               "unexplained": {} if decision is None else dict(decision.unexplained),
                "failure_values": failures, "filter_step": dt, "filter": args.filter,
                "particles_per_hypothesis": args.particles,
                "residual_noise_std": noise, "seed": args.seed, "evidence": {}, "predictions": [], "decisions": []}
@@ -655,7 +657,7 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
                 "censored": float(result.rul[k].censored_weight[0])})
         d = result.decisions[k]
         summary["decisions"].append({"t": float(t), "candidate": d.candidate, "status": d.status,
-                                     "degradation": d.degradation})
+                                     "degradation": d.degradation, "unexplained": sorted(d.unexplained)})
     top = result.index(max(decision.probabilities, key=decision.probabilities.get))
     summary["last"] = {**(summary["predictions"][-1] if summary["predictions"] else {"t": float(result.t[-1])}),
                        "hypothesis": result.hypotheses[top].name,
@@ -683,12 +685,13 @@ def _prognosis_line(result, summary: dict) -> str:
     reported = summary["candidate"] if isinstance(summary["candidate"], list) else [summary["candidate"]]
     if any(set(pair.split(" ~ ")) <= set(reported) for pair in summary["indistinguishable_on_record"]):
         status += ", on this record (the operating regime does not tell them apart)"
+    later = "".join(f"; but {reason}" for reason in summary["unexplained"].values())
     if last.get("withheld"):
         return (f"{head}; candidate {summary['candidate']} ({status}), degradation {law}; at t = "
-                f"{last['t']:g} s no RUL (undecided: {last['withheld']})")
+                f"{last['t']:g} s no RUL (undecided: {last['withheld']}){later}")
     return (f"{head}; candidate {summary['candidate']} ({status}), degradation {law}; at t = "
             f"{last['t']:g} s RUL median {_fmt(last['rul_median'])} s, 5-95 % [{_fmt(last['rul_p5'])}, "
-            f"{_fmt(last['rul_p95'])}] s")
+            f"{_fmt(last['rul_p95'])}] s{later}")
 
 
 def _first_reasons(result) -> list[str]:

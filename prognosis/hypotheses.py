@@ -28,8 +28,9 @@ from diagnosis import signature_matrix
 from .observation import observation_model
 from .errors import PrognosisError
 
-__all__ = ["Hypothesis", "HypothesisObservation", "indistinguishable_groups", "physical_domain", "rate_prior",
-           "record_separation", "same_signature", "sensitivity", "signature_candidates"]
+__all__ = ["Hypothesis", "HypothesisObservation", "explaining", "indistinguishable_groups", "law_distance",
+           "physical_domain", "rate_prior", "record_separation", "same_signature", "sensitivity",
+           "signature_candidates"]
 
 LIFE_PRIOR = (10.0, 1e5)  # filter steps: the life from nominal to failure, log-uniform between these
 
@@ -175,6 +176,21 @@ def same_signature(arrs: Sequence, candidate: str) -> list[str]:
     mine = signatures.matrix[signatures.rows.index(candidate)]
     return [row for row, signature in zip(signatures.rows, signatures.matrix)
             if row != candidate and np.array_equal(signature, mine)]
+
+
+def explaining(arrs: Sequence, fired: Iterable[str]) -> list[str]:
+    """The faults of the model, parameters and sensors (``"sensor <signal>"``), whose signature holds every
+    ARR of ``fired``: those a single fault among them could have fired.
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> arrs = derive_arrs(rlc_circuit())
+    >>> explaining(arrs, [arrs[0].name])
+    ['R', 'L', 'sensor i', 'sensor v_C']
+    """
+    signatures = signature_matrix(arrs)
+    columns = [signatures.columns.index(name) for name in fired]
+    return [row for row, signature in zip(signatures.rows, signatures.matrix) if all(signature[c] for c in columns)]
 
 
 def indistinguishable_groups(arrs: Sequence, candidates: Sequence[str], *, rtol: float = 1e-5,

@@ -26,6 +26,7 @@ The decision can change while data come in: it is made again at every RUL predic
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -34,8 +35,9 @@ import numpy as np
 
 from . import seeds
 from .degradation import POWER_EXPONENTS, PerAssetDegradation, degradation_model
-from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, indistinguishable_groups, law_distance,
-                         rate_prior, record_separation, same_signature, sensitivity, signature_candidates)
+from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, explaining, indistinguishable_groups,
+                         law_distance, rate_prior, record_separation, same_signature, sensitivity,
+                         signature_candidates)
 from .likelihood import ResidualNoise, healthy_noise
 from .monitor import MonitorResult, filter_stride
 from .observation import observation_model
@@ -92,6 +94,9 @@ class Decision:
     same_signature : tuple of str
         The faults outside the reported candidate(s), parameters and ``"sensor <signal>"``, with the
         same fault signature over the ARRs: the evidence cannot have told them apart.
+    unexplained : dict
+        ARR name -> why it is unexplained: an ARR that fired after the signature was read, which no
+        candidate is sensitive to (another fault, or a sensor's); the decision is about the first fault.
     """
 
     candidate: str | list | None
@@ -102,12 +107,13 @@ class Decision:
     degradation_ratio: float
     probabilities: dict
     same_signature: tuple = ()
+    unexplained: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
         return {"candidate": self.candidate, "status": self.status, "candidate_ratio": _finite(self.candidate_ratio),
                 "degradation": self.degradation, "degradation_decided": self.degradation_decided,
                 "degradation_ratio": _finite(self.degradation_ratio), "probabilities": self.probabilities,
-                "same_signature": list(self.same_signature)}
+                "same_signature": list(self.same_signature), "unexplained": dict(self.unexplained)}
 
 
 def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: Sequence[Sequence[str]],
@@ -180,6 +186,13 @@ class IsolationResult:
         (the signature the candidates come from; :meth:`IsolatingMonitor.signature`).
     transient : list of str
         The ARRs that alarmed in that window without staying in alarm: they rule nothing out.
+    late : dict
+        ARR name -> time (s) it fired after that window (in alarm over half of a window of
+        CONFIRM_STEPS filter steps, dated at the window's end, when it is known), for the ARRs
+        outside ``fired``.
+    late_faults : dict
+        For a late ARR no candidate is sensitive to: the faults of the model, parameters and
+        sensors, that could have fired it alone (:func:`~prognosis.hypotheses.explaining`).
     candidates, groups : list
         Candidates from the signature; their groups of indistinguishable ones.
     same_signature : dict
@@ -224,6 +237,8 @@ class IsolationResult:
     detection_time: float | None
     fired: list = field(default_factory=list)
     transient: list = field(default_factory=list)
+    late: dict = field(default_factory=dict)
+    late_faults: dict = field(default_factory=dict)
     candidates: list = field(default_factory=list)
     groups: list = field(default_factory=list)
     same_signature: dict = field(default_factory=dict)
@@ -251,8 +266,15 @@ class IsolationResult:
         """The decision on all the data (None without an alarm or a candidate)."""
         if not self.t.size:
             return None
-        return decide(self.hypotheses, self.log_evidence[-1], self.record_groups or self.groups, self.rejected,
-                      self.min_ratio, self.same_signature)
+        decision = decide(self.hypotheses, self.log_evidence[-1], self.record_groups or self.groups, self.rejected,
+                          self.min_ratio, self.same_signature)
+        return dataclasses.replace(decision, unexplained=self.unexplained(float(self.t[-1])))
+
+    def unexplained(self, time: float) -> dict:
+        """The ARRs fired late by ``time`` that no candidate is sensitive to, each with why (ARR name -> text)."""
+        return {name: (f"{name} fired at t = {when:g} s, after the signature was read, and no candidate is "
+                       f"sensitive to it: another fault ({', '.join(self.late_faults[name]) or 'none of the model'})")
+                for name, when in self.late.items() if when <= time and name in self.late_faults}
 
     def index(self, name: str) -> int:
         """Row of the hypothesis ``"candidate/law"``."""
@@ -447,6 +469,9 @@ class IsolatingMonitor:
         if not result.candidates:
             return result
         used = [i for i, a in enumerate(self.arrs) if any(c in a.parameters for c in result.candidates)]
+        result.late = self.late_firings(evaluations, k, filter_stride(t, self.dt), result.fired)
+        result.late_faults = {name: [f for f in explaining(self.arrs, [name]) if f not in result.candidates]
+                              for name in result.late if name not in {self.arrs[i].name for i in used}}
         arrs = [self.arrs[i] for i in used]
         result.arrs = [a.name for a in arrs]
         result.groups = indistinguishable_groups(arrs, result.candidates)
@@ -456,6 +481,26 @@ class IsolatingMonitor:
         start = self.settled(evaluations, k, filter_stride(t, self.dt), result.transient)
         self._filter(result, [evaluations[i] for i in used], arrs, start, progress)
         return result
+
+    def late_firings(self, evaluations: list, k: int, stride: int, fired: Sequence[str]) -> dict:
+        """ARR name -> the time an ARR outside ``fired`` fires after the signature's window from ``k``.
+
+        By the signature's rule (in alarm over at least half of CONFIRM_STEPS filter steps), dated at
+        the end of the first such window: the time the firing is known, so a decision before it
+        does not use it.
+        """
+        width = CONFIRM_STEPS * stride
+        t = evaluations[0].t
+        late = {}
+        for a, e in zip(self.arrs, evaluations):
+            if a.name in fired or t.size < k + 2 * width:
+                continue
+            counts = np.concatenate([[0], np.cumsum(e.alarm[k + width:])])
+            share = (counts[width:] - counts[:-width]) / width  # over [j, j + width), j from k + width
+            ends = np.flatnonzero(share >= 0.5)
+            if ends.size:
+                late[a.name] = float(t[k + width + ends[0] + width - 1])
+        return late
 
     def settled(self, evaluations: list, k: int, stride: int, transient: Sequence[str]) -> int:
         """The sample the filter starts from: after the last alarm of a transient ARR in the confirmation window.
@@ -570,6 +615,7 @@ class IsolatingMonitor:
             if (done - 1) % self.rul_every == 0:
                 decision = decide(hypotheses, pf.log_evidence, groups, result.rejected, self.min_ratio,
                                   result.same_signature)
+                decision = dataclasses.replace(decision, unexplained=result.unexplained(float(t[k])))
                 distribution, reason = self._mixture(pf, hypotheses, decision, predictors, models, key=done,
                                                      left_out={**collapsed_now, **result.inadequate})
                 rul.append(distribution)
