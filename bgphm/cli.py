@@ -628,6 +628,8 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
                "same_signature": [] if decision is None else list(decision.same_signature),
                # ARRs that fired later and that no candidate sees: another fault than the one decided on
                "unexplained": {} if decision is None else dict(decision.unexplained),
+               # why the status is not the evidence's alone (every law of every candidate contradicted)
+               "reason": "" if decision is None else decision.reason,
                "failure_values": failures, "filter_step": dt, "filter": args.filter,
                "particles_per_hypothesis": args.particles,
                "residual_noise_std": noise, "seed": args.seed, "evidence": {}, "predictions": [], "decisions": []}
@@ -678,6 +680,10 @@ def _prognosis_line(result, summary: dict) -> str:
                else "every hypothesis was rejected: " + "; ".join(_first_reasons(result)))
         return f"{head}; {why}"
     last = summary["last"]
+    later = "".join(f"; but {reason}" for reason in summary["unexplained"].values())
+    if summary["reason"]:
+        rejected = f" ({'; '.join(_first_reasons(result))})" if summary["status"] == "rejected" else ""
+        return f"{head}; {summary['status']}: {summary['reason']}{rejected}; at t = {last['t']:g} s no RUL{later}"
     law = summary["degradation"] + ("" if summary["degradation_decided"] else " (undecided)")
     status = summary["status"]
     if summary["same_signature"]:   # isolable in the model only when no other fault shares the signature
@@ -685,7 +691,6 @@ def _prognosis_line(result, summary: dict) -> str:
     reported = summary["candidate"] if isinstance(summary["candidate"], list) else [summary["candidate"]]
     if any(set(pair.split(" ~ ")) <= set(reported) for pair in summary["indistinguishable_on_record"]):
         status += ", on this record (the operating regime does not tell them apart)"
-    later = "".join(f"; but {reason}" for reason in summary["unexplained"].values())
     if last.get("withheld"):
         return (f"{head}; candidate {summary['candidate']} ({status}), degradation {law}; at t = "
                 f"{last['t']:g} s no RUL (undecided: {last['withheld']}){later}")

@@ -97,6 +97,11 @@ class Decision:
     unexplained : dict
         ARR name -> why it is unexplained: an ARR that fired after the signature was read, which no
         candidate is sensitive to (another fault, or a sensor's); the decision is about the first fault.
+    reason : str
+        Why the status is not the evidence's alone: when the data contradict every law of every
+        candidate (or reject every hypothesis), no candidate is claimed; the status is
+        ``"undecided"`` (``"rejected"``) and ``candidate`` lists the faults of the model, parameters
+        and sensors, consistent with the ARRs that fired.
     """
 
     candidate: str | list | None
@@ -108,12 +113,14 @@ class Decision:
     probabilities: dict
     same_signature: tuple = ()
     unexplained: dict = field(default_factory=dict)
+    reason: str = ""
 
     def as_dict(self) -> dict:
         return {"candidate": self.candidate, "status": self.status, "candidate_ratio": _finite(self.candidate_ratio),
                 "degradation": self.degradation, "degradation_decided": self.degradation_decided,
                 "degradation_ratio": _finite(self.degradation_ratio), "probabilities": self.probabilities,
-                "same_signature": list(self.same_signature), "unexplained": dict(self.unexplained)}
+                "same_signature": list(self.same_signature), "unexplained": dict(self.unexplained),
+                "reason": self.reason}
 
 
 def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: Sequence[Sequence[str]],
@@ -190,6 +197,9 @@ class IsolationResult:
         ARR name -> time (s) it fired after that window (in alarm over half of a window of
         CONFIRM_STEPS filter steps, dated at the window's end, when it is known), for the ARRs
         outside ``fired``.
+    consistent : list of str
+        The faults of the model, parameters and sensors (``"sensor <signal>"``), whose signature
+        holds every fired ARR (:func:`~prognosis.hypotheses.explaining`), with or without a failure value.
     late_faults : dict
         For a late ARR no candidate is sensitive to: the faults of the model, parameters and
         sensors, that could have fired it alone (:func:`~prognosis.hypotheses.explaining`).
@@ -239,6 +249,7 @@ class IsolationResult:
     transient: list = field(default_factory=list)
     late: dict = field(default_factory=dict)
     late_faults: dict = field(default_factory=dict)
+    consistent: list = field(default_factory=list)
     candidates: list = field(default_factory=list)
     groups: list = field(default_factory=list)
     same_signature: dict = field(default_factory=dict)
@@ -268,7 +279,29 @@ class IsolationResult:
             return None
         decision = decide(self.hypotheses, self.log_evidence[-1], self.record_groups or self.groups, self.rejected,
                           self.min_ratio, self.same_signature)
-        return dataclasses.replace(decision, unexplained=self.unexplained(float(self.t[-1])))
+        return self.revised(decision, float(self.t[-1]))
+
+    def revised(self, decision: Decision, time: float) -> Decision:
+        """``decision`` at ``time`` with what the evidence alone does not say: the ARRs fired late that no
+        candidate sees (:meth:`unexplained`), and no claim when the data contradict every hypothesis.
+
+        Evidence only ranks the hypotheses weighed; when every one not rejected is inadequate (its
+        innovations drift), the best of them is still a wrong explanation: a sensor's fault, a law
+        outside the family or a fault without a failure value.  The status is then "undecided"
+        (``"rejected"`` when every hypothesis was rejected), naming every fault of the model whose
+        signature holds the fired ARRs.
+        """
+        decision = dataclasses.replace(decision, unexplained=self.unexplained(time))
+        weighed = [h.name for h in self.hypotheses if h.name not in self.rejected]
+        if weighed and not all(name in self.inadequate for name in weighed):
+            return decision
+        what = "contradict every law of" if weighed else "rejected every hypothesis of"
+        return dataclasses.replace(
+            decision, candidate=list(self.consistent) or decision.candidate,
+            status="undecided" if weighed else "rejected", same_signature=(),
+            reason=(f"the data {what} every candidate ({', '.join(self.candidates)}): a fault outside the "
+                    f"hypotheses; the ARRs that fired ({', '.join(self.fired)}) are consistent with "
+                    f"{', '.join(self.consistent) or 'no single fault of the model'}"))
 
     def unexplained(self, time: float) -> dict:
         """The ARRs fired late by ``time`` that no candidate is sensitive to, each with why (ARR name -> text)."""
@@ -470,6 +503,7 @@ class IsolatingMonitor:
             return result
         used = [i for i, a in enumerate(self.arrs) if any(c in a.parameters for c in result.candidates)]
         result.late = self.late_firings(evaluations, k, filter_stride(t, self.dt), result.fired)
+        result.consistent = explaining(self.arrs, result.fired)
         result.late_faults = {name: [f for f in explaining(self.arrs, [name]) if f not in result.candidates]
                               for name in result.late if name not in {self.arrs[i].name for i in used}}
         arrs = [self.arrs[i] for i in used]
@@ -615,7 +649,7 @@ class IsolatingMonitor:
             if (done - 1) % self.rul_every == 0:
                 decision = decide(hypotheses, pf.log_evidence, groups, result.rejected, self.min_ratio,
                                   result.same_signature)
-                decision = dataclasses.replace(decision, unexplained=result.unexplained(float(t[k])))
+                decision = result.revised(decision, float(t[k]))
                 distribution, reason = self._mixture(pf, hypotheses, decision, predictors, models, key=done,
                                                      left_out={**collapsed_now, **result.inadequate})
                 rul.append(distribution)

@@ -11,6 +11,7 @@ within 20 % of the truth, and how often the 5-95 % and 25-75 % bands hold the tr
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import functools
 import io
 import json
@@ -58,6 +59,10 @@ class System:
         s: the healthy stretch given as ``--calibrate`` (before the onset).
     noise : mapping
         ``"clean"`` and ``"noisy"`` -> signal -> standard deviation of its Gaussian noise.
+    sensors : mapping
+        Signal -> the offset a faulty sensor reaches (a bias from the onset, or a drift to it at the
+        end of life, :data:`SENSOR_LAWS`): sensor faults have no failure value and no end of life;
+        a scenario asks only that the sensor be named.
     """
 
     model: Callable
@@ -71,6 +76,13 @@ class System:
     dt: float
     calibrate: float
     noise: Mapping
+    sensors: Mapping = dataclasses.field(default_factory=dict)
+
+
+SENSOR_LAWS = {
+    "bias": lambda size, onset, eol: lambda t: size * (np.asarray(t, float) >= onset),
+    "drift": lambda size, onset, eol: lambda t: size * np.clip((np.asarray(t, float) - onset) / (eol - onset), 0, None),
+}
 
 
 def _zoo(name: str, **facts) -> System:
@@ -93,7 +105,10 @@ SYSTEMS = {
     "torsion_bar": System(
         model=torsion_bar_monitorable, simulate=torsion.simulate, nominal=torsion.NOMINAL,
         failures={"b_Md": 0.45, "b_Ld": 10 * torsion.NOMINAL["b_Ld"], "f_m": 10 * torsion.NOMINAL["f_m"]},
-        wearing=("b_Md",), onset=10.0, eol=100.0, t_end=100.0, dt=0.01, calibrate=8.0, noise=_TORSION_NOISE),
+        wearing=("b_Md",), onset=10.0, eol=100.0, t_end=100.0, dt=0.01, calibrate=8.0, noise=_TORSION_NOISE,
+        # an encoder of the load speed (30 rad/s) off by 0.5 rad/s from the onset (a slipped code disc's
+        # count), and the motor's (110 rad/s) drifting to 2 rad/s at the end (a tachogenerator's brushes)
+        sensors={"omega_Ld": ("bias", 0.5), "omega_m": ("drift", 2.0)}),
     # (The zoo's heat exchanger, whose wall fouls, was tried first: six of its ARRs see the wall, with four
     # sensors, and their healthy covariance is singular; bgphm prognose --filter resample-move then stops,
     # exit 1 or 2, on some seeds.)
@@ -133,6 +148,11 @@ class Scenario:
         return f"{self.system}/{self.parameter}/{self.law}/{self.noise}"
 
     @property
+    def sensor(self) -> str | None:
+        """The faulty sensor's signal, for a sensor fault (``parameter`` ``"sensor <signal>"``)."""
+        return self.parameter[len("sensor "):] if self.parameter.startswith("sensor ") else None
+
+    @property
     def facts(self) -> System:
         return SYSTEMS[self.system]
 
@@ -147,13 +167,20 @@ class Scenario:
 
 def scenarios() -> list[Scenario]:
     """Every system's wearing parameters under every law, with a clean and a noisy residual."""
-    return [Scenario(system, parameter, law, noise) for system, facts in SYSTEMS.items()
+    wear = [Scenario(system, parameter, law, noise) for system, facts in SYSTEMS.items()
             for parameter in facts.wearing for law in LAWS for noise in ("clean", "noisy")]
+    sensors = [Scenario(system, f"sensor {signal}", law, noise) for system, facts in SYSTEMS.items()
+               for signal, (law, _) in facts.sensors.items() for noise in ("clean", "noisy")]
+    return wear + sensors
 
 
 def truth(scenario: Scenario) -> Callable:
-    """The wearing parameter's law ``theta(t)``: nominal up to the onset, the failure value at the end of life."""
+    """The wearing parameter's law ``theta(t)``: nominal up to the onset, the failure value at the end of life
+    (a sensor's offset for a sensor fault)."""
     facts = scenario.facts
+    if scenario.sensor:
+        law, size = facts.sensors[scenario.sensor]
+        return SENSOR_LAWS[law](size, facts.onset, facts.eol)
     return LAWS[scenario.law](facts.nominal[scenario.parameter], facts.failures[scenario.parameter],
                               facts.onset, facts.eol)
 
@@ -161,8 +188,13 @@ def truth(scenario: Scenario) -> Callable:
 def record(scenario: Scenario, seed: int, *, noise: Mapping | None = None) -> dict:
     """The scenario's record (the CSV's columns); ``noise`` replaces the scenario's (``{}``: noise-free)."""
     facts = scenario.facts
-    return facts.simulate({scenario.parameter: truth(scenario)}, t_end=facts.t_end, dt=facts.dt,
-                          noise=facts.noise[scenario.noise] if noise is None else noise, seed=seed)
+    noise = facts.noise[scenario.noise] if noise is None else noise
+    if not scenario.sensor:
+        return facts.simulate({scenario.parameter: truth(scenario)}, t_end=facts.t_end, dt=facts.dt, noise=noise,
+                              seed=seed)
+    columns = facts.simulate({}, t_end=facts.t_end, dt=facts.dt, noise=noise, seed=seed)
+    columns[scenario.sensor] = columns[scenario.sensor] + truth(scenario)(columns["t"])
+    return columns
 
 
 def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int = 10, method: str = "sir",
@@ -204,7 +236,7 @@ def score(scenario: Scenario, answer: dict) -> dict:
     figures = {"found": bool(found), "candidate": named, "status": answer.get("status"),
                "degradation": answer.get("degradation"), "detection_time": answer.get("detection_time"),
                "predictions": len(predictions), "withheld": len(given) - len(predictions)}
-    if not predictions:
+    if not predictions or scenario.sensor:  # a sensor fault has no end of life: any RUL given is counted, not scored
         return figures
     median = np.array([_number(p["rul_median"]) for p in predictions])
     p5, p95 = (np.array([_number(p[k]) for p in predictions]) for k in ("rul_p5", "rul_p95"))
