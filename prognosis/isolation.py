@@ -295,13 +295,13 @@ class IsolationResult:
         weighed = [h.name for h in self.hypotheses if h.name not in self.rejected]
         if weighed and not all(name in self.inadequate for name in weighed):
             return decision
-        what = "contradict every law of" if weighed else "rejected every hypothesis of"
+        what = (f"the data contradict every law of every candidate ({', '.join(self.candidates)})" if weighed
+                else f"every hypothesis was rejected ({', '.join(self.candidates)})")
         return dataclasses.replace(
             decision, candidate=list(self.consistent) or decision.candidate,
             status="undecided" if weighed else "rejected", same_signature=(),
-            reason=(f"the data {what} every candidate ({', '.join(self.candidates)}): a fault outside the "
-                    f"hypotheses; the ARRs that fired ({', '.join(self.fired)}) are consistent with "
-                    f"{', '.join(self.consistent) or 'no single fault of the model'}"))
+            reason=(f"{what}: a fault outside the hypotheses; the ARRs that fired ({', '.join(self.fired)}) are "
+                    f"consistent with {', '.join(self.consistent) or 'no single fault of the model'}"))
 
     def unexplained(self, time: float) -> dict:
         """The ARRs fired late by ``time`` that no candidate is sensitive to, each with why (ARR name -> text)."""

@@ -209,4 +209,6 @@ def test_a_failure_value_on_the_wrong_side_of_the_drift_is_reported(tmp_path, ca
     assert code == 0 and "every hypothesis was rejected" in out and "wrong side" in out
     assert err.startswith("bgphm: warning: every hypothesis was rejected: b/linear: ")
     summary = json.loads((tmp_path / "p" / "prognosis.json").read_text())
-    assert summary["status"] == "rejected" and summary["candidate"] is None
+    # no claim: the faults consistent with the ARRs that fired, b among them, and why
+    assert summary["status"] == "rejected" and "b" in summary["candidate"] and "sensor omega" in summary["candidate"]
+    assert summary["reason"].startswith("every hypothesis was rejected (b): a fault outside the hypotheses")
