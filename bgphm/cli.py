@@ -618,6 +618,8 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
     decision = result.decision
     summary = {"detection_time": result.detection_time, "fired": result.fired, "transient": result.transient,
                "late": result.late, "candidates": result.candidates,
+               # every fault of the model (sensors too) a single fault of which fires the ARRs that fired
+               "consistent": result.consistent,
                "indistinguishable": [g for g in result.groups if len(g) > 1], "arrs": result.arrs,
                # pairs the structure tells apart but this record's operating regime does not
                "indistinguishable_on_record": result.on_record,
@@ -676,7 +678,8 @@ def _prognosis_line(result, summary: dict) -> str:
         return "no alarm, so no prognosis (the filter starts at the first alarm)"
     head = f"alarm at t = {result.detection_time:g} s ({', '.join(result.fired)})"
     if summary["candidate"] is None:
-        why = ("no parameter with a failure value is sensitive to every ARR that fired" if not result.candidates
+        why = (f"no parameter with a failure value is sensitive to every ARR that fired (consistent with them: "
+               f"{', '.join(result.consistent) or 'no single fault of the model'})" if not result.candidates
                else "every hypothesis was rejected: " + "; ".join(_first_reasons(result)))
         return f"{head}; {why}"
     last = summary["last"]

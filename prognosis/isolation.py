@@ -499,11 +499,11 @@ class IsolatingMonitor:
         result.fired, result.transient = self.signature(evaluations, k, filter_stride(t, self.dt))
         result.candidates = (self.candidates if self.candidates is not None
                              else signature_candidates(self.arrs, self.failures, result.fired))
+        result.consistent = explaining(self.arrs, result.fired)
         if not result.candidates:
             return result
         used = [i for i, a in enumerate(self.arrs) if any(c in a.parameters for c in result.candidates)]
         result.late = self.late_firings(evaluations, k, filter_stride(t, self.dt), result.fired)
-        result.consistent = explaining(self.arrs, result.fired)
         result.late_faults = {name: [f for f in explaining(self.arrs, [name]) if f not in result.candidates]
                               for name in result.late if name not in {self.arrs[i].name for i in used}}
         arrs = [self.arrs[i] for i in used]

@@ -227,6 +227,8 @@ def score(scenario: Scenario, answer: dict) -> dict:
     named = answer.get("candidate")
     # an honest "indistinguishable" names a group; a decided answer names the parameter
     group = set(named) if isinstance(named, list) else {named} | set(answer.get("same_signature") or [])
+    if named is None:  # no candidate with a failure value: the faults consistent with the ARRs that fired
+        group, named = set(answer.get("consistent") or []), answer.get("consistent")
     found = named is not None and scenario.parameter in group
     onset, eol = scenario.onset, scenario.eol
     given = [p for p in answer.get("predictions", []) if onset < p["t"] < eol]
