@@ -9,6 +9,7 @@ import pytest
 from tests.wear.run import SYSTEMS, Scenario, record, run, score, truth
 
 
+@pytest.mark.slow  # three 100 s records of the torsion bar's physics: about 20 s of CPU
 def test_the_sensor_scenarios_offset_only_their_sensor_from_the_onset():
     facts = SYSTEMS["torsion_bar"]
     healthy = facts.simulate({}, t_end=facts.t_end, dt=facts.dt, noise={}, seed=2)
