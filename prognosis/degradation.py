@@ -169,12 +169,7 @@ class PowerDegradation:
             with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
                 clock = (share ** (1.0 / exponent))[..., None] + dt * np.cumsum(gamma[..., 0], axis=-1)
                 return self.origin + self.span * np.maximum(clock, 0.0) ** exponent[..., None]
-        out = np.empty(noise.shape)
-        current = theta
-        for step in range(noise.shape[-1]):
-            current = self.step(current, gamma[..., step, :], dt) + noise[..., step]
-            out[..., step] = current
-        return out
+        return stepped_path(self, theta, gamma, noise, dt)
 
 
 @dataclass(frozen=True)
@@ -209,12 +204,7 @@ class CustomDegradation:
         ``gamma`` (..., N, H, G) holds the gamma used at each step, ``noise`` (..., N, H) the ``v_l``; returns
         (..., N, H).
         """
-        out = np.empty(noise.shape)
-        current = theta
-        for step in range(noise.shape[-1]):
-            current = self.step(current, gamma[..., step, :], dt) + noise[..., step]
-            out[..., step] = current
-        return out
+        return stepped_path(self, theta, gamma, noise, dt)
 
 
 
@@ -255,6 +245,22 @@ class PerAssetDegradation:
             if mine.any():
                 out[mine] = model.step(theta[mine], gamma[mine][..., :model.n_gamma], dt)
         return out
+
+def stepped_path(model, theta: np.ndarray, gamma: np.ndarray, noise: np.ndarray, dt: float) -> np.ndarray:
+    """theta over a horizon by ``model.step``, one step at a time (each step vectorized over particles):
+    ``theta_{k+l} = step(theta_{k+l-1}, gamma_{k+l-1}, dt) + v_l``; ``gamma`` (..., N, H, G), ``noise`` (..., N, H).
+
+    >>> import numpy as np
+    >>> stepped_path(LinearDegradation(), np.zeros(1), np.ones((1, 3, 1)), np.zeros((1, 3)), dt=0.5).tolist()
+    [[0.5, 1.0, 1.5]]
+    """
+    out = np.empty(noise.shape)
+    current = theta
+    for step in range(noise.shape[-1]):
+        current = model.step(current, gamma[..., step, :], dt) + noise[..., step]
+        out[..., step] = current
+    return out
+
 
 _BLOCK = 16
 _TRIANGLE = np.triu(np.ones((_BLOCK, _BLOCK), np.float32))
