@@ -496,23 +496,24 @@ class IsolatingMonitor:
             return result
         k = min(firsts)
         result.detection_time = float(t[k])
-        result.fired, result.transient = self.signature(evaluations, k, filter_stride(t, self.dt))
+        stride = filter_stride(t, self.dt)
+        result.fired, result.transient = self.signature(evaluations, k, stride)
         result.candidates = (self.candidates if self.candidates is not None
                              else signature_candidates(self.arrs, self.failures, result.fired))
         result.consistent = explaining(self.arrs, result.fired)
         if not result.candidates:
             return result
         used = [i for i, a in enumerate(self.arrs) if any(c in a.parameters for c in result.candidates)]
-        result.late = self.late_firings(evaluations, k, filter_stride(t, self.dt), result.fired)
-        result.late_faults = {name: [f for f in explaining(self.arrs, [name]) if f not in result.candidates]
-                              for name in result.late if name not in {self.arrs[i].name for i in used}}
         arrs = [self.arrs[i] for i in used]
         result.arrs = [a.name for a in arrs]
+        result.late = self.late_firings(evaluations, k, stride, result.fired)
+        result.late_faults = {name: [f for f in explaining(self.arrs, [name]) if f not in result.candidates]
+                              for name in result.late if name not in result.arrs}
         result.groups = indistinguishable_groups(arrs, result.candidates)
         # isolable in the model: over every ARR given, not only those the filter weighs
         result.same_signature = {c: same_signature(self.arrs, c) for c in result.candidates}
         result.hypotheses, result.rejected = self.hypotheses_for(result.candidates)
-        start = self.settled(evaluations, k, filter_stride(t, self.dt), result.transient)
+        start = self.settled(evaluations, k, stride, result.transient)
         self._filter(result, [evaluations[i] for i in used], arrs, start, progress)
         return result
 
