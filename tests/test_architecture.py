@@ -71,6 +71,7 @@ def import_graph() -> nx.DiGraph:
     return graph
 
 
+@pytest.mark.slow
 def test_the_walk_sees_every_package_and_imports_inside_functions():
     packages = {"bondgraph", "diagnosis", "prognosis", "bgphm", "prognosis.statespace", "diagnosis.intervals"}
     assert packages <= set(MODULES)

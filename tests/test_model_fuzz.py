@@ -191,6 +191,7 @@ SPEC_RLC = {"junctions": ["1", "0"], "links": [(0, "bond", 1.0)],
             "sources": [(0, "Se")], "sensors": [0, 1]}
 
 
+@pytest.mark.slow
 @FEW
 @given(spec=model_specs(), seed=st.integers(0, 2**16))
 @example(spec=SPEC_RLC, seed=0)
@@ -205,6 +206,7 @@ def test_more_and_larger_random_models(spec, seed):
     run_stages(spec, seed)
 
 
+@pytest.mark.slow
 def test_the_generator_reaches_the_evaluation_of_an_arr_with_a_nonlinear_law_and_a_two_port():
     # the fuzzer is worth something only if its models get through: one with a law and a TF or GY does
     def through(spec):

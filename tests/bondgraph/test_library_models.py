@@ -186,6 +186,7 @@ def _default_gains():
     return controller.kp, controller.ki
 
 
+@pytest.mark.slow
 def test_torsion_bar_pi_loop_matches_hand_ode():
     kp, ki = _default_gains()
     t_span = (0.0, 10.0)
@@ -211,6 +212,7 @@ def test_torsion_bar_pi_loop_matches_hand_ode():
     assert np.all(np.abs(result["U"][t_eval > 5.0]) < U_MAX - 1.0)
 
 
+@pytest.mark.slow
 def test_torsion_bar_saturated_actuator_matches_hand_ode():
     """Motor-disk bearing degradation drives the actuator into saturation.
 

@@ -18,6 +18,7 @@ def test_a_model_edited_after_a_derivation_gets_its_own_arrs():
     assert derive_arrs(rlc_circuit(R=20.0))[0].values["R"] == 20.0
 
 
+@pytest.mark.slow
 def test_options_and_budgets_are_part_of_the_key(monkeypatch):
     from diagnosis import elimination
     assert len(derive_arrs(dc_motor())) == 2 and len(derive_arrs(dc_motor(), max_order=2)) == 4

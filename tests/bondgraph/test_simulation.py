@@ -34,6 +34,7 @@ def test_feedback_input_of_time_and_outputs():
     assert result["omega"][-1] == pytest.approx(w, rel=1e-5)
 
 
+@pytest.mark.slow
 def test_pi_controller_tracks_the_set_point_and_saturates():
     result = simulate(torsion_bar(), (0.0, 5.0), {"U": torsion_bar_controller()})
     assert result["omega_m"][-1] == pytest.approx(112.5, rel=1e-4)
@@ -256,6 +257,7 @@ def test_a_failure_of_both_methods_names_both(monkeypatch):
         simulate(rlc_circuit(), (0.0, 0.5), {"V": 1.0}, parameters={"C": 1e-300})
 
 
+@pytest.mark.slow
 def test_a_hopeless_pace_stops_the_integration_early():
     from bondgraph import simulation
 

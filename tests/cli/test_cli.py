@@ -217,6 +217,7 @@ def test_csv_ragged_row(motor_csv, tmp_path, capsys):
     assert code == 2 and "line 6: 2 cells for 4 columns" in err
 
 
+@pytest.mark.slow
 def test_csv_nan_run_is_a_reported_gap(motor_csv, tmp_path, capsys):
     header, rows = motor_rows(motor_csv)
     for r in rows[400:450]:
@@ -385,6 +386,7 @@ def test_an_open_circuit_or_a_tiny_capacitance_simulates_with_a_warning(tmp_path
         assert last[column] == pytest.approx(expected, rel=1e-3)
 
 
+@pytest.mark.slow
 def test_a_hopeless_simulation_ends_in_one_line_naming_the_limit(tmp_path, capsys):
     # an undamped LC circuit over 1.4e6 s, i.e. about 3e7 periods: found by test_fuzz.py, which it held for
     # minutes of CPU; the pace check stops it after PACE_START evaluations

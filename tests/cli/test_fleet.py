@@ -141,6 +141,7 @@ def test_a_serial_run_writes_the_tables_by_bucket_and_a_summary(reference):
     assert abs(rul["t"][-1] + rul["p50"][-1] - 2.8) < 0.5  # R reaches 20 ohm at t = 2.8 s
 
 
+@pytest.mark.slow
 def test_results_do_not_depend_on_the_sharding(records, reference, tmp_path):
     """One shard of six (the reference), three of two, six of one: bitwise the same tables."""
     expected = read_fleet(reference[0])
@@ -167,6 +168,7 @@ def test_the_workers_read_the_antiderivative_columns_of_the_detection(records, r
         "c0").rows("rul") > 0
 
 
+@pytest.mark.slow
 def test_a_second_run_replaces_the_parts_of_the_first(records, reference, tmp_path):
     out = tmp_path / "out"
     run_fleet(spec(), records, out, workers=0, shard_size=1)

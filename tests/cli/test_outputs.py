@@ -161,6 +161,7 @@ def test_bad_options_exit_2_naming_the_option(motor, capsys, argv, message):
     assert code == 2 and message in err and err.startswith("bgphm: error: ") and err.count("\n") == 1
 
 
+@pytest.mark.slow
 def test_calibrating_over_a_fault_is_refused(tmp_path, capsys):
     """Friction b x20 from t = 0.5 s: calibrating on t <= 0.9 would absorb the fault in the margin."""
     from bondgraph.simulation import simulate

@@ -21,6 +21,7 @@ def square_after(x, pause):
     return x * x
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("workers", [1, 2])
 def test_results_come_back_in_order_with_progress(workers):
     calls = []

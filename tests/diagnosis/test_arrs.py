@@ -116,6 +116,7 @@ def test_arrs_from_a_plain_networkx_graph_with_string_laws():
     assert arr.parameters == {"A", "valve"}
 
 
+@pytest.mark.slow
 def test_non_invertible_law_gives_an_implicit_arr():
     # a flow sensor on a pipe whose valve law cannot be solved for the pressure drop
     bg = BondGraph()

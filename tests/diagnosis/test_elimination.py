@@ -113,6 +113,7 @@ def test_the_residual_is_zero_on_the_healthy_motor_and_not_under_a_fault():
     assert faulty > 100 * healthy
 
 
+@pytest.mark.slow
 def test_isolation_asks_no_higher_derivative_than_detection_unless_told():
     motor = lib.dc_motor()
     default = derive_arrs(motor)

@@ -162,6 +162,7 @@ def test_orifice_on_a_pumped_path_gives_real_arrs_that_hold():
         assert identity_error(arr, run) < 1e-6, arr.name
 
 
+@pytest.mark.slow
 def test_a_blocked_law_is_not_differentiated_as_a_constant():
     # the orifice's pressure drop has no inverse in the form causality needs: its placeholder sits under
     # the tank's derivative; taken as a constant it once gave the wrong balance q_p = (C_a + A) p_a' + q_d

@@ -125,6 +125,7 @@ SPLITS = {"one at a time": [1], "seven at a time": [7], "uneven": [3, 1, 30, 2, 
 # -- equality with evaluate() --------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("split", SPLITS.values(), ids=SPLITS.keys())
 def test_rlc_stream_equals_the_batch_evaluation(rlc, split):
     arrs, record = rlc

@@ -131,6 +131,7 @@ def _synthetic(incidence) -> StructuralModel:
     return StructuralModel(equations, tuple(frozenset(row) for row in incidence), {})
 
 
+@pytest.mark.slow
 @settings(max_examples=60, deadline=None)
 @given(st.lists(st.sets(st.integers(0, 6), min_size=1, max_size=3), min_size=1, max_size=9))
 def test_overdetermined_part_is_where_removing_an_equation_lowers_the_redundancy(incidence):

@@ -50,6 +50,7 @@ def same(first: FleetResult, second: FleetResult, asset: str) -> bool:
     return True
 
 
+@pytest.mark.slow
 def test_results_do_not_depend_on_batching(circuit):
     arr, records = circuit
     together = fleet(arr).run(records)
@@ -260,6 +261,7 @@ def test_particles_only_on_request_and_the_monitor_pickles(circuit):
             assert values.tolist() == b.table(name)[column].tolist(), (name, column)
 
 
+@pytest.mark.slow
 def test_a_law_without_closed_form_is_propagated(circuit):
     from prognosis.degradation import CustomDegradation
     arr, records = circuit

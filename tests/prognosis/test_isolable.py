@@ -51,6 +51,7 @@ def test_a_decision_names_the_faults_that_share_the_signature():
     assert close.status == "undecided" and close.same_signature == ()   # nothing declared, nothing to qualify
 
 
+@pytest.mark.slow
 def test_prognose_does_not_call_the_quarter_car_damper_isolated(tmp_path, capsys):
     """The damper wears from t = 2 s; ARR_1_s alone sees it, and sees the spring, the body and both sensors too."""
     bg = quarter_car()

@@ -57,6 +57,7 @@ def test_monitor_detects_then_estimates_and_predicts(scenario):
     assert figures["rmse_theta"] < 0.5
 
 
+@pytest.mark.slow
 def test_residual_start_contains_theta_at_the_alarm_and_the_uncertainty_box_does_not(scenario):
     """At the alarm b_Md has left its [0, +20 %] box: the residual start finds it, the eq. 39 box cannot."""
     arr, record = scenario
@@ -95,6 +96,7 @@ def test_sample_by_sample_equals_the_whole_record(scenario):
     assert np.allclose(result.theta["mean"], whole.theta["mean"][:n])
 
 
+@pytest.mark.slow
 def test_prediction_workers_give_the_same_result(scenario):
     arr, record = scenario
     one = monitor(arr, seed=8).run(record)
@@ -173,6 +175,7 @@ def test_health_monitor_refuses_bad_filter_settings_by_name(rlc_arr, options, me
         HealthMonitor(rlc_arr, "R", ExponentialDegradation(1e-5), theta_fail=20.0, **options)
 
 
+@pytest.mark.slow
 def test_micro_batches_equal_the_whole_record_and_a_restart_pickles(scenario):
     import pickle
     arr, record = scenario

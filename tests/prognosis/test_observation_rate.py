@@ -6,6 +6,7 @@ shows as a step in this residual, not as a ramp.  The record comes from tests/we
 under a digital PI loop integrated exactly), not from the library's simulate.
 """
 
+import pytest
 import numpy as np
 import sympy as sp
 
@@ -24,6 +25,7 @@ def test_rate_coefficient_is_the_antiderivative_and_only_for_differentiated_arrs
     assert observation_model(arrs["ARR_1_1"], "k_s").rate_coefficient is None   # the twist is not measured
 
 
+@pytest.mark.slow
 def test_a_linear_wear_is_explained_by_value_and_rate_on_an_independent_simulation():
     scenario = wear.Scenario("torsion_bar", "b_Md", "linear", "clean")
     record = wear.record(scenario, seed=3)

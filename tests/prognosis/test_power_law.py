@@ -74,6 +74,7 @@ def test_the_power_law_needs_its_ends():
         PowerDegradation(1.0, 0.0)
 
 
+@pytest.mark.slow
 def test_resample_move_finds_the_exponent_and_leaves_a_fixed_gamma_alone():
     """Rows of one bank: a power law on a 2.5-power wear, a linear law on the same record with its
     unused gamma fixed by the prior; the power row finds q, the linear row stays distinct and unmoved

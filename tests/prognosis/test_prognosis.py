@@ -359,6 +359,7 @@ def test_ctrl_c_during_parallel_predictions_reaches_only_the_caller(tmp_path):
     assert run.stderr.splitlines() == ["interrupted"]  # no KeyboardInterrupt traceback from a worker
 
 
+@pytest.mark.slow
 def test_filter_and_rul_on_the_seed_b_md_problem(torsion_arr):
     """The fault model of Jha et al. (2016), section 6.3, on synthetic y (eqs. 52-53): estimate and predict."""
     observation = observation_model(torsion_arr, "b_Md")

@@ -84,6 +84,7 @@ def test_noise_understated_threefold_is_divided_out_and_the_evidence_follows_the
     assert abs(float(corrected.log_evidence[0]) - log_z) < 1.0
 
 
+@pytest.mark.slow
 def test_shared_rows_take_the_excess_of_the_most_probable_row():
     told = 0.05
     y = np.stack([line(0.05, seed=31), line(0.2, seed=32)])   # row 1's noise is four times what it is told

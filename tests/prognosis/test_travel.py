@@ -245,6 +245,7 @@ def test_filters_sharing_an_adaptation_object_work_as_with_their_own(adaptation)
     assert together[0].adaptation is not shared   # each filter works on its own copy
 
 
+@pytest.mark.slow
 def test_monitors_sharing_an_adaptation_object_give_the_results_of_separate_ones(rlc):
     """Two monitors fed sample by sample in turn (a stream of two assets)."""
     _, arr, record = rlc
@@ -273,6 +274,7 @@ def _run_in_worker(arr, record):
     return result, [w.category.__name__ for w in caught]
 
 
+@pytest.mark.slow
 def test_run_with_workers_inside_a_daemonic_pool_worker_predicts_in_the_worker(rlc):
     _, arr, record = rlc
     methods = multiprocessing.get_all_start_methods()

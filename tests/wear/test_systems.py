@@ -30,6 +30,7 @@ def _read_back(system: str, columns: dict, nominal: dict) -> np.ndarray:
     return (columns["P_s"] - columns["p_t"] - nominal["L_f"] * slope("Q")) / columns["Q"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("system", ZOO)
 def test_the_record_holds_the_nominal_value_before_the_onset_and_the_failure_value_at_the_end_of_life(system):
     facts = SYSTEMS[system]

@@ -440,6 +440,7 @@ def test_dependency_problem():
     assert g().lo == 0.0 and g().hi == 0.0
 
 
+@pytest.mark.slow
 def test_affine_range_is_exact_on_the_bg_lft_form():
     x1, x2, x3 = sp.symbols("x1 x2 x3")
     d3, d4 = sp.symbols("delta_3 delta_4")

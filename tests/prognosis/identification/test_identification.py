@@ -276,6 +276,7 @@ def test_degenerate_noise_is_floored_with_a_warning():
     assert new.R[0, 0] > 0.0 and new.D[0, 0] == pytest.approx(2.0, abs=1e-6)
 
 
+@pytest.mark.slow
 def test_simulate_draws_the_joint_noise_and_initial_state():
     rng = np.random.default_rng(10)
     u = rng.standard_normal((20000, 2))

@@ -154,6 +154,7 @@ def test_posterior_predictive_is_calibrated_on_its_own_model():
     assert 0.88 <= inside / total <= 0.99
 
 
+@pytest.mark.slow
 def test_prediction_interval_widens_with_the_lead_for_a_slow_pole():
     rng = np.random.default_rng(1)
     N = 150
@@ -204,6 +205,7 @@ def test_bad_direct_inputs_are_named(direct, message):
         window_log_posterior([[1.3, -0.4, 0.9, -0.2]], y, u, direct_inputs=direct)
 
 
+@pytest.mark.slow
 def test_bad_future_inputs_are_named():
     y, u, *_ = _window()
     post = sample_posterior(y, u, 2, particles=100, seed=0)

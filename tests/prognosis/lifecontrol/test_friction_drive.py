@@ -100,6 +100,7 @@ def test_power_of_a_non_one_port_raises_key_error_naming_it(speeds):
             speeds.power(name)
 
 
+@pytest.mark.slow
 def test_coenergy_states_of_the_rlc_circuit():
     i, v_c, R, L, C = sp.symbols("i v_C R L C")
     V = sp.Function("V")(sp.Symbol("t"))

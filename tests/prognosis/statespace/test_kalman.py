@@ -211,6 +211,7 @@ def test_derivative_free_fading_equals_the_jacobian_form_on_a_linear_model(model
     assert np.mean(fading > 1.0) > 0.25 and fading.max() > 5.0
 
 
+@pytest.mark.slow
 def test_strong_tracking_follows_a_drift_the_plain_filter_lags(model):
     """Bias ramp of 0.01 per step, random walk of std 1e-3 assumed.  Measured bias RMSE over the last 100 of
     200 steps: SCKF 0.51, STSCKF 0.12."""
@@ -234,6 +235,7 @@ def tank():
     return ThreeTanks
 
 
+@pytest.mark.slow
 def test_stsckf_tracks_the_az2_ramp_of_eq61_better_than_sckf(tank):
     """Du et al., section 6: az2 follows eq. (61), both filters assume az2_k = az2_{k-1} + d, std(d) = 1e-3.
 
