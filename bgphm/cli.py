@@ -202,8 +202,12 @@ def cmd_prognose(args, progress: Progress) -> int:
     progress(f"particle filter from the first alarm after t = {until:g} s: {len(laws)} law(s) per candidate, "
              f"{args.particles} particles each, dt = {dt:g} s")
     result = monitor.run(record, evaluations=evaluations, progress=_filter_progress(progress))
-    if result.decision is not None and result.decision.status == "rejected":  # no answer: said even with --quiet
+    # said even with --quiet: no answer, or no wear left but a sensor's offset (a wrong failure value?)
+    if result.decision is not None and result.decision.status == "rejected":
         print(f"bgphm: warning: every hypothesis was rejected: {'; '.join(_first_reasons(result))}", file=sys.stderr)
+    elif result.decision is not None and all(h.name in result.rejected for h in result.hypotheses if not h.sensor):
+        print(f"bgphm: warning: every wear hypothesis was rejected, only sensors' faults are left: "
+              f"{'; '.join(_first_reasons(result))}", file=sys.stderr)
     summary = _prognosis_summary(args, result, failures, dt, noise)
     print(_prognosis_line(result, summary))
     if out is not None:
@@ -620,6 +624,8 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
                "late": result.late, "candidates": result.candidates,
                # every fault of the model (sensors too) a single fault of which fires the ARRs that fired
                "consistent": result.consistent,
+               # sensors consistent with them whose fault is not weighed (an ARR integrates the reading)
+               "unweighed": result.unweighed,
                "indistinguishable": [g for g in result.groups if len(g) > 1], "arrs": result.arrs,
                # pairs the structure tells apart but this record's operating regime does not
                "indistinguishable_on_record": result.on_record,

@@ -13,6 +13,10 @@ A user knows the model, the data, a fault-free stretch and when each parameter c
   (:func:`rate_prior`);
 * :class:`HypothesisObservation`: what each hypothesis predicts for every residual, batched over
   hypotheses (rows) and particles, so that one particle filter weighs them all.
+
+A sensor's fault is a candidate too, ``"sensor <signal>"`` (as in the signature matrix): an offset
+``beta`` added to the reading, from 0, by the law ``"bias"`` (a constant) or ``"drift"`` (a straight
+line); it has no failure value (:data:`SENSOR_LAWS`, :func:`candidate_model`).
 """
 
 from __future__ import annotations
@@ -25,12 +29,16 @@ import numpy as np
 
 from diagnosis import signature_matrix
 
-from .observation import observation_model
+from .observation import SENSOR, observation_model, sensor_model
 from .errors import PrognosisError
 
-__all__ = ["Hypothesis", "HypothesisObservation", "explaining", "indistinguishable_groups", "law_distance",
-           "physical_domain", "rate_prior", "record_separation", "same_signature", "sensitivity",
-           "signature_candidates"]
+__all__ = ["Hypothesis", "HypothesisObservation", "SENSOR_LAWS", "candidate_model", "explaining",
+           "indistinguishable_groups", "law_distance", "physical_domain", "rate_prior", "record_separation",
+           "same_signature", "sees", "sensitivity", "sensor_signal", "signature_candidates"]
+
+#: the laws of a sensor's offset: a constant from its onset (a slipped code disc, a zero shift) or a
+#: straight line (an ageing transducer's drift)
+SENSOR_LAWS = ("bias", "drift")
 
 LIFE_PRIOR = (10.0, 1e5)  # filter steps: the life from nominal to failure, log-uniform between these
 
@@ -59,9 +67,26 @@ class Hypothesis:
     nominal: float
     bounds: tuple[float, float] | None = None
 
+    @classmethod
+    def of_sensor(cls, signal: str, law: str) -> "Hypothesis":
+        """The sensor of ``signal`` off by an offset from 0 by ``law`` (:data:`SENSOR_LAWS`): no failure value.
+
+        >>> h = Hypothesis.of_sensor("omega_m", "drift")
+        >>> h.name, h.sensor, h.domain
+        ('sensor omega_m/drift', True, (-inf, inf))
+        """
+        if law not in SENSOR_LAWS:
+            raise PrognosisError(f"a sensor's law is one of {', '.join(SENSOR_LAWS)}, got {law!r}")
+        return cls(SENSOR + signal, law, math.nan, 0.0, (-math.inf, math.inf))
+
     @property
     def name(self) -> str:
         return f"{self.candidate}/{self.law}"
+
+    @property
+    def sensor(self) -> bool:
+        """A sensor's fault (``"sensor <signal>"``), not a parameter's wear."""
+        return sensor_signal(self.candidate) is not None
 
     @property
     def direction(self) -> str:
@@ -72,6 +97,28 @@ class Hypothesis:
     def domain(self) -> tuple[float, float]:
         """The open interval the candidate's value must stay in."""
         return physical_domain(self.nominal) if self.bounds is None else self.bounds
+
+
+def sensor_signal(candidate: str) -> str | None:
+    """The signal of a sensor's candidate ``"sensor <signal>"``, None for a parameter.
+
+    >>> sensor_signal("sensor omega_m"), sensor_signal("b_Md")
+    ('omega_m', None)
+    """
+    return candidate[len(SENSOR):] if candidate.startswith(SENSOR) else None
+
+
+def sees(arr, candidate: str) -> bool:
+    """``arr`` is sensitive to the candidate: it holds the parameter, or reads the sensor's signal."""
+    signal = sensor_signal(candidate)
+    return candidate in arr.parameters if signal is None else signal in arr.signals
+
+
+def candidate_model(arr, candidate: str):
+    """The observation equation of ``arr`` for a parameter (:func:`~prognosis.observation.observation_model`)
+    or a sensor's offset (:func:`~prognosis.observation.sensor_model`)."""
+    signal = sensor_signal(candidate)
+    return observation_model(arr, candidate) if signal is None else sensor_model(arr, signal)
 
 
 def physical_domain(nominal: float) -> tuple[float, float]:
@@ -221,7 +268,7 @@ def indistinguishable_groups(arrs: Sequence, candidates: Sequence[str], *, rtol:
     for arr in arrs:
         points = [rng.uniform(0.5, 2.0, probes) for _ in arr.compiled.points]
         for c in candidates:
-            slope = (sensitivity(observation_model(arr, c), points) if c in arr.parameters else np.zeros(probes))
+            slope = sensitivity(candidate_model(arr, c), points) if sees(arr, c) else np.zeros(probes)
             sensitivities[c].append(slope)
     vectors = {c: np.concatenate(v) for c, v in sensitivities.items()}
     groups: list[list[str]] = []
@@ -326,7 +373,7 @@ class HypothesisObservation:
         models = {}
         for h in self.hypotheses:
             if h.candidate not in models:
-                models[h.candidate] = [observation_model(a, h.candidate) if h.candidate in a.parameters else None
+                models[h.candidate] = [candidate_model(a, h.candidate) if sees(a, h.candidate) else None
                                        for a in self.arrs]
         self.models = [models[h.candidate] for h in self.hypotheses]
 

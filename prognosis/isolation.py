@@ -35,12 +35,11 @@ import numpy as np
 
 from . import seeds
 from .degradation import POWER_EXPONENTS, PerAssetDegradation, degradation_model
-from .hypotheses import (LIFE_PRIOR, Hypothesis, HypothesisObservation, explaining, indistinguishable_groups,
-                         law_distance, rate_prior, record_separation, same_signature, sensitivity,
-                         signature_candidates)
+from .hypotheses import (LIFE_PRIOR, SENSOR_LAWS, Hypothesis, HypothesisObservation, candidate_model, explaining,
+                         indistinguishable_groups, law_distance, rate_prior, record_separation, same_signature, sees,
+                         sensitivity, sensor_signal, signature_candidates)
 from .likelihood import ResidualNoise, healthy_noise
 from .monitor import MonitorResult, filter_stride
-from .observation import observation_model
 from .particle_filter import KernelSmoothing, ParticleFilter, check_particles, check_positive
 from .resample_move import ResampleMoveFilter
 from .rul import RULDistribution, RULPredictor
@@ -63,6 +62,10 @@ ADEQUACY_WINDOW = 30  # filter steps of standardized innovations a law's fit is 
 #: mean standardized innovation over the window beyond which the law does not follow the residual: a
 #: fitting law stays within about 1 (clean or noisy torsion-bar wear), a law that lags drifts to tens
 ADEQUACY_LIMIT = 3.0
+#: standardized innovations are clipped at this many sd before the window's mean is taken: a drifting
+#: law still shows (each innovation beyond the limit counts in full up to here), one spike moves the
+#: mean by at most SPIKE / ADEQUACY_WINDOW
+SPIKE = 3 * ADEQUACY_LIMIT
 #: log evidence behind the best hypothesis beyond which a hypothesis' particles are no longer moved
 #: (its evidence still accumulates): 1e-8 of the best's probability, beyond any decision
 FREEZE_BELOW = 8 * math.log(10.0)
@@ -204,7 +207,10 @@ class IsolationResult:
         For a late ARR no candidate is sensitive to: the faults of the model, parameters and
         sensors, that could have fired it alone (:func:`~prognosis.hypotheses.explaining`).
     candidates, groups : list
-        Candidates from the signature; their groups of indistinguishable ones.
+        Candidates from the signature, parameters and sensors (``"sensor <signal>"``); their groups of
+        indistinguishable ones.
+    unweighed : dict
+        Sensor -> why its fault consistent with the signature is not weighed (an ARR integrates its reading).
     same_signature : dict
         Candidate -> the other faults of the model (parameters, ``"sensor <signal>"``) with its fault
         signature over the monitor's ARRs (:func:`~prognosis.hypotheses.same_signature`).
@@ -251,6 +257,7 @@ class IsolationResult:
     late_faults: dict = field(default_factory=dict)
     consistent: list = field(default_factory=list)
     candidates: list = field(default_factory=list)
+    unweighed: dict = field(default_factory=dict)
     groups: list = field(default_factory=list)
     same_signature: dict = field(default_factory=dict)
     hypotheses: list = field(default_factory=list)
@@ -350,7 +357,13 @@ class IsolatingMonitor:
         ``{name: model}`` (any model of :mod:`prognosis.degradation`, e.g. a
         :class:`~prognosis.degradation.CustomDegradation`).
     candidates : sequence of str, optional
-        Only these candidates (each needs a failure value), instead of those of the signature.
+        Only these candidates (each parameter needs a failure value; a sensor is ``"sensor <signal>"``),
+        instead of those of the signature.
+    sensors : bool
+        Weigh the faults of the sensors whose signature holds the fired ARRs too (on by default): an
+        offset of the reading from 0 by the laws :data:`~prognosis.hypotheses.SENSOR_LAWS`, a bias
+        or a drift.  A sensor's fault has no failure value: the RUL is that of the wear hypotheses
+        (given that a parameter wears), and none is given when only sensors are probable.
     dt : float
         Filter step (s), a multiple of the record's step.
     n_particles : int
@@ -421,7 +434,8 @@ class IsolatingMonitor:
 
     def __init__(self, arrs: Sequence, failures: Mapping[str, float], *, noise_std: Mapping[str, float],
                  laws: Sequence[str] | Mapping = LAWS, candidates: Sequence[str] | None = None,
-                 dt: float = 0.1, n_particles: int = 500, inflation: float | None = None, life: tuple = LIFE_PRIOR,
+                 sensors: bool = True, dt: float = 0.1, n_particles: int = 500, inflation: float | None = None,
+                 life: tuple = LIFE_PRIOR,
                  rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
                  rul_every: int = 10, horizon: float | None = None, detection: Mapping | None = None,
                  min_ratio: float = EVIDENCE_RATIO, healthy_until: float | None = None,
@@ -452,11 +466,13 @@ class IsolatingMonitor:
         if not self.laws:
             raise PrognosisError("laws: give at least one degradation law")
         if candidates is not None:
-            unknown = [c for c in candidates if c not in self.failures]
+            read = {s for a in self.arrs for s in a.signals}
+            unknown = [c for c in candidates if c not in self.failures and sensor_signal(c) not in read]
             if unknown:
-                raise PrognosisError(f"candidate {unknown[0]!r} has no failure value (failure values: "
-                                     f"{', '.join(self.failures)})")
+                raise PrognosisError(f"candidate {unknown[0]!r} has no failure value and is no sensor an ARR reads "
+                                     f"(failure values: {', '.join(self.failures)})")
         self.candidates = None if candidates is None else list(candidates)
+        self.sensors = bool(sensors)
         self.dt, self.n_particles = check_positive(dt, "dt"), check_particles(n_particles)
         # the random walk's likelihood is widened as in Jha et al. (2016); the resample-move one takes the
         # noise as measured
@@ -498,12 +514,15 @@ class IsolatingMonitor:
         result.detection_time = float(t[k])
         stride = filter_stride(t, self.dt)
         result.fired, result.transient = self.signature(evaluations, k, stride)
-        result.candidates = (self.candidates if self.candidates is not None
-                             else signature_candidates(self.arrs, self.failures, result.fired))
         result.consistent = explaining(self.arrs, result.fired)
+        result.candidates = (self.candidates if self.candidates is not None
+                             else signature_candidates(self.arrs, self.failures, result.fired)
+                             + [c for c in result.consistent if self.sensors and sensor_signal(c)])
+        result.unweighed = {c: why for c in result.candidates if (why := self._unmodelled(c, self.arrs))}
+        result.candidates = [c for c in result.candidates if c not in result.unweighed]
         if not result.candidates:
             return result
-        used = [i for i, a in enumerate(self.arrs) if any(c in a.parameters for c in result.candidates)]
+        used = [i for i, a in enumerate(self.arrs) if any(sees(a, c) for c in result.candidates)]
         arrs = [self.arrs[i] for i in used]
         result.arrs = [a.name for a in arrs]
         result.late = self.late_firings(evaluations, k, stride, result.fired)
@@ -574,9 +593,14 @@ class IsolatingMonitor:
         return dict(self.detection)
 
     def hypotheses_for(self, candidates: list) -> tuple[list, dict]:
-        """Every candidate with every law, and those rejected before any data (name -> reason)."""
+        """Every candidate with every law (a sensor's with the sensor laws), and those rejected before any
+        data (name -> reason)."""
         hypotheses, rejected = [], {}
         for c in candidates:
+            signal = sensor_signal(c)
+            if signal is not None:
+                hypotheses += [Hypothesis.of_sensor(signal, law) for law in SENSOR_LAWS]
+                continue
             for law in self.laws:
                 h = Hypothesis(c, law, self.failures[c], self.nominal[c], self.domains.get(c))
                 hypotheses.append(h)
@@ -584,6 +608,21 @@ class IsolatingMonitor:
                     rejected[h.name] = (f"an exponential law keeps the sign of {c} (nominal {h.nominal:g}), "
                                         f"so it never reaches {h.failure:g}")
         return hypotheses, rejected
+
+    @staticmethod
+    def _unmodelled(candidate: str, arrs: Sequence) -> str:
+        """Why a sensor's fault has no observation model on ``arrs`` ("" when it has one on each, or is a
+        parameter): an ARR integrates its reading, and no law of the offset from its onset gives the
+        integral since the record's start."""
+        if sensor_signal(candidate) is None:
+            return ""
+        for a in arrs:
+            if sees(a, candidate):
+                try:
+                    candidate_model(a, candidate)
+                except PrognosisError as error:
+                    return str(error)
+        return ""
 
     def _filter(self, result: IsolationResult, evaluations: list, arrs: list, k0: int, progress) -> None:
         hypotheses = result.hypotheses
@@ -603,7 +642,8 @@ class IsolatingMonitor:
                                 gamma_std=np.zeros(bank.n_gamma), adaptation=KernelSmoothing(self.discount),
                                 seed=seeds.spawn(self.seed, seeds.FILTER))
             rng = seeds.generator(self.seed, seeds.RATE_PRIOR)
-            gamma0 = np.stack([self.rate_particles(h, rng, bank.n_gamma) for h in hypotheses])
+            gamma0 = np.stack([self.rate_particles(h, rng, bank.n_gamma, offset=_offset(s))
+                               for h, s in zip(hypotheses, starts)])
             pf.initialize(bounds, gamma0=gamma0, assets=len(hypotheses))
         else:
             models = tuple(self.law(h, 0.0) for h in hypotheses)  # the law itself: no random walk
@@ -612,9 +652,12 @@ class IsolatingMonitor:
                                     noise=self.residual_noise(observation, evaluations, stride), dt=self.dt,
                                     n_particles=self.n_particles, discrepancy="shared",
                                     seed=seeds.spawn(self.seed, seeds.FILTER))
-            rates = np.array([self.gamma_bounds(h, bank.n_gamma) for h in hypotheses])  # (H, 2, G)
-            # the rate log-uniform on the prior of the life (uniform on a given interval), other gammas log-uniform
-            log_gamma = np.arange(bank.n_gamma) > 0 if self.rate is not None else True
+            rates = np.array([self.gamma_bounds(h, bank.n_gamma, offset=_offset(s))
+                              for h, s in zip(hypotheses, starts)])  # (H, 2, G)
+            # the rate log-uniform on the prior of the life (uniform on a given interval), other gammas
+            # log-uniform; a coordinate the prior fixes (a bias's rate, 0) is not
+            log_gamma = np.arange(bank.n_gamma) > 0 if self.rate is not None else np.ones(bank.n_gamma, bool)
+            log_gamma = (rates[:, 0] < rates[:, 1]) & log_gamma
             pf.initialize(bounds, gamma_bounds=(rates[:, 0], rates[:, 1]), assets=len(hypotheses),
                           log_gamma=log_gamma)
         steps = range(k0, t.size, stride)
@@ -707,7 +750,7 @@ class IsolatingMonitor:
                     and h.name not in result.inadequate]
             if rows:
                 best = max(rows, key=lambda i: log_evidence[i])
-                changes[ci], alive[ci] = float(theta[best]) - self.nominal[c], True
+                changes[ci], alive[ci] = float(theta[best]) - hypotheses[best].nominal, True
         separation = record_separation(information, changes)
         limit = math.log(self.min_ratio)
         groups = [list(g) for g in result.groups]
@@ -737,20 +780,26 @@ class IsolatingMonitor:
         """
         model, points, residual, total = self._resolving(h, evaluations, arrs, k, noise)
         box = self.healthy_box(h, [model.arr])
-        bracket = (min(box[0], h.failure), max(box[1], h.failure))
+        # a sensor's offset has no failure value: it is bracketed by the readings' own size
+        bracket = ((min(box[0], h.failure), max(box[1], h.failure)) if not h.sensor
+                   else _reading_bracket(model, points))
         explained = model.invert(-residual, points, bracket)
         explained = np.clip(explained[np.isfinite(explained)], *bracket)
+        if h.sensor:  # a bias is a step, which the first alarm may catch half-way through its stencil
+            explained = 2.0 * explained
         start = (min(box[0], float(explained.min())), max(box[1], float(explained.max()))) if explained.size else box
-        distance = abs(h.failure - h.nominal)
+        distance = abs(h.failure - h.nominal) if not h.sensor else math.inf
         resolution = min(1.0 / math.sqrt(total), distance) if total > 0 else distance
+        if not math.isfinite(resolution):
+            raise PrognosisError(f"no ARR resolves {h.candidate} at the alarm (t = {evaluations[0].t[k]:g} s)")
         return start[0], start[1], self.process_noise * resolution
 
     def _resolving(self, h: Hypothesis, evaluations: list, arrs: list, k: int, noise: np.ndarray):
         """The observation model of the ARR that resolves ``h``'s candidate best on the samples that raised
         the alarm at ``k``, its point values and residual there, and the information of all ARRs per sample."""
         window = slice(max(0, k - evaluations[0].persistence + 1), k + 1)
-        seeing = [m for m, a in enumerate(arrs) if h.candidate in a.parameters]
-        models = {m: observation_model(arrs[m], h.candidate) for m in seeing}
+        seeing = [m for m, a in enumerate(arrs) if sees(a, h.candidate)]
+        models = {m: candidate_model(arrs[m], h.candidate) for m in seeing}
         points = {m: [p[window] for p in evaluations[m].points] for m in seeing}
         # information per sample: (sensitivity / noise)^2, summed over the ARRs
         information = {m: float(np.nanmedian(np.square(sensitivity(models[m], points[m]) / noise[m])))
@@ -769,7 +818,7 @@ class IsolatingMonitor:
         drift away from failure (its rates point toward it), so this is said at the alarm.
         """
         values = {}  # candidate -> (its value at the alarm, the ARR it is read on): one inversion per candidate
-        for h in result.hypotheses:
+        for h in (h for h in result.hypotheses if not h.sensor):  # an offset has no failure value to be wrong about
             if h.candidate not in values:
                 model, points, residual, _ = self._resolving(h, evaluations, arrs, k, noise)
                 values[h.candidate] = (float(np.nanmedian(model.invert(-residual, points)))
@@ -804,7 +853,8 @@ class IsolatingMonitor:
         """
         q = estimate["theta_quantiles"]
         up = np.array([h.direction == "up" for h in hypotheses])
-        wrong = np.where(up, q[:, 2] < boxes[:, 0], q[:, 0] > boxes[:, 1])
+        sensor = np.array([h.sensor for h in hypotheses])  # an offset may go either way
+        wrong = np.where(up, q[:, 2] < boxes[:, 0], q[:, 0] > boxes[:, 1]) & ~sensor
         away = np.where(wrong, away + 1, 0)
         for row in np.flatnonzero(away >= DRIFT_AWAY_STEPS):
             h = hypotheses[row]
@@ -819,12 +869,14 @@ class IsolatingMonitor:
 
     def law(self, h: Hypothesis, process_noise: float):
         """The degradation model of ``h``'s law: the user's, or the built-in one with ``process_noise``."""
+        if h.sensor:  # an offset along a straight line (a bias: its rate 0)
+            return degradation_model("linear", process_noise)
         model = self.laws[h.law]
         if model is not None:
             return model
         return degradation_model(h.law, process_noise, nominal=h.nominal, failure=h.failure)
 
-    def gamma_bounds(self, h: Hypothesis, count: int) -> tuple[list, list]:
+    def gamma_bounds(self, h: Hypothesis, count: int, offset: float = 0.0) -> tuple[list, list]:
         """(lo, hi), each of ``count`` gammas, of a hypothesis' prior: its rate's, then its law's other gammas.
 
         The rate: the ``rate`` interval, or the rates of the prior on the life (the life from
@@ -833,7 +885,14 @@ class IsolatingMonitor:
         (exponential) or 1 (power: ``a`` is one over the life), as
         :func:`~prognosis.hypotheses.rate_prior` draws it).  The power law's exponent spans
         :data:`~prognosis.degradation.POWER_EXPONENTS`; a gamma the law does not have is fixed at 1.
+
+        A sensor's bias has the rate 0; its drift goes from 0 to ``offset`` (the offset the alarm shows)
+        in a life on the same prior, so its rate has the offset's sign.
         """
+        if h.sensor:
+            ends = ([0.0, 0.0] if h.law == "bias" or offset == 0 else
+                    sorted(offset / (steps * self.dt) for steps in self.life))
+            return [ends[0]] + [1.0] * (count - 1), [ends[1]] + [1.0] * (count - 1)
         if self.rate is not None:
             ends = sorted(float(r) / (h.failure - h.nominal if h.law == "power" else 1.0) for r in self.rate)
         else:
@@ -870,13 +929,19 @@ class IsolatingMonitor:
         return ResidualNoise(np.array(covariance), np.array(cross), np.array(growth),
                              np.array([h.nominal for h in hypotheses]), self.inflation)
 
-    def rate_particles(self, h: Hypothesis, rng: np.random.Generator, count: int = 1) -> np.ndarray:
+    def rate_particles(self, h: Hypothesis, rng: np.random.Generator, count: int = 1,
+                       offset: float = 0.0) -> np.ndarray:
         """Initial gamma particles (N, ``count``) of a hypothesis: the rate from the ``rate`` interval or the
-        prior on the life, the power law's exponent log-uniform (:meth:`gamma_bounds`), other gammas 1."""
-        lo, hi = self.gamma_bounds(h, count)
+        prior on the life, the power law's exponent log-uniform, other gammas 1 (:meth:`gamma_bounds`;
+        ``offset``: a sensor's offset at the alarm)."""
+        lo, hi = self.gamma_bounds(h, count, offset)
         gamma = np.ones((self.n_particles, count))
-        gamma[:, 0] = (rng.uniform(lo[0], hi[0], self.n_particles) if self.rate is not None
-                       else rate_prior(h, self.dt, self.n_particles, rng, self.life))
+        if h.sensor:
+            ends = np.sort(np.log(np.abs([lo[0], hi[0]]))) if lo[0] != hi[0] else None
+            gamma[:, 0] = 0.0 if ends is None else np.sign(lo[0]) * np.exp(rng.uniform(*ends, self.n_particles))
+        else:
+            gamma[:, 0] = (rng.uniform(lo[0], hi[0], self.n_particles) if self.rate is not None
+                           else rate_prior(h, self.dt, self.n_particles, rng, self.life))
         if count > 1 and lo[1] < hi[1]:
             gamma[:, 1] = np.exp(rng.uniform(math.log(lo[1]), math.log(hi[1]), self.n_particles))
         return gamma
@@ -902,7 +967,8 @@ class IsolatingMonitor:
         """
         if len(innovations) < ADEQUACY_WINDOW:
             return
-        window = np.array(innovations[-ADEQUACY_WINDOW:])  # (W, H, M)
+        # each innovation clipped: a single spike (a derivative stencil straddling a step) is no drift
+        window = np.clip(np.array(innovations[-ADEQUACY_WINDOW:]), -SPIKE, SPIKE)  # (W, H, M)
         with np.errstate(invalid="ignore"):
             count = np.sum(np.isfinite(window), axis=0)
             drift = np.nansum(window, axis=0) / np.sqrt(np.maximum(count, 1))
@@ -925,6 +991,8 @@ class IsolatingMonitor:
         distribution censored at the horizon and the reason no RUL is given.
         """
         weights = pf.weights
+        # a sensor's fault wears nothing: the RUL is that of the wear hypotheses, given that one holds
+        left_out = {**left_out, **{h.name: "a sensor's fault, nothing wears" for h in hypotheses if h.sensor}}
         samples, mixed = [], []
         probable = [h.name for h in hypotheses if decision.probabilities[h.name] >= MIXTURE_FLOOR]
         if probable and all(name in left_out for name in probable):
@@ -961,6 +1029,19 @@ class IsolatingMonitor:
         rng = seeds.generator(self.seed, seeds.RESOLUTION, key)
         spread = self.dt * (rng.random(rul.shape) - 0.5)
         return np.where(np.isfinite(rul), np.maximum(rul + spread, 0.0), rul)
+
+
+def _offset(start: tuple) -> float:
+    """The offset a hypothesis' start interval ``(lo, hi, sigma_v)`` shows at the alarm: its end farther from 0."""
+    return start[0] if abs(start[0]) > abs(start[1]) else start[1]
+
+
+def _reading_bracket(model, points: list) -> tuple[float, float]:
+    """Where a sensor's offset is searched for: ten times the largest reading of its signal (at least 1)."""
+    names = [str(p) for p in model.arr.compiled.points]
+    signal = sensor_signal(model.candidate)
+    size = float(np.nanmax(np.abs(points[names.index(signal)]))) if signal in names else 0.0
+    return (-10.0 * max(size, 1.0), 10.0 * max(size, 1.0))
 
 
 def _softmax(log_z: np.ndarray) -> np.ndarray:

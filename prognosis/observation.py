@@ -26,6 +26,9 @@ from sympy.core.function import AppliedUndef
 
 from .errors import PrognosisError
 
+#: the prefix of a sensor's fault candidate, ``"sensor <signal>"``, as in the signature matrix
+SENSOR = "sensor "
+
 
 @dataclass
 class ObservationModel:
@@ -181,6 +184,62 @@ def observation_model(arr, candidate: str) -> ObservationModel:
         coefficient = coefficient.xreplace(back)
     rate = _antiderivative(coefficient, arr) if str(getattr(arr, "form", "")).startswith("differentiated ") else None
     return ObservationModel(arr, candidate, nominal, h.xreplace(back), coefficient, rate)
+
+
+def sensor_model(arr, signal: str) -> ObservationModel:
+    """The observation equation of ``arr`` for an additive fault ``beta`` of the sensor of ``signal``.
+
+    The sensor reads ``s + beta``; evaluated on the readings, the ARR balances at the true signal
+    ``s = reading - beta``, so that
+
+        y = -r_n = R(reading - beta, reading' - beta') - R(reading, reading')
+
+    with ``beta'`` the offset's rate: 0 for a bias, the slope of a drift.  Both are straight lines in
+    time, so ``beta''`` and higher derivatives are 0 and the ARR's higher derivatives of the reading
+    are the signal's.  The candidate is ``"sensor <signal>"``, its nominal value 0; ``beta'`` enters
+    as the rate (``rate_coefficient``, ``-dR/ds'``), as a drifting parameter's does.  An ARR that
+    integrates the signal would need the integral of the offset since the record's start, which no
+    law of the offset from its onset gives: a :class:`~prognosis.errors.PrognosisError` says so.
+
+    Examples
+    --------
+    The RLC circuit's loop, ``V - R i - L di/dt - v_C``, with the current's sensor off by beta
+    (and drifting at beta'): ``y = R beta + L beta'``.
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> arr = derive_arrs(rlc_circuit(), complete=False, integrals="keep")[0]
+    >>> h = sensor_model(arr, "i")
+    >>> h.candidate, h.nominal, h.expression, h.coefficient, h.rate_coefficient
+    ('sensor i', 0.0, R*sensor i, R, L)
+    >>> h(np.array([0.1]), [1.0, 0.5, 0.0, 0.0], rate=np.array([0.2])).round(9).tolist()   # R = 10, L = 0.1
+    [1.02]
+    """
+    if signal not in arr.signals:
+        raise PrognosisError(f"{arr.name} does not read {signal!r}; it reads {arr.signals}")
+    beta, rate = sp.Symbol(SENSOR + signal), sp.Dummy("rate")
+    balance, back = _opaque(arr.nominal)
+    shift = {}
+    for symbol, atom in back.items():
+        if isinstance(atom, AppliedUndef) and atom.func.__name__ == signal:
+            shift[symbol] = symbol - beta
+        elif isinstance(atom, sp.Derivative) and isinstance(atom.expr, AppliedUndef):
+            if atom.expr.func.__name__ == signal and atom.derivative_count == 1:
+                shift[symbol] = symbol - rate
+        elif any(f.func.__name__ == signal for f in atom.atoms(AppliedUndef)):
+            raise PrognosisError(f"{arr.name}: the sensor of {signal!r} is read inside {atom}, so an offset of it "
+                                 "acts through its history since the record's start; use an ARR that reads "
+                                 f"{signal!r} and its derivatives only")
+    change = sp.expand(balance.xreplace(shift) - balance)
+    h = sp.factor_terms(change.subs(rate, 0))
+    x = sp.factor_terms(sp.diff(change, rate).subs({rate: 0, beta: 0}))
+    slope = sp.diff(h, beta)
+    coefficient = sp.factor_terms(slope) if not slope.has(beta) else None
+    if coefficient is not None:
+        h = beta * coefficient
+        coefficient = coefficient.xreplace(back)
+    return ObservationModel(arr, SENSOR + signal, 0.0, h.xreplace(back), coefficient,
+                            x.xreplace(back) if x != 0 else None)
 
 
 def _antiderivative(coefficient: sp.Expr | None, arr) -> sp.Expr | None:

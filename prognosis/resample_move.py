@@ -52,14 +52,14 @@ DISCREPANCY = ("each", "shared", None)  # whose information excess divides an as
 
 @dataclass(frozen=True)
 class Prior:
-    """Uniform over the box ``[lo, hi]`` (A, D) of working coordinates; ``log[g]``: gamma_g as sign * exp(u).
+    """Uniform over the box ``[lo, hi]`` (A, D) of working coordinates; ``log[a, g]``: gamma_g as sign * exp(u).
 
     A coordinate with ``lo == hi`` is fixed: a gamma of a row whose law does not have it.
     """
 
     lo: np.ndarray
     hi: np.ndarray
-    log: np.ndarray  # (G,) bool
+    log: np.ndarray  # (A, G) bool
     sign: np.ndarray  # (A, G)
 
     def draw(self, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -76,7 +76,8 @@ class Prior:
 
     def gamma(self, z: np.ndarray) -> np.ndarray:
         u = z[..., 1:]
-        return np.where(self.log, self.sign[:, None, :] * np.exp(np.where(self.log, u, 0.0)), u)
+        log = self.log[:, None, :]
+        return np.where(log, self.sign[:, None, :] * np.exp(np.where(log, u, 0.0)), u)
 
 
 class ResampleMoveFilter:
@@ -149,8 +150,8 @@ class ResampleMoveFilter:
     def initialize(self, theta_bounds, gamma_bounds, assets: int = 1, log_gamma=False) -> None:
         """Particles from the prior: theta_0 ~ U(theta_bounds), gamma ~ U(gamma_bounds) or log-uniform.
 
-        Bounds are scalars, (A,) or, for gamma, (A, G).  ``log_gamma`` (bool or (G,)): draw that
-        gamma log-uniformly, its bounds then of one sign and nonzero.
+        Bounds are scalars, (A,) or, for gamma, (A, G).  ``log_gamma`` (bool, (G,) or (A, G)): draw
+        that gamma (of that asset) log-uniformly, its bounds then of one sign and nonzero.
         """
         g = self.model.n_gamma
         lo, hi = (np.broadcast_to(np.asarray(b, float), (assets,)) for b in theta_bounds)
@@ -159,9 +160,9 @@ class ResampleMoveFilter:
                                                            np.all(np.isfinite([g_lo, g_hi]))):
             raise PrognosisError(f"prior bounds must be finite with lo <= hi: theta {theta_bounds}, "
                                  f"gamma {gamma_bounds}")
-        log = np.broadcast_to(np.asarray(log_gamma, bool), (g,))
+        log = np.broadcast_to(np.asarray(log_gamma, bool), (assets, g))
         sign = np.sign(np.where(g_hi != 0, g_hi, g_lo))
-        if np.any(log & ((g_lo * g_hi <= 0).any(axis=0))):
+        if np.any(log & (g_lo * g_hi <= 0)):
             raise PrognosisError("a log-uniform gamma needs bounds of one sign, both nonzero")
         u_lo = np.where(log, np.log(np.abs(np.where(log, np.where(sign > 0, g_lo, g_hi), 1.0))), g_lo)
         u_hi = np.where(log, np.log(np.abs(np.where(log, np.where(sign > 0, g_hi, g_lo), 1.0))), g_hi)

@@ -207,9 +207,19 @@ def test_a_failure_value_on_the_wrong_side_of_the_drift_is_reported(tmp_path, ca
     assert code == 2 and "--calibrate 3 is not fault-free: calibrated on its first half (t <= 1.5 s)" in err
     code, out, err = run(capsys, "--quiet", "prognose", str(folder / "model.json"), str(folder / "data.csv"),
                          "--fail", "b=1e-5", "--calibrate", "0.9", "--particles", "200", "--out", str(tmp_path / "p"))
+    # b's laws are rejected by name, said even with --quiet; the sensors' offsets are what is left to weigh
+    assert code == 0 and err.startswith("bgphm: warning: every wear hypothesis was rejected, only sensors' faults "
+                                        "are left: b/linear: ")
+    assert "wrong side" in err
+    summary = json.loads((tmp_path / "p" / "prognosis.json").read_text())
+    assert all("wrong side" in summary["evidence"][f"b/{law}"]["rejected"] for law in ("linear", "exponential"))
+    assert "b" not in summary["candidate"] and summary["status"] != "isolated"
+    code, out, err = run(capsys, "--quiet", "prognose", str(folder / "model.json"), str(folder / "data.csv"),
+                         "--fail", "b=1e-5", "--calibrate", "0.9", "--particles", "200", "--candidate", "b",
+                         "--out", str(tmp_path / "only-b"))
     assert code == 0 and "every hypothesis was rejected" in out and "wrong side" in out
     assert err.startswith("bgphm: warning: every hypothesis was rejected: b/linear: ")
-    summary = json.loads((tmp_path / "p" / "prognosis.json").read_text())
+    summary = json.loads((tmp_path / "only-b" / "prognosis.json").read_text())
     # no claim: the faults consistent with the ARRs that fired, b among them, and why
     assert summary["status"] == "rejected" and "b" in summary["candidate"] and "sensor omega" in summary["candidate"]
     assert summary["reason"].startswith("every hypothesis was rejected (b): a fault outside the hypotheses")
