@@ -194,7 +194,8 @@ def cmd_prognose(args, progress: Progress) -> int:
                           **({"window": args.window} if args.window else {})} for e in evaluations}
     if args.rate is not None and not (all(math.isfinite(v) for v in args.rate) and args.rate[0] < args.rate[1]):
         raise UsageError(f"--rate {args.rate[0]:g} {args.rate[1]:g}: need two finite numbers with lo < hi")
-    monitor = IsolatingMonitor(arrs, failures, noise_std=noise, laws=laws, candidates=candidates, dt=dt,
+    monitor = IsolatingMonitor(arrs, failures, noise_std=noise, laws=laws, candidates=candidates,
+                               sensors=args.sensors, dt=dt,
                                n_particles=args.particles, rate=None if args.rate is None else tuple(args.rate),
                                rul_every=args.rul_every, horizon=args.horizon, detection=detection,
                                healthy_until=until, domains=spec.model.domains, method=args.filter,
@@ -904,6 +905,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--degradation", choices=("exponential", "linear", "power"), action="append",
                    help="a law that competes (repeatable; default: linear, exponential and power compete on "
                         "evidence); power: a power of the time since onset, its exponent estimated too")
+    p.add_argument("--sensors", action=argparse.BooleanOptionalAction, default=True,
+                   help="weigh a bias, drift or gain of each sensor consistent with the ARRs that fired too "
+                        "(default; --no-sensors: the sensors are healthy)")
     p.add_argument("--direction", choices=("up", "down"), help="check that --candidate's failure value lies on "
                    "this side of nominal")
     p.add_argument("--rate", type=float, nargs=2, metavar=("LO", "HI"),

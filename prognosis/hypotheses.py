@@ -16,7 +16,8 @@ A user knows the model, the data, a fault-free stretch and when each parameter c
 
 A sensor's fault is a candidate too, ``"sensor <signal>"`` (as in the signature matrix): an offset
 ``beta`` added to the reading, from 0, by the law ``"bias"`` (a constant) or ``"drift"`` (a straight
-line); it has no failure value (:data:`SENSOR_LAWS`, :func:`candidate_model`).
+line), or a share ``g`` of the reading in error, from 0 along a straight line (``"gain"``); it has no
+failure value (:data:`SENSOR_LAWS`, :func:`candidate_model`).
 """
 
 from __future__ import annotations
@@ -36,9 +37,10 @@ __all__ = ["Hypothesis", "HypothesisObservation", "SENSOR_LAWS", "candidate_mode
            "indistinguishable_groups", "law_distance", "physical_domain", "rate_prior", "record_separation",
            "same_signature", "sees", "sensitivity", "sensor_signal", "signature_candidates"]
 
-#: the laws of a sensor's offset: a constant from its onset (a slipped code disc, a zero shift) or a
-#: straight line (an ageing transducer's drift)
-SENSOR_LAWS = ("bias", "drift")
+#: the laws of a sensor's fault: an offset constant from its onset (a slipped code disc, a zero shift)
+#: or along a straight line (an ageing transducer's drift), or an error proportional to the reading,
+#: its share along a straight line (a gain: an encoder's wrong line count, an amplifier's ageing)
+SENSOR_LAWS = ("bias", "drift", "gain")
 
 LIFE_PRIOR = (10.0, 1e5)  # filter steps: the life from nominal to failure, log-uniform between these
 
@@ -114,11 +116,14 @@ def sees(arr, candidate: str) -> bool:
     return candidate in arr.parameters if signal is None else signal in arr.signals
 
 
-def candidate_model(arr, candidate: str):
+def candidate_model(arr, candidate: str, law: str | None = None):
     """The observation equation of ``arr`` for a parameter (:func:`~prognosis.observation.observation_model`)
-    or a sensor's offset (:func:`~prognosis.observation.sensor_model`)."""
+    or a sensor's fault (:func:`~prognosis.observation.sensor_model`: a gain for the law ``"gain"``, else
+    an offset)."""
     signal = sensor_signal(candidate)
-    return observation_model(arr, candidate) if signal is None else sensor_model(arr, signal)
+    if signal is None:
+        return observation_model(arr, candidate)
+    return sensor_model(arr, signal, "gain" if law == "gain" else "offset")
 
 
 def physical_domain(nominal: float) -> tuple[float, float]:
@@ -370,12 +375,20 @@ class HypothesisObservation:
 
     def __init__(self, arrs: Sequence, hypotheses: Sequence[Hypothesis]):
         self.arrs, self.hypotheses = list(arrs), list(hypotheses)
-        models = {}
+        models = {}  # one per candidate, and per kind of a sensor's fault
         for h in self.hypotheses:
-            if h.candidate not in models:
-                models[h.candidate] = [candidate_model(a, h.candidate) if sees(a, h.candidate) else None
-                                       for a in self.arrs]
-        self.models = [models[h.candidate] for h in self.hypotheses]
+            key = (h.candidate, h.law == "gain" and h.sensor)
+            if key not in models:
+                models[key] = [candidate_model(a, h.candidate, h.law) if sees(a, h.candidate) else None
+                               for a in self.arrs]
+        self.models = [models[(h.candidate, h.law == "gain" and h.sensor)] for h in self.hypotheses]
+
+    def rows(self, index: Sequence[int]) -> "HypothesisObservation":
+        """The observation of the rows (hypotheses) ``index`` alone, sharing their compiled models."""
+        view = object.__new__(HypothesisObservation)
+        view.arrs, view.hypotheses = self.arrs, [self.hypotheses[i] for i in index]
+        view.models = [self.models[i] for i in index]
+        return view
 
     @property
     def rates(self) -> bool:

@@ -360,9 +360,9 @@ class IsolatingMonitor:
         Only these candidates (each parameter needs a failure value; a sensor is ``"sensor <signal>"``),
         instead of those of the signature.
     sensors : bool
-        Weigh the faults of the sensors whose signature holds the fired ARRs too (on by default): an
-        offset of the reading from 0 by the laws :data:`~prognosis.hypotheses.SENSOR_LAWS`, a bias
-        or a drift.  A sensor's fault has no failure value: the RUL is that of the wear hypotheses
+        Weigh the faults of the sensors whose signature holds the fired ARRs too (on by default), by
+        the laws :data:`~prognosis.hypotheses.SENSOR_LAWS`: an offset of the reading from 0, a bias
+        or a drift, or a gain.  A sensor's fault has no failure value: the RUL is that of the wear hypotheses
         (given that a parameter wears), and none is given when only sensors are probable.
     dt : float
         Filter step (s), a multiple of the record's step.
@@ -799,7 +799,7 @@ class IsolatingMonitor:
         the alarm at ``k``, its point values and residual there, and the information of all ARRs per sample."""
         window = slice(max(0, k - evaluations[0].persistence + 1), k + 1)
         seeing = [m for m, a in enumerate(arrs) if sees(a, h.candidate)]
-        models = {m: candidate_model(arrs[m], h.candidate) for m in seeing}
+        models = {m: candidate_model(arrs[m], h.candidate, h.law) for m in seeing}
         points = {m: [p[window] for p in evaluations[m].points] for m in seeing}
         # information per sample: (sensitivity / noise)^2, summed over the ARRs
         information = {m: float(np.nanmedian(np.square(sensitivity(models[m], points[m]) / noise[m])))
@@ -886,8 +886,8 @@ class IsolatingMonitor:
         :func:`~prognosis.hypotheses.rate_prior` draws it).  The power law's exponent spans
         :data:`~prognosis.degradation.POWER_EXPONENTS`; a gamma the law does not have is fixed at 1.
 
-        A sensor's bias has the rate 0; its drift goes from 0 to ``offset`` (the offset the alarm shows)
-        in a life on the same prior, so its rate has the offset's sign.
+        A sensor's bias has the rate 0; its drift (its gain's error) goes from 0 to ``offset`` (what the
+        alarm shows) in a life on the same prior, so its rate has that sign.
         """
         if h.sensor:
             ends = ([0.0, 0.0] if h.law == "bias" or offset == 0 else

@@ -186,25 +186,30 @@ def observation_model(arr, candidate: str) -> ObservationModel:
     return ObservationModel(arr, candidate, nominal, h.xreplace(back), coefficient, rate)
 
 
-def sensor_model(arr, signal: str) -> ObservationModel:
-    """The observation equation of ``arr`` for an additive fault ``beta`` of the sensor of ``signal``.
+def sensor_model(arr, signal: str, kind: str = "offset") -> ObservationModel:
+    """The observation equation of ``arr`` for a fault of the sensor of ``signal``.
 
-    The sensor reads ``s + beta``; evaluated on the readings, the ARR balances at the true signal
-    ``s = reading - beta``, so that
+    ``kind="offset"``: the sensor reads ``s + beta``; evaluated on the readings, the ARR balances at
+    the true signal ``s = reading - beta``, so that
 
         y = -r_n = R(reading - beta, reading' - beta') - R(reading, reading')
 
     with ``beta'`` the offset's rate: 0 for a bias, the slope of a drift.  Both are straight lines in
     time, so ``beta''`` and higher derivatives are 0 and the ARR's higher derivatives of the reading
-    are the signal's.  The candidate is ``"sensor <signal>"``, its nominal value 0; ``beta'`` enters
-    as the rate (``rate_coefficient``, ``-dR/ds'``), as a drifting parameter's does.  An ARR that
-    integrates the signal would need the integral of the offset since the record's start, which no
-    law of the offset from its onset gives: a :class:`~prognosis.errors.PrognosisError` says so.
+    are the signal's.  ``kind="gain"``: the error is a share ``g`` of the reading, ``s = reading (1 - g)``
+    (a gain ``1 / (1 - g)``), so the k-th derivative of the signal is ``reading^(k) (1 - g) - k g'
+    reading^(k-1)`` for ``g`` a straight line in time.  Either way the candidate is
+    ``"sensor <signal>"``, its nominal value 0, ``y`` linear in it, and its rate enters as a drifting
+    parameter's does (``rate_coefficient``; left out when it needs a derivative the ARR does not
+    compute).  An ARR that integrates the signal would need the integral of the error since the
+    record's start, which no law of the error from its onset gives: a
+    :class:`~prognosis.errors.PrognosisError` says so.
 
     Examples
     --------
     The RLC circuit's loop, ``V - R i - L di/dt - v_C``, with the current's sensor off by beta
-    (and drifting at beta'): ``y = R beta + L beta'``.
+    (and drifting at beta'): ``y = R beta + L beta'``; with a share g of the reading in error,
+    ``y = g (R i + L di/dt) + L g' i``.
 
     >>> from bondgraph.library import rlc_circuit
     >>> from diagnosis import derive_arrs
@@ -214,32 +219,52 @@ def sensor_model(arr, signal: str) -> ObservationModel:
     ('sensor i', 0.0, R*sensor i, R, L)
     >>> h(np.array([0.1]), [1.0, 0.5, 0.0, 0.0], rate=np.array([0.2])).round(9).tolist()   # R = 10, L = 0.1
     [1.02]
+    >>> gain = sensor_model(arr, "i", kind="gain")
+    >>> gain.coefficient, gain.rate_coefficient
+    (L*Derivative(i(t), t) + R*i(t), L*i(t))
     """
+    if kind not in ("offset", "gain"):
+        raise PrognosisError(f"a sensor's fault is an 'offset' or a 'gain', got {kind!r}")
     if signal not in arr.signals:
         raise PrognosisError(f"{arr.name} does not read {signal!r}; it reads {arr.signals}")
-    beta, rate = sp.Symbol(SENSOR + signal), sp.Dummy("rate")
+    theta, rate = sp.Symbol(SENSOR + signal), sp.Dummy("rate")
     balance, back = _opaque(arr.nominal)
     shift = {}
     for symbol, atom in back.items():
-        if isinstance(atom, AppliedUndef) and atom.func.__name__ == signal:
-            shift[symbol] = symbol - beta
-        elif isinstance(atom, sp.Derivative) and isinstance(atom.expr, AppliedUndef):
-            if atom.expr.func.__name__ == signal and atom.derivative_count == 1:
-                shift[symbol] = symbol - rate
-        elif any(f.func.__name__ == signal for f in atom.atoms(AppliedUndef)):
-            raise PrognosisError(f"{arr.name}: the sensor of {signal!r} is read inside {atom}, so an offset of it "
-                                 "acts through its history since the record's start; use an ARR that reads "
-                                 f"{signal!r} and its derivatives only")
+        order = _order_in(atom, signal, arr.name)
+        if order is None:
+            continue
+        if kind == "offset":
+            shift[symbol] = symbol - (theta if order == 0 else rate if order == 1 else 0)
+        else:
+            lower = 0 if order == 0 else (atom.expr if order == 1 else sp.Derivative(atom.expr, (sp.Symbol("t"),
+                                                                                                order - 1)))
+            shift[symbol] = symbol * (1 - theta) - order * rate * lower
     change = sp.expand(balance.xreplace(shift) - balance)
     h = sp.factor_terms(change.subs(rate, 0))
-    x = sp.factor_terms(sp.diff(change, rate).subs({rate: 0, beta: 0}))
-    slope = sp.diff(h, beta)
-    coefficient = sp.factor_terms(slope) if not slope.has(beta) else None
+    x = sp.factor_terms(sp.diff(change, rate).subs({rate: 0, theta: 0})).xreplace(back)
+    if x == 0 or not x.atoms(sp.Integral, sp.Derivative, AppliedUndef) <= set(arr.compiled.symbols):
+        x = None
+    slope = sp.diff(h, theta)
+    coefficient = sp.factor_terms(slope) if not slope.has(theta) else None
     if coefficient is not None:
-        h = beta * coefficient
+        h = theta * coefficient
         coefficient = coefficient.xreplace(back)
-    return ObservationModel(arr, SENSOR + signal, 0.0, h.xreplace(back), coefficient,
-                            x.xreplace(back) if x != 0 else None)
+    return ObservationModel(arr, SENSOR + signal, 0.0, h.xreplace(back), coefficient, x)
+
+
+def _order_in(atom: sp.Expr, signal: str, arr_name: str) -> int | None:
+    """The order of ``atom`` as a time derivative of ``signal`` (0: the signal), None when it is not of it;
+    an error when the signal is inside it otherwise (an integral)."""
+    if isinstance(atom, AppliedUndef):
+        return 0 if atom.func.__name__ == signal else None
+    if isinstance(atom, sp.Derivative) and isinstance(atom.expr, AppliedUndef):
+        return atom.derivative_count if atom.expr.func.__name__ == signal else None
+    if any(f.func.__name__ == signal for f in atom.atoms(AppliedUndef)):
+        raise PrognosisError(f"{arr_name}: the sensor of {signal!r} is read inside {atom}, so an error of it "
+                             "acts through its history since the record's start; use an ARR that reads "
+                             f"{signal!r} and its derivatives only")
+    return None
 
 
 def _antiderivative(coefficient: sp.Expr | None, arr) -> sp.Expr | None:

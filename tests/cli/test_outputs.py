@@ -214,6 +214,13 @@ def test_a_failure_value_on_the_wrong_side_of_the_drift_is_reported(tmp_path, ca
     summary = json.loads((tmp_path / "p" / "prognosis.json").read_text())
     assert all("wrong side" in summary["evidence"][f"b/{law}"]["rejected"] for law in ("linear", "exponential"))
     assert "b" not in summary["candidate"] and summary["status"] != "isolated"
+    # with the sensors taken as healthy (or b the only candidate) nothing is left: no claim
+    code, out, err = run(capsys, "--quiet", "prognose", str(folder / "model.json"), str(folder / "data.csv"),
+                         "--fail", "b=1e-5", "--calibrate", "0.9", "--particles", "200", "--no-sensors",
+                         "--out", str(tmp_path / "no-sensors"))
+    assert code == 0 and err.startswith("bgphm: warning: every hypothesis was rejected: b/linear: ")
+    summary = json.loads((tmp_path / "no-sensors" / "prognosis.json").read_text())
+    assert summary["status"] == "rejected" and not any(name.startswith("sensor") for name in summary["evidence"])
     code, out, err = run(capsys, "--quiet", "prognose", str(folder / "model.json"), str(folder / "data.csv"),
                          "--fail", "b=1e-5", "--calibrate", "0.9", "--particles", "200", "--candidate", "b",
                          "--out", str(tmp_path / "only-b"))

@@ -1,4 +1,4 @@
-"""A sensor's fault as a hypothesis: an offset of its reading, a bias or a drift, weighed with the wear.
+"""A sensor's fault as a hypothesis: an offset of its reading (a bias or a drift) or a gain, weighed with the wear.
 
 The observation model of an offset is judged on the torsion bar's physics written apart from the
 library (:mod:`tests.wear.torsion`): the residuals of the record read through the faulty sensor,
@@ -35,16 +35,20 @@ def healthy():
     return torsion.simulate({}, t_end=T_END, dt=DT, noise={}, seed=0)
 
 
-@pytest.mark.parametrize("signal, size, slope", [
-    ("omega_Ld", 0.5, 0.0),     # a slipped code disc: a bias from the onset
-    ("omega_m", 0.0, 0.8),      # a tachogenerator's brushes: a drift from the onset, 0.8 rad/s per s
-    ("omega_m", -0.3, -0.2),    # both, downward
+@pytest.mark.parametrize("signal, size, slope, kind", [
+    ("omega_Ld", 0.5, 0.0, "offset"),     # a slipped code disc: a bias from the onset
+    ("omega_m", 0.0, 0.8, "offset"),      # a tachogenerator's brushes: a drift from the onset, 0.8 rad/s per s
+    ("omega_m", -0.3, -0.2, "offset"),    # both, downward
+    ("omega_Ld", 0.02, 0.0, "gain"),      # an encoder's line count 2 % off: a gain from the onset
+    ("omega_m", 0.0, 0.01, "gain"),       # an amplifier's gain ageing, 1 % of the reading per s
 ])
-def test_the_offset_model_predicts_what_the_faulty_reading_does_to_every_residual(arrs, healthy, signal, size,
-                                                                                  slope):
+def test_the_sensor_model_predicts_what_the_faulty_reading_does_to_every_residual(arrs, healthy, signal, size,
+                                                                                  slope, kind):
     t = healthy["t"]
-    offset = np.where(t >= ONSET, size + slope * (t - ONSET), 0.0)
-    faulty = {**healthy, signal: healthy[signal] + offset}
+    error = np.where(t >= ONSET, size + slope * (t - ONSET), 0.0)
+    # an offset adds to the true signal; a gain's share g of the reading is error: reading = s / (1 - g)
+    reading = healthy[signal] + error if kind == "offset" else healthy[signal] / (1 - error)
+    faulty = {**healthy, signal: reading}
     # away from the onset's kink, where the derivative stencils straddle it
     settled = (t > ONSET + 0.2) & (t < T_END - 0.2)
     for arr in arrs:
@@ -52,9 +56,9 @@ def test_the_offset_model_predicts_what_the_faulty_reading_does_to_every_residua
             continue
         before, after = arr.evaluate(healthy), arr.evaluate(faulty)
         change = -(after.residual - before.residual)   # y = -r_n, against the healthy reading's
-        model = sensor_model(arr, signal)
+        model = sensor_model(arr, signal, kind)
         points = [np.asarray(p)[settled] for p in after.points]
-        predicted = model(offset[settled][:, None], points, rate=np.full((settled.sum(), 1), slope))[:, 0]
+        predicted = model(error[settled][:, None], points, rate=np.full((settled.sum(), 1), slope))[:, 0]
         scale = max(np.max(np.abs(change[settled])), 1e-9)
         assert np.max(np.abs(predicted - change[settled])) <= 1e-3 * scale, (arr.name, signal)
 
@@ -71,16 +75,17 @@ def test_a_sensor_is_a_candidate_of_the_arrs_that_read_it(arrs):
 
 
 def test_sensor_hypotheses_have_no_failure_value_and_any_sign():
-    bias, drift = (Hypothesis.of_sensor("omega_m", law) for law in SENSOR_LAWS)
-    assert (bias.law, drift.law) == ("bias", "drift") and bias.sensor and not Hypothesis("k", "linear", 2, 1).sensor
+    bias, drift, gain = (Hypothesis.of_sensor("omega_m", law) for law in SENSOR_LAWS)
+    assert (bias.law, drift.law, gain.law) == ("bias", "drift", "gain")
+    assert bias.sensor and not Hypothesis("k", "linear", 2, 1).sensor
     assert math.isnan(drift.failure) and drift.domain == (-math.inf, math.inf)
-    with pytest.raises(PrognosisError, match="a sensor's law is one of bias, drift, got 'linear'"):
+    with pytest.raises(PrognosisError, match="a sensor's law is one of bias, drift, gain, got 'linear'"):
         Hypothesis.of_sensor("omega_m", "linear")
 
 
 def test_a_bias_has_rate_zero_and_a_drift_the_sign_of_the_offset_seen(arrs):
     monitor = IsolatingMonitor(arrs, {"b_Md": 0.45}, noise_std={a.name: 0.1 for a in arrs}, n_particles=50)
-    bias, drift = (Hypothesis.of_sensor("omega_Ld", law) for law in SENSOR_LAWS)
+    bias, drift, _ = (Hypothesis.of_sensor("omega_Ld", law) for law in SENSOR_LAWS)
     rng = np.random.default_rng(1)
     assert (monitor.rate_particles(bias, rng, offset=0.4) == 0).all()
     down = monitor.rate_particles(drift, rng, offset=-0.4)[:, 0]
@@ -90,15 +95,17 @@ def test_a_bias_has_rate_zero_and_a_drift_the_sign_of_the_offset_seen(arrs):
 
 
 def test_the_observation_of_a_sensor_row_predicts_on_the_arrs_reading_it(arrs):
-    hypotheses = [Hypothesis.of_sensor("tau_m", "bias"), Hypothesis("b_Md", "linear", 0.45, 0.005025)]
+    hypotheses = [Hypothesis.of_sensor("tau_m", "bias"), Hypothesis("b_Md", "linear", 0.45, 0.005025),
+                  Hypothesis.of_sensor("tau_m", "gain")]
     observation = HypothesisObservation(arrs, hypotheses)
     reads = [("tau_m" in a.signals) for a in arrs]
     assert [m is not None for m in observation.models[0]] == reads
-    points = [[1.0] * len(a.compiled.points) for a in arrs]
-    y = observation(np.array([[0.2], [0.005025]]), points)
+    points = [[2.0] * len(a.compiled.points) for a in arrs]
+    y = observation(np.array([[0.2], [0.005025], [0.1]]), points)
     mso = [a.name for a in arrs].index("ARR_MSO_1")
     assert y[0, 0, mso] == pytest.approx(-0.2)   # the torque's reading 0.2 high: the balance is 0.2 short
     assert np.allclose(y[1], 0.0)                # b_Md at nominal moves nothing
+    assert y[2, 0, mso] == pytest.approx(-0.2)   # a tenth of a 2 N.m reading in error: the same 0.2
 
 
 def test_a_sensor_read_inside_an_integral_is_named_and_not_weighed():
@@ -118,5 +125,5 @@ def test_an_unknown_sensor_candidate_is_refused_by_name(arrs):
                          candidates=["b_Md", "sensor speed"])
     monitor = IsolatingMonitor(arrs, {"b_Md": 0.45}, noise_std={a.name: 0.1 for a in arrs},
                                candidates=["b_Md", "sensor omega_m"])
-    assert [h.name for h in monitor.hypotheses_for(monitor.candidates)[0]][-2:] == [
-        "sensor omega_m/bias", "sensor omega_m/drift"]
+    assert [h.name for h in monitor.hypotheses_for(monitor.candidates)[0]][-3:] == [
+        "sensor omega_m/bias", "sensor omega_m/drift", "sensor omega_m/gain"]

@@ -198,10 +198,11 @@ def record(scenario: Scenario, seed: int, *, noise: Mapping | None = None) -> di
 
 
 def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int = 10, method: str = "sir",
-        degradation: str | tuple = ()) -> dict:
+        degradation: str | tuple = (), sensors: bool = True) -> dict:
     """``prognosis.json`` of ``bgphm prognose`` on the scenario's record (exit code under ``"exit"``).
 
-    ``degradation``: the competing laws (``--degradation``, a name or several; default the command's).
+    ``degradation``: the competing laws (``--degradation``, a name or several; default the command's);
+    ``sensors=False``: the sensors' faults are not weighed (``--no-sensors``).
     """
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -212,7 +213,8 @@ def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int =
         argv = ["--quiet", "prognose", str(folder / "model.json"), str(folder / "data.csv"), *fails,
                 "--calibrate", f"{facts.calibrate:g}", "--particles", str(particles), "--rul-every", str(rul_every),
                 "--seed", str(seed), "--filter", method, "--out", str(folder / "out"),
-                *(f"--degradation={law}" for law in ([degradation] if isinstance(degradation, str) else degradation))]
+                *(f"--degradation={law}" for law in ([degradation] if isinstance(degradation, str) else degradation)),
+                *([] if sensors else ["--no-sensors"])]
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
             code = bgphm(argv)
         if code != 0:
