@@ -236,6 +236,14 @@ class PerAssetDegradation:
         """Standard deviation of v per row, (A, 1), to broadcast over the particles."""
         return np.array([[self.models[i].process_noise] for i in self.laws], float)
 
+    def rows(self, index: np.ndarray) -> "PerAssetDegradation":
+        """The bank of the rows ``index`` alone.
+
+        >>> PerAssetDegradation((LinearDegradation(), ExponentialDegradation()), laws=(0, 1, 0)).rows([1]).laws
+        (1,)
+        """
+        return PerAssetDegradation(self.models, tuple(self.laws[i] for i in index))
+
     def step(self, theta: np.ndarray, gamma: np.ndarray, dt: float) -> np.ndarray:
         """Deterministic step of each row with its own law."""
         out = np.empty(np.shape(theta))

@@ -119,6 +119,20 @@ class ResidualNoise:
         std = np.atleast_1d(np.asarray(std, float))
         return cls(np.einsum("...m,mn->...mn", np.square(std), np.eye(std.shape[-1])), inflation=inflation)
 
+    def rows(self, index: np.ndarray) -> "ResidualNoise":
+        """The noise of the rows ``index`` alone: per-row arrays sliced, shared ones kept.
+
+        >>> noise = ResidualNoise.independent([[0.1], [0.2], [0.3]])
+        >>> noise.rows(np.array([2])).covariance.round(4).tolist()
+        [[[0.09]]]
+        """
+        view = object.__new__(ResidualNoise)
+        for name in ("covariance", "cross", "growth", "nominal"):
+            value = getattr(self, name)
+            object.__setattr__(view, name, value if value is None or value.shape[0] == 1 else value[index])
+        object.__setattr__(view, "inflation", self.inflation)
+        return view
+
     @property
     def size(self) -> int:
         """M, the number of residuals."""

@@ -323,12 +323,14 @@ class ResampleMoveFilter:
         proposal = np.where(both, proposal, np.eye(width.shape[1]))
         chol = _cholesky(proposal) * free[:, :, None]
         accepted = np.zeros(self.assets)
+        view = self._view(np.flatnonzero(rows))
         for _ in range(self.moves):
             step = np.einsum("ade,ane->and", chol, self.rng.standard_normal(self.z.shape))
             z_new = self.z + self.scale[:, None, None] * step
             inside = self.prior.inside(z_new) & rows[:, None]
             # a proposal outside the prior is rejected; replayed inside it, so that no law overflows
-            past, last, theta = self._replay(np.clip(z_new, self.prior.lo[:, None, :], self.prior.hi[:, None, :]))
+            past, last, theta = self._replay(np.clip(z_new, self.prior.lo[:, None, :], self.prior.hi[:, None, :]),
+                                             view, increment)
             a, b = on_past[:, None], on_increment[:, None]
             log_ratio = (a * past + b * last) - (a * self.past + b * increment)
             accept = inside & (np.log(self.rng.random(log_ratio.shape)) < np.nan_to_num(log_ratio, nan=-np.inf))
@@ -344,11 +346,36 @@ class ResampleMoveFilter:
                               self.scale)
         return increment
 
-    def _replay(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Log-likelihood of particles ``z`` over the history before this step, of this step, and theta now."""
+    def _view(self, index: np.ndarray):
+        """(rows, model, observation, noise) of the rows ``index`` alone, or None for every row.
+
+        A move replays the history of the rows it moves; the others (frozen hypotheses, assets whose
+        cloud is healthy) need no replay.  Only when the model, the observation and the noise can
+        each be cut to rows (a bank of laws, hypotheses' observations, per-row noise: a method
+        ``rows``); otherwise, or when every row moves, the whole arrays are replayed.
+        """
+        parts = (self.model, self.observation, self.noise)
+        if index.size == self.assets or not all(hasattr(part, "rows") for part in parts):
+            return None
+        return (index, *(part.rows(index) for part in parts))
+
+    def _replay(self, z: np.ndarray, view=None, increment: np.ndarray | None = None):
+        """Log-likelihood of particles ``z`` over the history before this step, of this step, and theta now.
+
+        With a ``view`` (:meth:`_view`) only its rows are replayed; the others keep the current
+        particles' values (``self.past``, ``increment``, ``self.theta``).
+        """
+        if view is None:
+            return self._replay_rows(z, None)
+        index = view[0]
+        past, last, theta = self.past.copy(), increment.copy(), self.theta.copy()
+        past[index], last[index], theta[index] = self._replay_rows(z[index], view)
+        return past, last, theta
+
+    def _replay_rows(self, z: np.ndarray, view) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         past = np.zeros(z.shape[:2])
-        for path, rate, start, stop in self._paths(z):
-            terms = self._history_terms(path, rate, start, stop)
+        for path, rate, start, stop in self._paths(z, view):
+            terms = self._history_terms(path, rate, start, stop, view)
             if stop == len(self.history):
                 return past + terms[..., :-1].sum(axis=-1), terms[..., -1], path[..., -1]
             past = past + terms.sum(axis=-1)
@@ -363,41 +390,47 @@ class ResampleMoveFilter:
             pieces.append((gaps / sd)[:, 0])
         return np.concatenate(pieces, axis=1)
 
-    def _paths(self, z: np.ndarray):
+    def _paths(self, z: np.ndarray, view=None):
         """theta's path (A, N, K) under particles ``z`` and its rate (or None), CHUNK steps at a time,
-        with the steps ``start, stop`` of the history they cover."""
-        gamma = self.prior.gamma(z)
+        with the steps ``start, stop`` of the history they cover (of the rows of ``view``)."""
+        model, observation = (self.model, self.observation) if view is None else view[1:3]
+        prior = self.prior if view is None else Prior(*(a[view[0]] for a in (self.prior.lo, self.prior.hi,
+                                                                              self.prior.log, self.prior.sign)))
+        gamma = prior.gamma(z)
         theta = z[..., 0]
         steps = len(self.history)
         for start in range(0, steps, CHUNK):
             stop = min(start + CHUNK, steps)
             path = np.empty((*theta.shape, stop - start))
-            rate = np.empty_like(path) if getattr(self.observation, "rates", False) else None
+            rate = np.empty_like(path) if getattr(observation, "rates", False) else None
             for j in range(start, stop):
                 if j:
-                    theta = self.model.step(theta, gamma, self.dt)
+                    theta = model.step(theta, gamma, self.dt)
                 path[..., j - start] = theta
                 if rate is not None:  # theta's rate only where an ARR sees it (a differentiated one)
-                    rate[..., j - start] = self._rate(theta, gamma)
+                    rate[..., j - start] = (model.step(theta, gamma, self.dt) - theta) / self.dt
             yield path, rate, start, stop
 
-    def _history_terms(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int) -> np.ndarray:
+    def _history_terms(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int, view=None) -> np.ndarray:
         """log p(y_j | theta_j) (A, N, K) for the steps ``start..stop`` of the history."""
-        gaps = self._history_gaps(path, rate, start, stop)
-        terms = self.noise.log_density(gaps, path)
+        gaps = self._history_gaps(path, rate, start, stop, view)
+        terms = (self.noise if view is None else view[3]).log_density(gaps, path)
         measured = np.isfinite(gaps).any(axis=-1)
         return np.where(measured, terms, 0.0)
 
-    def _history_gaps(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int) -> np.ndarray:
+    def _history_gaps(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int, view=None) -> np.ndarray:
         """``y_j - h(theta_j)`` (A, N, K, M) for the steps ``start..stop`` of the history."""
         ys = np.stack([self.history[j][0] for j in range(start, stop)], axis=1)  # (A, K) or (A, K, M)
-        trajectory = getattr(self.observation, "trajectory", None)
+        observation = self.observation if view is None else view[2]
+        if view is not None:
+            ys = ys[view[0]]
+        trajectory = getattr(observation, "trajectory", None)
         if trajectory is not None:
             predicted = trajectory(path, [self.history[j][1] for j in range(start, stop)],
                                    **({} if rate is None else {"rate": rate}))
         else:
             predicted = np.stack([self._call(path[..., j], self.history[start + j][1],
-                                             None if rate is None else rate[..., j])
+                                             None if rate is None else rate[..., j], observation)
                                   for j in range(stop - start)], axis=2)
         if ys.ndim == 2:
             ys, predicted = ys[..., None], predicted[..., None] if predicted.ndim == 3 else predicted
@@ -409,10 +442,11 @@ class ResampleMoveFilter:
         rate = self._rate(theta, self.prior.gamma(z)) if getattr(self.observation, "rates", False) else None
         return self._call(theta, points, rate)
 
-    def _call(self, theta, points, rate):
+    def _call(self, theta, points, rate, observation=None):
+        observation = self.observation if observation is None else observation
         if rate is None:
-            return np.asarray(self.observation(theta, points), float)
-        return np.asarray(self.observation(theta, points, rate=rate), float)
+            return np.asarray(observation(theta, points), float)
+        return np.asarray(observation(theta, points, rate=rate), float)
 
     def _rate(self, theta: np.ndarray, gamma: np.ndarray) -> np.ndarray:
         """theta's rate of change under the law, ``(g(theta, gamma, dt) - theta) / dt``."""

@@ -203,3 +203,35 @@ def test_particles_without_density_stay_without_it_when_the_temperature_changes(
     assert np.isfinite(f.log_evidence[0]) and np.all(np.isfinite(f.weights))
     assert np.all(np.isneginf(f.past[0, 100:])) and np.all(np.isfinite(f.past[0, :100]))
     assert np.all(f.weights[0, 100:] == 0.0)
+
+
+class _Rows:
+    """Each row sees its own theta: an observation that can be cut to rows (as hypotheses' observations can)."""
+
+    def __call__(self, theta, points):
+        return theta
+
+    def rows(self, index):
+        return self
+
+
+def test_replaying_only_the_rows_a_move_needs_changes_nothing():
+    """Rows whose cloud is healthy, or frozen, are not replayed: the same particles, bit for bit."""
+    from prognosis.degradation import PerAssetDegradation
+    from prognosis.likelihood import ResidualNoise
+
+    y = np.stack([line(0.05, seed=41), line(0.002, seed=42), line(0.05, seed=43)])
+    bank = PerAssetDegradation((LinearDegradation(), ExponentialDegradation()), laws=(0, 0, 1))
+    noise = ResidualNoise.independent([[0.05], [0.002], [0.05]])
+    runs = []
+    for observation in (lambda theta, points: theta, _Rows()):   # without rows(): every row is replayed
+        f = ResampleMoveFilter(bank, observation, noise=noise, dt=DT, n_particles=100, seed=44)
+        f.initialize(BOX[0], gamma_bounds=((-1.0, -1.0, 0.01), (1.0, 1.0, 1.0)), assets=3)
+        partly = 0   # steps at which some rows moved and others not
+        for k in range(STEPS):
+            f.frozen = np.array([False, False, k > 20])   # the last row weighed, no longer moved
+            partly += 0 < f.step(y[:, k]).resampled.sum() < 3
+        runs.append((f, partly))
+    (whole, partly), (cut, _) = runs
+    assert partly >= 5
+    assert np.array_equal(whole.z, cut.z) and np.array_equal(whole.log_evidence, cut.log_evidence)
