@@ -34,5 +34,8 @@ def test_a_faulty_encoder_and_its_law_are_named_and_no_rul_is_claimed(signal, me
     assert figures["found"], (answer["candidate"], answer["status"])
     assert answer["status"] in ("isolated", "indistinguishable") and answer["degradation"] == law
     probabilities = {name: e["probability"] for name, e in answer["evidence"].items()}
-    assert max(probabilities, key=probabilities.get) == f"sensor {signal}/{law}", probabilities
+    best = max(probabilities, key=probabilities.get)
+    assert best.endswith(f"/{law}"), probabilities
+    # the two encoders act nearly in proportion at a steady speed: either is named with the reason
+    assert best == f"sensor {signal}/{law}" or answer["indistinguishable_on_record"], probabilities
     assert answer["last"].get("rul_median") is None   # no band for a fault without an end of life
