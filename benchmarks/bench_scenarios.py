@@ -14,8 +14,12 @@ noisy one (more noise on the signal that carries the residual's noise).  Every s
 and the filter's own streams.  The user's side is a model file, a CSV and ``--fail`` values, nothing of
 the truth.
 
-Per scenario, over the seeds: the share of runs that name the degrading parameter (or an honest
-indistinguishable group holding it), the statuses and laws said, over the second half of life the
+A sensor scenario offsets one encoder's reading of the torsion bar (a bias, a drift), the machine
+healthy: the sensor and its law must be named, and no RUL is due.
+
+Per scenario, over the seeds: the share of runs that name the degrading parameter or the faulty
+sensor (or an honest indistinguishable group holding it), the share whose most probable hypothesis
+at the end is that fault itself (``top_is_true``), the statuses and laws said, over the second half of life the
 share of predictions whose median RUL is within 20 % of the truth (mean and worst over the seeds),
 the pooled coverage of the 5-95 % and 25-75 % bands, the PIT histogram per quarter of the life (the
 truth's place among the predicted 5, 25, 50, 75 and 95 % quantiles: 5, 20, 25, 25, 20, 5 % when
@@ -62,6 +66,8 @@ def pooled(name: str, rows: list[dict]) -> dict:
         "found": float(np.mean([r["found"] for r in rows])),
         "statuses": dict(Counter(str(r.get("status")) for r in rows)),
         "laws": dict(Counter(str(r.get("degradation")) for r in rows)),
+        # the share of runs whose most probable hypothesis is the true fault (parameter or sensor)
+        "top_is_true": float(np.mean([str(r.get("top")).split("/")[0] == name.split("/")[1] for r in rows])),
         # predictions withheld as undecided (every probable law contradicted by the data): no figure
         "withheld": _share_withheld(rows),
         "within_20pct_mean": float(np.mean(within)) if within else None,

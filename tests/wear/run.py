@@ -239,7 +239,9 @@ def score(scenario: Scenario, answer: dict) -> dict:
     truth = np.array([eol - p["t"] for p in predictions])
     figures = {"found": bool(found), "candidate": named, "status": answer.get("status"),
                "degradation": answer.get("degradation"), "detection_time": answer.get("detection_time"),
-               "predictions": len(predictions), "withheld": len(given) - len(predictions)}
+               "predictions": len(predictions), "withheld": len(given) - len(predictions),
+               # the most probable hypothesis at the end: the faulty parameter or sensor itself, and its law
+               "top": _top(answer)}
     if not predictions or scenario.sensor:  # a sensor fault has no end of life: any RUL given is counted, not scored
         return figures
     median = np.array([_number(p["rul_median"]) for p in predictions])
@@ -256,6 +258,12 @@ def score(scenario: Scenario, answer: dict) -> dict:
         figures["coverage_50"] = float(np.mean((p25 <= truth) & (truth <= p75)))
         figures["pit"] = pit_histogram(predictions, truth, onset=onset, eol=eol)
     return figures
+
+
+def _top(answer: dict) -> str | None:
+    """The most probable hypothesis ``"candidate/law"`` at the end of the record (None without evidence)."""
+    evidence = answer.get("evidence") or {}
+    return max(evidence, key=lambda name: evidence[name]["probability"]) if evidence else None
 
 
 PIT_EDGES = (0.05, 0.25, 0.5, 0.75, 0.95)  # the predicted quantiles: six bins of the PIT between them
