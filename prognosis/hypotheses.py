@@ -375,13 +375,13 @@ class HypothesisObservation:
 
     def __init__(self, arrs: Sequence, hypotheses: Sequence[Hypothesis]):
         self.arrs, self.hypotheses = list(arrs), list(hypotheses)
-        models = {}  # one per candidate, and per kind of a sensor's fault
-        for h in self.hypotheses:
-            key = (h.candidate, h.law == "gain" and h.sensor)
+        models = {}  # one per candidate, and per kind of a sensor's fault (an offset, a gain)
+        keys = [(h.candidate, h.sensor and h.law == "gain") for h in self.hypotheses]
+        for h, key in zip(self.hypotheses, keys):
             if key not in models:
                 models[key] = [candidate_model(a, h.candidate, h.law) if sees(a, h.candidate) else None
                                for a in self.arrs]
-        self.models = [models[(h.candidate, h.law == "gain" and h.sensor)] for h in self.hypotheses]
+        self.models = [models[key] for key in keys]
 
     def rows(self, index: Sequence[int]) -> "HypothesisObservation":
         """The observation of the rows (hypotheses) ``index`` alone, sharing their compiled models."""
