@@ -25,8 +25,8 @@ from bondgraph.errors import PHMError
 
 FAST = settings(max_examples=6, deadline=None, derandomize=True, database=None,
                 suppress_health_check=list(HealthCheck))
-SLOW = settings(FAST, max_examples=50)
-#: The fast tier's share of random models (the slow tier runs 50, benchmarks none).
+SLOW = settings(FAST, max_examples=30)
+#: The fast tier's share of random models (the slow tier runs 30, benchmarks none).
 FEW = settings(FAST, max_examples=3)
 
 #: Nonlinear laws of an R element named ``{p}``: a cubic damper and an orifice.
