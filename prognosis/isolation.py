@@ -886,8 +886,8 @@ class IsolatingMonitor:
         :func:`~prognosis.hypotheses.rate_prior` draws it).  The power law's exponent spans
         :data:`~prognosis.degradation.POWER_EXPONENTS`; a gamma the law does not have is fixed at 1.
 
-        A sensor's bias has the rate 0; its drift (its gain's error) goes from 0 to ``offset`` (what the
-        alarm shows) in a life on the same prior, so its rate has that sign.
+        A sensor's bias has the rate 0; its drift (its gain's error) goes from 0 to ``offset`` (the far
+        end of its start interval) in a life on the same prior, so its rate has that sign.
         """
         if h.sensor:
             ends = ([0.0, 0.0] if h.law == "bias" or offset == 0 else
