@@ -71,6 +71,10 @@ class Prior:
         """(A, D): the coordinates the prior does not fix (``lo < hi``)."""
         return self.hi > self.lo
 
+    def rows(self, index: np.ndarray) -> "Prior":
+        """The prior of the rows (assets) ``index`` alone."""
+        return Prior(self.lo[index], self.hi[index], self.log[index], self.sign[index])
+
     def inside(self, z: np.ndarray) -> np.ndarray:
         return np.all((z >= self.lo[:, None, :]) & (z <= self.hi[:, None, :]), axis=-1)
 
@@ -347,7 +351,7 @@ class ResampleMoveFilter:
         return increment
 
     def _view(self, index: np.ndarray):
-        """(rows, model, observation, noise) of the rows ``index`` alone, or None for every row.
+        """(rows, model, observation, noise, prior) of the rows ``index`` alone, or None for every row.
 
         A move replays the history of the rows it moves; the others (frozen hypotheses, assets whose
         cloud is healthy) need no replay.  Only when the model, the observation and the noise can
@@ -357,7 +361,7 @@ class ResampleMoveFilter:
         parts = (self.model, self.observation, self.noise)
         if index.size == self.assets or not all(hasattr(part, "rows") for part in parts):
             return None
-        return (index, *(part.rows(index) for part in parts))
+        return (index, *(part.rows(index) for part in (*parts, self.prior)))
 
     def _replay(self, z: np.ndarray, view=None, increment: np.ndarray | None = None):
         """Log-likelihood of particles ``z`` over the history before this step, of this step, and theta now.
@@ -393,9 +397,8 @@ class ResampleMoveFilter:
     def _paths(self, z: np.ndarray, view=None):
         """theta's path (A, N, K) under particles ``z`` and its rate (or None), CHUNK steps at a time,
         with the steps ``start, stop`` of the history they cover (of the rows of ``view``)."""
-        model, observation = (self.model, self.observation) if view is None else view[1:3]
-        prior = self.prior if view is None else Prior(*(a[view[0]] for a in (self.prior.lo, self.prior.hi,
-                                                                              self.prior.log, self.prior.sign)))
+        model, observation, prior = ((self.model, self.observation, self.prior) if view is None
+                                     else (view[1], view[2], view[4]))
         gamma = prior.gamma(z)
         theta = z[..., 0]
         steps = len(self.history)
@@ -408,7 +411,7 @@ class ResampleMoveFilter:
                     theta = model.step(theta, gamma, self.dt)
                 path[..., j - start] = theta
                 if rate is not None:  # theta's rate only where an ARR sees it (a differentiated one)
-                    rate[..., j - start] = (model.step(theta, gamma, self.dt) - theta) / self.dt
+                    rate[..., j - start] = self._rate(theta, gamma, model)
             yield path, rate, start, stop
 
     def _history_terms(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int, view=None) -> np.ndarray:
@@ -448,9 +451,10 @@ class ResampleMoveFilter:
             return np.asarray(observation(theta, points), float)
         return np.asarray(observation(theta, points, rate=rate), float)
 
-    def _rate(self, theta: np.ndarray, gamma: np.ndarray) -> np.ndarray:
-        """theta's rate of change under the law, ``(g(theta, gamma, dt) - theta) / dt``."""
-        return (self.model.step(theta, gamma, self.dt) - theta) / self.dt
+    def _rate(self, theta: np.ndarray, gamma: np.ndarray, model=None) -> np.ndarray:
+        """theta's rate under ``model``'s law (default the filter's): ``(g(theta, gamma, dt) - theta) / dt``."""
+        model = self.model if model is None else model
+        return (model.step(theta, gamma, self.dt) - theta) / self.dt
 
     def _log_likelihood(self, y: np.ndarray, predicted: np.ndarray, theta: np.ndarray) -> np.ndarray:
         if y.ndim == 1:
