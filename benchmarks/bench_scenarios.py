@@ -42,7 +42,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from tests.wear.run import SYSTEMS, run, scenarios, score  # noqa: E402
+from tests.wear.run import SYSTEMS, fault_of, run, same_fault, scenarios, score  # noqa: E402
 
 SEED_BASE = 20261126   # seeds SEED_BASE + k: each its own noise and its own filter streams
 
@@ -67,7 +67,7 @@ def pooled(name: str, rows: list[dict]) -> dict:
         "statuses": dict(Counter(str(r.get("status")) for r in rows)),
         "laws": dict(Counter(str(r.get("degradation")) for r in rows)),
         # the share of runs whose most probable hypothesis is the true fault (parameter or sensor)
-        "top_is_true": float(np.mean([str(r.get("top")).split("/")[0] == name.split("/")[1] for r in rows])),
+        "top_is_true": float(np.mean([same_fault(fault_of(r.get("top")), name.split("/")[1]) for r in rows])),
         # predictions withheld as undecided (every probable law contradicted by the data): no figure
         "withheld": _share_withheld(rows),
         "within_20pct_mean": float(np.mean(within)) if within else None,

@@ -195,7 +195,7 @@ def cmd_prognose(args, progress: Progress) -> int:
     if args.rate is not None and not (all(math.isfinite(v) for v in args.rate) and args.rate[0] < args.rate[1]):
         raise UsageError(f"--rate {args.rate[0]:g} {args.rate[1]:g}: need two finite numbers with lo < hi")
     monitor = IsolatingMonitor(arrs, failures, noise_std=noise, laws=laws, candidates=candidates,
-                               sensors=args.sensors, dt=dt,
+                               sensors=args.sensors, pairs=args.pairs, dt=dt,
                                n_particles=args.particles, rate=None if args.rate is None else tuple(args.rate),
                                rul_every=args.rul_every, horizon=args.horizon, detection=detection,
                                healthy_until=until, domains=spec.model.domains, method=args.filter,
@@ -653,7 +653,10 @@ def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> 
                                        "rejected": result.rejected.get(h.name),
                                        "inadequate": result.inadequate.get(h.name),
                                        "theta_mean": float(result.theta["mean"][-1, row]),
-                                       "gamma_mean": float(result.gamma["mean"][-1, row])}
+                                       "gamma_mean": float(result.gamma["mean"][-1, row]),
+                                       # a pair's estimate of each of its parameters
+                                       **({"parameters": {c: float(v[-1]) for c, v in result.parts[h.name].items()}}
+                                          if h.name in result.parts else {})}
     best = result.monitor_result()
     percentiles = best.rul_percentiles((5, 25, 50, 75, 95))
     for k, t in enumerate(result.rul_t):
@@ -722,6 +725,8 @@ def _estimate_columns(result) -> dict:
     columns = {"t": result.t}
     for row, h in enumerate(result.hypotheses):
         columns[f"{h.name}.theta_mean"] = result.theta["mean"][:, row]
+        for parameter, mean in result.parts.get(h.name, {}).items():  # a pair's: each of its parameters
+            columns[f"{h.name}.{parameter}.theta_mean"] = mean
         columns[f"{h.name}.gamma_mean"] = result.gamma["mean"][:, row]
         columns[f"{h.name}.log_evidence"] = result.log_evidence[:, row]
     return columns
@@ -908,6 +913,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--sensors", action=argparse.BooleanOptionalAction, default=True,
                    help="weigh a bias, drift or gain of each sensor consistent with the ARRs that fired too "
                         "(default; --no-sensors: the sensors are healthy)")
+    p.add_argument("--pairs", action=argparse.BooleanOptionalAction, default=True,
+                   help="with --filter resample-move, weigh two parameters wearing at once too, declared only when "
+                        "the data demand two faults; the RUL is the first failure's (default; --no-pairs: one)")
     p.add_argument("--direction", choices=("up", "down"), help="check that --candidate's failure value lies on "
                    "this side of nominal")
     p.add_argument("--rate", type=float, nargs=2, metavar=("LO", "HI"),

@@ -53,6 +53,10 @@ class LinearDegradation:
         """theta over a horizon: ``gamma`` (..., N, H, G) used at each step, ``noise`` (..., N, H)."""
         return theta[..., None] + dt * np.cumsum(gamma[..., 0], axis=-1) + np.cumsum(noise, axis=-1)
 
+    def trajectory(self, theta: np.ndarray, gamma: np.ndarray, start: int, stop: int, dt: float) -> np.ndarray:
+        """theta after ``j`` deterministic steps, ``j`` in ``start..stop`` (..., N, stop - start): in closed form."""
+        return theta[..., None] + dt * gamma[..., 0][..., None] * np.arange(start, stop)
+
     def path_from_sums(self, theta, gamma_sum, noise, noise_sum, carry, dt):
         """theta_{k+l} = theta_k + dt gamma_sum + noise_sum, with ``gamma_sum`` = sum_{m<l} gamma_{k+m}
         and ``noise_sum`` = sum_{j<=l} v_j, both (M, H) and counted from the prediction time."""
@@ -77,6 +81,11 @@ class ExponentialDegradation:
         Uses ``gamma[..., 0]``; the caller (the particle filter) adds the process noise ``v``.
         """
         return theta * np.exp(gamma[..., 0] * dt)
+
+    def trajectory(self, theta: np.ndarray, gamma: np.ndarray, start: int, stop: int, dt: float) -> np.ndarray:
+        """theta after ``j`` deterministic steps, ``j`` in ``start..stop`` (..., N, stop - start): in closed form."""
+        with np.errstate(over="ignore"):
+            return theta[..., None] * np.exp(gamma[..., 0][..., None] * dt * np.arange(start, stop))
 
     def path(self, theta: np.ndarray, gamma: np.ndarray, noise: np.ndarray, dt: float) -> np.ndarray:
         """theta over a horizon: ``gamma`` (..., N, H, G) used at each step, ``noise`` (..., N, H); returns (..., N, H).
@@ -155,6 +164,15 @@ class PowerDegradation:
         rate, exponent = gamma[..., 0], gamma[..., 1]
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
             clock = np.maximum(share ** (1.0 / exponent) + rate * dt, 0.0)  # a tau, up to the step's end
+            return self.origin + self.span * clock ** exponent
+
+    def trajectory(self, theta: np.ndarray, gamma: np.ndarray, start: int, stop: int, dt: float) -> np.ndarray:
+        """theta after ``j`` deterministic steps, for ``j`` in ``start..stop`` (..., N, stop - start): the clock
+        ``a tau`` grows by ``a dt`` a step."""
+        share = np.maximum((theta - self.origin) / self.span, 0.0)
+        rate, exponent = gamma[..., 0][..., None], gamma[..., 1][..., None]
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            clock = np.maximum(share[..., None] ** (1.0 / exponent) + rate * dt * np.arange(start, stop), 0.0)
             return self.origin + self.span * clock ** exponent
 
     def path(self, theta: np.ndarray, gamma: np.ndarray, noise: np.ndarray, dt: float) -> np.ndarray:
@@ -253,6 +271,81 @@ class PerAssetDegradation:
             if mine.any():
                 out[mine] = model.step(theta[mine], gamma[mine][..., :model.n_gamma], dt)
         return out
+
+    def trajectory(self, theta: np.ndarray, gamma: np.ndarray, start: int, stop: int, dt: float) -> np.ndarray:
+        """theta (A, N) after j steps of each row's law, ``j`` in ``start..stop`` (A, N, stop - start).
+
+        >>> bank = PerAssetDegradation((LinearDegradation(), ExponentialDegradation()), laws=(0, 1))
+        >>> bank.trajectory(np.ones((2, 1)), np.full((2, 1, 1), np.log(2.0)), 1, 3, dt=1.0).round(3).tolist()
+        [[[1.693, 2.386]], [[2.0, 4.0]]]
+        """
+        out = np.empty((*np.shape(theta), stop - start))
+        rows = np.asarray(self.laws)
+        for index, model in enumerate(self.models):
+            mine = rows == index
+            if mine.any():
+                out[mine] = trajectory(model, theta[mine], gamma[mine][..., :model.n_gamma], start, stop, dt)
+        return out
+
+@dataclass(frozen=True)
+class JointDegradation:
+    """Several parameters per row degrading at once, each by its own law: a joint hypothesis.
+
+    Component ``c`` of ``theta`` (A, N, C) moves by ``banks[c]`` (a
+    :class:`PerAssetDegradation`, a law per row) with its own gammas, ``gamma[..., offsets[c]:]``
+    of the row's (A, N, G); G sums the banks' gammas.
+
+    >>> import numpy as np
+    >>> first = PerAssetDegradation((LinearDegradation(),), laws=(0,))
+    >>> second = PerAssetDegradation((ExponentialDegradation(),), laws=(0,))
+    >>> joint = JointDegradation((first, second))
+    >>> theta, gamma = np.ones((1, 1, 2)), np.array([[[0.5, np.log(2.0)]]])
+    >>> joint.step(theta, gamma, dt=1.0).tolist()   # 1 + 0.5 and 1 * 2
+    [[[1.5, 2.0]]]
+    """
+
+    banks: tuple
+
+    @property
+    def n_gamma(self) -> int:
+        return sum(b.n_gamma for b in self.banks)
+
+    @property
+    def offsets(self) -> list[int]:
+        """Where each component's gammas start in a row's gammas."""
+        return [sum(b.n_gamma for b in self.banks[:c]) for c in range(len(self.banks))]
+
+    def rows(self, index) -> "JointDegradation":
+        return JointDegradation(tuple(b.rows(index) for b in self.banks))
+
+    def trajectory(self, theta: np.ndarray, gamma: np.ndarray, start: int, stop: int, dt: float) -> np.ndarray:
+        """theta (A, N, C) after ``j`` deterministic steps, ``j`` in ``start..stop``: (A, N, stop - start, C)."""
+        return np.stack([bank.trajectory(theta[..., c], gamma[..., first:first + bank.n_gamma], start, stop, dt)
+                         for c, (bank, first) in enumerate(zip(self.banks, self.offsets))], axis=-1)
+
+    def step(self, theta: np.ndarray, gamma: np.ndarray, dt: float) -> np.ndarray:
+        """Deterministic step of each component with its row's law."""
+        return np.stack([bank.step(theta[..., c], gamma[..., start:start + bank.n_gamma], dt)
+                         for c, (bank, start) in enumerate(zip(self.banks, self.offsets))], axis=-1)
+
+
+def trajectory(model, theta: np.ndarray, gamma: np.ndarray, start: int, stop: int, dt: float) -> np.ndarray:
+    """theta (..., N) after ``j`` deterministic steps of ``model``, ``j`` in ``start..stop``: (..., N, stop - start);
+    in closed form where the model has one, else step by step.
+
+    >>> trajectory(CustomDegradation(lambda theta, gamma, dt: theta + 1.0), np.zeros(1), np.zeros((1, 1)), 0, 3,
+    ...            dt=1.0).tolist()
+    [[0.0, 1.0, 2.0]]
+    """
+    if hasattr(model, "trajectory"):
+        return model.trajectory(theta, gamma, start, stop, dt)
+    out = np.empty((*np.shape(theta), stop - start))
+    for j in range(stop):
+        if j >= start:
+            out[..., j - start] = theta
+        theta = model.step(theta, gamma, dt)
+    return out
+
 
 def stepped_path(model, theta: np.ndarray, gamma: np.ndarray, noise: np.ndarray, dt: float) -> np.ndarray:
     """theta over a horizon by ``model.step``, one step at a time (each step vectorized over particles):

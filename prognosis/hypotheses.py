@@ -27,13 +27,15 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
+import sympy as sp
 
 from diagnosis import signature_matrix
 
 from .observation import SENSOR, observation_model, sensor_model
 from .errors import PrognosisError
 
-__all__ = ["Hypothesis", "HypothesisObservation", "SENSOR_LAWS", "candidate_model", "explaining",
+__all__ = ["Hypothesis", "HypothesisObservation", "JointHypothesis", "JointObservation", "SENSOR_LAWS", "additive",
+           "candidate_model", "explaining",
            "indistinguishable_groups", "law_distance", "physical_domain", "rate_prior", "record_separation",
            "same_signature", "sees", "sensitivity", "sensor_signal", "signature_candidates"]
 
@@ -99,6 +101,45 @@ class Hypothesis:
     def domain(self) -> tuple[float, float]:
         """The open interval the candidate's value must stay in."""
         return physical_domain(self.nominal) if self.bounds is None else self.bounds
+
+
+@dataclass(frozen=True)
+class JointHypothesis:
+    """Several parameters degrading at once, each by its own law (``parts``): a multiple fault.
+
+    Named by its parts, ``"a/law + b/law"``; its candidate is ``"a + b"``.  Its RUL is that of the
+    first part to reach its failure value.
+
+    >>> h = JointHypothesis((Hypothesis("R_a", "power", 1.0, 0.5), Hypothesis("c_p", "power", 4e-5, 2e-5)))
+    >>> h.name, h.candidate, h.members
+    ('R_a/power + c_p/power', 'R_a + c_p', ('R_a', 'c_p'))
+    """
+
+    parts: tuple
+
+    @property
+    def name(self) -> str:
+        return " + ".join(h.name for h in self.parts)
+
+    @property
+    def candidate(self) -> str:
+        return " + ".join(self.members)
+
+    @property
+    def members(self) -> tuple:
+        return tuple(h.candidate for h in self.parts)
+
+    @property
+    def law(self) -> str:
+        return " + ".join(h.law for h in self.parts)
+
+    sensor = False
+
+    # what is asked of a single hypothesis' parameter is the first part's here; each part's own is in ``parts``
+    failure = property(lambda self: self.parts[0].failure)
+    nominal = property(lambda self: self.parts[0].nominal)
+    direction = property(lambda self: self.parts[0].direction)
+    domain = property(lambda self: self.parts[0].domain)
 
 
 def sensor_signal(candidate: str) -> str | None:
@@ -358,7 +399,8 @@ def _proportional(first: np.ndarray, second: np.ndarray, rtol: float) -> bool:
 class HypothesisObservation:
     """What each hypothesis predicts for every residual: ``y_m = h_m(theta)`` for row ``h``, ARR ``m``.
 
-    Row ``h`` of the particles is hypothesis ``hypotheses[h]``; an ARR blind to its candidate
+    Row ``h`` of the particles is hypothesis ``hypotheses[h]`` (None: no fault, it predicts 0 everywhere,
+    the healthy part of a :class:`JointObservation`); an ARR blind to its candidate
     predicts 0 (the residual stays at its healthy level), so an ARR that stays quiet counts
     against a hypothesis that would move it.  Called with ``theta`` (H, N) and ``points``, one
     list of point values per ARR (the order of each ARR's compiled points), it returns (H, N, M).
@@ -375,8 +417,8 @@ class HypothesisObservation:
 
     def __init__(self, arrs: Sequence, hypotheses: Sequence[Hypothesis]):
         self.arrs, self.hypotheses = list(arrs), list(hypotheses)
-        models = {}  # one per candidate, and per kind of a sensor's fault (an offset, a gain)
-        keys = [(h.candidate, h.sensor and h.law == "gain") for h in self.hypotheses]
+        models = {None: [None] * len(self.arrs)}  # one per candidate, and per kind of a sensor's fault
+        keys = [None if h is None else (h.candidate, h.sensor and h.law == "gain") for h in self.hypotheses]
         for h, key in zip(self.hypotheses, keys):
             if key not in models:
                 models[key] = [candidate_model(a, h.candidate, h.law) if sees(a, h.candidate) else None
@@ -423,3 +465,64 @@ class HypothesisObservation:
                     out[row, :, :, m] = model(theta[row].T, list(stacked[m].T),
                                               None if rate is None else rate[row].T).T
         return out
+
+
+class JointObservation:
+    """What rows of joint hypotheses predict: several parameters degrade at once, ``y = sum_c h_c(theta_c)``.
+
+    Component ``c`` of every row is observed by ``parts[c]``, a :class:`HypothesisObservation` with
+    one hypothesis per row (None: that row's component stays healthy, so a single fault weighs in
+    the same filter as pairs).  ``theta`` is (H, N, C); the sum of each parameter's change is the
+    ARR's change when no ARR multiplies two of them (:func:`additive`).
+
+    Examples
+    --------
+    The RLC circuit's loop, ``y = -(R - R_n) i - (L - L_n) di/dt``, with R = 11 ohm and L = 0.2 H, at
+    i = 0.5 A and di/dt = 2 A/s (R_n = 10, L_n = 0.1):
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> arrs = derive_arrs(rlc_circuit(), complete=False, integrals="keep")[:1]
+    >>> joint = JointObservation([HypothesisObservation(arrs, [Hypothesis("R", "linear", 20.0, 10.0)]),
+    ...                           HypothesisObservation(arrs, [Hypothesis("L", "linear", 2.0, 0.1)])])
+    >>> joint(np.array([[[11.0, 0.2]]]), [[1.0, 0.5, 0.0, 2.0]]).round(9).tolist()
+    [[[-0.7]]]
+    """
+
+    def __init__(self, parts: Sequence[HypothesisObservation]):
+        self.parts = list(parts)
+        self.arrs = self.parts[0].arrs
+
+    def rows(self, index: Sequence[int]) -> "JointObservation":
+        """The observation of the rows ``index`` alone."""
+        return JointObservation([part.rows(index) for part in self.parts])
+
+    @property
+    def rates(self) -> bool:
+        return any(part.rates for part in self.parts)
+
+    def __call__(self, theta: np.ndarray, points, rate: np.ndarray | None = None) -> np.ndarray:
+        return sum(part(theta[..., c], points, None if rate is None else rate[..., c])
+                   for c, part in enumerate(self.parts))
+
+    def trajectory(self, theta: np.ndarray, points: Sequence, rate: np.ndarray | None = None) -> np.ndarray:
+        """Predictions (H, N, K, M) along paths ``theta`` (H, N, K, C)."""
+        return sum(part.trajectory(theta[..., c], points, None if rate is None else rate[..., c])
+                   for c, part in enumerate(self.parts))
+
+
+def additive(arrs: Sequence, first: str, second: str) -> str:
+    """Why two parameters' changes do not add up in the ARRs ("" when they do): an ARR's nominal part holds
+    a product of them, so one's effect depends on the other's value.
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> additive(derive_arrs(rlc_circuit()), "R", "L")
+    ''
+    """
+    a, b = sp.Symbol(first), sp.Symbol(second)
+    for arr in arrs:
+        if first in arr.parameters and second in arr.parameters and sp.diff(arr.nominal, a, b) != 0:
+            return (f"{arr.name} holds {first} and {second} in one product, so the change of one depends on the "
+                    "other: a pair of them is not weighed")
+    return ""

@@ -34,10 +34,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import seeds
-from .degradation import POWER_EXPONENTS, PerAssetDegradation, degradation_model
-from .hypotheses import (LIFE_PRIOR, SENSOR_LAWS, Hypothesis, HypothesisObservation, candidate_model, explaining,
-                         indistinguishable_groups, law_distance, rate_prior, record_separation, same_signature, sees,
-                         sensitivity, sensor_signal, signature_candidates)
+from .degradation import POWER_EXPONENTS, JointDegradation, PerAssetDegradation, degradation_model
+from .hypotheses import (LIFE_PRIOR, SENSOR_LAWS, Hypothesis, HypothesisObservation, JointHypothesis, JointObservation,
+                         additive, candidate_model, explaining, indistinguishable_groups, law_distance, rate_prior,
+                         record_separation, same_signature, sees, sensitivity, sensor_signal, signature_candidates)
 from .likelihood import ResidualNoise, healthy_noise
 from .monitor import MonitorResult, filter_stride
 from .particle_filter import KernelSmoothing, ParticleFilter, check_particles, check_positive
@@ -46,7 +46,7 @@ from .rul import RULDistribution, RULPredictor
 from .seeds import check_seed
 from .errors import PrognosisError
 
-__all__ = ["Decision", "IsolatingMonitor", "IsolationResult", "decide"]
+__all__ = ["Decision", "IsolatingMonitor", "IsolationResult", "decide", "held_back"]
 
 METHODS = ("resample-move", "sir")
 #: the competing laws by default: the two of Jha et al. (2016) and the flexible power law, which holds the
@@ -183,6 +183,39 @@ def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: S
                     twins)
 
 
+def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[str, str] = {},
+              min_ratio: float = EVIDENCE_RATIO) -> dict:
+    """The joint hypotheses of a pair whose evidence (over its laws) does not beat each of its parameters'
+    alone by ``min_ratio`` (name -> why): one fault explains the data as well, and two are claimed only
+    when the data demand them.
+
+    A parameter's evidence alone sums its single hypotheses' (not rejected); one without any (a second
+    fault no fired ARR pointed to at the alarm) is not compared.
+
+    >>> a, b = Hypothesis("a", "power", 2.0, 1.0), Hypothesis("b", "power", 2.0, 1.0)
+    >>> hs = [a, b, JointHypothesis((a, b))]
+    >>> sorted(held_back(hs, np.array([0.0, -50.0, 2.0])))   # e^2 over a alone: not decisive
+    ['a/power + b/power']
+    >>> held_back(hs, np.array([0.0, -50.0, 9.0]))
+    {}
+    """
+    alone, pairs = {}, {}
+    for h, value in zip(hypotheses, log_evidence):
+        if h.name not in rejected:
+            (pairs if isinstance(h, JointHypothesis) else alone).setdefault(h.candidate, []).append(float(value))
+    held = {}
+    for h in hypotheses:
+        if not isinstance(h, JointHypothesis) or h.name in rejected:
+            continue
+        together = _logsumexp(pairs[h.candidate])
+        rivals = {m: _logsumexp(alone[m]) for m in h.members if m in alone}
+        best = max(rivals, key=rivals.get, default=None)
+        if best is not None and together - rivals[best] < math.log(min_ratio):
+            held[h.name] = (f"{h.candidate} explain the residuals no better than {best} alone "
+                            f"(evidence ratio {math.exp(min(together - rivals[best], 700.0)):.3g} < {min_ratio:g})")
+    return held
+
+
 @dataclass
 class IsolationResult:
     """What :class:`IsolatingMonitor` found on a record.
@@ -248,6 +281,8 @@ class IsolationResult:
         record (each one's estimated change imitated by the other to within the decisive ratio,
         :func:`~prognosis.hypotheses.record_separation`, over the filter steps up to the end);
         ``record_groups`` are ``groups`` merged with those pairs, the groups the final decision uses.
+    parts : dict
+        Joint hypothesis name -> parameter -> its mean estimate (K,) (``theta`` holds the first's).
     """
 
     detection_time: float | None
@@ -278,17 +313,24 @@ class IsolationResult:
     withheld: list = field(default_factory=list)
     on_record: dict = field(default_factory=dict)
     record_groups: list = field(default_factory=list)
+    parts: dict = field(default_factory=dict)
 
     @property
     def decision(self) -> Decision | None:
         """The decision on all the data (None without an alarm or a candidate)."""
         if not self.t.size:
             return None
-        decision = decide(self.hypotheses, self.log_evidence[-1], self.record_groups or self.groups, self.rejected,
-                          self.min_ratio, self.same_signature)
-        return self.revised(decision, float(self.t[-1]))
+        return self.decide_at(self.log_evidence[-1], float(self.t[-1]), self.record_groups or self.groups)
 
-    def revised(self, decision: Decision, time: float) -> Decision:
+    def decide_at(self, log_evidence: np.ndarray, time: float, groups: Sequence) -> Decision:
+        """The decision at ``time`` on the hypotheses' evidence then (:func:`decide`, :meth:`revised`), the joint
+        hypotheses not more probable than their parts alone held back (:func:`held_back`)."""
+        held = held_back(self.hypotheses, log_evidence, self.rejected, self.min_ratio)
+        decision = decide(self.hypotheses, log_evidence, groups, {**self.rejected, **held}, self.min_ratio,
+                          self.same_signature)
+        return self.revised(decision, time, held)
+
+    def revised(self, decision: Decision, time: float, held: Mapping = {}) -> Decision:
         """``decision`` at ``time`` with what the evidence alone does not say: the ARRs fired late that no
         candidate sees (:meth:`unexplained`), and no claim when the data contradict every hypothesis.
 
@@ -299,7 +341,7 @@ class IsolationResult:
         signature holds the fired ARRs.
         """
         decision = dataclasses.replace(decision, unexplained=self.unexplained(time))
-        weighed = [h.name for h in self.hypotheses if h.name not in self.rejected]
+        weighed = [h.name for h in self.hypotheses if h.name not in self.rejected and h.name not in held]
         if weighed and not all(name in self.inadequate for name in weighed):
             return decision
         what = (f"the data contradict every law of every candidate ({', '.join(self.candidates)})" if weighed
@@ -364,6 +406,11 @@ class IsolatingMonitor:
         the laws :data:`~prognosis.hypotheses.SENSOR_LAWS`: an offset of the reading from 0, a bias
         or a drift, or a gain.  A sensor's fault has no failure value: the RUL is that of the wear hypotheses
         (given that a parameter wears), and none is given when only sensors are probable.
+    pairs : bool
+        ``method="resample-move"`` and no ``candidates`` only: weigh two parameters degrading at once too
+        (:meth:`pairs_for`, :class:`~prognosis.hypotheses.JointHypothesis`), each by each of ``laws``;
+        a pair is declared only when its evidence beats each of its members' alone by
+        ``min_ratio`` (one fault unless the data demand two), and its RUL is that of the first failure.
     dt : float
         Filter step (s), a multiple of the record's step.
     n_particles : int
@@ -439,7 +486,7 @@ class IsolatingMonitor:
                  rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
                  rul_every: int = 10, horizon: float | None = None, detection: Mapping | None = None,
                  min_ratio: float = EVIDENCE_RATIO, healthy_until: float | None = None,
-                 domains: Mapping[str, tuple] | None = None, method: str = "sir",
+                 domains: Mapping[str, tuple] | None = None, method: str = "sir", pairs: bool = True,
                  seed: int | np.random.SeedSequence = 0):
         if method not in METHODS:
             raise PrognosisError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
@@ -472,7 +519,7 @@ class IsolatingMonitor:
                 raise PrognosisError(f"candidate {unknown[0]!r} has no failure value and is no sensor an ARR reads "
                                      f"(failure values: {', '.join(self.failures)})")
         self.candidates = None if candidates is None else list(candidates)
-        self.sensors = bool(sensors)
+        self.sensors, self.pairs = bool(sensors), bool(pairs)
         self.dt, self.n_particles = check_positive(dt, "dt"), check_particles(n_particles)
         # the random walk's likelihood is widened as in Jha et al. (2016); the resample-move one takes the
         # noise as measured
@@ -520,18 +567,23 @@ class IsolatingMonitor:
                              + [c for c in result.consistent if self.sensors and sensor_signal(c)])
         result.unweighed = {c: why for c in result.candidates if (why := self._unmodelled(c, self.arrs))}
         result.candidates = [c for c in result.candidates if c not in result.unweighed]
-        if not result.candidates:
+        weigh_pairs = self.method != "sir" and self.pairs and self.candidates is None
+        pairs, pair_groups = self.pairs_for(result) if weigh_pairs else ([], [])
+        if not result.candidates and not pairs:
             return result
-        used = [i for i, a in enumerate(self.arrs) if any(sees(a, c) for c in result.candidates)]
+        members = {m for pair in pairs for m in pair}
+        used = [i for i, a in enumerate(self.arrs) if any(sees(a, c) for c in [*result.candidates, *members])]
         arrs = [self.arrs[i] for i in used]
         result.arrs = [a.name for a in arrs]
         result.late = self.late_firings(evaluations, k, stride, result.fired)
         result.late_faults = {name: [f for f in explaining(self.arrs, [name]) if f not in result.candidates]
                               for name in result.late if name not in result.arrs}
-        result.groups = indistinguishable_groups(arrs, result.candidates)
+        result.groups = indistinguishable_groups(arrs, result.candidates) if result.candidates else []
         # isolable in the model: over every ARR given, not only those the filter weighs
         result.same_signature = {c: same_signature(self.arrs, c) for c in result.candidates}
         result.hypotheses, result.rejected = self.hypotheses_for(result.candidates)
+        result.hypotheses += [h for pair in pairs for h in self.pair_hypotheses(pair)]
+        result.groups += pair_groups
         start = self.settled(evaluations, k, stride, result.transient)
         self._filter(result, [evaluations[i] for i in used], arrs, start, progress)
         return result
@@ -609,6 +661,42 @@ class IsolatingMonitor:
                                         f"so it never reaches {h.failure:g}")
         return hypotheses, rejected
 
+    def pairs_for(self, result: IsolationResult) -> tuple[list, list]:
+        """The pairs of parameters weighed as two faults at once, and their groups of indistinguishable pairs.
+
+        Each parameter candidate with every other parameter that has a failure value and that an ARR
+        sees (a second fault may show first in ARRs the first one already fired, or in others later);
+        without a single candidate (no one parameter sees every fired ARR), every pair that does.  A
+        pair is left out when its members act on the residuals in proportion (no record tells how
+        much each moved) or when an ARR multiplies them (their changes do not add).  Two pairs whose
+        members are pairwise indistinguishable are one group.
+        """
+        seen = [p for p in self.failures if any(p in a.parameters for a in self.arrs)]
+        groups = indistinguishable_groups(self.arrs, seen)
+        group_of = {p: i for i, g in enumerate(groups) for p in g}
+        singles = [c for c in result.candidates if sensor_signal(c) is None]
+        if singles:
+            pairs = [(c, q) for c in singles for q in seen if q != c]
+        else:
+            covers = {p: {a.name for a in self.arrs if p in a.parameters} for p in seen}
+            pairs = [(c, q) for i, c in enumerate(seen) for q in seen[i + 1:]
+                     if set(result.fired) <= covers[c] | covers[q]]
+        kept, keys = [], {}
+        for c, q in pairs:
+            key = frozenset((group_of[c], group_of[q]))
+            if group_of[c] == group_of[q] or any({c, q} == set(k) for k in kept) or additive(self.arrs, c, q):
+                continue
+            kept.append((c, q))
+            keys.setdefault(key, []).append(f"{c} + {q}")
+        return kept, [g for g in keys.values() if len(g) > 1]
+
+    def pair_hypotheses(self, pair: tuple) -> list[JointHypothesis]:
+        """Two parameters degrading at once, each by each of the laws: a hypothesis per pair of laws (an
+        exponential law left out for a parameter whose sign it cannot take to its failure value)."""
+        options = [[Hypothesis(c, law, self.failures[c], self.nominal[c], self.domains.get(c)) for law in self.laws
+                    if law != "exponential" or self.failures[c] * self.nominal[c] > 0] for c in pair]
+        return [JointHypothesis((first, second)) for first in options[0] for second in options[1]]
+
     @staticmethod
     def _unmodelled(candidate: str, arrs: Sequence) -> str:
         """Why a sensor's fault has no observation model on ``arrs`` ("" when it has one on each, or is a
@@ -627,13 +715,16 @@ class IsolatingMonitor:
     def _filter(self, result: IsolationResult, evaluations: list, arrs: list, k0: int, progress) -> None:
         hypotheses = result.hypotheses
         noise = np.array([self.noise_std[a.name] for a in arrs])
-        starts = [self.start_interval(h, evaluations, arrs, k0, noise) for h in hypotheses]
+        # a joint hypothesis starts each of its parameters where the alarm puts it
+        starts = [tuple(self.start_interval(part, evaluations, arrs, k0, noise) for part in h.parts)
+                  if isinstance(h, JointHypothesis) else self.start_interval(h, evaluations, arrs, k0, noise)
+                  for h in hypotheses]
         self._reject_wrong_side(result, evaluations, arrs, k0, noise)
         t = evaluations[0].t
         stride = filter_stride(t, self.dt)
-        bounds = (np.array([s[0] for s in starts]), np.array([s[1] for s in starts]))
-        observation = HypothesisObservation(arrs, hypotheses)
         if self.method == "sir":
+            observation = HypothesisObservation(arrs, hypotheses)
+            bounds = (np.array([s[0] for s in starts]), np.array([s[1] for s in starts]))
             # a model per row: sigma_v is on the scale of each candidate
             models = tuple(self.law(h, s[2]) for h, s in zip(hypotheses, starts))
             bank = PerAssetDegradation(models, tuple(range(len(models))))
@@ -645,21 +736,9 @@ class IsolatingMonitor:
             gamma0 = np.stack([self.rate_particles(h, rng, bank.n_gamma, offset=_offset(s))
                                for h, s in zip(hypotheses, starts)])
             pf.initialize(bounds, gamma0=gamma0, assets=len(hypotheses))
+            models = [(m,) for m in models]
         else:
-            models = tuple(self.law(h, 0.0) for h in hypotheses)  # the law itself: no random walk
-            bank = PerAssetDegradation(models, tuple(range(len(models))))
-            pf = ResampleMoveFilter(bank, observation,
-                                    noise=self.residual_noise(observation, evaluations, stride), dt=self.dt,
-                                    n_particles=self.n_particles, discrepancy="shared",
-                                    seed=seeds.spawn(self.seed, seeds.FILTER))
-            rates = np.array([self.gamma_bounds(h, bank.n_gamma, offset=_offset(s))
-                              for h, s in zip(hypotheses, starts)])  # (H, 2, G)
-            # the rate log-uniform on the prior of the life (uniform on a given interval), other gammas
-            # log-uniform; a coordinate the prior fixes (a bias's rate, 0) is not
-            log_gamma = np.arange(bank.n_gamma) > 0 if self.rate is not None else np.ones(bank.n_gamma, bool)
-            log_gamma = (rates[:, 0] < rates[:, 1]) & log_gamma
-            pf.initialize(bounds, gamma_bounds=(rates[:, 0], rates[:, 1]), assets=len(hypotheses),
-                          log_gamma=log_gamma)
+            pf, observation, models = self._resample_move(hypotheses, starts, evaluations, arrs, stride)
         steps = range(k0, t.size, stride)
         information = self._information(result, observation, evaluations, noise, steps)
         every = -(-len(steps) // 100)
@@ -691,9 +770,7 @@ class IsolatingMonitor:
                                                                np.ravel(estimate["theta_mean"]))
                 result.record_groups = groups
             if (done - 1) % self.rul_every == 0:
-                decision = decide(hypotheses, pf.log_evidence, groups, result.rejected, self.min_ratio,
-                                  result.same_signature)
-                decision = result.revised(decision, float(t[k]))
+                decision = result.decide_at(pf.log_evidence, float(t[k]), groups)
                 distribution, reason = self._mixture(pf, hypotheses, decision, predictors, models, key=done,
                                                      left_out={**collapsed_now, **result.inadequate})
                 rul.append(distribution)
@@ -712,6 +789,54 @@ class IsolatingMonitor:
             setattr(result, key, {"mean": mean, "rmad": rmad, "quantiles": quantiles})
         result.rul_t, result.rul, result.decisions = np.array(rul_t), rul, decisions
         result.ess = np.array(ess)
+        for row, h in enumerate(hypotheses):  # a joint hypothesis' estimate of each of its parameters
+            if isinstance(h, JointHypothesis):
+                result.parts[h.name] = {part.candidate: np.array([r[2]["components"][c]["theta_mean"][row]
+                                                                  for r in rows]) for c, part in enumerate(h.parts)}
+
+    def _resample_move(self, hypotheses: list, starts: list, evaluations: list, arrs: list, stride: int):
+        """The resample-move filter over the hypotheses' static parameters, its observation, and each row's
+        models (one per parameter, for the RUL).
+
+        Without a joint hypothesis theta is (H, N).  With one it is (H, N, C): component c of a row is its
+        c-th parameter (a single hypothesis' others fixed and blind, so that all weigh in one filter on
+        the same residuals), each by its own law with its own gammas.
+        """
+        parts = [h.parts if isinstance(h, JointHypothesis) else (h,) for h in hypotheses]
+        part_starts = [s if isinstance(h, JointHypothesis) else (s,) for h, s in zip(hypotheses, starts)]
+        width = max(len(p) for p in parts)
+        banks, observations, theta_lo, theta_hi, gamma_lo, gamma_hi, logs = [], [], [], [], [], [], []
+        for c in range(width):
+            mine = [p[c] if c < len(p) else None for p in parts]  # None: this row has no c-th parameter
+            bank = PerAssetDegradation(tuple(self.law(h, 0.0) if h is not None else degradation_model("linear")
+                                             for h in mine), tuple(range(len(mine))))
+            g = bank.n_gamma
+            ends = [s[c] if c < len(s) else (0.0, 0.0, 0.0) for s in part_starts]
+            rates = np.array([self.gamma_bounds(h, g, offset=_offset(e)) if h is not None else [[0.0] * g] * 2
+                              for h, e in zip(mine, ends)])  # (H, 2, G)
+            # the rate log-uniform on the prior of the life (uniform on a given interval), other gammas
+            # log-uniform; a coordinate the prior fixes (a bias's rate, 0) is not
+            log_gamma = np.arange(g) > 0 if self.rate is not None else np.ones(g, bool)
+            banks.append(bank)
+            observations.append(HypothesisObservation(arrs, mine))
+            theta_lo.append([e[0] for e in ends])
+            theta_hi.append([e[1] for e in ends])
+            gamma_lo.append(rates[:, 0])
+            gamma_hi.append(rates[:, 1])
+            logs.append((rates[:, 0] < rates[:, 1]) & log_gamma)
+        joint = width > 1
+        model = JointDegradation(tuple(banks)) if joint else banks[0]
+        observation = JointObservation(observations) if joint else observations[0]
+        # the noise grows with a row's first parameter (a joint hypothesis' others' growth is left out)
+        pf = ResampleMoveFilter(model, observation, noise=self.residual_noise(observations[0], evaluations, stride),
+                                dt=self.dt, n_particles=self.n_particles, discrepancy="shared",
+                                seed=seeds.spawn(self.seed, seeds.FILTER))
+        bounds = (np.array(theta_lo).T, np.array(theta_hi).T) if joint else (np.array(theta_lo[0]),
+                                                                               np.array(theta_hi[0]))
+        pf.initialize(bounds, gamma_bounds=(np.hstack(gamma_lo), np.hstack(gamma_hi)), assets=len(hypotheses),
+                      log_gamma=np.hstack(logs), components=width if joint else None)
+        models = [tuple(bank.models[row] for bank in banks[:len(p)]) for row, p in enumerate(parts)]
+        return pf, observations[0], models
 
     def _information(self, result: IsolationResult, observation: HypothesisObservation, evaluations: list,
                      noise: np.ndarray, steps: range) -> np.ndarray:
@@ -818,7 +943,8 @@ class IsolatingMonitor:
         drift away from failure (its rates point toward it), so this is said at the alarm.
         """
         values = {}  # candidate -> (its value at the alarm, the ARR it is read on): one inversion per candidate
-        for h in (h for h in result.hypotheses if not h.sensor):  # an offset has no failure value to be wrong about
+        # an offset has no failure value to be wrong about; a joint hypothesis' parts are the single ones'
+        for h in (h for h in result.hypotheses if not h.sensor and not isinstance(h, JointHypothesis)):
             if h.candidate not in values:
                 model, points, residual, _ = self._resolving(h, evaluations, arrs, k, noise)
                 values[h.candidate] = (float(np.nanmedian(model.invert(-residual, points)))
@@ -837,7 +963,9 @@ class IsolatingMonitor:
 
     @staticmethod
     def healthy_box(h: Hypothesis, arrs: list) -> tuple[float, float]:
-        """The candidate's healthy values: its uncertainty box around nominal (the nominal alone without one)."""
+        """The candidate's healthy values: its uncertainty box around nominal (the nominal alone without one);
+        a joint hypothesis', its first parameter's."""
+        h = h.parts[0] if isinstance(h, JointHypothesis) else h
         lo, hi = next((a.uncertainties[h.candidate] for a in arrs if h.candidate in a.uncertainties), (0.0, 0.0))
         return tuple(sorted((h.nominal * (1 + lo), h.nominal * (1 + hi))))
 
@@ -947,13 +1075,15 @@ class IsolatingMonitor:
         return gamma
 
     def _reject(self, result: IsolationResult, hypotheses: list, estimate: dict, time: float) -> None:
-        """Reject the hypotheses whose median estimate left the candidate's physical domain."""
-        median = estimate["theta_quantiles"][:, 1]
-        for h, value in zip(hypotheses, median):
-            lo, hi = h.domain
-            if h.name not in result.rejected and not lo < value < hi:
-                result.rejected[h.name] = (f"at t = {time:g} s the estimate of {h.candidate} is {value:.3g}, "
-                                           f"outside its physical domain ({lo:g}, {hi:g})")
+        """Reject the hypotheses whose median estimate of a parameter left its physical domain."""
+        components = estimate.get("components", [estimate])
+        for row, h in enumerate(hypotheses):
+            for c, part in enumerate(h.parts if isinstance(h, JointHypothesis) else (h,)):
+                value = components[c]["theta_quantiles"][row, 1]
+                lo, hi = part.domain
+                if h.name not in result.rejected and not lo < value < hi:
+                    result.rejected[h.name] = (f"at t = {time:g} s the estimate of {part.candidate} is {value:.3g}, "
+                                               f"outside its physical domain ({lo:g}, {hi:g})")
 
     def _check_adequacy(self, result: IsolationResult, hypotheses: list, arrs: list, innovations: list,
                         time: float) -> None:
@@ -1004,13 +1134,17 @@ class IsolatingMonitor:
             p = decision.probabilities[h.name]
             if p < MIXTURE_FLOOR or h.name in left_out:
                 continue
-            if row not in predictors:
-                predictors[row] = RULPredictor(models[row], dt=self.dt, theta_fail=h.failure,
-                                               direction=h.direction, horizon=self.horizon,
-                                               seed=seeds.spawn(self.seed, seeds.PREDICTORS, row))
-            prediction = predictors[row].predict(pf.theta[row:row + 1], pf.gamma[row:row + 1], weights[row:row + 1],
-                                                 0.0, key=key)
-            samples.append(prediction.samples[0])
+            # a joint hypothesis' RUL is its first failure: each particle's earliest crossing over its parameters
+            first = np.full(weights.shape[1], np.inf)
+            for c, part in enumerate(h.parts if isinstance(h, JointHypothesis) else (h,)):
+                if (row, c) not in predictors:  # the first parameter's stream as a single hypothesis'
+                    stream = seeds.spawn(self.seed, seeds.PREDICTORS, row, *((c,) if c else ()))
+                    predictors[row, c] = RULPredictor(models[row][c], dt=self.dt, theta_fail=part.failure,
+                                                      direction=part.direction, horizon=self.horizon, seed=stream)
+                theta, gamma = _component(pf, row, c)
+                prediction = predictors[row, c].predict(theta, gamma, weights[row:row + 1], 0.0, key=key)
+                first = np.minimum(first, prediction.samples[0])
+            samples.append(first)
             mixed.append(p * weights[row])
         if not samples:  # every hypothesis rejected
             return RULDistribution(np.full((1, 1), np.inf), np.ones((1, 1)), self.horizon), None
@@ -1029,6 +1163,14 @@ class IsolatingMonitor:
         rng = seeds.generator(self.seed, seeds.RESOLUTION, key)
         spread = self.dt * (rng.random(rul.shape) - 0.5)
         return np.where(np.isfinite(rul), np.maximum(rul + spread, 0.0), rul)
+
+
+def _component(pf, row: int, c: int) -> tuple[np.ndarray, np.ndarray]:
+    """theta (1, N) and gamma (1, N, G) of parameter ``c`` of hypothesis ``row`` (a joint filter's component)."""
+    if getattr(pf, "components", None) is None:
+        return pf.theta[row:row + 1], pf.gamma[row:row + 1]
+    bank, start = pf.model.banks[c], pf.model.offsets[c]
+    return pf.theta[row:row + 1, :, c], pf.gamma[row:row + 1, :, start:start + bank.n_gamma]
 
 
 def _offset(start: tuple) -> float:

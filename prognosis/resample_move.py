@@ -61,6 +61,7 @@ class Prior:
     hi: np.ndarray
     log: np.ndarray  # (A, G) bool
     sign: np.ndarray  # (A, G)
+    width: int = 1  # the first coordinates are theta_0's: one, or one per parameter of a joint hypothesis
 
     def draw(self, n: int, rng: np.random.Generator) -> np.ndarray:
         shape = (self.lo.shape[0], n, self.lo.shape[1])
@@ -73,13 +74,17 @@ class Prior:
 
     def rows(self, index: np.ndarray) -> "Prior":
         """The prior of the rows (assets) ``index`` alone."""
-        return Prior(self.lo[index], self.hi[index], self.log[index], self.sign[index])
+        return Prior(self.lo[index], self.hi[index], self.log[index], self.sign[index], self.width)
 
     def inside(self, z: np.ndarray) -> np.ndarray:
         return np.all((z >= self.lo[:, None, :]) & (z <= self.hi[:, None, :]), axis=-1)
 
+    def theta(self, z: np.ndarray, components: int | None) -> np.ndarray:
+        """theta_0 of particles ``z``: (A, N), or (A, N, C) for ``components`` C."""
+        return z[..., 0] if components is None else z[..., :components]
+
     def gamma(self, z: np.ndarray) -> np.ndarray:
-        u = z[..., 1:]
+        u = z[..., self.width:]
         log = self.log[:, None, :]
         return np.where(log, self.sign[:, None, :] * np.exp(np.where(log, u, 0.0)), u)
 
@@ -146,19 +151,25 @@ class ResampleMoveFilter:
         self.resample = get_scheme(resampling)
         self.rng = np.random.default_rng(check_seed(seed))
         self.z = self.theta = self.log_weights = self.log_evidence = None
+        self.components = None
         self.acceptance = None
         #: assets (A,) reweighted but no longer moved: a caller's choice (an hypothesis left far behind)
         self.frozen = None
 
     # -- set-up ------------------------------------------------------------------------------
-    def initialize(self, theta_bounds, gamma_bounds, assets: int = 1, log_gamma=False) -> None:
+    def initialize(self, theta_bounds, gamma_bounds, assets: int = 1, log_gamma=False,
+                   components: int | None = None) -> None:
         """Particles from the prior: theta_0 ~ U(theta_bounds), gamma ~ U(gamma_bounds) or log-uniform.
 
         Bounds are scalars, (A,) or, for gamma, (A, G).  ``log_gamma`` (bool, (G,) or (A, G)): draw
         that gamma (of that asset) log-uniformly, its bounds then of one sign and nonzero.
+        ``components``: C parameters per row degrading at once (a joint hypothesis), theta (A, N, C),
+        its bounds (A, C); the model then moves (A, N, C) (a
+        :class:`~prognosis.degradation.JointDegradation`) and the observation takes it.
         """
         g = self.model.n_gamma
-        lo, hi = (np.broadcast_to(np.asarray(b, float), (assets,)) for b in theta_bounds)
+        shape = (assets,) if components is None else (assets, int(components))
+        lo, hi = (np.broadcast_to(np.asarray(b, float), shape) for b in theta_bounds)
         g_lo, g_hi = (_per_asset(b, assets, g) for b in gamma_bounds)
         if np.any(lo > hi) or np.any(g_lo > g_hi) or not (np.all(np.isfinite([lo, hi])) and
                                                            np.all(np.isfinite([g_lo, g_hi]))):
@@ -170,9 +181,11 @@ class ResampleMoveFilter:
             raise PrognosisError("a log-uniform gamma needs bounds of one sign, both nonzero")
         u_lo = np.where(log, np.log(np.abs(np.where(log, np.where(sign > 0, g_lo, g_hi), 1.0))), g_lo)
         u_hi = np.where(log, np.log(np.abs(np.where(log, np.where(sign > 0, g_hi, g_lo), 1.0))), g_hi)
-        self.prior = Prior(np.column_stack([lo, u_lo]), np.column_stack([hi, u_hi]), log, sign)
+        self.components = None if components is None else int(components)
+        self.prior = Prior(np.column_stack([lo, u_lo]), np.column_stack([hi, u_hi]), log, sign,
+                           1 if components is None else self.components)
         self.z = self.prior.draw(self.n, self.rng)
-        self.theta = self.z[..., 0].copy()
+        self.theta = self.prior.theta(self.z, self.components).copy()
         self.log_weights = np.full((assets, self.n), -np.log(self.n))
         self.log_evidence = np.zeros(assets)
         self.past = np.zeros((assets, self.n))  # sum of log p(y_j | theta_j) of each particle over the history
@@ -280,7 +293,7 @@ class ResampleMoveFilter:
         mean = np.einsum("an,anm->am", weights, predicted)
         spread = np.einsum("an,anm->am", weights, np.square(predicted - mean[:, None, :]))
         noise = np.einsum("an,anm->am", weights,
-                          np.diagonal(self.noise.covariance_at(self.theta), axis1=-2, axis2=-1))
+                          np.diagonal(self.noise.covariance_at(self._first(self.theta)), axis1=-2, axis2=-1))
         return (y - mean) / np.sqrt(spread + noise)
 
     def _next_share(self, increment: np.ndarray, done: np.ndarray) -> np.ndarray:
@@ -313,7 +326,7 @@ class ResampleMoveFilter:
         index = self.resample(weights, self.rng)
         index = np.where(rows[:, None], index, np.arange(self.n))
         self.z = np.take_along_axis(self.z, index[..., None], axis=1)
-        self.theta = np.take_along_axis(self.theta, index, axis=1)
+        self.theta = _take(self.theta, index)
         self.past = np.take_along_axis(self.past, index, axis=1)
         increment = np.take_along_axis(increment, index, axis=1)
         self.log_weights = np.where(rows[:, None], -np.log(self.n), self.log_weights)
@@ -339,7 +352,7 @@ class ResampleMoveFilter:
             log_ratio = (a * past + b * last) - (a * self.past + b * increment)
             accept = inside & (np.log(self.rng.random(log_ratio.shape)) < np.nan_to_num(log_ratio, nan=-np.inf))
             self.z = np.where(accept[..., None], z_new, self.z)
-            self.theta = np.where(accept, theta, self.theta)
+            self.theta = np.where(_along(accept, theta), theta, self.theta)
             self.past = np.where(accept, past, self.past)
             increment = np.where(accept, last, increment)
             accepted += accept.mean(axis=1)
@@ -381,7 +394,7 @@ class ResampleMoveFilter:
         for path, rate, start, stop in self._paths(z, view):
             terms = self._history_terms(path, rate, start, stop, view)
             if stop == len(self.history):
-                return past + terms[..., :-1].sum(axis=-1), terms[..., -1], path[..., -1]
+                return past + terms[..., :-1].sum(axis=-1), terms[..., -1], path[:, :, -1]
             past = past + terms.sum(axis=-1)
         raise RuntimeError("no history to replay")
 
@@ -390,7 +403,7 @@ class ResampleMoveFilter:
         pieces = []
         for path, rate, start, stop in self._paths(z):
             gaps = self._history_gaps(path, rate, start, stop)  # (A, 1, K, M)
-            sd = np.sqrt(np.diagonal(self.noise.covariance_at(path), axis1=-2, axis2=-1))
+            sd = np.sqrt(np.diagonal(self.noise.covariance_at(self._first(path)), axis1=-2, axis2=-1))
             pieces.append((gaps / sd)[:, 0])
         return np.concatenate(pieces, axis=1)
 
@@ -400,24 +413,30 @@ class ResampleMoveFilter:
         model, observation, prior = ((self.model, self.observation, self.prior) if view is None
                                      else (view[1], view[2], view[4]))
         gamma = prior.gamma(z)
-        theta = z[..., 0]
+        theta = prior.theta(z, self.components)
         steps = len(self.history)
+        rates = getattr(observation, "rates", False)  # theta's rate only where an ARR sees it (a differentiated one)
         for start in range(0, steps, CHUNK):
             stop = min(start + CHUNK, steps)
-            path = np.empty((*theta.shape, stop - start))
-            rate = np.empty_like(path) if getattr(observation, "rates", False) else None
+            if hasattr(model, "trajectory"):  # the whole chunk at once, its rate from the step after each
+                path = model.trajectory(theta, gamma, start, stop + rates, self.dt)
+                rate = np.diff(path, axis=2) / self.dt if rates else None
+                yield path[:, :, :stop - start], rate, start, stop
+                continue
+            path = np.empty((*theta.shape[:2], stop - start, *theta.shape[2:]))  # steps after (A, N)
+            rate = np.empty_like(path) if rates else None
             for j in range(start, stop):
                 if j:
                     theta = model.step(theta, gamma, self.dt)
-                path[..., j - start] = theta
-                if rate is not None:  # theta's rate only where an ARR sees it (a differentiated one)
-                    rate[..., j - start] = self._rate(theta, gamma, model)
+                path[:, :, j - start] = theta
+                if rate is not None:
+                    rate[:, :, j - start] = self._rate(theta, gamma, model)
             yield path, rate, start, stop
 
     def _history_terms(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int, view=None) -> np.ndarray:
         """log p(y_j | theta_j) (A, N, K) for the steps ``start..stop`` of the history."""
         gaps = self._history_gaps(path, rate, start, stop, view)
-        terms = (self.noise if view is None else view[3]).log_density(gaps, path)
+        terms = (self.noise if view is None else view[3]).log_density(gaps, self._first(path))
         measured = np.isfinite(gaps).any(axis=-1)
         return np.where(measured, terms, 0.0)
 
@@ -432,8 +451,8 @@ class ResampleMoveFilter:
             predicted = trajectory(path, [self.history[j][1] for j in range(start, stop)],
                                    **({} if rate is None else {"rate": rate}))
         else:
-            predicted = np.stack([self._call(path[..., j], self.history[start + j][1],
-                                             None if rate is None else rate[..., j], observation)
+            predicted = np.stack([self._call(path[:, :, j], self.history[start + j][1],
+                                             None if rate is None else rate[:, :, j], observation)
                                   for j in range(stop - start)], axis=2)
         if ys.ndim == 2:
             ys, predicted = ys[..., None], predicted[..., None] if predicted.ndim == 3 else predicted
@@ -459,7 +478,11 @@ class ResampleMoveFilter:
     def _log_likelihood(self, y: np.ndarray, predicted: np.ndarray, theta: np.ndarray) -> np.ndarray:
         if y.ndim == 1:
             y, predicted = y[:, None], predicted[..., None]
-        return self.noise.log_density(y[:, None, :] - predicted, theta)
+        return self.noise.log_density(y[:, None, :] - predicted, self._first(theta))
+
+    def _first(self, theta: np.ndarray) -> np.ndarray:
+        """What the noise grows with: theta, or a joint hypothesis' first parameter (its others' growth left out)."""
+        return theta if self.components is None else theta[..., 0]
 
     def _distinct(self) -> np.ndarray:
         """Distinct particles per asset (A,), counted on a coordinate the prior leaves free (a move changes all)."""
@@ -468,8 +491,22 @@ class ResampleMoveFilter:
         return 1.0 + np.count_nonzero(np.diff(ordered, axis=1) != 0, axis=1)
 
     def estimate(self) -> dict:
-        """Weighted mean, median and RMAD of theta (now) and each gamma, per asset."""
-        return cloud_estimate(self.theta, self.gamma, self.weights)
+        """Weighted mean, median and RMAD of theta (now) and each gamma, per asset; of a joint hypothesis'
+        parameters, ``theta_*`` of the first and ``components`` one estimate per parameter."""
+        if self.components is None:
+            return cloud_estimate(self.theta, self.gamma, self.weights)
+        parts = [cloud_estimate(self.theta[..., c], self.gamma, self.weights) for c in range(self.components)]
+        return {**parts[0], "components": parts}
+
+
+def _take(values: np.ndarray, index: np.ndarray) -> np.ndarray:
+    """``values`` (A, N, ...) at the particles ``index`` (A, N) of each asset."""
+    return np.take_along_axis(values, index.reshape(index.shape + (1,) * (values.ndim - 2)), axis=1)
+
+
+def _along(mask: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """``mask`` (A, N) broadcastable against ``values`` (A, N, ...)."""
+    return mask.reshape(mask.shape + (1,) * (values.ndim - mask.ndim))
 
 
 def _per_asset(bound, assets: int, g: int) -> np.ndarray:

@@ -1,0 +1,96 @@
+"""Two parameters degrading at once: a joint hypothesis, weighed with the single ones in one filter.
+
+The joint observation model is judged on the pump drive's physics written apart from the library
+(:mod:`tests.wear.zoo`): with the brushes' resistance and the pump's load coefficient both wearing,
+every residual of the noise-free record is the sum of what each change predicts alone.
+"""
+
+import numpy as np
+import pytest
+
+from diagnosis import derive_arrs
+from prognosis.degradation import JointDegradation, LinearDegradation, PerAssetDegradation
+from prognosis.hypotheses import Hypothesis, HypothesisObservation, JointHypothesis, JointObservation, additive
+from prognosis.isolation import IsolatingMonitor, IsolationResult, held_back
+from prognosis.resample_move import ResampleMoveFilter
+from tests.wear.laws import LAWS
+from tests.wear.run import SYSTEMS
+
+FACTS = SYSTEMS["pump_drive"]
+
+
+@pytest.fixture(scope="module")
+def arrs():
+    return derive_arrs(FACTS.model())
+
+
+def test_the_joint_model_predicts_what_two_wearing_parameters_do_to_every_residual(arrs):
+    laws = {"R_a": LAWS["linear"](FACTS.nominal["R_a"], FACTS.failures["R_a"], 0.2, 2.0),
+            "c_p": LAWS["exponential"](FACTS.nominal["c_p"], FACTS.failures["c_p"], 0.2, 1.6)}
+    record = FACTS.simulate(laws, t_end=1.6, dt=FACTS.dt, noise={}, seed=0)
+    healthy = FACTS.simulate({}, t_end=1.6, dt=FACTS.dt, noise={}, seed=0)
+    t = record["t"]
+    settled = (t > 0.3) & (t < 1.5)   # away from the onset's kink and the record's ends
+    joint = JointObservation([HypothesisObservation(arrs, [Hypothesis("R_a", "linear", 1.0, FACTS.nominal["R_a"])]),
+                              HypothesisObservation(arrs, [Hypothesis("c_p", "linear", 1.0,
+                                                                      FACTS.nominal["c_p"])])])
+    theta = np.stack([laws["R_a"](t[settled]), laws["c_p"](t[settled])], axis=-1)[None, None]   # (1, 1, K, 2)
+    rate = np.gradient(np.stack([laws["R_a"](t), laws["c_p"](t)], axis=-1), t, axis=0)[settled][None, None]
+    evaluations = [a.evaluate(record) for a in arrs]
+    steps = [[[np.asarray(p)[k] for p in e.points] for e in evaluations] for k in np.flatnonzero(settled)]
+    predicted = joint.trajectory(theta, steps, rate=rate)[0, 0]   # (K, M)
+    for m, (arr, e) in enumerate(zip(arrs, evaluations)):
+        change = -e.residual[settled]
+        floor = np.max(np.abs(arr.evaluate(healthy).residual[settled]))   # the healthy record's own residual
+        scale = np.max(np.abs(change))
+        assert scale > 100 * floor, arr.name   # both faults show well above it
+        assert np.max(np.abs(predicted[:, m] - change)) <= 1e-3 * scale + 2 * floor, arr.name
+
+
+def test_two_parameters_in_one_product_are_not_weighed_as_a_pair(arrs):
+    assert additive(arrs, "R_a", "c_p") == ""
+    assert "one product" in additive(arrs, "k_m", "r_g")   # k_m omega_p / r_g: their changes do not add
+
+
+def test_a_joint_filter_follows_two_parameters_with_distinct_particles():
+    # y = (theta_1, theta_1 + theta_2): both rates are identifiable, measured with noise 0.02
+    bank = PerAssetDegradation((LinearDegradation(),), (0,))
+    model = JointDegradation((bank, bank))
+    f = ResampleMoveFilter(model, lambda theta, points: np.stack([theta[..., 0], theta.sum(-1)], axis=-1),
+                           noise=[0.02, 0.02], dt=1.0, n_particles=300, seed=3)
+    f.initialize((np.zeros((1, 2)), np.ones((1, 2))), gamma_bounds=(np.zeros((1, 2)), np.full((1, 2), 0.2)),
+                 components=2)
+    rng = np.random.default_rng(0)
+    for k in range(40):
+        first, second = 0.5 + 0.05 * k, 0.2 + 0.1 * k
+        step = f.step(np.array([[first, first + second]]) + rng.normal(0, 0.02, (1, 2)))
+    estimate = f.estimate()
+    assert estimate["gamma_mean"][0] == pytest.approx([0.05, 0.1], abs=0.005)
+    assert [c["theta_mean"][0] for c in estimate["components"]] == pytest.approx([2.45, 4.1], abs=0.05)
+    assert f.theta.shape == (1, 300, 2) and not step.collapsed[0]
+    assert np.unique(f.gamma[0, :, 1]).size > 100
+
+
+def test_a_pair_is_held_back_until_it_beats_each_of_its_parameters_alone():
+    a, b = Hypothesis("a", "power", 2.0, 1.0), Hypothesis("b", "power", 2.0, 1.0)
+    pair = JointHypothesis((a, b))
+    hypotheses = [a, b, pair]
+    assert set(held_back(hypotheses, np.array([0.0, -1.0, 4.0]))) == {pair.name}   # e^4 < 100
+    assert held_back(hypotheses, np.array([0.0, -1.0, 4.0]), min_ratio=10.0) == {}
+    # a rejected single does not count against the pair, and a rejected pair is not held back again
+    assert held_back(hypotheses, np.array([0.0, -1.0, 0.5]), rejected={a.name: "", b.name: ""}) == {}
+    assert held_back(hypotheses, np.array([0.0, -1.0, 0.5]), rejected={pair.name: ""}) == {}
+
+
+def test_the_pairs_of_a_first_candidate_are_with_every_other_parameter_that_adds(arrs):
+    monitor = IsolatingMonitor(arrs, FACTS.failures, noise_std={a.name: 1.0 for a in arrs},
+                               method="resample-move")
+    result = IsolationResult(0.5, fired=["ARR_1_e"], candidates=["R_a", "L_a"])
+    pairs, groups = monitor.pairs_for(result)
+    assert ("R_a", "c_p") in pairs and ("L_a", "c_p") in pairs and ("R_a", "L_a") in pairs
+    assert ("L_a", "R_a") not in pairs   # one pair once
+    assert not any({"k_m", "r_g"} <= set(p) for p in pairs)
+    hypotheses = monitor.pair_hypotheses(("R_a", "c_p"))
+    assert len(hypotheses) == 9 and "R_a/linear + c_p/exponential" in [h.name for h in hypotheses]
+    assert hypotheses[0].parts[1].failure == FACTS.failures["c_p"]
+    assert all(len(g) > 1 for g in groups)
