@@ -1,0 +1,45 @@
+"""Two parameters wearing at once: the pump drive's brushes (R_a, linearly to 2.0 s) and its impeller's
+load (c_p, exponentially, failing first at 1.6 s), simulated from the physics and run through
+``bgphm prognose --filter resample-move`` as a user would.  The brushes' ARR fires first; the answer must
+name both, and the RUL must be the first failure's, not the brushes'.
+"""
+
+import numpy as np
+import pytest
+
+from tests.wear.run import SYSTEMS, Scenario, fault_of, laws, record, run, same_fault, score
+
+PAIR = Scenario("pump_drive", "R_a + c_p", "linear + exponential", "noisy")
+
+
+def test_the_concurrent_scenario_wears_both_parameters_each_to_its_failure_at_its_own_end_of_life():
+    facts = SYSTEMS["pump_drive"]
+    theta = laws(PAIR)
+    assert set(theta) == {"R_a", "c_p"} and PAIR.eol == 1.6
+    for name, _, eol in PAIR.wearing:
+        assert theta[name](facts.onset) == facts.nominal[name]
+        assert theta[name](eol) == pytest.approx(facts.failures[name], rel=1e-12)
+    # both change the record: each alone gives another one
+    both = record(PAIR, seed=0, noise={})
+    alone = facts.simulate({"R_a": theta["R_a"]}, t_end=facts.t_end, dt=facts.dt, noise={}, seed=0)
+    late = both["t"] > 1.0
+    assert np.max(np.abs(both["omega_p"][late] - alone["omega_p"][late])) > 1.0   # rad/s: the pump slows
+    assert same_fault("c_p + R_a", PAIR.parameter) and fault_of("R_a/linear + c_p/exponential") == "R_a + c_p"
+
+
+@pytest.mark.slow  # a 2 s record of the pump's physics and bgphm prognose with pairs: about 60 s of CPU
+def test_two_parameters_wearing_at_once_are_named_together_and_the_first_failure_is_predicted():
+    answer = run(PAIR, seed=5, particles=100, rul_every=40, method="resample-move")
+    assert answer["exit"] == 0, answer.get("error")
+    figures = score(PAIR, answer)
+    assert figures["found"] and answer["status"] == "isolated", (answer["candidate"], answer["status"])
+    assert same_fault(fault_of(figures["top"]), PAIR.parameter), figures["top"]
+    assert set(answer["evidence"][figures["top"]]["parameters"]) == {"R_a", "c_p"}
+    # the RUL is c_p's (at 1.6 s), not the brushes' (at 2.0 s): over the last third of c_p's life the
+    # band holds the first failure and its median is far from the brushes' end
+    late = [p for p in answer["predictions"] if 1.1 < p["t"] < PAIR.eol and not p.get("withheld")]
+    assert late
+    for p in late:
+        first, brushes = PAIR.eol - p["t"], 2.0 - p["t"]
+        assert p["rul_p5"] <= first <= p["rul_p95"], p
+        assert abs(p["rul_median"] - first) < abs(p["rul_median"] - brushes), p
