@@ -15,7 +15,10 @@ and the filter's own streams.  The user's side is a model file, a CSV and ``--fa
 the truth.
 
 A sensor scenario offsets one encoder's reading of the torsion bar (a bias, a drift), the machine
-healthy: the sensor and its law must be named, and no RUL is due.
+healthy: the sensor and its law must be named, and no RUL is due.  A concurrent scenario wears two
+parameters at once (the pump's brushes and impeller, the pipe's strainer and the tank's outlet), the
+second failing first: both must be named (``"R_a + c_p"``) and the RUL is the first failure's; only
+``--filter resample-move`` weighs pairs.
 
 Per scenario, over the seeds: the share of runs that name the degrading parameter or the faulty
 sensor (or an honest indistinguishable group holding it), the share whose most probable hypothesis

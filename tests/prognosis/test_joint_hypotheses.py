@@ -94,3 +94,14 @@ def test_the_pairs_of_a_first_candidate_are_with_every_other_parameter_that_adds
     assert len(hypotheses) == 9 and "R_a/linear + c_p/exponential" in [h.name for h in hypotheses]
     assert hypotheses[0].parts[1].failure == FACTS.failures["c_p"]
     assert all(len(g) > 1 for g in groups)
+
+
+def test_without_a_single_candidate_the_pairs_are_those_whose_arrs_hold_every_fired_one(arrs):
+    monitor = IsolatingMonitor(arrs, FACTS.failures, noise_std={a.name: 1.0 for a in arrs},
+                               method="resample-move")
+    pairs, _ = monitor.pairs_for(IsolationResult(0.5, fired=["ARR_1_e", "ARR_1_p"], candidates=[]))
+    assert ("R_a", "c_p") in pairs or ("c_p", "R_a") in pairs
+    seen = {a.name: set(a.parameters) for a in arrs}
+    for pair in pairs:   # each fired ARR sees one of the two
+        assert all(set(pair) & seen[name] for name in ("ARR_1_e", "ARR_1_p")), pair
+    assert not any(set(pair) <= seen["ARR_1_e"] - seen["ARR_1_p"] for pair in pairs)   # R_a with L_a: not both

@@ -1,7 +1,8 @@
 """One prognosis scenario, run as a user would: a model file, a CSV, ``bgphm prognose --fail ...``.
 
 A scenario names a system (:data:`SYSTEMS`: the torsion bar, and from the model zoo a DC motor driving a
-pump and a pipe feeding a tank), the parameter that wears, its law and the noise.  The truth (the
+pump and a pipe feeding a tank), the parameter that wears (or two at once, ``"R_a + c_p"``, or a sensor),
+its law and the noise.  The truth (the
 parameter's law, hence the end of life) comes from the scenario, the answer from the command's
 ``prognosis.json``; :func:`score` compares them: whether the degrading parameter was named (or honestly
 called undecided or indistinguishable), the share of the second half of life where the median RUL is
