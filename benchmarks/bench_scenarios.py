@@ -1,7 +1,7 @@
 """Prognosis scenarios (issue 31): wear laws simulated from the physics, run through ``bgphm prognose``.
 
     python benchmarks/bench_scenarios.py [--json] [--seeds 10] [--particles 300] [--rul-every 10]
-                                         [--jobs 2] [--filter sir|resample-move] [--system NAME]
+                                         [--jobs 2] [--filter sir|resample-move] [--pairs] [--system NAME]
                                          [--degradation LAW ...] [NAME ...]
 
 Each scenario (tests/wear/run.py) is a parameter wearing by a law (linear, exponential, power,
@@ -17,8 +17,8 @@ the truth.
 A sensor scenario offsets one encoder's reading of the torsion bar (a bias, a drift), the machine
 healthy: the sensor and its law must be named, and no RUL is due.  A concurrent scenario wears two
 parameters at once (the pump's brushes and impeller, the pipe's strainer and the tank's outlet), the
-second failing first: both must be named (``"R_a + c_p"``) and the RUL is the first failure's; only
-``--filter resample-move`` weighs pairs.
+second failing first: both must be named (``"R_a + c_p"``) and the RUL is the first failure's; pairs
+are weighed only with ``--filter resample-move --pairs`` (then in every scenario).
 
 Per scenario, over the seeds: the share of runs that name the degrading parameter or the faulty
 sensor (or an honest indistinguishable group holding it), the share whose most probable hypothesis
@@ -51,11 +51,11 @@ SEED_BASE = 20261126   # seeds SEED_BASE + k: each its own noise and its own fil
 
 
 def one(arguments: tuple) -> dict:
-    scenario, seed, particles, rul_every, method, laws = arguments
+    scenario, seed, particles, rul_every, method, laws, pairs = arguments
     started = time.process_time()
     figures = score(scenario, run(scenario, seed, particles=particles, rul_every=rul_every, method=method,
-                                  degradation=laws))
-    return {**figures, "seed": seed, "filter": method, "cpu_s": round(time.process_time() - started, 1)}
+                                  degradation=laws, pairs=pairs))
+    return {**figures, "seed": seed, "filter": method, "pairs": pairs, "cpu_s": round(time.process_time() - started, 1)}
 
 
 def pooled(name: str, rows: list[dict]) -> dict:
@@ -66,6 +66,7 @@ def pooled(name: str, rows: list[dict]) -> dict:
     within, ra = values("within_20pct_second_half"), values("ra")
     return {
         "scenario": name, "seeds": len(rows), "filter": rows[0]["filter"] if rows else None,
+        "pairs": rows[0]["pairs"] if rows else None,
         "found": float(np.mean([r["found"] for r in rows])),
         "statuses": dict(Counter(str(r.get("status")) for r in rows)),
         "laws": dict(Counter(str(r.get("degradation")) for r in rows)),
@@ -107,12 +108,14 @@ def main() -> int:
     parser.add_argument("--rul-every", type=int, default=10)
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--filter", choices=("sir", "resample-move"), default="sir", help="bgphm prognose --filter")
+    parser.add_argument("--pairs", action="store_true",
+                        help="bgphm prognose --pairs: weigh two parameters wearing at once (with resample-move)")
     parser.add_argument("--degradation", action="append", default=[], choices=("linear", "exponential", "power"),
                         help="bgphm prognose --degradation (repeatable; default the command's laws)")
     args = parser.parse_args()
     chosen = [s for s in scenarios() if (not args.names or s.name in args.names)
               and (not args.system or s.system in args.system)]
-    tasks = [(s, SEED_BASE + k, args.particles, args.rul_every, args.filter, tuple(args.degradation))
+    tasks = [(s, SEED_BASE + k, args.particles, args.rul_every, args.filter, tuple(args.degradation), args.pairs)
              for s in chosen for k in range(args.seeds)]
     with ProcessPoolExecutor(args.jobs) as pool:
         results = list(pool.map(one, tasks)) if args.jobs > 1 else [one(t) for t in tasks]

@@ -194,6 +194,9 @@ def cmd_prognose(args, progress: Progress) -> int:
                           **({"window": args.window} if args.window else {})} for e in evaluations}
     if args.rate is not None and not (all(math.isfinite(v) for v in args.rate) and args.rate[0] < args.rate[1]):
         raise UsageError(f"--rate {args.rate[0]:g} {args.rate[1]:g}: need two finite numbers with lo < hi")
+    if args.pairs and (args.filter != "resample-move" or candidates is not None):
+        raise UsageError("--pairs: two faults at once are weighed with --filter resample-move and without "
+                         "--candidate only")
     monitor = IsolatingMonitor(arrs, failures, noise_std=noise, laws=laws, candidates=candidates,
                                sensors=args.sensors, pairs=args.pairs, dt=dt,
                                n_particles=args.particles, rate=None if args.rate is None else tuple(args.rate),
@@ -913,9 +916,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--sensors", action=argparse.BooleanOptionalAction, default=True,
                    help="weigh a bias, drift or gain of each sensor consistent with the ARRs that fired too "
                         "(default; --no-sensors: the sensors are healthy)")
-    p.add_argument("--pairs", action=argparse.BooleanOptionalAction, default=True,
+    p.add_argument("--pairs", action=argparse.BooleanOptionalAction, default=False,
                    help="with --filter resample-move, weigh two parameters wearing at once too, declared only when "
-                        "the data demand two faults; the RUL is the first failure's (default; --no-pairs: one)")
+                        "the data demand two faults; the RUL is the first failure's (default: one fault)")
     p.add_argument("--direction", choices=("up", "down"), help="check that --candidate's failure value lies on "
                    "this side of nominal")
     p.add_argument("--rate", type=float, nargs=2, metavar=("LO", "HI"),

@@ -43,11 +43,13 @@ class ResidualNoise:
     ----------
     covariance : array (A, M, M) or (M, M)
         ``C``: the residuals' covariance at the nominal value.
-    cross, growth : array like ``covariance``, optional
+    cross, growth : array (A, M, M C) and (A, M C, M C), optional
         ``X`` and ``G``: cross-covariance of residual and sensitivity noise, covariance of the
-        sensitivities' noise.  Without them the noise does not depend on theta.
-    nominal : array (A,) or float
-        ``theta_n`` of each asset (row).
+        sensitivities' noise, of each of C parameters per row (C = 1: like ``covariance``; C > 1, a
+        joint hypothesis: the sensitivities of the C parameters side by side, ``Cov(y - h) = C +
+        sum_c D_c (X_c + X_c^T) + sum_cd D_c D_d G_cd``).  Without them the noise does not depend on theta.
+    nominal : array (A,), (A, C) or float
+        ``theta_n`` of each asset (row), of each of its C parameters.
     inflation : float
         Multiplier of the whole covariance (1: the noise as measured).
 
@@ -86,7 +88,8 @@ class ResidualNoise:
             value = getattr(self, name)
             if value is not None:
                 value = np.asarray(value, float)
-                object.__setattr__(self, name, np.broadcast_to(value if value.ndim == 3 else value[None], c.shape))
+                value = value if value.ndim == 3 else value[None]
+                object.__setattr__(self, name, np.broadcast_to(value, (c.shape[0], *value.shape[1:])))
         object.__setattr__(self, "nominal", np.atleast_1d(np.asarray(self.nominal, float)))
         if self.cross is not None or self.growth is not None:
             self._make_joint_positive()
@@ -100,8 +103,9 @@ class ResidualNoise:
         positive semi-definite exactly when the Schur complement ``G - X^T C^-1 X`` is: its negative
         eigenvalues are set to zero, which raises G (more noise, never less) and keeps C and X.
         """
-        x = np.zeros_like(self.covariance) if self.cross is None else self.cross
-        g = np.zeros_like(self.covariance) if self.growth is None else self.growth
+        width = self.size * self.components
+        x = np.zeros((*self.covariance.shape[:2], width)) if self.cross is None else self.cross
+        g = np.zeros((self.covariance.shape[0], width, width)) if self.growth is None else self.growth
         explained = np.swapaxes(x, -1, -2) @ np.linalg.solve(self.covariance, x)
         schur = g - explained
         values, vectors = np.linalg.eigh(0.5 * (schur + np.swapaxes(schur, -1, -2)))
@@ -138,19 +142,37 @@ class ResidualNoise:
         """M, the number of residuals."""
         return self.covariance.shape[-1]
 
+    @property
+    def components(self) -> int:
+        """C, the parameters per row the noise grows with (theta then carries them on a last axis when C > 1)."""
+        given = self.cross if self.cross is not None else self.growth
+        return 1 if given is None else given.shape[-1] // self.size
+
     def covariance_at(self, theta: np.ndarray) -> np.ndarray:
-        """``Sigma(theta)`` (A, N, ..., M, M) for ``theta`` (A, N, ...), kept positive definite."""
+        """``Sigma(theta)`` (A, N, ..., M, M) for ``theta`` (A, N, ...), or (A, N, ..., C) with C > 1
+        :attr:`components`, kept positive definite."""
         theta = np.asarray(theta, float)
-        extra = (slice(None),) + (None,) * (theta.ndim - 1) + (Ellipsis,)
-        sigma = np.broadcast_to(self.covariance[extra], (*theta.shape, self.size, self.size))
+        c, m = self.components, self.size
+        batch = theta.shape if c == 1 else theta.shape[:-1]
+        extra = (slice(None),) + (None,) * (len(batch) - 1) + (Ellipsis,)
+        sigma = np.broadcast_to(self.covariance[extra], (*batch, m, m))
         if self.cross is None and self.growth is None:
             return self.inflation * sigma
-        d = (theta - self.nominal.reshape((-1,) + (1,) * (theta.ndim - 1)))[..., None, None]
+        d = (theta.reshape(*batch, c) - self.nominal.reshape((-1,) + (1,) * (len(batch) - 1) + (c,)))
         with np.errstate(over="ignore", invalid="ignore"):  # a theta far out overflows: no density there
-            if self.cross is not None:
-                sigma = sigma + d * (self.cross + np.swapaxes(self.cross, -1, -2))[extra]
-            if self.growth is not None:
-                sigma = sigma + np.square(d) * self.growth[extra]
+            if c == 1:
+                d = d[..., None]
+                if self.cross is not None:
+                    sigma = sigma + d * (self.cross + np.swapaxes(self.cross, -1, -2))[extra]
+                if self.growth is not None:
+                    sigma = sigma + np.square(d) * self.growth[extra]
+            elif self.cross is not None:  # sum_c d_c X_c, X_c the c-th M x M block of X
+                blocks = self.cross.reshape(-1, m, c, m)[extra]
+                term = np.einsum("...c,...icj->...ij", d, blocks)
+                sigma = sigma + term + np.swapaxes(term, -1, -2)
+            if c > 1 and self.growth is not None:  # sum_cd d_c d_d G_cd
+                blocks = self.growth.reshape(-1, c, m, c, m)[extra]
+                sigma = sigma + np.einsum("...c,...d,...cidj->...ij", d, d, blocks)
         # the cross term can only lower the variance as far as the correlation allows; estimates from
         # a short stretch may overshoot, so the diagonal stays at least at the healthy one's share
         healthy = np.diagonal(self.covariance, axis1=-2, axis2=-1)[extra]

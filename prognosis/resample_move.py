@@ -293,7 +293,7 @@ class ResampleMoveFilter:
         mean = np.einsum("an,anm->am", weights, predicted)
         spread = np.einsum("an,anm->am", weights, np.square(predicted - mean[:, None, :]))
         noise = np.einsum("an,anm->am", weights,
-                          np.diagonal(self.noise.covariance_at(self._first(self.theta)), axis1=-2, axis2=-1))
+                          np.diagonal(self.noise.covariance_at(self._noise_theta(self.theta)), axis1=-2, axis2=-1))
         return (y - mean) / np.sqrt(spread + noise)
 
     def _next_share(self, increment: np.ndarray, done: np.ndarray) -> np.ndarray:
@@ -403,7 +403,7 @@ class ResampleMoveFilter:
         pieces = []
         for path, rate, start, stop in self._paths(z):
             gaps = self._history_gaps(path, rate, start, stop)  # (A, 1, K, M)
-            sd = np.sqrt(np.diagonal(self.noise.covariance_at(self._first(path)), axis1=-2, axis2=-1))
+            sd = np.sqrt(np.diagonal(self.noise.covariance_at(self._noise_theta(path)), axis1=-2, axis2=-1))
             pieces.append((gaps / sd)[:, 0])
         return np.concatenate(pieces, axis=1)
 
@@ -436,7 +436,7 @@ class ResampleMoveFilter:
     def _history_terms(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int, view=None) -> np.ndarray:
         """log p(y_j | theta_j) (A, N, K) for the steps ``start..stop`` of the history."""
         gaps = self._history_gaps(path, rate, start, stop, view)
-        terms = (self.noise if view is None else view[3]).log_density(gaps, self._first(path))
+        terms = (self.noise if view is None else view[3]).log_density(gaps, self._noise_theta(path))
         measured = np.isfinite(gaps).any(axis=-1)
         return np.where(measured, terms, 0.0)
 
@@ -478,11 +478,14 @@ class ResampleMoveFilter:
     def _log_likelihood(self, y: np.ndarray, predicted: np.ndarray, theta: np.ndarray) -> np.ndarray:
         if y.ndim == 1:
             y, predicted = y[:, None], predicted[..., None]
-        return self.noise.log_density(y[:, None, :] - predicted, self._first(theta))
+        return self.noise.log_density(y[:, None, :] - predicted, self._noise_theta(theta))
 
-    def _first(self, theta: np.ndarray) -> np.ndarray:
-        """What the noise grows with: theta, or a joint hypothesis' first parameter (its others' growth left out)."""
-        return theta if self.components is None else theta[..., 0]
+    def _noise_theta(self, theta: np.ndarray) -> np.ndarray:
+        """What the noise grows with: theta, or of joint hypotheses' parameters those the noise knows (the
+        first, unless it grows with each: :attr:`~prognosis.likelihood.ResidualNoise.components`)."""
+        if self.components is None or self.noise.components == self.components:
+            return theta
+        return theta[..., 0]
 
     def _distinct(self) -> np.ndarray:
         """Distinct particles per asset (A,), counted on a coordinate the prior leaves free (a move changes all)."""

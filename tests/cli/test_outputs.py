@@ -154,6 +154,10 @@ def test_check_output_accepts_new_paths_and_names_the_option(tmp_path):
      "--horizon 1e+12: "),
     (["prognose", "{model}", "{data}", "--fail", "b=2e-3", "--calibrate", "0.5", "--horizon", "1e4",
       "--particles", "50000"], "GiB of random numbers"),
+    (["prognose", "{model}", "{data}", "--fail", "b=2e-3", "--calibrate", "0.5", "--pairs"],
+     "--pairs: two faults at once are weighed with --filter resample-move"),
+    (["prognose", "{model}", "{data}", "--fail", "b=2e-3", "--calibrate", "0.5", "--pairs", "--filter",
+      "resample-move", "--candidate", "b"], "without --candidate only"),
 ])
 def test_bad_options_exit_2_naming_the_option(motor, capsys, argv, message):
     model, data = motor

@@ -226,11 +226,12 @@ def record(scenario: Scenario, seed: int, *, noise: Mapping | None = None) -> di
 
 
 def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int = 10, method: str = "sir",
-        degradation: str | tuple = (), sensors: bool = True) -> dict:
+        degradation: str | tuple = (), sensors: bool = True, pairs: bool = False) -> dict:
     """``prognosis.json`` of ``bgphm prognose`` on the scenario's record (exit code under ``"exit"``).
 
     ``degradation``: the competing laws (``--degradation``, a name or several; default the command's);
-    ``sensors=False``: the sensors' faults are not weighed (``--no-sensors``).
+    ``sensors=False``: the sensors' faults are not weighed (``--no-sensors``); ``pairs=True``: two
+    parameters wearing at once are (``--pairs``, with ``method="resample-move"``).
     """
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -242,7 +243,7 @@ def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int =
                 "--calibrate", f"{facts.calibrate:g}", "--particles", str(particles), "--rul-every", str(rul_every),
                 "--seed", str(seed), "--filter", method, "--out", str(folder / "out"),
                 *(f"--degradation={law}" for law in ([degradation] if isinstance(degradation, str) else degradation)),
-                *([] if sensors else ["--no-sensors"])]
+                *([] if sensors else ["--no-sensors"]), *(["--pairs"] if pairs else [])]
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
             code = bgphm(argv)
         if code != 0:
