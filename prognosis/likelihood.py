@@ -166,13 +166,16 @@ class ResidualNoise:
                     sigma = sigma + d * (self.cross + np.swapaxes(self.cross, -1, -2))[extra]
                 if self.growth is not None:
                     sigma = sigma + np.square(d) * self.growth[extra]
-            elif self.cross is not None:  # sum_c d_c X_c, X_c the c-th M x M block of X
-                blocks = self.cross.reshape(-1, m, c, m)[extra]
-                term = np.einsum("...c,...icj->...ij", d, blocks)
-                sigma = sigma + term + np.swapaxes(term, -1, -2)
-            if c > 1 and self.growth is not None:  # sum_cd d_c d_d G_cd
-                blocks = self.growth.reshape(-1, c, m, c, m)[extra]
-                sigma = sigma + np.einsum("...c,...d,...cidj->...ij", d, d, blocks)
+            else:  # a loop over the C parameters (a few): elementwise products broadcast fast, einsum does not
+                d = d[..., None, None]
+                for i in range(c):
+                    if self.cross is not None:  # d_i (X_i + X_i^T), X_i the i-th M x M block of X
+                        block = self.cross[:, :, i * m:(i + 1) * m]
+                        sigma = sigma + d[..., i, :, :] * (block + np.swapaxes(block, -1, -2))[extra]
+                    if self.growth is not None:  # d_i d_j G_ij
+                        for j in range(c):
+                            block = self.growth[:, i * m:(i + 1) * m, j * m:(j + 1) * m][extra]
+                            sigma = sigma + (d[..., i, :, :] * d[..., j, :, :]) * block
         # the cross term can only lower the variance as far as the correlation allows; estimates from
         # a short stretch may overshoot, so the diagonal stays at least at the healthy one's share
         healthy = np.diagonal(self.covariance, axis1=-2, axis2=-1)[extra]

@@ -74,3 +74,28 @@ def test_more_arrs_than_sensors_give_a_covariance_that_stays_invertible():
     assert np.all(np.isfinite(log_p))
     # the correlations themselves are kept, up to the floor
     assert np.corrcoef(a + b, a)[0, 1] == pytest.approx(covariance[0, 2] / (scale[0] * scale[2]), abs=0.02)
+
+
+def test_the_noise_of_two_parameters_grows_with_each_as_their_sensitivities_side_by_side_say():
+    # Cov(y - h) = C + X D^T + D X^T + D G D^T with D = [d_1 I, d_2 I]: the sensitivities' noise of both
+    rng = np.random.default_rng(0)
+    assets, m = 3, 2
+    # the joint covariance of the residuals' and both sensitivities' noise, positive definite
+    factor = rng.normal(0, 0.1, (assets, 3 * m, 3 * m))
+    joint = factor @ np.swapaxes(factor, -1, -2) + 0.01 * np.eye(3 * m)
+    covariance, cross, growth = joint[:, :m, :m], joint[:, :m, m:], joint[:, m:, m:]
+    noise = ResidualNoise(covariance, cross, growth, nominal=np.ones((assets, 2)))
+    assert noise.components == 2
+    theta = rng.normal(1.0, 0.3, (assets, 5, 4, 2))
+    sigma = noise.covariance_at(theta)
+    for a, i, k in [(0, 0, 0), (2, 4, 3), (1, 2, 1)]:
+        d = theta[a, i, k] - 1.0
+        D = np.hstack([d[0] * np.eye(m), d[1] * np.eye(m)])
+        expected = noise.covariance[a] + noise.cross[a] @ D.T + D @ noise.cross[a].T + D @ noise.growth[a] @ D.T
+        healthy = np.diag(noise.covariance[a])
+        expected += np.diag(np.maximum(0.25 * healthy - np.diag(expected), 0.0) + 1e-6 * healthy)
+        assert sigma[a, i, k] == pytest.approx(expected, abs=1e-14)
+    # a second parameter at its nominal value: the noise of the first alone
+    single = ResidualNoise(covariance, cross[:, :, :m], growth[:, :m, :m], nominal=np.ones(assets))
+    at_first = np.stack([theta[..., 0], np.ones(theta.shape[:-1])], axis=-1)
+    assert noise.covariance_at(at_first) == pytest.approx(single.covariance_at(theta[..., 0]), abs=1e-14)
