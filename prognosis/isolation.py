@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections import Counter
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -153,9 +154,7 @@ def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: S
     ('indistinguishable', ('k',))
     """
     log_z = np.array([-np.inf if h.name in rejected else float(v) for h, v in zip(hypotheses, log_evidence)])
-    laws_of = {}
-    for h in hypotheses:
-        laws_of[h.candidate] = laws_of.get(h.candidate, 0) + 1
+    laws_of = Counter(h.candidate for h in hypotheses)
     # a uniform prior over the candidates, then over each one's laws: a pair with nine pairs of laws
     # weighs no more than a parameter with three
     probabilities = _softmax(log_z - np.log([laws_of[h.candidate] for h in hypotheses]))
@@ -209,17 +208,17 @@ def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[
     for h, value in zip(hypotheses, log_evidence):  # a rejected one counts with no evidence
         value = -np.inf if h.name in rejected else float(value)
         (pairs if isinstance(h, JointHypothesis) else alone).setdefault(h.candidate, []).append(value)
-    held = {}
-    for h in hypotheses:
-        if not isinstance(h, JointHypothesis) or h.name in rejected:
-            continue
-        together = _logmeanexp(pairs[h.candidate])
-        rivals = {m: _logmeanexp(alone[m]) for m in h.members if m in alone and np.isfinite(alone[m]).any()}
+    why = {}  # pair candidate -> why it is held back
+    for candidate, values in pairs.items():
+        together = _logmeanexp(values)
+        rivals = {m: _logmeanexp(alone[m]) for m in candidate.split(" + ")
+                  if m in alone and np.isfinite(alone[m]).any()}
         best = max(rivals, key=rivals.get, default=None)
         if best is not None and together - rivals[best] < math.log(min_ratio):
-            held[h.name] = (f"{h.candidate} explain the residuals no better than {best} alone "
-                            f"(evidence ratio {math.exp(min(together - rivals[best], 700.0)):.3g} < {min_ratio:g})")
-    return held
+            why[candidate] = (f"{candidate} explain the residuals no better than {best} alone (evidence ratio "
+                              f"{math.exp(min(together - rivals[best], 700.0)):.3g} < {min_ratio:g})")
+    return {h.name: why[h.candidate] for h in hypotheses
+            if isinstance(h, JointHypothesis) and h.name not in rejected and h.candidate in why}
 
 
 @dataclass
