@@ -29,7 +29,7 @@ def test_the_concurrent_scenario_wears_both_parameters_each_to_its_failure_at_it
 
 @pytest.mark.slow  # a 2 s record of the pump's physics and bgphm prognose with pairs: about 60 s of CPU
 def test_two_parameters_wearing_at_once_are_named_together_and_the_first_failure_is_predicted():
-    answer = run(PAIR, seed=5, particles=100, rul_every=40, method="resample-move", pairs=True)
+    answer = run(PAIR, seed=5, particles=60, rul_every=80, method="resample-move", pairs=True)
     assert answer["exit"] == 0, answer.get("error")
     figures = score(PAIR, answer)
     # named, alone or with a pair the record cannot tell from it (the bearing's friction b_m omega acts
