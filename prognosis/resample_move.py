@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .degradation import trajectory
 from .errors import PrognosisError
 from .likelihood import MIN_STEPS, ResidualNoise, information_excess
 from .particle_filter import COLLAPSE_BELOW, StepDiagnostics, check_particles, check_positive, cloud_estimate
@@ -418,20 +419,10 @@ class ResampleMoveFilter:
         rates = getattr(observation, "rates", False)  # theta's rate only where an ARR sees it (a differentiated one)
         for start in range(0, steps, CHUNK):
             stop = min(start + CHUNK, steps)
-            if hasattr(model, "trajectory"):  # the whole chunk at once, its rate from the step after each
-                path = model.trajectory(theta, gamma, start, stop + rates, self.dt)
-                rate = np.diff(path, axis=2) / self.dt if rates else None
-                yield path[:, :, :stop - start], rate, start, stop
-                continue
-            path = np.empty((*theta.shape[:2], stop - start, *theta.shape[2:]))  # steps after (A, N)
-            rate = np.empty_like(path) if rates else None
-            for j in range(start, stop):
-                if j:
-                    theta = model.step(theta, gamma, self.dt)
-                path[:, :, j - start] = theta
-                if rate is not None:
-                    rate[:, :, j - start] = self._rate(theta, gamma, model)
-            yield path, rate, start, stop
+            # the whole chunk at once (in closed form where the law has one), its rate from the step after each
+            path = trajectory(model, theta, gamma, start, stop + rates, self.dt)
+            rate = np.diff(path, axis=2) / self.dt if rates else None
+            yield path[:, :, :stop - start], rate, start, stop
 
     def _history_terms(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int, view=None) -> np.ndarray:
         """log p(y_j | theta_j) (A, N, K) for the steps ``start..stop`` of the history."""
