@@ -185,7 +185,15 @@ def csv_text(columns: Mapping[str, ArrayLike]) -> str:
     0.1,
     """
     names = list(columns)
-    data = np.column_stack([np.asarray(columns[n], float) for n in names])
-    lines = [",".join(names)]
-    lines += [",".join("" if not np.isfinite(v) else repr(float(v)) for v in row) for row in data]
+    cells = [_cells(np.asarray(columns[n], float)) for n in names]
+    if len({len(c) for c in cells}) > 1:
+        raise ValueError("csv_text: columns of different lengths: "
+                         + ", ".join(f"{n} ({len(c)})" for n, c in zip(names, cells)))
+    lines = [",".join(names)] + [",".join(row) for row in zip(*cells)]
     return "\n".join(lines) + "\n"
+
+
+def _cells(values: np.ndarray) -> list[str]:
+    """One column's cells: ``repr`` of each finite value (a Python float's repr reads back exactly), else empty."""
+    finite = np.isfinite(values)
+    return [repr(v) if ok else "" for v, ok in zip(values.ravel().tolist(), finite.ravel().tolist())]

@@ -348,8 +348,10 @@ def persistent(violation: np.ndarray, samples: int) -> np.ndarray:
     """
     if samples <= 1:
         return violation.copy()
-    run = np.convolve(violation.astype(int), np.ones(samples, int))[: violation.size]
-    return run >= samples
+    # a running count of violations, O(n) whatever the window (a convolution costs O(n * samples))
+    count = np.concatenate(([0], np.cumsum(violation, dtype=np.int64)))
+    window = count[1:] - count[np.maximum(np.arange(violation.size) + 1 - samples, 0)]
+    return window >= samples
 
 
 def noise_margin(arr, nominal_record, k: float = 3.0, **options) -> float:

@@ -264,6 +264,7 @@ MISSING_CELLS = frozenset({"", "nan", "NaN", "NAN", "NA", "N/A", "null"})
 #: A number in a CSV cell: decimal digits with an optional sign, point and exponent.  Python's
 #: ``float()`` also takes ``1_000``, other scripts' digits and surrounding words; a data file should not.
 CSV_NUMBER = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
+_PLAIN_COLUMN = re.compile(f"(?:{CSV_NUMBER.pattern})(?:\n(?:{CSV_NUMBER.pattern}))*")
 #: Words ``float()`` reads as infinite or NaN, with an optional sign, in any case.
 _SPECIAL_NUMBER = re.compile(r"[+-]?(?:inf|infinity|nan)", re.IGNORECASE)
 #: Separators a CSV file written with another convention uses instead of the comma.
@@ -332,8 +333,7 @@ def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None) -> R
     columns = {}
     for column in wanted:
         index = header.index(column)
-        columns[column] = np.array([_csv_number(row[index], name, line, column)
-                                    for line, row in enumerate(data, start=2)], dtype=float)
+        columns[column] = _csv_column([row[index] for row in data], name, column)
     _warn_text_columns(header, wanted, data, name)
     t = columns[TIME]
     for i in np.flatnonzero(~np.isfinite(t)):
@@ -391,6 +391,18 @@ def _separator_hint(row: list[str], lead: str) -> str:
             if separator in row[0]:
                 return f"{lead} separated by {label}, but read_csv expects commas"
     return ""
+
+
+def _csv_column(cells: list[str], name: str, column: str) -> np.ndarray:
+    """The numbers of one used column (its cells from line 2 on); RecordError naming the first bad cell."""
+    # the common case, every cell a plain finite number, checked by one regular expression over the column
+    # and converted by numpy; anything else (gaps, words, huge values) goes cell by cell for the exact message
+    if _PLAIN_COLUMN.fullmatch("\n".join(cells)) is not None:
+        values = np.array(cells, dtype=float)
+        if np.all(np.abs(values) <= MAX_MAGNITUDE):
+            return values
+    return np.array([_csv_number(cell, name, line, column) for line, cell in enumerate(cells, start=2)],
+                    dtype=float)
 
 
 def _csv_number(cell: str, name: str, line: int, column: str) -> float:
