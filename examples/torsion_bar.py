@@ -356,12 +356,32 @@ def run(case: str | Case = "b-md", preset: str = "auto", seed: int = 0, *, scena
     return Run(case, preset, seed, scenario, arr, margin, (quiet, faulty), result, figures)
 
 
-def _isolate(case: Case, arrs: list, calibration, degraded, n: int, seed: int):
-    """Preset auto: every ARR's noise from the calibration record, then candidates and laws by evidence."""
+def arr_detection(arrs: list, calibration) -> tuple[dict, dict]:
+    """Preset auto: every ARR's noise (one robust sd) from the calibration record, and its detection options."""
     options = {"antiderivatives": ANTIDERIVATIVES}
     noise = {a.name: noise_margin(a, calibration, k=1.0, **options) for a in arrs}
-    detection = {a.name: {**options, "margin": MARGIN_SIGMAS * noise[a.name], "persistence": PERSISTENCE}
-                 for a in arrs}
+    return noise, {a.name: {**options, "margin": MARGIN_SIGMAS * noise[a.name], "persistence": PERSISTENCE}
+                   for a in arrs}
+
+
+def detect(case: str | Case, scenario: Scenario, seed: int = 0, noise: str = "paper") -> dict:
+    """The detection figures of :func:`run` (preset auto) without the filter: the first alarm of any ARR
+    on the degraded record, false alarms and threshold widths on the nominal one."""
+    case = CASES[case] if isinstance(case, str) else case
+    arrs, arr, detection, nominal, degraded, calibration = detection_setup(case, scenario, seed, NOISES[noise])
+    quiet = arr.evaluate(nominal, **detection)
+    _, options = arr_detection(arrs, calibration)
+    evaluations = [a.evaluate(degraded, **options[a.name]) for a in arrs]
+    alarms = [e.t[e.alarm][0] for e in evaluations if e.alarm.any()]
+    detection_time = float(min(alarms)) if alarms else None
+    return {"arrs": [a.name for a in arrs], "detection_time_s": detection_time,
+            "detection_delay_s": None if detection_time is None else detection_time - case.onset,
+            "false_alarms_nominal": quiet.false_alarms(float(quiet.t[-1]) + 1.0), **_threshold_widths(quiet)}
+
+
+def _isolate(case: Case, arrs: list, calibration, degraded, n: int, seed: int):
+    """Preset auto: every ARR's noise from the calibration record, then candidates and laws by evidence."""
+    noise, detection = arr_detection(arrs, calibration)
     failures = {case.candidate: case.theta_fail, **case.other_failures}
     monitor = IsolatingMonitor(arrs, failures, noise_std=noise, dt=DT_FILTER, n_particles=n, rul_every=1,
                                detection=detection, seed=seed)  # its default horizon: nothing from the true life
