@@ -205,21 +205,56 @@ class ResidualNoise:
         bad = ~np.all(np.isfinite(sigma), axis=(-2, -1)) | ~np.all(np.isfinite(np.where(missing, 0.0, gap)), axis=-1)
         sigma = np.where(bad[..., None, None], np.eye(self.size), sigma)
         chol = _cholesky(sigma)
-        z = np.linalg.solve(chol, np.where(bad[..., None], 0.0, gap)[..., None])[..., 0]
+        z = _forward(chol, np.where(bad[..., None], 0.0, gap))
         log_det = 2 * np.sum(np.log(np.diagonal(chol, axis1=-2, axis2=-1)), axis=-1)
         used = np.sum(~missing, axis=-1)
         return np.where(bad, -np.inf, -0.5 * (np.sum(np.square(z), axis=-1) + log_det + used * _LOG_2PI))
+
+
+#: Up to this many residuals, the Cholesky factor and the forward substitution are written out over the
+#: matrix entries, each step vectorized over the particles: numpy's batched LAPACK calls cost microseconds
+#: per (tiny) matrix, which made them three quarters of a resample-move run.
+SMALL = 5
+
+
+def _factor(sigma: np.ndarray) -> np.ndarray | None:
+    """Lower Cholesky factors of covariances (..., M, M), or None if one is not positive definite."""
+    m = sigma.shape[-1]
+    if m > SMALL:
+        try:
+            return np.linalg.cholesky(sigma)
+        except np.linalg.LinAlgError:
+            return None
+    chol = np.zeros_like(sigma)
+    for j in range(m):
+        pivot = sigma[..., j, j] - np.sum(np.square(chol[..., j, :j]), axis=-1)
+        if not np.all(pivot > 0):  # NaN included
+            return None
+        chol[..., j, j] = root = np.sqrt(pivot)
+        for i in range(j + 1, m):
+            chol[..., i, j] = (sigma[..., i, j] - np.sum(chol[..., i, :j] * chol[..., j, :j], axis=-1)) / root
+    return chol
+
+
+def _forward(chol: np.ndarray, gap: np.ndarray) -> np.ndarray:
+    """``L^-1 gap`` (..., M) for lower-triangular ``chol`` (..., M, M)."""
+    m = chol.shape[-1]
+    if m > SMALL:
+        return np.linalg.solve(chol, gap[..., None])[..., 0]
+    z = np.empty(np.broadcast_shapes(gap.shape, chol.shape[:-1]))
+    for i in range(m):
+        z[..., i] = (gap[..., i] - np.sum(chol[..., i, :i] * z[..., :i], axis=-1)) / chol[..., i, i]
+    return z
 
 
 def _cholesky(sigma: np.ndarray) -> np.ndarray:
     """Cholesky factors of covariances (..., M, M); rounding that leaves one not quite positive
     definite is met with a ridge of a growing share of its trace."""
     for ridge in (0.0, 1e-12, 1e-9, 1e-6):
-        try:
-            lifted = sigma + ridge * np.trace(sigma, axis1=-2, axis2=-1)[..., None, None] * np.eye(sigma.shape[-1])
-            return np.linalg.cholesky(lifted)
-        except np.linalg.LinAlgError:
-            continue
+        lifted = sigma + ridge * np.trace(sigma, axis1=-2, axis2=-1)[..., None, None] * np.eye(sigma.shape[-1])
+        chol = _factor(lifted)
+        if chol is not None:
+            return chol
     raise PrognosisError("a residual covariance is not positive definite even with a ridge of 1e-6 of its trace")
 
 
