@@ -57,6 +57,15 @@ class LinearDegradation:
         """theta after ``j`` deterministic steps, ``j`` in ``start..stop`` (..., N, stop - start): in closed form."""
         return theta[..., None] + dt * gamma[..., 0][..., None] * np.arange(start, stop)
 
+    def crossing(self, theta: np.ndarray, gamma: np.ndarray, theta_fail: float) -> np.ndarray:
+        """Time (s) until the deterministic path from ``theta`` (...) reaches ``theta_fail``; inf if it never does.
+
+        >>> LinearDegradation().crossing(np.array([1.0, 1.0]), np.array([[0.5], [-0.5]]), 2.0).tolist()
+        [2.0, inf]
+        """
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return _ahead((theta_fail - theta) / gamma[..., 0])
+
     def path_from_sums(self, theta, gamma_sum, noise, noise_sum, carry, dt):
         """theta_{k+l} = theta_k + dt gamma_sum + noise_sum, with ``gamma_sum`` = sum_{m<l} gamma_{k+m}
         and ``noise_sum`` = sum_{j<=l} v_j, both (M, H) and counted from the prediction time."""
@@ -86,6 +95,11 @@ class ExponentialDegradation:
         """theta after ``j`` deterministic steps, ``j`` in ``start..stop`` (..., N, stop - start): in closed form."""
         with np.errstate(over="ignore"):
             return theta[..., None] * np.exp(gamma[..., 0][..., None] * dt * np.arange(start, stop))
+
+    def crossing(self, theta: np.ndarray, gamma: np.ndarray, theta_fail: float) -> np.ndarray:
+        """Time (s) until the deterministic path from ``theta`` (...) reaches ``theta_fail``; inf if it never does."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return _ahead(np.log(theta_fail / theta) / gamma[..., 0])
 
     def path(self, theta: np.ndarray, gamma: np.ndarray, noise: np.ndarray, dt: float) -> np.ndarray:
         """theta over a horizon: ``gamma`` (..., N, H, G) used at each step, ``noise`` (..., N, H); returns (..., N, H).
@@ -174,6 +188,20 @@ class PowerDegradation:
         with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
             clock = np.maximum(share[..., None] ** (1.0 / exponent) + rate * dt * np.arange(start, stop), 0.0)
             return self.origin + self.span * clock ** exponent
+
+    def crossing(self, theta: np.ndarray, gamma: np.ndarray, theta_fail: float) -> np.ndarray:
+        """Time (s) until the deterministic path from ``theta`` (...) reaches ``theta_fail``; inf if it never does:
+        the clock ``u^(1/q)`` must grow from its value now to the failure value's at ``a`` a second.
+
+        >>> model = PowerDegradation(origin=1.0, span=1.0)
+        >>> float(model.crossing(np.array([1.25]), np.array([[0.1, 2.0]]), 2.0)[0])   # tau from 5 s to 10 s
+        5.0
+        """
+        share = np.maximum((theta - self.origin) / self.span, 0.0)
+        rate, exponent = gamma[..., 0], gamma[..., 1]
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            goal = ((theta_fail - self.origin) / self.span) ** (1.0 / exponent)
+            return _ahead(np.where(exponent > 0, (goal - share ** (1.0 / exponent)) / rate, np.nan))
 
     def path(self, theta: np.ndarray, gamma: np.ndarray, noise: np.ndarray, dt: float) -> np.ndarray:
         """theta over a horizon: ``gamma`` (..., N, H, 2) used at each step, ``noise`` (..., N, H); returns (..., N, H).
@@ -327,6 +355,11 @@ class JointDegradation:
         """Deterministic step of each component with its row's law."""
         return np.stack([bank.step(theta[..., c], gamma[..., start:start + bank.n_gamma], dt)
                          for c, (bank, start) in enumerate(zip(self.banks, self.offsets))], axis=-1)
+
+
+def _ahead(time: np.ndarray) -> np.ndarray:
+    """A crossing time where it lies ahead (positive and finite), else inf: the path never gets there."""
+    return np.where(np.isfinite(time) & (time > 0), time, np.inf)
 
 
 def trajectory(model, theta: np.ndarray, gamma: np.ndarray, start: int, stop: int, dt: float) -> np.ndarray:

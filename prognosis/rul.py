@@ -317,7 +317,13 @@ class RULPredictor:
         failed = _crossed(theta_now, self.theta_fail, self.direction)
         rul[failed] = 0.0
         alive = np.flatnonzero(~failed)
-        if hasattr(self.model, "path_from_sums") and g == 1:
+        if hasattr(self.model, "crossing") and not np.any(std) and not np.any(self.model.process_noise):
+            # a deterministic path (the resample-move filter's laws): its crossing time in closed form,
+            # censored beyond the horizon as a stepped path would be
+            with np.errstate(invalid="ignore"):
+                time = self.model.crossing(theta_now[alive], gamma_now[alive], self.theta_fail)
+            rul[alive] = np.where(time <= self.steps * self.dt, time, np.inf)
+        elif hasattr(self.model, "path_from_sums") and g == 1:
             self._propagate_with_sums(theta_now, gamma_now[:, 0], std[:, 0], alive, rul)
         else:
             self._propagate_stepwise(theta_now, gamma_now, std, alive, rul)
