@@ -251,7 +251,8 @@ def _cholesky(sigma: np.ndarray) -> np.ndarray:
     """Cholesky factors of covariances (..., M, M); rounding that leaves one not quite positive
     definite is met with a ridge of a growing share of its trace."""
     for ridge in (0.0, 1e-12, 1e-9, 1e-6):
-        lifted = sigma + ridge * np.trace(sigma, axis1=-2, axis2=-1)[..., None, None] * np.eye(sigma.shape[-1])
+        lifted = sigma if ridge == 0.0 else (sigma + ridge * np.trace(sigma, axis1=-2, axis2=-1)[..., None, None]
+                                             * np.eye(sigma.shape[-1]))
         chol = _factor(lifted)
         if chol is not None:
             return chol
