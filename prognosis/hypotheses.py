@@ -22,6 +22,7 @@ failure value (:data:`SENSOR_LAWS`, :func:`candidate_model`).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -29,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import sympy as sp
 
+from bondgraph.memo import ContentCache, content_key
 from diagnosis import signature_matrix
 
 from .observation import SENSOR, observation_model, sensor_model
@@ -162,9 +164,25 @@ def candidate_model(arr, candidate: str, law: str | None = None):
     or a sensor's fault (:func:`~prognosis.observation.sensor_model`: a gain for the law ``"gain"``, else
     an offset)."""
     signal = sensor_signal(candidate)
+    kind = None if signal is None else "gain" if law == "gain" else "offset"
+    # the same equations are asked for by every hypothesis of a candidate, by the start interval and
+    # by the resolution, and again by every run on the same ARRs: derived once (an ARR whose content
+    # cannot be keyed is derived each time)
+    content = _arr_content(arr)
+    key = None if content is None else content_key((content, candidate, kind))
     if signal is None:
-        return observation_model(arr, candidate)
-    return sensor_model(arr, signal, "gain" if law == "gain" else "offset")
+        return _MODELS.get(key, lambda: observation_model(arr, candidate))
+    return _MODELS.get(key, lambda: sensor_model(arr, signal, kind))
+
+
+_MODELS = ContentCache(256)  # observation equations by the content of their ARR (bondgraph.memo)
+
+
+def _arr_content(arr) -> tuple | None:
+    """What an ARR's observation equations depend on: its fields, not its lazily compiled functions."""
+    if not dataclasses.is_dataclass(arr):
+        return None
+    return tuple((f.name, getattr(arr, f.name)) for f in dataclasses.fields(arr) if not f.name.startswith("_"))
 
 
 def physical_domain(nominal: float) -> tuple[float, float]:
