@@ -99,3 +99,25 @@ def test_the_noise_of_two_parameters_grows_with_each_as_their_sensitivities_side
     single = ResidualNoise(covariance, cross[:, :, :m], growth[:, :m, :m], nominal=np.ones(assets))
     at_first = np.stack([theta[..., 0], np.ones(theta.shape[:-1])], axis=-1)
     assert noise.covariance_at(at_first) == pytest.approx(single.covariance_at(theta[..., 0]), abs=1e-14)
+
+
+@pytest.mark.parametrize("m", [1, 2, 3, 5, 6, 8])
+def test_the_density_is_the_multivariate_normal_for_every_number_of_residuals(m):
+    # up to 5 residuals the factor is written out over the entries, above that LAPACK's: both must agree
+    rng = np.random.default_rng(m)
+    root = rng.normal(size=(m, m))
+    c = root @ root.T + 0.1 * np.eye(m)
+    noise = ResidualNoise(c)
+    gap = rng.normal(size=(2, 3, m))
+    got = noise.log_density(gap, np.zeros((2, 3)))
+    want = multivariate_normal(np.zeros(m), c).logpdf(gap.reshape(-1, m)).reshape(2, 3)
+    np.testing.assert_allclose(got, want, rtol=1e-10)
+
+
+def test_a_covariance_short_of_positive_definite_gets_a_ridge_not_an_error():
+    v = np.array([1.0, 1.0, 1.0]) / np.sqrt(3.0)
+    singular = np.eye(3) - np.outer(v, v)   # rank 2: a zero pivot without the ridge
+    noise = ResidualNoise(singular)
+    along, across = noise.log_density(np.array([[[0.1, -0.1, 0.0], [0.1, 0.1, 0.1]]]), np.zeros((1, 2)))[0]
+    # a gap in the covariance's range is likely; one along its null direction is all but impossible
+    assert np.isfinite(along) and np.isfinite(across) and along > across + 1e4

@@ -11,7 +11,8 @@ import sympy as sp
 
 from bondgraph.library import torsion_bar_monitorable, torsion_bar_with_load
 from diagnosis import derive_arrs
-from prognosis.degradation import CustomDegradation, ExponentialDegradation, LinearDegradation, degradation_model
+from prognosis.degradation import (CustomDegradation, ExponentialDegradation, LinearDegradation, PowerDegradation,
+                                   degradation_model)
 from prognosis.particle_filter import ParticleFilter, VarianceAdaptation
 from prognosis.observation import observation_model
 from prognosis.rul import RULPredictor, predict_rul
@@ -405,3 +406,23 @@ def test_initial_gamma_drawn_over_bounds():
     assert pf.gamma.min() >= 0.03 and pf.gamma.max() <= 0.07 and pf.gamma.std() > 0.01
     with pytest.raises(ValueError, match="gamma bounds have lo > hi"):
         pf.initialize((1.0, 1.2), gamma_bounds=(0.07, 0.03))
+
+
+@pytest.mark.parametrize("law, gamma", [
+    (LinearDegradation(), [[0.02], [0.05], [-0.01], [0.0]]),
+    (ExponentialDegradation(), [[0.01], [0.04], [-0.02], [0.0]]),
+    (PowerDegradation(origin=1.0, span=1.0), [[0.01, 0.7], [0.03, 3.0], [0.02, 1.0], [0.0, 2.0]]),
+])
+def test_a_noise_free_law_crosses_when_the_same_law_stepped_by_hand_does(law, gamma):
+    # the closed-form crossing (noise-free laws, as the resample-move filter's) against the same step
+    # function hidden in a CustomDegradation, which the predictor can only step through
+    theta = np.array([[1.2, 1.5, 1.1, 1.3]])
+    gamma = np.array(gamma, float)[None]
+    weights = np.full((1, 4), 0.25)
+    stepped = CustomDegradation(law.step, n_gamma=law.n_gamma)
+    exact, by_steps = (RULPredictor(m, dt=0.01, theta_fail=2.0, horizon=80.0, seed=0)
+                       .predict(theta, gamma, weights, 0.0) for m in (law, stepped))
+    assert np.array_equal(np.isfinite(exact.samples), np.isfinite(by_steps.samples))
+    assert np.isfinite(exact.samples).sum() >= 2   # at least two particles fail within the horizon
+    np.testing.assert_allclose(exact.samples[np.isfinite(exact.samples)],
+                               by_steps.samples[np.isfinite(by_steps.samples)], atol=1e-4)

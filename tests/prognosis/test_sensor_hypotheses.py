@@ -127,3 +127,18 @@ def test_an_unknown_sensor_candidate_is_refused_by_name(arrs):
                                candidates=["b_Md", "sensor omega_m"])
     assert [h.name for h in monitor.hypotheses_for(monitor.candidates)[0]][-3:] == [
         "sensor omega_m/bias", "sensor omega_m/drift", "sensor omega_m/gain"]
+
+
+def test_observation_equations_are_derived_once_per_arr_content_and_anew_for_a_changed_arr():
+    import dataclasses
+
+    from bondgraph.library import rlc_circuit
+    from diagnosis import derive_arrs
+    from prognosis.hypotheses import candidate_model
+
+    first, again = derive_arrs(rlc_circuit())[0], derive_arrs(rlc_circuit())[0]
+    assert candidate_model(first, "R") is candidate_model(again, "R")   # equal content, one derivation
+    assert candidate_model(first, "sensor i", "gain") is not candidate_model(first, "sensor i", "bias")
+    other = dataclasses.replace(first, values={**first.values, "L": 2 * first.values["L"]})
+    model = candidate_model(other, "R")
+    assert model is not candidate_model(first, "R") and model.arr.values["L"] == 2 * first.values["L"]
