@@ -33,6 +33,7 @@ __all__ = ["ResidualNoise", "healthy_noise", "information_excess"]
 _LOG_2PI = float(np.log(2 * np.pi))
 DIFFERENCES = 4  # order of the differences the sensitivities' noise is read from
 MIN_STEPS = 8  # standardized gaps below which their long-run variance is not estimated (taken as 1)
+BATCHES = 8  # the fewest batches the long-run variance is read from (the longest batches, K / BATCHES steps)
 
 
 @dataclass(frozen=True)
@@ -330,6 +331,17 @@ def healthy_noise(residuals: np.ndarray, sensitivities: np.ndarray | None = None
     return out
 
 
+def _batch_variance(gaps: np.ndarray, size: int) -> np.ndarray:
+    """``n mean^2`` averaged over the most recent whole batches of ``size`` steps (A, M): 1 for white gaps."""
+    assets, steps, m = gaps.shape
+    count = steps // size
+    batches = gaps[:, steps - count * size:].reshape(assets, count, size, m)
+    seen = np.sum(np.isfinite(batches), axis=2)
+    means = np.nansum(batches, axis=2) / np.maximum(seen, 1)
+    # a batch's mean over n measured steps has variance 1 / n for white gaps: n mean^2 is 1 on average
+    return np.nanmean(np.where(seen > 0, seen * np.square(means), np.nan), axis=1)
+
+
 def information_excess(gaps: np.ndarray) -> np.ndarray:
     """How many times the likelihood overstates what the residuals know: their long-run variance, at least 1.
 
@@ -339,9 +351,11 @@ def information_excess(gaps: np.ndarray) -> np.ndarray:
     error that the noise model does not know of (a derivative's lag, a friction law's shape, a law
     that bends away) leaves gaps that are too large or that persist over many steps; the posterior
     from a likelihood taken as white is then too narrow by the factor returned here, the long-run
-    variance ``lim K Var(mean of K gaps)``, read by batch means of ``ceil(sqrt(K))`` steps about zero
-    (not about their own mean: a persistent offset is part of the excess), or their mean square if
-    larger (it has more degrees of freedom).  Dividing the
+    variance ``lim K Var(mean of K gaps)``, read by batch means about zero (not about their own mean:
+    a persistent offset is part of the excess), of ``ceil(sqrt(K))`` steps and, once that is shorter,
+    of ``K / BATCHES`` steps (an offset that wanders over tens of steps, as an integral's drift does,
+    averages out of short batches), or their mean square if larger (it has more degrees of freedom).
+    White gaps come out at about 1.1-1.25 on average (the largest of several noisy estimates).  Dividing the
     log-likelihood by it is the sandwich correction of a misspecified likelihood.  The largest over
     the M residuals, per asset (A,); 1 with fewer than :data:`MIN_STEPS` steps.
 
@@ -352,22 +366,20 @@ def information_excess(gaps: np.ndarray) -> np.ndarray:
     >>> rng = np.random.default_rng(0)
     >>> white = rng.standard_normal((1, 400, 1))
     >>> information_excess(np.concatenate([white, white + 1.0, 2.0 * white])).round(1).tolist()
-    [1.1, 19.7, 4.6]
+    [1.1, 46.8, 4.6]
     """
     gaps = np.asarray(gaps, float)
     assets, steps, m = gaps.shape
     if steps < MIN_STEPS:
         return np.ones(assets)
-    size = math.ceil(math.sqrt(steps))
-    count = steps // size
-    batches = gaps[:, steps - count * size:].reshape(assets, count, size, m)  # the most recent whole batches
     with np.errstate(invalid="ignore"):
-        seen = np.sum(np.isfinite(batches), axis=2)
-        means = np.nansum(batches, axis=2) / np.maximum(seen, 1)
-        # a batch's mean over n measured steps has variance 1 / n for white gaps: n mean^2 is 1 on average
-        scaled = np.where(seen > 0, seen * np.square(means), np.nan)
         # batch means see persistence but have few degrees of freedom; the plain mean square has many:
-        # the larger of the two, so that gaps merely too wide are not missed by a lucky draw of batches
-        variance = np.fmax(np.nanmean(scaled, axis=1), np.nanmean(np.square(gaps), axis=1))
+        # the larger of them, so that gaps merely too wide are not missed by a lucky draw of batches.
+        # Batches of sqrt(K) steps, and of K / BATCHES steps once those are longer: an offset that
+        # wanders over tens of steps (an integral's drift) averages out of short batches
+        variance = np.nanmean(np.square(gaps), axis=1)
+        short = math.ceil(math.sqrt(steps))
+        for size in (short, *((steps // BATCHES,) if steps // BATCHES > short else ())):
+            variance = np.fmax(variance, _batch_variance(gaps, size))
     # an ARR never measured in the history says nothing: 1, as does every variance below it
     return np.max(np.where(np.isfinite(variance), variance, 1.0), axis=1, initial=1.0)

@@ -5,7 +5,7 @@ import pytest
 from scipy.stats import multivariate_normal
 
 from prognosis.errors import PrognosisError
-from prognosis.likelihood import ResidualNoise, healthy_noise
+from prognosis.likelihood import ResidualNoise, healthy_noise, information_excess
 
 
 def test_log_density_is_the_multivariate_normal_at_each_theta():
@@ -121,3 +121,14 @@ def test_a_covariance_short_of_positive_definite_gets_a_ridge_not_an_error():
     along, across = noise.log_density(np.array([[[0.1, -0.1, 0.0], [0.1, 0.1, 0.1]]]), np.zeros((1, 2)))[0]
     # a gap in the covariance's range is likely; one along its null direction is all but impossible
     assert np.isfinite(along) and np.isfinite(across) and along > across + 1e4
+
+
+def test_an_offset_wandering_over_hundreds_of_steps_counts_in_the_information_excess():
+    # gaps white but for an offset of 0.3 sd swinging over 300 steps (an integral's drift): short batches
+    # of sqrt(K) = 25 steps average it out; batches of K / 8 see it, while white gaps stay near 1
+    rng = np.random.default_rng(1)
+    steps = 588
+    white = rng.standard_normal((200, steps, 1))
+    swing = 0.3 * np.sin(2 * np.pi * np.arange(steps) / 300 + rng.uniform(0, 2 * np.pi, (200, 1)))
+    assert information_excess(white).mean() < 1.4
+    assert information_excess(white + swing[..., None]).mean() > 3.0
