@@ -428,8 +428,15 @@ class ParallelRUL:
             return
         fork = "fork" in multiprocessing.get_all_start_methods()
         context = multiprocessing.get_context("fork" if fork else None)
-        self._pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_start_worker,
-                                         initargs=(model, predictor))
+        # the workers are started here with Ctrl-C blocked, and unblock it only once they ignore it: a
+        # worker still starting when the interrupt comes would otherwise print a traceback of its own
+        blocked = _block_interrupts()
+        try:
+            self._pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_start_worker,
+                                             initargs=(model, predictor))
+            self._pool.submit(int).result()  # a no-op: the pool starts its workers at the first task
+        finally:
+            _unblock_interrupts(blocked)
 
     def submit(self, theta, gamma, weights, gamma_std, *, key: int):
         """Start ``RULPredictor.predict(theta, gamma, weights, gamma_std, key=key)`` in a worker; returns its Future.
@@ -460,7 +467,21 @@ _WORKER_PREDICTOR = None
 def _start_worker(model, predictor) -> None:
     global _WORKER_PREDICTOR
     signal.signal(signal.SIGINT, signal.SIG_IGN)  # Ctrl-C is the parent's to handle
+    _unblock_interrupts(True)
     _WORKER_PREDICTOR = RULPredictor(model, **predictor)
+
+
+def _block_interrupts() -> bool:
+    """Block SIGINT in this thread (children started now inherit the mask); whether it was done."""
+    if not hasattr(signal, "pthread_sigmask"):  # not on Windows: there workers are not in the console's group
+        return False
+    return signal.SIGINT not in signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+
+
+def _unblock_interrupts(blocked: bool) -> None:
+    """Undo :func:`_block_interrupts`: an interrupt that came meanwhile is delivered now."""
+    if blocked and hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 def _predict_in_worker(theta, gamma, weights, gamma_std, key) -> RULDistribution:
