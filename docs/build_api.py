@@ -55,7 +55,8 @@ MODULE_ORDER = ["bondgraph.model", "bondgraph.structure", "bondgraph.causality",
                 "diagnosis.detection", "diagnosis.signals", "diagnosis.intervals.rounding",
                 "diagnosis.intervals.kernels", "diagnosis.intervals.interval", "diagnosis.intervals.functions",
                 "diagnosis.intervals.compiler", "prognosis.observation", "prognosis.degradation",
-                "prognosis.particle_filter", "prognosis.resample_move", "prognosis.likelihood", "prognosis.rul",
+                "prognosis.particle_filter", "prognosis.resample_move", "prognosis.likelihood", "prognosis.wander",
+                "prognosis.rul",
                 "prognosis.monitor", "prognosis.metrics", "bgphm.cli", "bgphm.plotting", "bgphm.runs"]
 #: Names documented for a package that has no useful ``__all__``.
 EXPLICIT = {"bgphm": ["bgphm.cli.main"]}

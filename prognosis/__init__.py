@@ -4,7 +4,8 @@ The core chain lives at the top of the package: a degradation law of the prognos
 ``theta`` (:mod:`.degradation`), the observation equation ``y = -r_n`` derived from the ARR
 (:mod:`.observation`), the SIR particle filter with its resampling schemes and variance adaptation
 (:mod:`.particle_filter`, :mod:`.resampling`), the resample-move filter over a law's static
-parameters with the residual noise it weighs them by (:mod:`.resample_move`, :mod:`.likelihood`),
+parameters with the residual noise and wandering offset it weighs them by (:mod:`.resample_move`,
+:mod:`.likelihood`, :mod:`.wander`),
 the RUL by propagating the particles to the failure value (:mod:`.rul`), the prognostic metrics
 (:mod:`.metrics`) and the health monitor that runs detection, estimation and RUL on a record
 (:mod:`.monitor`).

@@ -37,7 +37,7 @@ from .observation import SENSOR, observation_model, sensor_model
 from .errors import PrognosisError
 
 __all__ = ["Hypothesis", "HypothesisObservation", "JointHypothesis", "JointObservation", "SENSOR_LAWS", "additive",
-           "candidate_model", "explaining",
+           "candidate_model", "explaining", "integral_increments",
            "indistinguishable_groups", "law_distance", "physical_domain", "rate_prior", "record_separation",
            "same_signature", "sees", "sensitivity", "sensor_signal", "signature_candidates"]
 
@@ -400,6 +400,36 @@ def sensitivity(observation, points: list) -> np.ndarray:
     size = len(np.atleast_1d(points[0])) if points else 1
     y = np.broadcast_to(np.asarray(observation.function()(at[None, :], *values), float), (size, 2))
     return (y[:, 1] - y[:, 0]) / (2 * step)
+
+
+def integral_increments(arr, points: Sequence, steps: np.ndarray) -> np.ndarray:
+    """The nominal residual's change over each of the filter ``steps`` through the ARR's integrals alone (K - 1,).
+
+    ``sum_i (dr_n / dI_i) (I_i(t_k+1) - I_i(t_k))``, the gain of each integral ``I_i`` read at the
+    first step; ``points`` the ARR's point values at every sample (its :class:`~diagnosis.Evaluation`'s),
+    ``steps`` the samples of the filter steps.  Zeros for an ARR without integrals.  What
+    :func:`~prognosis.likelihood.integral_walk` reads the integrals' drift from.
+
+    The torsion bar's load ARR has the shaft's twist, ``k_s`` times the integral of the speeds' gap:
+
+    >>> from bondgraph.library import torsion_bar_monitorable
+    >>> from diagnosis import derive_arrs
+    >>> arr = derive_arrs(torsion_bar_monitorable(), complete=False, integrals="keep")[1]
+    >>> arr.name, [str(p) for p in arr.compiled.points]
+    ('ARR_1_2', ['omega_Ld', 'omega_m', 'd1_omega_Ld', 'int0'])
+    >>> points = [np.zeros(5), np.zeros(5), np.zeros(5), np.arange(5.0) ** 2]
+    >>> integral_increments(arr, points, np.arange(5)).round(3).tolist()   # k_s = 1.786
+    [1.786, 5.358, 8.93, 12.502]
+    """
+    compiled = arr.compiled
+    steps = np.asarray(steps)
+    total = np.zeros(max(steps.size - 1, 0))
+    at = [np.asarray(p, float)[steps[:1]] for p in points]
+    for symbol in compiled.integrals:
+        gain = compiled.function(f"integral gain {symbol}", sp.diff(compiled.nominal, symbol))(*at)
+        values = np.asarray(points[compiled.points.index(symbol)], float)[steps]
+        total = total + float(np.ravel(gain)[0]) * np.diff(values)
+    return total
 
 
 def _proportional(first: np.ndarray, second: np.ndarray, rtol: float) -> bool:

@@ -37,9 +37,10 @@ import numpy as np
 from . import seeds
 from .degradation import POWER_EXPONENTS, JointDegradation, PerAssetDegradation, degradation_model
 from .hypotheses import (LIFE_PRIOR, SENSOR_LAWS, Hypothesis, HypothesisObservation, JointHypothesis, JointObservation,
-                         additive, candidate_model, explaining, indistinguishable_groups, law_distance, rate_prior,
+                         additive, candidate_model, explaining, indistinguishable_groups, integral_increments,
+                         law_distance, rate_prior,
                          record_separation, same_signature, sees, sensitivity, sensor_signal, signature_candidates)
-from .likelihood import ResidualNoise, healthy_noise
+from .likelihood import ResidualNoise, healthy_noise, integral_walk
 from .monitor import MonitorResult, filter_stride
 from .particle_filter import KernelSmoothing, ParticleFilter, check_particles, check_positive
 from .resample_move import ResampleMoveFilter
@@ -1042,7 +1043,8 @@ class IsolatingMonitor:
     def residual_noise(self, observation: HypothesisObservation | Sequence, evaluations: list,
                        stride: int) -> ResidualNoise:
         """The likelihood's noise per hypothesis: ``noise_std`` with, from the healthy stretch, the residuals'
-        correlations and how their noise grows with the candidate (:func:`~prognosis.likelihood.healthy_noise`).
+        correlations, how their noise grows with the candidate (:func:`~prognosis.likelihood.healthy_noise`)
+        and how far the integrals of an ARR drift a step (:func:`~prognosis.likelihood.integral_walk`).
 
         ``observation``: one :class:`~prognosis.hypotheses.HypothesisObservation`, or one per parameter
         of joint hypotheses (rows aligned; the noise then grows with each). Without a healthy stretch of
@@ -1069,8 +1071,9 @@ class IsolatingMonitor:
             cross.append(estimate["cross"])
             growth.append(estimate["growth"])
         nominal = np.array([[0.0 if h is None else h.nominal for h in part.hypotheses] for part in parts]).T
+        walk = [integral_walk(integral_increments(a, e.points, healthy)) for a, e in zip(arrs, evaluations)]
         return ResidualNoise(np.array(covariance), np.array(cross), np.array(growth),
-                             nominal[:, 0] if len(parts) == 1 else nominal, self.inflation)
+                             nominal[:, 0] if len(parts) == 1 else nominal, self.inflation, np.array(walk))
 
     def rate_particles(self, h: Hypothesis, rng: np.random.Generator, count: int = 1,
                        offset: float = 0.0) -> np.ndarray:

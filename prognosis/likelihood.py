@@ -28,7 +28,7 @@ import numpy as np
 
 from .errors import PrognosisError
 
-__all__ = ["ResidualNoise", "healthy_noise", "information_excess"]
+__all__ = ["ResidualNoise", "healthy_noise", "information_excess", "integral_walk"]
 
 _LOG_2PI = float(np.log(2 * np.pi))
 DIFFERENCES = 4  # order of the differences the sensitivities' noise is read from
@@ -53,6 +53,10 @@ class ResidualNoise:
         ``theta_n`` of each asset (row), of each of its C parameters.
     inflation : float
         Multiplier of the whole covariance (1: the noise as measured).
+    walk : array (A, M) or (M,), optional
+        Variance per step of a random-walk offset on each residual (the drift an integral of noisy
+        signals adds: :func:`integral_walk`), in the residual's units squared; None: no offset.
+        The likelihood of a history then follows it (:mod:`prognosis.wander`).
 
     Examples
     --------
@@ -72,6 +76,7 @@ class ResidualNoise:
     growth: np.ndarray | None = None
     nominal: np.ndarray | float = 0.0
     inflation: float = 1.0
+    walk: np.ndarray | None = None
 
     def __post_init__(self):
         c = np.asarray(self.covariance, float)
@@ -92,6 +97,11 @@ class ResidualNoise:
                 value = value if value.ndim == 3 else value[None]
                 object.__setattr__(self, name, np.broadcast_to(value, (c.shape[0], *value.shape[1:])))
         object.__setattr__(self, "nominal", np.atleast_1d(np.asarray(self.nominal, float)))
+        if self.walk is not None:
+            walk = np.broadcast_to(np.asarray(self.walk, float), (c.shape[0], c.shape[-1]))
+            if not (np.all(np.isfinite(walk)) and np.all(walk >= 0)):
+                raise PrognosisError("walk must hold finite variances >= 0, one per residual")
+            object.__setattr__(self, "walk", walk)
         if self.cross is not None or self.growth is not None:
             self._make_joint_positive()
 
@@ -132,11 +142,31 @@ class ResidualNoise:
         [[[0.09]]]
         """
         view = object.__new__(ResidualNoise)
-        for name in ("covariance", "cross", "growth", "nominal"):
+        for name in ("covariance", "cross", "growth", "nominal", "walk"):
             value = getattr(self, name)
             object.__setattr__(view, name, value if value is None or value.shape[0] == 1 else value[index])
         object.__setattr__(view, "inflation", self.inflation)
         return view
+
+    @property
+    def walk_ratio(self) -> np.ndarray:
+        """Each whitened residual's offset walk per step over its noise (A, M), 0 without a walk.
+
+        The walk of residual m over the variance residual m keeps given the earlier ones (the square
+        of the Cholesky factor's diagonal at the nominal value): what the walk is in the whitened
+        component it enters first.  A walk of one residual also leaks into later whitened
+        components; that share is left out (the walks are small beside the noise).
+
+        >>> ResidualNoise.independent([0.1], inflation=4.0).walk_ratio.tolist()
+        [[0.0]]
+        >>> noise = ResidualNoise(covariance=[[0.01]], walk=[1e-4])
+        >>> noise.walk_ratio.round(6).tolist()
+        [[0.01]]
+        """
+        if self.walk is None:
+            return np.zeros(self.covariance.shape[:2])
+        conditional = np.square(np.diagonal(_cholesky(self.covariance), axis1=-2, axis2=-1))
+        return self.walk / conditional
 
     @property
     def size(self) -> int:
@@ -188,15 +218,29 @@ class ResidualNoise:
 
     def log_density(self, gap: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """``log N(gap; 0, Sigma(theta))`` (A, N, ...) for ``gap`` (A, N, ..., M); NaN entries marginalized."""
+        white, log_det, measured = self.whiten(gap, theta)
+        used = np.sum(measured, axis=-1)
+        with np.errstate(invalid="ignore"):  # -inf log_det (no density) stays -inf
+            return -0.5 * (np.sum(np.square(white), axis=-1) + log_det + used * _LOG_2PI)
+
+    def whiten(self, gap: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``L^-1 gap`` with ``L L^T = Sigma(theta)``, ``log det Sigma`` and which entries were measured.
+
+        The whitened gaps (A, N, ..., M) are independent N(0, 1) under the noise model (0 where not
+        measured: the marginal of the measured ones); ``log det`` (A, N, ...) is ``inf`` where a
+        particle's theta is so far out that its covariance overflows (no density there).
+        """
         gap = np.asarray(gap, float)
         missing = ~np.isfinite(gap)
         sigma = self.covariance_at(theta)
         if self.size == 1:
             variance = sigma[..., 0, 0]
-            with np.errstate(over="ignore", invalid="ignore"):
-                value = -0.5 * (np.square(gap[..., 0]) / variance + np.log(variance) + _LOG_2PI)
-            # an overflowing covariance (or gap) has no density, as with several residuals: -inf, never NaN
-            return np.where(missing[..., 0], 0.0, np.where(np.isfinite(value), value, -np.inf))
+            with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
+                white = gap / np.sqrt(variance)[..., None]
+                log_det = np.log(variance)
+            # an overflowing covariance (or gap) has no density, as with several residuals, never NaN
+            bad = ~(np.isfinite(log_det) & np.all(np.isfinite(white) | missing, axis=-1))
+            return (np.where(missing | bad[..., None], 0.0, white), np.where(bad, np.inf, log_det), ~missing)
         if missing.any():  # the marginal of the measured ones: their rows and columns alone
             keep = ~missing
             sigma = np.where(keep[..., :, None] & keep[..., None, :], sigma,
@@ -206,10 +250,9 @@ class ResidualNoise:
         bad = ~np.all(np.isfinite(sigma), axis=(-2, -1)) | ~np.all(np.isfinite(np.where(missing, 0.0, gap)), axis=-1)
         sigma = np.where(bad[..., None, None], np.eye(self.size), sigma)
         chol = _cholesky(sigma)
-        z = _forward(chol, np.where(bad[..., None], 0.0, gap))
+        white = _forward(chol, np.where(bad[..., None], 0.0, gap))
         log_det = 2 * np.sum(np.log(np.diagonal(chol, axis1=-2, axis2=-1)), axis=-1)
-        used = np.sum(~missing, axis=-1)
-        return np.where(bad, -np.inf, -0.5 * (np.sum(np.square(z), axis=-1) + log_det + used * _LOG_2PI))
+        return np.where(bad[..., None], 0.0, white), np.where(bad, np.inf, log_det), ~missing
 
 
 #: Up to this many residuals, the Cholesky factor and the forward substitution are written out over the
@@ -329,6 +372,42 @@ def healthy_noise(residuals: np.ndarray, sensitivities: np.ndarray | None = None
     out["growth"] = ds.T @ ds / (gain * ds.shape[0])
     out["cross"] = dr.T @ ds / (gain * ds.shape[0])
     return out
+
+
+WALK_DIFFERENCES = 4  # order of the differences an integral's walk is read from
+
+
+def integral_walk(increments: np.ndarray) -> float:
+    """The variance per filter step of the random walk that integrals of noisy signals add to a residual.
+
+    ``increments`` (K,): the residual's change over each of K successive filter steps of a healthy
+    stretch through its integrals alone, ``sum_i (dr/dI_i) (I_i(t_k+1) - I_i(t_k))``.  An integral of a
+    signal carrying white noise of sd ``s`` at sample interval ``h`` drifts as a random walk of
+    variance ``s^2 h Delta`` per filter step ``Delta``: its increments are the integrand's smooth part
+    times ``Delta`` plus the walk's independent steps.  In fourth differences of the increments a
+    smooth integrand nearly cancels while the walk's steps keep ``C(8, 4) = 70`` times their
+    variance; their sd is taken robustly (a set-point step is one outlier, not a drift).  0 with
+    fewer than six increments.
+
+    Examples
+    --------
+    The integral of a speed that swings smoothly, read through noise of sd 0.01 at 1 kHz, every
+    0.1 s: a walk of sd ``0.01 sqrt(1e-3 0.1) = 1e-4`` per step (read from 100 s to about 10 %).
+
+    >>> rng = np.random.default_rng(0)
+    >>> t = np.arange(0, 100, 1e-3)
+    >>> speed = 3 + np.sin(t) + rng.normal(0, 0.01, t.size)
+    >>> integral = np.cumsum(speed) * 1e-3
+    >>> round(float(np.sqrt(integral_walk(np.diff(integral[::100])))), 5)
+    0.00011
+    """
+    increments = np.asarray(increments, float)
+    increments = increments[np.isfinite(increments)]
+    if increments.size < WALK_DIFFERENCES + 2:
+        return 0.0
+    d = np.diff(increments, WALK_DIFFERENCES)
+    robust = 1.4826 * np.median(np.abs(d - np.median(d)))
+    return float(robust ** 2 / math.comb(2 * WALK_DIFFERENCES, WALK_DIFFERENCES))
 
 
 def _batch_variance(gaps: np.ndarray, size: int) -> np.ndarray:

@@ -24,6 +24,11 @@ drawn for.
 The prior is uniform over a box of working coordinates: theta_0, and each gamma itself or (``log``)
 its logarithm with its sign, so that a rate known to within decades is log-uniform.
 
+A residual whose noise model has a walk (:attr:`~prognosis.likelihood.ResidualNoise.walk`: the drift
+of an ARR's integral of noisy signals) carries an offset that wanders; the likelihood of a step is
+then that of its innovation given the past gaps (:mod:`prognosis.wander`), so that the drift is not
+read as wear.
+
 The contract is the :class:`~prognosis.particle_filter.ParticleFilter`'s: ``initialize``, ``step``
 (returning :class:`~prognosis.particle_filter.StepDiagnostics`), ``estimate``, ``weights``,
 ``theta``, ``gamma`` and ``log_evidence``, batched over independent assets (rows).
@@ -41,6 +46,7 @@ from .likelihood import MIN_STEPS, ResidualNoise, information_excess
 from .particle_filter import COLLAPSE_BELOW, StepDiagnostics, check_particles, check_positive, cloud_estimate
 from .resampling import effective_sample_size, get_scheme, normalize_log_weights
 from .seeds import check_seed
+from .wander import innovations, steady_state
 
 __all__ = ["ResampleMoveFilter"]
 
@@ -48,6 +54,7 @@ ESS_TARGET = 0.5  # share of N the ESS is kept at by tempering
 MOVES = 4  # Metropolis-Hastings steps per move
 MAX_STAGES = 60  # tempering stages per filter step before the rest of the increment is taken at once
 CHUNK = 1024  # filter steps evaluated at once when the whole history is replayed (bounds the memory)
+LOG_2PI = float(np.log(2 * np.pi))
 DISCREPANCY = ("each", "shared", None)  # whose information excess divides an asset's likelihood
 
 
@@ -190,6 +197,7 @@ class ResampleMoveFilter:
         self.log_weights = np.full((assets, self.n), -np.log(self.n))
         self.log_evidence = np.zeros(assets)
         self.past = np.zeros((assets, self.n))  # sum of log p(y_j | theta_j) of each particle over the history
+        self.level = None  # (A, N, M): each particle's offset predicted for the next step (whitened)
         self.history = []  # (y, points) of every step
         self.acceptance = np.full(assets, np.nan)
         self.frozen = np.zeros(assets, bool)
@@ -226,7 +234,7 @@ class ResampleMoveFilter:
         self.history.append((y, points))
         predicted = self._observe(self.theta, points, self.z)
         innovation = self._innovation(y, predicted)
-        increment = self._log_likelihood(y, predicted, self.theta)
+        increment, self.level = self._log_likelihood(y, predicted, self.theta, self.level)
         updated = np.isfinite(y).any(axis=1) if y.ndim == 2 else np.isfinite(y)
         increment = np.where(updated[:, None], increment, 0.0)
         # the target moves from exp(past / excess_before) to exp((past + increment) / excess_after)
@@ -329,6 +337,7 @@ class ResampleMoveFilter:
         self.z = np.take_along_axis(self.z, index[..., None], axis=1)
         self.theta = _take(self.theta, index)
         self.past = np.take_along_axis(self.past, index, axis=1)
+        self.level = _take(self.level, index)
         increment = np.take_along_axis(increment, index, axis=1)
         self.log_weights = np.where(rows[:, None], -np.log(self.n), self.log_weights)
         width = np.maximum(np.sqrt(np.diagonal(spread, axis1=-2, axis2=-1)),
@@ -347,14 +356,15 @@ class ResampleMoveFilter:
             z_new = self.z + self.scale[:, None, None] * step
             inside = self.prior.inside(z_new) & rows[:, None]
             # a proposal outside the prior is rejected; replayed inside it, so that no law overflows
-            past, last, theta = self._replay(np.clip(z_new, self.prior.lo[:, None, :], self.prior.hi[:, None, :]),
-                                             view, increment)
+            past, last, theta, level = self._replay(np.clip(z_new, self.prior.lo[:, None, :],
+                                                            self.prior.hi[:, None, :]), view, increment)
             a, b = on_past[:, None], on_increment[:, None]
             log_ratio = (a * past + b * last) - (a * self.past + b * increment)
             accept = inside & (np.log(self.rng.random(log_ratio.shape)) < np.nan_to_num(log_ratio, nan=-np.inf))
             self.z = np.where(accept[..., None], z_new, self.z)
             self.theta = np.where(_along(accept, theta), theta, self.theta)
             self.past = np.where(accept, past, self.past)
+            self.level = np.where(accept[..., None], level, self.level)
             increment = np.where(accept, last, increment)
             accepted += accept.mean(axis=1)
         rate = accepted / self.moves
@@ -378,7 +388,8 @@ class ResampleMoveFilter:
         return (index, *(part.rows(index) for part in (*parts, self.prior)))
 
     def _replay(self, z: np.ndarray, view=None, increment: np.ndarray | None = None):
-        """Log-likelihood of particles ``z`` over the history before this step, of this step, and theta now.
+        """Log-likelihood of particles ``z`` over the history before this step, of this step, theta now and
+        the offset predicted for the next step.
 
         With a ``view`` (:meth:`_view`) only its rows are replayed; the others keep the current
         particles' values (``self.past``, ``increment``, ``self.theta``).
@@ -386,26 +397,26 @@ class ResampleMoveFilter:
         if view is None:
             return self._replay_rows(z, None)
         index = view[0]
-        past, last, theta = self.past.copy(), increment.copy(), self.theta.copy()
-        past[index], last[index], theta[index] = self._replay_rows(z[index], view)
-        return past, last, theta
+        past, last, theta, level = self.past.copy(), increment.copy(), self.theta.copy(), self.level.copy()
+        past[index], last[index], theta[index], level[index] = self._replay_rows(z[index], view)
+        return past, last, theta, level
 
-    def _replay_rows(self, z: np.ndarray, view) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        past = np.zeros(z.shape[:2])
+    def _replay_rows(self, z: np.ndarray, view) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        past, level = np.zeros(z.shape[:2]), None
         for path, rate, start, stop in self._paths(z, view):
-            terms = self._history_terms(path, rate, start, stop, view)
+            terms, level, _ = self._history_terms(path, rate, start, stop, level, view)
             if stop == len(self.history):
-                return past + terms[..., :-1].sum(axis=-1), terms[..., -1], path[:, :, -1]
+                return past + terms[..., :-1].sum(axis=-1), terms[..., -1], path[:, :, -1], level
             past = past + terms.sum(axis=-1)
         raise RuntimeError("no history to replay")
 
     def _standardized_gaps(self, z: np.ndarray) -> np.ndarray:
-        """``(y - h) / sd`` (A, K, M) over the history of one particle per asset, ``z`` (A, 1, D)."""
-        pieces = []
+        """The innovations of the whitened gaps over their sd (A, K, M), over the history of one particle
+        per asset, ``z`` (A, 1, D): N(0, 1) and white if the noise and wander models hold (NaN: unmeasured)."""
+        pieces, level = [], None
         for path, rate, start, stop in self._paths(z):
-            gaps = self._history_gaps(path, rate, start, stop)  # (A, 1, K, M)
-            sd = np.sqrt(np.diagonal(self.noise.covariance_at(self._noise_theta(path)), axis1=-2, axis2=-1))
-            pieces.append((gaps / sd)[:, 0])
+            _, level, standardized = self._history_terms(path, rate, start, stop, level)
+            pieces.append(standardized[:, 0])
         return np.concatenate(pieces, axis=1)
 
     def _paths(self, z: np.ndarray, view=None):
@@ -424,12 +435,15 @@ class ResampleMoveFilter:
             rate = np.diff(path, axis=2) / self.dt if rates else None
             yield path[:, :, :stop - start], rate, start, stop
 
-    def _history_terms(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int, view=None) -> np.ndarray:
-        """log p(y_j | theta_j) (A, N, K) for the steps ``start..stop`` of the history."""
+    def _history_terms(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int,
+                       level: np.ndarray | None, view=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """log p(y_j | y_<j, theta_j) (A, N, K) for the steps ``start..stop`` of the history, the offset
+        predicted after them (A, N, M) from ``level`` before them (None: zero), and the standardized
+        innovations (A, N, K, M), NaN where not measured."""
         gaps = self._history_gaps(path, rate, start, stop, view)
-        terms = (self.noise if view is None else view[3]).log_density(gaps, self._noise_theta(path))
-        measured = np.isfinite(gaps).any(axis=-1)
-        return np.where(measured, terms, 0.0)
+        noise = self.noise if view is None else view[3]
+        white, log_det, measured = noise.whiten(gaps, self._noise_theta(path))
+        return _score(white, log_det, measured, noise.walk_ratio, level)
 
     def _history_gaps(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int, view=None) -> np.ndarray:
         """``y_j - h(theta_j)`` (A, N, K, M) for the steps ``start..stop`` of the history."""
@@ -466,10 +480,15 @@ class ResampleMoveFilter:
         model = self.model if model is None else model
         return (model.step(theta, gamma, self.dt) - theta) / self.dt
 
-    def _log_likelihood(self, y: np.ndarray, predicted: np.ndarray, theta: np.ndarray) -> np.ndarray:
+    def _log_likelihood(self, y: np.ndarray, predicted: np.ndarray, theta: np.ndarray,
+                        level: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
+        """log p(y | past, theta) (A, N) of this step's measurement and the offset predicted for the next."""
         if y.ndim == 1:
             y, predicted = y[:, None], predicted[..., None]
-        return self.noise.log_density(y[:, None, :] - predicted, self._noise_theta(theta))
+        white, log_det, measured = self.noise.whiten(y[:, None, :] - predicted, self._noise_theta(theta))
+        terms, level, _ = _score(white[:, :, None], log_det[:, :, None], measured[:, :, None],
+                                 self.noise.walk_ratio, level)
+        return terms[:, :, 0], level
 
     def _noise_theta(self, theta: np.ndarray) -> np.ndarray:
         """What the noise grows with: theta, or of joint hypotheses' parameters those the noise knows (the
@@ -491,6 +510,23 @@ class ResampleMoveFilter:
             return cloud_estimate(self.theta, self.gamma, self.weights)
         parts = [cloud_estimate(self.theta[..., c], self.gamma, self.weights) for c in range(self.components)]
         return {**parts[0], "components": parts}
+
+
+def _score(white: np.ndarray, log_det: np.ndarray, measured: np.ndarray, walk: np.ndarray,
+           level: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Log-densities (A, N, K) of whitened gaps (A, N, K, M) whose offsets walk by ``walk`` (A, M) a step
+    over the noise, the offsets predicted after them (A, N, M) from ``level`` before them (None:
+    zero), and the standardized innovations (A, N, K, M), NaN where not measured (:mod:`prognosis.wander`)."""
+    gain, spread = steady_state(walk[:, None, :])  # (A, 1, M)
+    level = np.zeros(white.shape[:2] + white.shape[-1:]) if level is None else level
+    v, level = innovations(white, measured, gain, level)
+    spread = spread[:, :, None, :]  # (A, 1, 1, M)
+    with np.errstate(invalid="ignore", over="ignore"):  # an infinite log det: no density, -inf
+        terms = -0.5 * (np.sum(np.where(measured, np.square(v) / spread + np.log(spread) + LOG_2PI, 0.0), axis=-1)
+                        + log_det)
+    terms = np.where(np.isfinite(terms), terms, -np.inf)
+    used = np.any(measured, axis=-1)
+    return np.where(used, terms, 0.0), level, np.where(measured, v / np.sqrt(spread), np.nan)
 
 
 def _take(values: np.ndarray, index: np.ndarray) -> np.ndarray:
