@@ -218,17 +218,18 @@ class ResidualNoise:
 
     def log_density(self, gap: np.ndarray, theta: np.ndarray) -> np.ndarray:
         """``log N(gap; 0, Sigma(theta))`` (A, N, ...) for ``gap`` (A, N, ..., M); NaN entries marginalized."""
-        white, log_det, measured = self.whiten(gap, theta)
+        white, log_variance, measured = self.whiten(gap, theta)
         used = np.sum(measured, axis=-1)
-        with np.errstate(invalid="ignore"):  # -inf log_det (no density) stays -inf
-            return -0.5 * (np.sum(np.square(white), axis=-1) + log_det + used * _LOG_2PI)
+        with np.errstate(invalid="ignore"):  # an infinite variance (no density) gives -inf
+            return -0.5 * (np.sum(np.square(white) + log_variance, axis=-1) + used * _LOG_2PI)
 
     def whiten(self, gap: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """``L^-1 gap`` with ``L L^T = Sigma(theta)``, ``log det Sigma`` and which entries were measured.
+        """``L^-1 gap`` with ``L L^T = Sigma(theta)``, ``log L_mm^2`` and which entries were measured.
 
         The whitened gaps (A, N, ..., M) are independent N(0, 1) under the noise model (0 where not
-        measured: the marginal of the measured ones); ``log det`` (A, N, ...) is ``inf`` where a
-        particle's theta is so far out that its covariance overflows (no density there).
+        measured: the marginal of the measured ones); the log-variances ``log L_mm^2`` (A, N, ..., M),
+        each residual's variance given the earlier ones, sum to ``log det Sigma``, and are ``inf``
+        where a particle's theta is so far out that its covariance overflows (no density there).
         """
         gap = np.asarray(gap, float)
         missing = ~np.isfinite(gap)
@@ -237,10 +238,11 @@ class ResidualNoise:
             variance = sigma[..., 0, 0]
             with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
                 white = gap / np.sqrt(variance)[..., None]
-                log_det = np.log(variance)
+                log_variance = np.log(variance)[..., None]
             # an overflowing covariance (or gap) has no density, as with several residuals, never NaN
-            bad = ~(np.isfinite(log_det) & np.all(np.isfinite(white) | missing, axis=-1))
-            return (np.where(missing | bad[..., None], 0.0, white), np.where(bad, np.inf, log_det), ~missing)
+            bad = ~(np.isfinite(log_variance) & (np.isfinite(white) | missing))
+            return (np.where(missing | bad, 0.0, white), np.where(bad, np.inf, np.where(missing, 0.0, log_variance)),
+                    ~missing)
         if missing.any():  # the marginal of the measured ones: their rows and columns alone
             keep = ~missing
             sigma = np.where(keep[..., :, None] & keep[..., None, :], sigma,
@@ -251,8 +253,8 @@ class ResidualNoise:
         sigma = np.where(bad[..., None, None], np.eye(self.size), sigma)
         chol = _cholesky(sigma)
         white = _forward(chol, np.where(bad[..., None], 0.0, gap))
-        log_det = 2 * np.sum(np.log(np.diagonal(chol, axis1=-2, axis2=-1)), axis=-1)
-        return np.where(bad[..., None], 0.0, white), np.where(bad, np.inf, log_det), ~missing
+        log_variance = 2 * np.log(np.diagonal(chol, axis1=-2, axis2=-1))
+        return np.where(bad[..., None], 0.0, white), np.where(bad[..., None], np.inf, log_variance), ~missing
 
 
 #: Up to this many residuals, the Cholesky factor and the forward substitution are written out over the
@@ -435,8 +437,9 @@ def information_excess(gaps: np.ndarray) -> np.ndarray:
     of ``K / BATCHES`` steps (an offset that wanders over tens of steps, as an integral's drift does,
     averages out of short batches), or their mean square if larger (it has more degrees of freedom).
     White gaps come out at about 1.1-1.25 on average (the largest of several noisy estimates).  Dividing the
-    log-likelihood by it is the sandwich correction of a misspecified likelihood.  The largest over
-    the M residuals, per asset (A,); 1 with fewer than :data:`MIN_STEPS` steps.
+    log-likelihood by it is the sandwich correction of a misspecified likelihood.  One per residual
+    and asset (A, M): whitened residuals carry independent information, so each is corrected by its
+    own; 1 with fewer than :data:`MIN_STEPS` steps.
 
     Examples
     --------
@@ -445,12 +448,12 @@ def information_excess(gaps: np.ndarray) -> np.ndarray:
     >>> rng = np.random.default_rng(0)
     >>> white = rng.standard_normal((1, 400, 1))
     >>> information_excess(np.concatenate([white, white + 1.0, 2.0 * white])).round(1).tolist()
-    [1.1, 46.8, 4.6]
+    [[1.1], [46.8], [4.6]]
     """
     gaps = np.asarray(gaps, float)
     assets, steps, m = gaps.shape
     if steps < MIN_STEPS:
-        return np.ones(assets)
+        return np.ones((assets, m))
     with np.errstate(invalid="ignore"):
         # batch means see persistence but have few degrees of freedom; the plain mean square has many:
         # the larger of them, so that gaps merely too wide are not missed by a lucky draw of batches.
@@ -461,4 +464,4 @@ def information_excess(gaps: np.ndarray) -> np.ndarray:
         for size in (short, *((steps // BATCHES,) if steps // BATCHES > short else ())):
             variance = np.fmax(variance, _batch_variance(gaps, size))
     # an ARR never measured in the history says nothing: 1, as does every variance below it
-    return np.max(np.where(np.isfinite(variance), variance, 1.0), axis=1, initial=1.0)
+    return np.fmax(np.where(np.isfinite(variance), variance, 1.0), 1.0)

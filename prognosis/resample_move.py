@@ -117,10 +117,12 @@ class ResampleMoveFilter:
         Tempering keeps the ESS at this share of N.
     resampling : str
     discrepancy : {"each", "shared", None}
-        Divide the log-likelihood by the information excess of the residuals' gaps
+        Divide each whitened residual's log-likelihood by the information excess of its gaps
         (:func:`~prognosis.likelihood.information_excess`): each asset by its own ("each"), every
         row by that of the row with the largest evidence ("shared": rows that are hypotheses about
         one asset, whose evidence stays comparable), or not at all (None: the noise model is trusted).
+        Per residual: an ARR whose gaps persist (a second derivative's lag) loses its weight, not
+        the others.
     seed : int or numpy.random.SeedSequence
 
     Examples
@@ -196,13 +198,14 @@ class ResampleMoveFilter:
         self.theta = self.prior.theta(self.z, self.components).copy()
         self.log_weights = np.full((assets, self.n), -np.log(self.n))
         self.log_evidence = np.zeros(assets)
-        self.past = np.zeros((assets, self.n))  # sum of log p(y_j | theta_j) of each particle over the history
+        # sum of log p(y_j | theta_j) of each particle over the history, per whitened residual (A, N, M)
+        self.past = np.zeros((assets, self.n, 1))
         self.level = None  # (A, N, M): each particle's offset predicted for the next step (whitened)
         self.history = []  # (y, points) of every step
         self.acceptance = np.full(assets, np.nan)
         self.frozen = np.zeros(assets, bool)
         self.scale = 2.38 / np.sqrt(np.maximum(self.prior.free.sum(axis=1), 1))
-        self.excess = np.ones(assets)  # what the likelihood is divided by (information_excess)
+        self.excess = np.ones((assets, 1))  # what each residual's likelihood is divided by (information_excess)
 
     @property
     def assets(self) -> int:
@@ -236,8 +239,11 @@ class ResampleMoveFilter:
         innovation = self._innovation(y, predicted)
         increment, self.level = self._log_likelihood(y, predicted, self.theta, self.level)
         updated = np.isfinite(y).any(axis=1) if y.ndim == 2 else np.isfinite(y)
-        increment = np.where(updated[:, None], increment, 0.0)
-        # the target moves from exp(past / excess_before) to exp((past + increment) / excess_after)
+        increment = np.where(updated[:, None, None], increment, 0.0)
+        if len(self.history) == 1:  # the residuals' count is known now
+            self.past = np.zeros(increment.shape)
+            self.excess = np.ones((self.assets, increment.shape[-1]))
+        # the target moves from exp(sum past / excess_before) to exp(sum (past + increment) / excess_after)
         before, after = 1.0 / self.excess, 1.0 / self._excess_now()
         done = np.zeros(self.assets)  # the share phi of the way already in the weights
         ess_min = np.full(self.assets, float(self.n))
@@ -248,8 +254,8 @@ class ResampleMoveFilter:
             if not rows.any():
                 break
             # d log target / d phi; a particle without density (a past of -inf) keeps none at any temperature
-            retempered = np.where(np.isfinite(self.past), (after - before)[:, None] * self.past, 0.0)
-            slope = retempered + after[:, None] * increment
+            retempered = np.where(np.isfinite(self.past), (after - before)[:, None, :] * self.past, 0.0)
+            slope = np.sum(retempered + after[:, None, :] * increment, axis=-1)
             # a frozen asset is not moved, so it takes its increment at once
             share = 1.0 - done if stage == MAX_STAGES else np.where(self.frozen, 1.0 - done,
                                                                      self._next_share(slope, done))
@@ -265,8 +271,9 @@ class ResampleMoveFilter:
             ess_min = np.minimum(ess_min, ess)
             low = rows & (ess < self.ess_target * self.n * (1 + 1e-9)) & ~self.frozen
             if low.any():
-                increment = self._resample_move(weights, low, increment, (1 - done) * before + done * after,
-                                                done * after)
+                share_done = done[:, None]
+                increment = self._resample_move(weights, low, increment,
+                                                (1 - share_done) * before + share_done * after, share_done * after)
                 moved |= low
                 distinct = np.where(low, self._distinct(), distinct)
         self.past = self.past + increment
@@ -275,7 +282,8 @@ class ResampleMoveFilter:
         return StepDiagnostics(updated, ess_min, moved, np.zeros(self.assets, bool), collapsed, innovation)
 
     def _excess_now(self) -> np.ndarray:
-        """The information excess (A,) the likelihood is divided by from this step on (all 1 without ``discrepancy``).
+        """The information excess (A, M) each residual's likelihood is divided by from this step on (1 without
+        ``discrepancy``).
 
         Read from the standardized gaps of the history at the particle that explains it best, the
         largest likelihood of the past (:func:`information_excess`), not at the cloud's mean: a
@@ -287,11 +295,12 @@ class ResampleMoveFilter:
         steps = len(self.history)
         if self.discrepancy is None or steps < MIN_STEPS or (steps - MIN_STEPS) % max(1, steps // 20):
             return self.excess
-        best = np.argmax(np.where(np.isfinite(self.past), self.past, -np.inf), axis=1)
+        past = self.past.sum(axis=-1)
+        best = np.argmax(np.where(np.isfinite(past), past, -np.inf), axis=1)
         excess = information_excess(self._standardized_gaps(self.z[np.arange(self.assets), best][:, None, :]))
         if self.discrepancy == "shared":  # rows are hypotheses of one asset: the best one's excess for all
             best = np.where(self.frozen, -np.inf, self.log_evidence)
-            excess = np.full(self.assets, excess[int(np.argmax(best))])
+            excess = np.broadcast_to(excess[int(np.argmax(best))], excess.shape).copy()
         return excess
 
     def _innovation(self, y: np.ndarray, predicted: np.ndarray) -> np.ndarray:
@@ -329,16 +338,16 @@ class ResampleMoveFilter:
                        on_past: np.ndarray, on_increment: np.ndarray) -> np.ndarray:
         """Resample the ``rows`` assets, then move them by MH on the tempered posterior; returns the new increment.
 
-        The target is ``prior exp(on_past past + on_increment increment)``, exponents (A,).
+        The target is ``prior exp(sum_m on_past_m past_m + on_increment_m increment_m)``, exponents (A, M).
         """
         spread = _weighted_covariance(self.z, weights)  # (A, D, D): the proposal's shape, before resampling
         index = self.resample(weights, self.rng)
         index = np.where(rows[:, None], index, np.arange(self.n))
         self.z = np.take_along_axis(self.z, index[..., None], axis=1)
         self.theta = _take(self.theta, index)
-        self.past = np.take_along_axis(self.past, index, axis=1)
+        self.past = _take(self.past, index)
         self.level = _take(self.level, index)
-        increment = np.take_along_axis(increment, index, axis=1)
+        increment = _take(increment, index)
         self.log_weights = np.where(rows[:, None], -np.log(self.n), self.log_weights)
         width = np.maximum(np.sqrt(np.diagonal(spread, axis1=-2, axis2=-1)),
                            1e-9 * np.maximum(np.abs(self.prior.hi - self.prior.lo), 1e-300))
@@ -358,14 +367,14 @@ class ResampleMoveFilter:
             # a proposal outside the prior is rejected; replayed inside it, so that no law overflows
             past, last, theta, level = self._replay(np.clip(z_new, self.prior.lo[:, None, :],
                                                             self.prior.hi[:, None, :]), view, increment)
-            a, b = on_past[:, None], on_increment[:, None]
-            log_ratio = (a * past + b * last) - (a * self.past + b * increment)
+            a, b = on_past[:, None, :], on_increment[:, None, :]
+            log_ratio = np.sum(a * past + b * last, axis=-1) - np.sum(a * self.past + b * increment, axis=-1)
             accept = inside & (np.log(self.rng.random(log_ratio.shape)) < np.nan_to_num(log_ratio, nan=-np.inf))
             self.z = np.where(accept[..., None], z_new, self.z)
             self.theta = np.where(_along(accept, theta), theta, self.theta)
-            self.past = np.where(accept, past, self.past)
+            self.past = np.where(accept[..., None], past, self.past)
             self.level = np.where(accept[..., None], level, self.level)
-            increment = np.where(accept, last, increment)
+            increment = np.where(accept[..., None], last, increment)
             accepted += accept.mean(axis=1)
         rate = accepted / self.moves
         self.acceptance = np.where(rows, rate, self.acceptance)
@@ -402,12 +411,12 @@ class ResampleMoveFilter:
         return past, last, theta, level
 
     def _replay_rows(self, z: np.ndarray, view) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        past, level = np.zeros(z.shape[:2]), None
+        past, level = 0.0, None
         for path, rate, start, stop in self._paths(z, view):
-            terms, level, _ = self._history_terms(path, rate, start, stop, level, view)
+            terms, level, _ = self._history_terms(path, rate, start, stop, level, view)  # (A, N, K, M)
             if stop == len(self.history):
-                return past + terms[..., :-1].sum(axis=-1), terms[..., -1], path[:, :, -1], level
-            past = past + terms.sum(axis=-1)
+                return past + terms[..., :-1, :].sum(axis=-2), terms[..., -1, :], path[:, :, -1], level
+            past = past + terms.sum(axis=-2)
         raise RuntimeError("no history to replay")
 
     def _standardized_gaps(self, z: np.ndarray) -> np.ndarray:
@@ -442,8 +451,8 @@ class ResampleMoveFilter:
         innovations (A, N, K, M), NaN where not measured."""
         gaps = self._history_gaps(path, rate, start, stop, view)
         noise = self.noise if view is None else view[3]
-        white, log_det, measured = noise.whiten(gaps, self._noise_theta(path))
-        return _score(white, log_det, measured, noise.walk_ratio, level)
+        white, log_variance, measured = noise.whiten(gaps, self._noise_theta(path))
+        return _score(white, log_variance, measured, noise.walk_ratio, level)
 
     def _history_gaps(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int, view=None) -> np.ndarray:
         """``y_j - h(theta_j)`` (A, N, K, M) for the steps ``start..stop`` of the history."""
@@ -482,11 +491,12 @@ class ResampleMoveFilter:
 
     def _log_likelihood(self, y: np.ndarray, predicted: np.ndarray, theta: np.ndarray,
                         level: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
-        """log p(y | past, theta) (A, N) of this step's measurement and the offset predicted for the next."""
+        """log p(y | past, theta) per whitened residual (A, N, M) of this step's measurement, and the offset
+        predicted for the next."""
         if y.ndim == 1:
             y, predicted = y[:, None], predicted[..., None]
-        white, log_det, measured = self.noise.whiten(y[:, None, :] - predicted, self._noise_theta(theta))
-        terms, level, _ = _score(white[:, :, None], log_det[:, :, None], measured[:, :, None],
+        white, log_variance, measured = self.noise.whiten(y[:, None, :] - predicted, self._noise_theta(theta))
+        terms, level, _ = _score(white[:, :, None], log_variance[:, :, None], measured[:, :, None],
                                  self.noise.walk_ratio, level)
         return terms[:, :, 0], level
 
@@ -512,21 +522,20 @@ class ResampleMoveFilter:
         return {**parts[0], "components": parts}
 
 
-def _score(white: np.ndarray, log_det: np.ndarray, measured: np.ndarray, walk: np.ndarray,
+def _score(white: np.ndarray, log_variance: np.ndarray, measured: np.ndarray, walk: np.ndarray,
            level: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Log-densities (A, N, K) of whitened gaps (A, N, K, M) whose offsets walk by ``walk`` (A, M) a step
-    over the noise, the offsets predicted after them (A, N, M) from ``level`` before them (None:
-    zero), and the standardized innovations (A, N, K, M), NaN where not measured (:mod:`prognosis.wander`)."""
+    """Log-densities per whitened residual (A, N, K, M) of whitened gaps (A, N, K, M) whose offsets walk by
+    ``walk`` (A, M) a step over the noise, the offsets predicted after them (A, N, M) from ``level``
+    before them (None: zero), and the standardized innovations (A, N, K, M), NaN where not measured
+    (:mod:`prognosis.wander`).  ``log_variance``: the whitening's (:meth:`ResidualNoise.whiten`)."""
     gain, spread = steady_state(walk[:, None, :])  # (A, 1, M)
     level = np.zeros(white.shape[:2] + white.shape[-1:]) if level is None else level
     v, level = innovations(white, measured, gain, level)
     spread = spread[:, :, None, :]  # (A, 1, 1, M)
-    with np.errstate(invalid="ignore", over="ignore"):  # an infinite log det: no density, -inf
-        terms = -0.5 * (np.sum(np.where(measured, np.square(v) / spread + np.log(spread) + LOG_2PI, 0.0), axis=-1)
-                        + log_det)
+    with np.errstate(invalid="ignore", over="ignore"):  # an infinite variance: no density, -inf
+        terms = -0.5 * (np.square(v) / spread + np.log(spread) + LOG_2PI + log_variance)
     terms = np.where(np.isfinite(terms), terms, -np.inf)
-    used = np.any(measured, axis=-1)
-    return np.where(used, terms, 0.0), level, np.where(measured, v / np.sqrt(spread), np.nan)
+    return np.where(measured, terms, 0.0), level, np.where(measured, v / np.sqrt(spread), np.nan)
 
 
 def _take(values: np.ndarray, index: np.ndarray) -> np.ndarray:
