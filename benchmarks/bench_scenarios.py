@@ -107,7 +107,8 @@ def main() -> int:
     parser.add_argument("--particles", type=int, default=300)
     parser.add_argument("--rul-every", type=int, default=10)
     parser.add_argument("--jobs", type=int, default=1)
-    parser.add_argument("--filter", choices=("sir", "resample-move"), default="sir", help="bgphm prognose --filter")
+    parser.add_argument("--filter", choices=("resample-move", "sir"), default="resample-move",
+                        help="bgphm prognose --filter")
     parser.add_argument("--pairs", action="store_true",
                         help="bgphm prognose --pairs: weigh two parameters wearing at once (with resample-move)")
     parser.add_argument("--degradation", action="append", default=[], choices=("linear", "exponential", "power"),

@@ -917,7 +917,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="weigh a bias, drift or gain of each sensor consistent with the ARRs that fired too "
                         "(default; --no-sensors: the sensors are healthy)")
     p.add_argument("--pairs", action=argparse.BooleanOptionalAction, default=False,
-                   help="with --filter resample-move, weigh two parameters wearing at once too, declared only when "
+                   help="weigh two parameters wearing at once too (the resample-move filter only), declared only when "
                         "the data demand two faults; the RUL is the first failure's (default: one fault)")
     p.add_argument("--direction", choices=("up", "down"), help="check that --candidate's failure value lies on "
                    "this side of nominal")
@@ -925,10 +925,11 @@ def build_parser() -> argparse.ArgumentParser:
                    help="uniform prior interval of the rate (default: the life from nominal to failure "
                         "log-uniform over 10 to 1e5 filter steps)")
     p.add_argument("--particles", type=int, default=500, help="particles per hypothesis (default 500)")
-    p.add_argument("--filter", choices=("sir", "resample-move"), default="sir",
-                   help="sir: the random-walk particle filter of Jha et al. 2016 (the default; cheaper, collapses "
-                        "on a clean residual); resample-move: the law's parameters weighed on the whole history, "
-                        "moved by MCMC, with the residual noise measured on the healthy stretch")
+    p.add_argument("--filter", choices=("resample-move", "sir"), default="resample-move",
+                   help="resample-move (the default): the law's parameters weighed on the whole history, moved "
+                        "by MCMC, with the residual noise measured on the healthy stretch; a law the data "
+                        "contradict is reported inadequate.  sir: the random-walk particle filter of Jha et al. "
+                        "2016 (collapses on a clean residual; no adequacy check)")
     p.add_argument("--dt", type=float, help="filter step in s, a multiple of the record's (default: one "
                    "derivative window of samples)")
     p.add_argument("--rul-every", type=int, default=10, help="predict the RUL every N filter steps (default 10)")

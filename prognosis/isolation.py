@@ -449,16 +449,17 @@ class IsolatingMonitor:
     healthy_until : float, optional
         End of the stretch the user declares fault-free (the one the noise was calibrated on):
         alarms there are not faults (a start-up transient) and start nothing.
-    method : {"sir", "resample-move"}
-        The filter: ``"resample-move"`` weighs each law's static parameters, theta at the alarm and
-        the rate, by their posterior on the whole history and moves its particles by MCMC
+    method : {"resample-move", "sir"}
+        The filter: ``"resample-move"`` (the default) weighs each law's static parameters, theta at the
+        alarm and the rate, by their posterior on the whole history and moves its particles by MCMC
         (:class:`~prognosis.resample_move.ResampleMoveFilter`), with the residual noise measured on
         the healthy stretch, correlated between ARRs and growing with the candidate
         (:mod:`~prognosis.likelihood`), divided by the gaps' information excess; it does not collapse
-        on a clean residual.  ``"sir"`` (the default, until the resample-move filter picks the law as
-        well on every demo) is the random-walk SIR filter of Jha et al. (2016) with kernel smoothing
-        of the rate (:class:`~prognosis.particle_filter.ParticleFilter`): cheaper, but its cloud
-        collapses when the residual is much sharper than its process noise.
+        on a clean residual, and a law the innovations contradict is reported inadequate.  ``"sir"`` is
+        the random-walk SIR filter of Jha et al. (2016) with kernel smoothing of the rate
+        (:class:`~prognosis.particle_filter.ParticleFilter`): no cheaper on the demos, its cloud collapses
+        when the residual is much sharper than its process noise, and its random walk absorbs a
+        wrong law instead of showing it (no adequacy check).
     domains : mapping, optional
         Parameter -> open interval ``(lo, hi)`` of its physical domain, as the model declares it
         (:attr:`bondgraph.BondGraph.domains`); a hypothesis whose estimate leaves it is rejected.
@@ -496,7 +497,7 @@ class IsolatingMonitor:
                  rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
                  rul_every: int = 10, horizon: float | None = None, detection: Mapping | None = None,
                  min_ratio: float = EVIDENCE_RATIO, healthy_until: float | None = None,
-                 domains: Mapping[str, tuple] | None = None, method: str = "sir", pairs: bool = False,
+                 domains: Mapping[str, tuple] | None = None, method: str = "resample-move", pairs: bool = False,
                  seed: int | np.random.SeedSequence = 0):
         if method not in METHODS:
             raise PrognosisError(f"method must be one of {', '.join(METHODS)}, got {method!r}")

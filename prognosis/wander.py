@@ -62,8 +62,10 @@ def innovations(white: np.ndarray, measured: np.ndarray, gain: np.ndarray,
     steps = white.shape[-2]
     decay = np.broadcast_to(1.0 - np.asarray(gain, float), start.shape)[..., None, :]  # (..., 1, M)
     gain = 1.0 - decay
-    out = np.empty(np.broadcast_shapes(white.shape, start.shape[:-1] + white.shape[-2:]))
     level = np.asarray(start, float)
+    if not np.any(gain):  # white residuals (the common case): the innovations are the gaps
+        return np.where(measured, white, 0.0), level
+    out = np.empty(np.broadcast_shapes(white.shape, start.shape[:-1] + white.shape[-2:]))
     if not np.all(measured):  # rare: step by step, an unmeasured step neither moves nor scores
         for j in range(steps):
             seen = measured[..., j, :]

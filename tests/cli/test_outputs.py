@@ -154,7 +154,7 @@ def test_check_output_accepts_new_paths_and_names_the_option(tmp_path):
      "--horizon 1e+12: "),
     (["prognose", "{model}", "{data}", "--fail", "b=2e-3", "--calibrate", "0.5", "--horizon", "1e4",
       "--particles", "50000"], "GiB of random numbers"),
-    (["prognose", "{model}", "{data}", "--fail", "b=2e-3", "--calibrate", "0.5", "--pairs"],
+    (["prognose", "{model}", "{data}", "--fail", "b=2e-3", "--calibrate", "0.5", "--pairs", "--filter", "sir"],
      "--pairs: two faults at once are weighed with --filter resample-move"),
     (["prognose", "{model}", "{data}", "--fail", "b=2e-3", "--calibrate", "0.5", "--pairs", "--filter",
       "resample-move", "--candidate", "b"], "without --candidate only"),
@@ -217,7 +217,10 @@ def test_a_failure_value_on_the_wrong_side_of_the_drift_is_reported(tmp_path, ca
     assert "wrong side" in err
     summary = json.loads((tmp_path / "p" / "prognosis.json").read_text())
     assert all("wrong side" in summary["evidence"][f"b/{law}"]["rejected"] for law in ("linear", "exponential"))
-    assert "b" not in summary["candidate"] and summary["status"] != "isolated"
+    # no claim on b: what the data leave is sensors' offsets, or (each law of theirs contradicted by the
+    # data) "undecided", listing every fault the fired ARRs are consistent with, b among them
+    assert summary["status"] != "isolated"
+    assert summary["status"] == "undecided" or "b" not in summary["candidate"]
     # with the sensors taken as healthy (or b the only candidate) nothing is left: no claim
     code, out, err = run(capsys, "--quiet", "prognose", str(folder / "model.json"), str(folder / "data.csv"),
                          "--fail", "b=1e-5", "--calibrate", "0.9", "--particles", "200", "--no-sensors",
