@@ -483,7 +483,7 @@ class IsolatingMonitor:
     ...                   parameters={"R": drift}).record()
     >>> arrs = derive_arrs(bg)
     >>> monitor = IsolatingMonitor(arrs, {"R": 20.0, "L": 2.0}, noise_std={a.name: 1e-3 for a in arrs},
-    ...                            dt=0.01, n_particles=200, detection={"margin": 0.01})
+    ...                            dt=0.01, n_particles=100, detection={"margin": 0.01})
     >>> result = monitor.run(record)
     >>> d = result.decision
     >>> d.candidate, d.status, d.degradation, d.same_signature   # L fires the same ARR: not isolable in the model

@@ -11,12 +11,18 @@ import math
 
 import numpy as np
 import pytest
+import sympy as sp
 from scipy.stats import multivariate_normal
 
+from bondgraph.library import TORSION_BAR, torsion_bar_monitorable
+from diagnosis import derive_arrs
+from diagnosis.signals import add_noise, as_record
 from prognosis.degradation import LinearDegradation
+from prognosis.hypotheses import integral_increments
 from prognosis.likelihood import ResidualNoise, integral_walk
 from prognosis.resample_move import ResampleMoveFilter
 from prognosis.wander import BLOCK, innovations, steady_state
+from tests.scenarios import TORSION_DT, torsion_bar_b_md
 
 
 def walk_covariance(steps: int, lam: float, p: float) -> np.ndarray:
@@ -121,3 +127,28 @@ def test_an_integral_of_white_noise_walks_as_the_physics_says():
     assert np.mean(estimates) == pytest.approx(expected, rel=0.1)
     assert max(estimates) < 1.6 * expected and min(estimates) > 0.5 * expected
     assert integral_walk(np.diff((2.0 + np.sin(0.7 * np.arange(0.0, 10.0, h)))[::every])) < 1e-3 * expected
+
+
+def test_the_walk_read_from_a_torsion_bar_record_is_what_its_sensor_noise_integrates_to():
+    """Both ARRs integrate the speeds' gap ``omega_m / k_belt - omega_Ld`` (the shaft's twist): with
+    noise of sd s on each speed sampled every h, the integral walks by ``s sqrt(1 + 1/k_belt^2)
+    sqrt(h Delta)`` per filter step Delta, times each ARR's gain on it (k_s in the load ARR); written
+    without integrals (differentiated), they do not walk."""
+    nominal = TORSION_BAR["b_Md"][0]
+    record = torsion_bar_b_md(t_end=40.0, truth=lambda t: nominal)
+    sd, every = 0.002, 10
+    columns = {k: record[k] for k in ("t", "omega_m", "omega_Ld", "tau_m")}
+    noisy = add_noise(as_record(columns), {"omega_m": sd, "omega_Ld": sd}, seed=3)
+    k_s, k_belt = TORSION_BAR["k_s"][0], TORSION_BAR["k_belt"][0]
+    twist = sd * math.sqrt(1 + 1 / k_belt**2) * math.sqrt(TORSION_DT * every * TORSION_DT)
+    for form in ("keep", "avoid"):
+        for arr in derive_arrs(torsion_bar_monitorable(), complete=False, integrals=form):
+            evaluation = arr.evaluate(noisy)
+            steps = np.flatnonzero(np.asarray(evaluation.t) > 1.0)[::every]
+            walk = math.sqrt(integral_walk(integral_increments(arr, evaluation.points, steps)))
+            gains = [float(sp.diff(arr.compiled.nominal, s)) for s in arr.compiled.integrals]
+            if form == "avoid":
+                assert not gains and walk == 0.0, arr.name
+            else:
+                assert len(gains) == 1 and walk == pytest.approx(abs(gains[0]) * twist, rel=0.15), arr.name
+                assert arr.name != "ARR_1_2" or gains[0] == pytest.approx(k_s)
