@@ -446,9 +446,9 @@ class ResampleMoveFilter:
 
     def _history_terms(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int,
                        level: np.ndarray | None, view=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """log p(y_j | y_<j, theta_j) (A, N, K) for the steps ``start..stop`` of the history, the offset
-        predicted after them (A, N, M) from ``level`` before them (None: zero), and the standardized
-        innovations (A, N, K, M), NaN where not measured."""
+        """log p(y_j | y_<j, theta_j) per whitened residual (A, N, K, M) for the steps ``start..stop`` of the
+        history, the offset predicted after them (A, N, M) from ``level`` before them (None: zero), and
+        the standardized innovations (A, N, K, M), NaN where not measured."""
         gaps = self._history_gaps(path, rate, start, stop, view)
         noise = self.noise if view is None else view[3]
         white, log_variance, measured = noise.whiten(gaps, self._noise_theta(path))
