@@ -23,10 +23,12 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from .errors import PrognosisError
+from .wander import innovations, steady_state
 
 __all__ = ["ResidualNoise", "healthy_noise", "information_excess", "integral_walk"]
 
@@ -148,7 +150,7 @@ class ResidualNoise:
         object.__setattr__(view, "inflation", self.inflation)
         return view
 
-    @property
+    @cached_property
     def walk_ratio(self) -> np.ndarray:
         """Each whitened residual's offset walk per step over its noise (A, M), 0 without a walk.
 
@@ -222,6 +224,32 @@ class ResidualNoise:
         used = np.sum(measured, axis=-1)
         with np.errstate(invalid="ignore"):  # an infinite variance (no density) gives -inf
             return -0.5 * (np.sum(np.square(white) + log_variance, axis=-1) + used * _LOG_2PI)
+
+    def history_density(self, gap: np.ndarray, theta: np.ndarray,
+                        level: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Log-densities per whitened residual (A, N, K, M) of the gaps (A, N, K, M) of K successive steps.
+
+        Each step's density is that of its innovation given the earlier gaps when the residuals'
+        offsets walk (:attr:`walk_ratio`, :mod:`prognosis.wander`), of the gap itself otherwise (the
+        terms then sum to :meth:`log_density`).  ``theta`` (A, N, K) or (A, N, K, C); ``level`` (A, N, M):
+        the offsets predicted for the first step (None: zero).  Returns the terms (0 where not
+        measured), the offsets predicted after the last step and the standardized innovations (NaN
+        where not measured), which are white N(0, 1) when the noise model holds.
+
+        >>> noise = ResidualNoise(covariance=[[1.0]], walk=[0.25])
+        >>> terms, level, standardized = noise.history_density(np.ones((1, 1, 3, 1)), np.zeros((1, 1, 3)))
+        >>> level.round(3).tolist(), standardized[0, 0, :, 0].round(3).tolist()   # the offset follows the gaps
+        ([[[0.773]]], [0.781, 0.476, 0.29])
+        """
+        white, log_variance, measured = self.whiten(gap, theta)
+        gain, spread = steady_state(self.walk_ratio[:, None, :])  # (A, 1, M)
+        level = np.zeros(white.shape[:2] + white.shape[-1:]) if level is None else level
+        v, level = innovations(white, measured, gain, level)
+        spread = spread[:, :, None, :]  # (A, 1, 1, M)
+        with np.errstate(invalid="ignore", over="ignore"):  # an infinite variance: no density, -inf
+            terms = -0.5 * (np.square(v) / spread + np.log(spread) + _LOG_2PI + log_variance)
+        terms = np.where(np.isfinite(terms), terms, -np.inf)
+        return np.where(measured, terms, 0.0), level, np.where(measured, v / np.sqrt(spread), np.nan)
 
     def whiten(self, gap: np.ndarray, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``L^-1 gap`` with ``L L^T = Sigma(theta)``, ``log L_mm^2`` and which entries were measured.

@@ -46,7 +46,6 @@ from .likelihood import MIN_STEPS, ResidualNoise, information_excess
 from .particle_filter import COLLAPSE_BELOW, StepDiagnostics, check_particles, check_positive, cloud_estimate
 from .resampling import effective_sample_size, get_scheme, normalize_log_weights
 from .seeds import check_seed
-from .wander import innovations, steady_state
 
 __all__ = ["ResampleMoveFilter"]
 
@@ -54,7 +53,6 @@ ESS_TARGET = 0.5  # share of N the ESS is kept at by tempering
 MOVES = 4  # Metropolis-Hastings steps per move
 MAX_STAGES = 60  # tempering stages per filter step before the rest of the increment is taken at once
 CHUNK = 1024  # filter steps evaluated at once when the whole history is replayed (bounds the memory)
-LOG_2PI = float(np.log(2 * np.pi))
 DISCREPANCY = ("each", "shared", None)  # whose information excess divides an asset's likelihood
 
 
@@ -450,9 +448,7 @@ class ResampleMoveFilter:
         history, the offset predicted after them (A, N, M) from ``level`` before them (None: zero), and
         the standardized innovations (A, N, K, M), NaN where not measured."""
         gaps = self._history_gaps(path, rate, start, stop, view)
-        noise = self.noise if view is None else view[3]
-        white, log_variance, measured = noise.whiten(gaps, self._noise_theta(path))
-        return _score(white, log_variance, measured, noise.walk_ratio, level)
+        return (self.noise if view is None else view[3]).history_density(gaps, self._noise_theta(path), level)
 
     def _history_gaps(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int, view=None) -> np.ndarray:
         """``y_j - h(theta_j)`` (A, N, K, M) for the steps ``start..stop`` of the history."""
@@ -495,9 +491,9 @@ class ResampleMoveFilter:
         predicted for the next."""
         if y.ndim == 1:
             y, predicted = y[:, None], predicted[..., None]
-        white, log_variance, measured = self.noise.whiten(y[:, None, :] - predicted, self._noise_theta(theta))
-        terms, level, _ = _score(white[:, :, None], log_variance[:, :, None], measured[:, :, None],
-                                 self.noise.walk_ratio, level)
+        # one step: a history of length one
+        terms, level, _ = self.noise.history_density(np.expand_dims(y[:, None, :] - predicted, 2),
+                                                     np.expand_dims(self._noise_theta(theta), 2), level)
         return terms[:, :, 0], level
 
     def _noise_theta(self, theta: np.ndarray) -> np.ndarray:
@@ -520,22 +516,6 @@ class ResampleMoveFilter:
             return cloud_estimate(self.theta, self.gamma, self.weights)
         parts = [cloud_estimate(self.theta[..., c], self.gamma, self.weights) for c in range(self.components)]
         return {**parts[0], "components": parts}
-
-
-def _score(white: np.ndarray, log_variance: np.ndarray, measured: np.ndarray, walk: np.ndarray,
-           level: np.ndarray | None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Log-densities per whitened residual (A, N, K, M) of whitened gaps (A, N, K, M) whose offsets walk by
-    ``walk`` (A, M) a step over the noise, the offsets predicted after them (A, N, M) from ``level``
-    before them (None: zero), and the standardized innovations (A, N, K, M), NaN where not measured
-    (:mod:`prognosis.wander`).  ``log_variance``: the whitening's (:meth:`ResidualNoise.whiten`)."""
-    gain, spread = steady_state(walk[:, None, :])  # (A, 1, M)
-    level = np.zeros(white.shape[:2] + white.shape[-1:]) if level is None else level
-    v, level = innovations(white, measured, gain, level)
-    spread = spread[:, :, None, :]  # (A, 1, 1, M)
-    with np.errstate(invalid="ignore", over="ignore"):  # an infinite variance: no density, -inf
-        terms = -0.5 * (np.square(v) / spread + np.log(spread) + LOG_2PI + log_variance)
-    terms = np.where(np.isfinite(terms), terms, -np.inf)
-    return np.where(measured, terms, 0.0), level, np.where(measured, v / np.sqrt(spread), np.nan)
 
 
 def _take(values: np.ndarray, index: np.ndarray) -> np.ndarray:
