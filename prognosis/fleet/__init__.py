@@ -5,11 +5,14 @@
 * :class:`FleetFilter` (:mod:`.filter`): the particle arrays of every (asset, hypothesis) row and the
   vectorized SIR step on per-asset random streams (:mod:`prognosis.streams`);
 * :mod:`.rul`: closed-form crossing times and per-asset RUL summaries;
-* :class:`FleetResult` (:mod:`.results`): the tidy tables (alarms, estimates, RUL).
+* :class:`FleetResult` (:mod:`.results`): the tidy tables (alarms, estimates, RUL);
+* :func:`write_checkpoint`, :func:`read_checkpoint` (:mod:`.checkpoint`): a stream's state on disk as
+  sealed numeric arrays, never a pickle.
 """
 
+from .checkpoint import read_checkpoint, write_checkpoint
 from .filter import FleetFilter
 from .monitor import FleetMonitor
 from .results import FleetResult
 
-__all__ = ["FleetFilter", "FleetMonitor", "FleetResult"]
+__all__ = ["FleetFilter", "FleetMonitor", "FleetResult", "read_checkpoint", "write_checkpoint"]

@@ -16,6 +16,7 @@ Results are tidy tables (:class:`~prognosis.fleet.results.FleetResult`): alarms,
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,6 +28,7 @@ from ..observation import observation_model
 from .. import seeds
 from ..rul import RULPredictor
 from ..streams import RATES, AssetStreams, asset_key
+from .checkpoint import check_state, read_checkpoint, write_checkpoint
 from .filter import ROW_STATE, FleetFilter
 from .live import LiveAsset
 from .results import FleetResult
@@ -356,14 +358,15 @@ class FleetMonitor:
         return list(self._live)
 
     # -- checkpoints -------------------------------------------------------------------------
-    def checkpoint(self) -> dict:
-        """The streaming state of every asset as plain data (numpy arrays, numbers, strings).
+    def checkpoint(self, path: str | os.PathLike | None = None) -> dict:
+        """The streaming state of every asset as plain data (numeric arrays, numbers, text); with ``path``,
+        written there too as a checkpoint file (:func:`~prognosis.fleet.checkpoint.write_checkpoint`).
 
         Particles, kernel-smoothing state, log evidence and filter step of each row (the step is
         the whole state of an asset's random stream), the online evaluation's buffers and running
         integrals, the alarm and the queued samples: :meth:`restore` on a monitor with the same
-        settings goes on exactly as if there had been no restart.  It pickles with the standard
-        library (``pickle.dump(monitor.checkpoint(), file)``).
+        settings goes on exactly as if there had been no restart.  The file is numeric arrays under
+        a JSON header with a format version and a checksum, never a pickle: reading it runs no code.
         """
         pf = self._filter
         assets = []
@@ -373,28 +376,46 @@ class FleetMonitor:
             if live.rows is not None:
                 state["rows"] = {name: getattr(pf, name)[live.rows].copy() for name in ROW_STATE}
             assets.append(state)
-        return {"version": 1, "settings": self._fingerprint(), "assets": assets}
+        state = {"version": 1, "settings": self._fingerprint(), "assets": assets}
+        if path is not None:
+            write_checkpoint(state, path)
+        return state
 
-    def restore(self, checkpoint: Mapping) -> None:
-        """Take up the streams of a :meth:`checkpoint` (replacing this monitor's streams)."""
-        if checkpoint.get("version") != 1:
-            raise PrognosisError(f"checkpoint: unknown version {checkpoint.get('version')!r} (expected 1)")
+    def restore(self, checkpoint: Mapping | str | os.PathLike) -> None:
+        """Take up the streams of a :meth:`checkpoint`, the dict or its file (replacing this monitor's streams).
+
+        Every key, shape, dtype, finiteness and range is checked first (:func:`~prognosis.fleet.checkpoint.
+        check_state`), and a file's format, version and checksum; a checkpoint refused raises a
+        :class:`~prognosis.errors.PrognosisError` naming the key or the file and leaves this monitor as it was.
+        """
+        if isinstance(checkpoint, (str, os.PathLike)):
+            checkpoint = read_checkpoint(checkpoint)
+        if not isinstance(checkpoint, Mapping) or checkpoint.get("version") != 1:
+            got = checkpoint.get("version") if isinstance(checkpoint, Mapping) else type(checkpoint).__name__
+            raise PrognosisError(f"checkpoint: unknown version {got!r} (expected 1)")
         if checkpoint.get("settings") != self._fingerprint():
             raise PrognosisError("checkpoint: it was made by a monitor with other settings "
                                  f"({checkpoint.get('settings')}); this one has {self._fingerprint()}")
-        self._live, self._filter = {}, None
+        pf = self._new_filter()
+        check_state(checkpoint, arrs=len(self.arrs), hypotheses=self.hypotheses, particles=pf.n, gammas=pf.g,
+                    domains=self.domains, row_state=ROW_STATE)
+        live_assets, used = {}, False
         for state in checkpoint["assets"]:
-            live = LiveAsset.restore(state, self.arrs, self.options)
-            live.queue = [(t, np.asarray(y), list(points)) for t, y, points in state.get("queue", [])]
+            try:
+                live = LiveAsset.restore(state, self.arrs, self.options)
+            except ValueError as error:
+                raise PrognosisError(f"checkpoint: asset {state['asset']!r}: {error}") from None
+            live.queue = [(float(t), np.asarray(y, float), [np.asarray(p, float) for p in points])
+                          for t, y, points in state.get("queue", [])]
             if "rows" in state:
-                pf = self._streaming_filter()
                 rows = pf.allocate(len(state["rows"]["theta"]))
                 for name in ROW_STATE:
                     getattr(pf, name)[rows] = state["rows"][name]
                 for row in rows:
                     pf.asset[row] = live.asset
-                live.rows = rows
-            self._live[live.asset] = live
+                live.rows, used = rows, True
+            live_assets[live.asset] = live
+        self._live, self._filter = live_assets, (pf if used else None)
 
     def _fingerprint(self) -> dict:
         s = self.settings
