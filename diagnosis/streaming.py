@@ -292,13 +292,9 @@ class StreamingEvaluation:
             a step off the stream's step (``method="savgol"``).  Naming the signal: a signal missing,
             non-numeric, infinite, too large, or of another length than ``t``.  After :meth:`flush`.
         """
-        if self._ended:
-            raise RecordError(f"{self._name}: the stream has ended (flush() was called); start a new "
-                              "StreamingEvaluation for new data")
-        t, block = self._read(t, signals)
+        t, block, self._step = self._checked(t, signals)
         if t.size == 0:
             return self._empty()
-        self._check_times(t)
         if self._count == 0:
             self._origin = block[:, 0].copy()
         self._t = np.concatenate((self._t, t))
@@ -309,6 +305,33 @@ class StreamingEvaluation:
         if self._t.size > self._keep:  # copies, so that the batch's arrays are not kept alive
             self._t, self._x = self._t[-self._keep:].copy(), self._x[:, -self._keep:].copy()
         return chunk
+
+    def check(self, t: ArrayLike, signals: Mapping[str, ArrayLike]) -> None:
+        """Raise the error :meth:`push` would raise for these samples, without taking them.
+
+        The stream is left as it was, so a caller with several streams (a fleet's assets, an asset's
+        ARRs) can check a whole batch before any of them moves.
+
+        >>> from bondgraph.library import rlc_circuit
+        >>> from diagnosis import derive_arrs
+        >>> stream = StreamingEvaluation(derive_arrs(rlc_circuit())[0])
+        >>> try:
+        ...     stream.check([0.0, 0.01], {"V": [1.0, 1.0], "i": [0.0, 0.0]})
+        ... except RecordError as error:
+        ...     print(str(error).split(";")[0])
+        ARR_J1 stream: missing signal(s) ['v_C'] in this batch
+        >>> stream.samples
+        0
+        """
+        self._checked(t, signals)
+
+    def _checked(self, t: ArrayLike, signals: Mapping) -> tuple[np.ndarray, np.ndarray, float]:
+        """The batch read and checked: ``t``, the columns (columns, n) and the stream's step after it."""
+        if self._ended:
+            raise RecordError(f"{self._name}: the stream has ended (flush() was called); start a new "
+                              "StreamingEvaluation for new data")
+        t, block = self._read(t, signals)
+        return t, block, (self._check_times(t) if t.size else self._step)
 
     def flush(self) -> StreamChunk:
         """End the stream: finalize the waiting samples with the one-sided fit a record's end gets.
@@ -356,8 +379,11 @@ class StreamingEvaluation:
                            name=self._name, min_samples=0)
         return record.t, np.array([record.columns[c] for c in self._columns]).reshape(len(self._columns), -1)
 
-    def _check_times(self, t: np.ndarray) -> None:
-        """``t`` increases within the batch and from the previous one; steps uniform for Savitzky-Golay."""
+    def _check_times(self, t: np.ndarray) -> float:
+        """``t`` increases within the batch and from the previous one; steps uniform for Savitzky-Golay.
+
+        Returns the stream's step once these samples are taken (read from the first two samples when
+        ``dt`` is not given); the stream itself is not changed."""
         before = self._t[-1:] if self._count else np.empty(0)
         times = np.concatenate((before, t))
         steps = np.diff(times)
@@ -367,17 +393,19 @@ class StreamingEvaluation:
             where = "the previous batch's last sample" if (i == 0 and before.size) else "the previous sample"
             raise RecordError(f"{self._name}: t must increase: t = {float(times[i + 1])!r} follows "
                               f"t = {float(times[i])!r} ({where})")
+        step = self._step
         if not self._uniform or not steps.size:
-            return
-        if math.isnan(self._step):
-            self._step = self._options["dt"] if self._options["dt"] is not None else float(steps[0])
-        off = np.abs(steps - self._step) > UNIFORM_RTOL * self._step
+            return step
+        if math.isnan(step):
+            step = self._options["dt"] if self._options["dt"] is not None else float(steps[0])
+        off = np.abs(steps - step) > UNIFORM_RTOL * step
         if off.any():
             i = int(np.flatnonzero(off)[0])
             raise RecordError(f"{self._name}: t = {float(times[i + 1])!r} comes {float(steps[i]):.9g} after the "
-                              f"previous sample, but the stream's step is {self._step:.9g} (off by "
-                              f"{abs(steps[i] - self._step) / self._step:.2%}); method='savgol' needs uniform "
+                              f"previous sample, but the stream's step is {step:.9g} (off by "
+                              f"{abs(steps[i] - step) / step:.2%}); method='savgol' needs uniform "
                               f"sampling (within {UNIFORM_RTOL:g}): use method='central', which handles uneven steps")
+        return step
 
     # -- finalizing samples ----------------------------------------------------------------------------
     def _advance(self, ready: int, at_end: bool) -> StreamChunk:

@@ -64,6 +64,11 @@ class LiveAsset:
         return cls(asset, evaluators, max(int(o.get("persistence", 1)) for o in options),
                    pending=[None] * len(evaluators))
 
+    def check(self, t: np.ndarray, signals: Mapping) -> None:
+        """Raise what :meth:`push` would raise for this micro-batch, for any ARR, before any evaluation moves."""
+        for evaluator in self.evaluators:
+            evaluator.check(t, signals)
+
     def push(self, t: np.ndarray, signals: Mapping) -> Final | None:
         """Feed a micro-batch; the samples that became final for every ARR (None if none did)."""
         for m, evaluator in enumerate(self.evaluators):

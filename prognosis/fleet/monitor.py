@@ -148,7 +148,7 @@ class FleetMonitor:
         self.up = np.array([h.direction == "up" for h in self.hypotheses])
         self._filter = None  # the streaming filter (run() uses one per block)
         self._laws = None
-        self._live: dict = {}
+        self._live: dict = {}  # text of the asset id -> its stream (ids that print the same are one)
         self._predictors: dict = {}
         self._keep_particles = False  # RUL predictors of laws without a closed form, by hypothesis
 
@@ -244,9 +244,7 @@ class FleetMonitor:
 
     def particles(self, asset) -> dict:
         """The particles of a streamed asset now: ``{hypothesis: {"theta": (N,), "gamma": (G, N)}}`` (copies)."""
-        live = self._live.get(asset)
-        if live is None:
-            raise KeyError(f"no asset {asset!r} in the stream")
+        live = self._stream_of(asset)
         return {} if live.rows is None else self._particles_of(self._filter, live.rows)
 
     def _particles_of(self, pf: FleetFilter, rows: np.ndarray) -> dict:
@@ -274,21 +272,44 @@ class FleetMonitor:
         no history: memory stays bounded however long the stream, and the returned rows are the
         caller's to keep.
         """
-        columns = _columns(batch)
         result = FleetResult()
         touched = []
-        for asset, index in _by_asset(columns["asset"]):
-            live = self._live.get(asset)
-            if live is None:
-                asset_key(asset)
-                live = self._live[asset] = LiveAsset.start(asset, self.arrs, self.options)
-            signals = {name: values[index] for name, values in columns.items() if name not in ("asset", "t")}
-            final = live.push(np.asarray(columns["t"][index], float), signals)
+        for live, new, t, signals in self._checked_batch(_columns(batch)):
+            if new:
+                self._live[str(live.asset)] = live
+            final = live.push(t, signals)
             if final is not None:
                 self._watch(live, final, result)
                 touched.append(live)
         self._drain(touched, result)
         return result
+
+    def _checked_batch(self, columns: dict) -> list:
+        """Each asset's part of a micro-batch, ``(live, new, t, signals)``, all checked before any stream moves.
+
+        A batch refused changes nothing, so it can be corrected and sent again.  Ids stay as given
+        (text or whole numbers, their random streams keyed by them), but two that print the same (7
+        and "7") cannot be told apart in a table: they are refused, in one batch or across batches.
+        """
+        parts = []
+        for asset, index in _by_asset(columns["asset"]):
+            live, new = self._live.get(str(asset)), False
+            other = next((a for a in columns["asset"][index] if not _same_id(a, asset)), None)
+            if other is None and live is not None and not _same_id(live.asset, asset):
+                other = live.asset
+            if other is not None:
+                raise PrognosisError(f"update: asset ids {other!r} and {asset!r} collide: ids are compared as text")
+            try:
+                if live is None:
+                    asset_key(asset)
+                    live, new = LiveAsset.start(asset, self.arrs, self.options), True
+                t = columns["t"][index]
+                signals = {name: values[index] for name, values in columns.items() if name not in ("asset", "t")}
+                live.check(t, signals)
+            except (TypeError, ValueError) as error:
+                raise PrognosisError(f"update: asset {asset!r}: {error}") from None
+            parts.append((live, new, t, signals))
+        return parts
 
     def _watch(self, live: LiveAsset, final, result: FleetResult) -> None:
         """Detection on the new final samples, the start at the alarm, and the filter steps they make due."""
@@ -346,16 +367,21 @@ class FleetMonitor:
 
     def retire(self, asset) -> None:
         """Forget an asset (replaced, or its stream ended): its rows and buffers are freed."""
-        live = self._live.pop(asset, None)
-        if live is None:
-            raise KeyError(f"no asset {asset!r} in the stream")
+        live = self._stream_of(asset)
+        del self._live[str(asset)]
         if live.rows is not None:
             self._filter.remove(live.rows)
 
     @property
     def assets(self) -> list:
         """The assets of the stream so far."""
-        return list(self._live)
+        return [live.asset for live in self._live.values()]
+
+    def _stream_of(self, asset) -> LiveAsset:
+        live = self._live.get(str(asset))
+        if live is None or not _same_id(live.asset, asset):
+            raise KeyError(f"no asset {asset!r} in the stream")
+        return live
 
     # -- checkpoints -------------------------------------------------------------------------
     def checkpoint(self, path: str | os.PathLike | None = None) -> dict:
@@ -414,7 +440,7 @@ class FleetMonitor:
                 for row in rows:
                     pf.asset[row] = live.asset
                 live.rows, used = rows, True
-            live_assets[live.asset] = live
+            live_assets[str(live.asset)] = live
         self._live, self._filter = live_assets, (pf if used else None)
 
     def _fingerprint(self) -> dict:
@@ -569,6 +595,11 @@ def _columns(batch) -> dict:
     if len(set(sizes.values())) > 1:
         raise PrognosisError(f"update: columns of different lengths {sizes}")
     return columns
+
+
+def _same_id(first, second) -> bool:
+    """One asset id: equal values of one kind (``7`` and ``numpy.int64(7)``, not ``7`` and ``"7"``)."""
+    return isinstance(first, str) == isinstance(second, str) and first == second
 
 
 def _by_asset(assets: np.ndarray):

@@ -14,7 +14,7 @@ from prognosis.fleet import FleetResult
 from prognosis.fleet.checkpoint import read_checkpoint, write_checkpoint
 from tests.prognosis.test_fleet import circuit, fleet, same, stream  # noqa: F401 (circuit: a fixture)
 
-STOP = 600  # samples streamed before the checkpoint: every faulty asset has alarmed, c3 just
+STOP = 600  # samples streamed before the checkpoint: c1 and c4 are filtering, c3 alarms 23 samples later
 
 
 @pytest.fixture(scope="module")
