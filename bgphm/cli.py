@@ -7,7 +7,7 @@
     bgphm detect MODEL DATA.csv [--margin M | --calibrate T] [--persistence N] [--out DIR]
     bgphm prognose MODEL DATA.csv --fail PARAM=VALUE [--fail ...] [--candidate P] [--degradation LAW] [--out DIR]
     bgphm fleet MODEL RECORDS --fail PARAM=VALUE [--fail ...] --calibrate T --out DIR [--scheduler ADDRESS]
-                [--workers N] [--particles N] [--dt S] [--rul-every K] [--seed S] [--force]
+                [--workers N] [--particles N] [--dt S] [--rul-every K] [--seed S] [--force] [--resume]
     bgphm demo [dc-motor|torsion-bar|three-tank] [--out DIR] [--seed N]
 
 MODEL is a JSON file (networkx node-link form), a Python file defining ``model``, or a built-in example
@@ -250,8 +250,9 @@ def cmd_fleet(args, progress: Progress) -> int:
     if args.scheduler is not None or args.workers > 0:
         require_dask()
     source = open_source(args.records)
+    # --resume goes on in the run's own --out: it is not empty, and needs no --force
     out = check_output(args.out, kind="directory", inputs=input_files(args.model) + source.inputs(),
-                       force=args.force)
+                       force=args.force or args.resume)
     spec, arrs, failures, candidates, laws = _what_can_fail(args, progress)
     assets = source.assets()
     progress(f"{len(assets)} assets in {source.describe()}")
@@ -269,10 +270,14 @@ def cmd_fleet(args, progress: Progress) -> int:
     progress(f"monitoring {len(assets)} assets ({where}): {len(laws)} law(s) per candidate, {args.particles} "
              f"particles each, dt = {dt:g} s")
     summary = run_fleet(job, source, out, scheduler=args.scheduler, workers=args.workers,
-                        shard_size=args.shard_size, progress=_fleet_progress(progress), notes=calibration)
+                        shard_size=args.shard_size, progress=_fleet_progress(progress), notes=calibration,
+                        resume=args.resume)
     print(f"{summary['assets']} assets, {summary['assets_with_alarm']} with an alarm, {summary['rows']['rul']} RUL "
           f"rows, in {summary['wall_s']:.1f} s ({1e3 * summary['seconds_per_asset']:.1f} ms per asset)")
-    print(f"wrote {out / 'alarms'}, {out / 'estimates'}, {out / 'rul'} (Parquet) and {out / 'summary.json'}")
+    resumed = f" ({summary['resumed_shards']} of {summary['shards']} shards kept from the interrupted run)" \
+        if args.resume else ""
+    print(f"wrote {out / 'alarms'}, {out / 'estimates'}, {out / 'rul'} (Parquet), {out / 'summary.json'} and "
+          f"{out / 'manifest.json'}{resumed}")
     return EXIT_OK
 
 
@@ -988,7 +993,10 @@ def _fleet_parser(sub, model_help: str) -> None:
                    "it, the asset id and the step")
     p.add_argument("--out", required=True, help="output directory (new or empty, unless --force)")
     p.add_argument("--force", action="store_true", help="write into a non-empty --out directory (a previous "
-                   "fleet run's tables there are replaced)")
+                   "fleet run's tables there are replaced, whole, when this one ends)")
+    p.add_argument("--resume", action="store_true", help="go on with the run interrupted in --out: the same "
+                   "options and records, its finished shards kept (checked by SHA-256), the same tables as "
+                   "an uninterrupted run")
     p.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786 "
                    "(default: a local cluster of --workers processes)")
     p.add_argument("--workers", type=int, default=2, help="worker processes of the local cluster (default 2; 0 runs "

@@ -5,7 +5,9 @@
 * sources (:mod:`.sources`): a directory of CSV files (one per asset) or one Parquet file;
 * :func:`run_fleet` (:mod:`.engine`): shards of sorted asset ids on a local Dask cluster, a remote
   scheduler, or in this process; :func:`run_shard` is one task;
-* :func:`read_fleet` (:mod:`.store`): the Parquet tables back as a :class:`~prognosis.fleet.FleetResult`.
+* :func:`read_fleet` (:mod:`.store`): the Parquet tables back as a :class:`~prognosis.fleet.FleetResult`;
+* the output directory (:mod:`.outdir`): one run at a time (a lock), shards staged, tables published
+  whole with a manifest, an interrupted run resumed.
 
 Dask (``dask[distributed]``) and pyarrow are the optional extra ``[dask]``; ``prognosis`` uses
 neither.  ``bgphm fleet`` is the command line of :func:`run_fleet`; ``docs/fleet.md`` is the guide.

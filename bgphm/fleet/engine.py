@@ -14,7 +14,6 @@ same in any shard, on any worker, and in the serial run.
 from __future__ import annotations
 
 import contextlib
-import json
 import logging
 import math
 import os
@@ -26,11 +25,11 @@ from pathlib import Path
 from typing import NamedTuple
 
 from bgphm.errors import FleetError, FleetWarning, MissingExtraError, UsageError
-from bgphm.files import write_text
 
+from .outdir import Output, locked
 from .sources import open_source
 from .spec import FleetSpec, monitor_for
-from .store import BUCKETS, SUMMARY, clear_outputs, write_shard
+from .store import BUCKETS, write_shard
 
 __all__ = ["SERIAL", "Task", "default_shard_size", "local_cluster", "malloc_setting", "plan", "require_dask",
            "run_fleet", "run_shard", "shard_assets"]
@@ -83,8 +82,8 @@ def run_shard(task: Task) -> dict:
     start, cpu = time.perf_counter(), time.process_time()
     built, new = monitor_for(task.spec)
     result = built.monitor.run(task.source.read(task.assets, built.signals))
-    rows = write_shard(result, task.out, task.shard, task.buckets)
-    return {"shard": task.shard, "assets": len(task.assets),
+    rows, files = write_shard(result, task.out, task.shard, task.buckets)
+    return {"shard": task.shard, "assets": len(task.assets), "files": files,
             "assets_with_alarm": int(len(set(result.alarms["asset"].tolist()))), "rows": rows,
             "seconds": time.perf_counter() - start, "cpu_seconds": time.process_time() - cpu,
             "built_monitor": new, "worker": f"{socket.gethostname()}:{os.getpid()}"}
@@ -92,7 +91,8 @@ def run_shard(task: Task) -> dict:
 
 def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, workers: int = 2,
               shard_size: int | None = None, buckets: int = BUCKETS,
-              progress: Callable[[int, int], None] | None = None, notes: dict | None = None) -> dict:
+              progress: Callable[[int, int], None] | None = None, notes: dict | None = None,
+              resume: bool = False) -> dict:
     """Monitor every asset of ``sources`` and write the tables to Parquet under ``out``; return the summary.
 
     Parameters
@@ -104,7 +104,9 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
         ``asset`` column (:func:`~bgphm.fleet.sources.open_source`).
     out : path
         Output directory: ``alarms/``, ``estimates/`` and ``rul/`` (Parquet, partitioned by asset
-        bucket) and ``summary.json``.  A previous run's tables there are removed first.
+        bucket), ``summary.json`` and ``manifest.json`` (:mod:`bgphm.fleet.outdir`).  One run at a
+        time writes there (a second is refused while the first lives); shards are staged and the
+        tables replace a previous run's whole at the end, ``manifest.json`` last.
     scheduler : None, "serial", str or distributed.Client
         None: a local Dask cluster of ``workers`` processes (one thread each); ``"serial"`` (or
         ``workers=0``): every shard in this process, without Dask; ``"tcp://host:port"``: the
@@ -120,6 +122,10 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
         ``progress(assets_done, assets_total)`` after each shard.
     notes : dict, optional
         Written into ``summary.json`` as they are (e.g. how the noise was calibrated).
+    resume : bool
+        Go on with the interrupted run staged under ``out``: the same spec, records, shards and
+        buckets are required, and its finished shards (their files checked against their SHA-256)
+        are kept; the tables equal those of an uninterrupted run, bit for bit.
 
     Returns
     -------
@@ -157,30 +163,44 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
     serial = scheduler == SERIAL or (scheduler is None and workers == 0)
     assets = source.assets()
     size = shard_size or default_shard_size(len(assets), workers)
-    tasks = plan(spec, source, out, shard_size=size, buckets=buckets)
     if not serial:  # a bad spec fails here, once, before a cluster starts (a serial run builds it in its first shard)
         monitor_for(spec)
     out = Path(out)
-    clear_outputs(out)
-    for name in ("alarms", "estimates", "rul"):
-        (out / name).mkdir(parents=True, exist_ok=True)  # present even when no row falls in them
-    start = time.perf_counter()
-    done = []
+    with locked(out):
+        output = Output(out)
+        tasks = plan(spec, source, output.staging, shard_size=size, buckets=buckets)
+        facts = {"spec": spec.as_dict(), "records": source.describe(), "buckets": buckets,
+                 "shards": [list(task.assets) for task in tasks]}
+        finished = output.start(facts, resume=resume)
+        start = time.perf_counter()
+        done = list(finished.values())
 
-    def report(summary: dict) -> None:
-        done.append(summary)
-        if progress is not None:
-            progress(sum(s["assets"] for s in done), len(assets))
+        def report(summary: dict) -> None:
+            output.finished(summary)
+            done.append(summary)
+            if progress is not None:
+                progress(sum(s["assets"] for s in done), len(assets))
 
-    if serial:
-        where = SERIAL
-        for task in tasks:
-            report(run_shard(task))
-    else:
-        where = _run_dask(tasks, scheduler, workers, report)
-    summary = _summary(spec, source, done, where, size, buckets, time.perf_counter() - start, notes)
-    write_text(out / SUMMARY, json.dumps(summary, indent=2))
+        todo = [task for task in tasks if task.shard not in finished]
+        if serial:
+            where = SERIAL
+            for task in todo:
+                report(run_shard(task))
+        else:
+            where = _run_dask(todo, scheduler, workers, report) if todo else SERIAL
+        summary = _summary(spec, source, done, where, size, buckets, time.perf_counter() - start, notes)
+        summary["resumed_shards"] = len(finished)
+        output.publish(summary, _manifest(facts, done, size))
     return summary
+
+
+def _manifest(facts: dict, done: list, size: int) -> dict:
+    """What a reader checks the tables against: the settings, every shard's assets, rows and files."""
+    shards = sorted(done, key=lambda s: s["shard"])
+    return {"spec": facts["spec"], "records": facts["records"], "buckets": facts["buckets"], "shard_size": size,
+            "assets": sum(len(a) for a in facts["shards"]),
+            "shards": [{"shard": s["shard"], "assets": facts["shards"][s["shard"]], "rows": s["rows"],
+                        "files": s["files"]} for s in shards]}
 
 
 def _check_counts(workers, shard_size, buckets) -> None:

@@ -1,42 +1,40 @@
 """A fleet's tables on disk: Parquet datasets partitioned by asset bucket, written shard by shard.
 
-Layout under the output directory::
+Layout of a table (under the staging area while a run goes, published whole at its end: see
+:mod:`bgphm.fleet.outdir`)::
 
     alarms/bucket=03/part-00012.parquet     # the rows of shard 12 whose asset falls in bucket 3
     estimates/bucket=.../part-....parquet
     rul/bucket=.../part-....parquet
-    summary.json                            # written last: the run finished
 
 An asset's bucket is ``asset_key(asset) % buckets`` (:func:`prognosis.streams.asset_key`, a hash
 that is the same in every process), so all of an asset's rows are in one bucket, and in one file
 (one shard holds the asset).  Each file is written whole or not at all (:func:`bgphm.files.write_with`:
-a hidden temporary file, then a rename), and readers skip hidden files.  pandas reads a table with
-``pd.read_parquet(out / "rul")`` (the bucket becomes a column); :func:`read_fleet` gives a
-:class:`~prognosis.fleet.FleetResult` in an order that does not depend on the sharding.
+a hidden temporary file, then a rename), and readers skip hidden files.  pandas reads a published
+table with ``pd.read_parquet(out / "rul")`` (the bucket becomes a column); :func:`read_fleet` checks
+the files against the run's manifest and gives a :class:`~prognosis.fleet.FleetResult` in an order
+that does not depend on the sharding.
 """
 
 from __future__ import annotations
 
-import re
-import warnings
+import hashlib
 from pathlib import Path
 
 import numpy as np
 
-from bgphm.errors import FleetError, FleetWarning
+from bgphm.errors import FleetError
 from bgphm.files import write_with
 from prognosis.fleet import FleetResult
 from prognosis.fleet.results import COLUMNS, INTEGER, TABLES, TEXT
 from prognosis.streams import asset_key
 
+from .outdir import BUCKET, MANIFEST, PART, STAGING, file_digest, read_manifest
 from .sources import pyarrow_modules
 
-__all__ = ["BUCKETS", "bucket_of", "clear_outputs", "read_fleet", "write_shard"]
+__all__ = ["BUCKETS", "bucket_of", "read_fleet", "write_shard"]
 
 BUCKETS = 16  # partitions per table: few enough files, small enough to read one bucket's assets alone
-SUMMARY = "summary.json"
-PART = re.compile(r"part-\d+\.parquet")
-BUCKET = re.compile(r"bucket=\d+")
 
 
 def bucket_of(asset: str, buckets: int = BUCKETS) -> int:
@@ -55,10 +53,13 @@ def schema(name: str):
                       for c in COLUMNS[name]])
 
 
-def write_shard(result: FleetResult, out: str | Path, shard: int, buckets: int = BUCKETS) -> dict:
-    """Write the tables of one shard's result, one file per table and bucket; return the rows per table."""
+def write_shard(result: FleetResult, out: str | Path, shard: int, buckets: int = BUCKETS) -> tuple[dict, dict]:
+    """Write the tables of one shard's result under ``out``, one file per table and bucket.
+
+    Returns the rows per table and the files written, ``{path relative to out: SHA-256}``.
+    """
     pa, _, pq = pyarrow_modules()
-    rows = {}
+    rows, files = {}, {}
     for name in TABLES:
         table = result.table(name)
         rows[name] = int(len(table["asset"]))
@@ -70,31 +71,14 @@ def write_shard(result: FleetResult, out: str | Path, shard: int, buckets: int =
             mine = bucket == b
             arrow = pa.table({c: pa.array(table[c][mine].tolist() if c in TEXT else table[c][mine], type=t.type)
                               for c, t in zip(COLUMNS[name], schema(name))}, schema=schema(name))
-            path = Path(out) / name / f"bucket={b:0{_width(buckets)}d}" / f"part-{shard:05d}.parquet"
-            write_with(path, lambda p, arrow=arrow: pq.write_table(arrow, p))
-    return rows
-
-
-def clear_outputs(out: str | Path) -> None:
-    """Remove a previous run's tables and summary from ``out`` (only the files this module writes).
-
-    Parts of a run with another sharding would otherwise be read with the new ones.
-    """
-    out = Path(out)
-    (out / SUMMARY).unlink(missing_ok=True)
-    for name in TABLES:
-        for folder in (out / name).glob("bucket=*"):
-            if not (folder.is_dir() and BUCKET.fullmatch(folder.name)):
-                continue
-            for part in folder.iterdir():
-                if PART.fullmatch(part.name):
-                    part.unlink()
-            if not any(folder.iterdir()):
-                folder.rmdir()
+            relative = f"{name}/bucket={b:0{_width(buckets)}d}/part-{shard:05d}.parquet"
+            path = write_with(Path(out) / relative, lambda p, arrow=arrow: pq.write_table(arrow, p))
+            files[relative] = file_digest(path)
+    return rows, files
 
 
 def read_fleet(out: str | Path) -> FleetResult:
-    """The tables of a fleet run written under ``out``, as a :class:`~prognosis.fleet.FleetResult`.
+    """The tables of a fleet run published under ``out``, as a :class:`~prognosis.fleet.FleetResult`.
 
     Rows are ordered by asset id, and each asset's rows in the order the monitor wrote them, so the
     result is the same whatever the sharding, the workers and the scheduler.
@@ -102,23 +86,29 @@ def read_fleet(out: str | Path) -> FleetResult:
     Raises
     ------
     FleetError
-        ``out`` holds no fleet tables.
-
-    Warns
-    -----
-    FleetWarning
-        No ``summary.json``: the run did not finish, and assets may be missing.
+        ``out`` holds no fleet tables; the run did not finish, is still running or was interrupted
+        (no ``manifest.json``); a table's files are not those of the manifest, or one was altered.
     """
     pa, pc, pq = pyarrow_modules()
     out = Path(out)
-    if not all((out / name).is_dir() for name in TABLES):
+    if not any((out / name).exists() for name in (*TABLES, MANIFEST, STAGING)):
         raise FleetError(f"{out}: not the output of a fleet run (no {', '.join(TABLES)} directories)")
-    if not (out / SUMMARY).is_file():
-        warnings.warn(f"{out}: no {SUMMARY}, so the run did not finish; assets may be missing", FleetWarning,
-                      stacklevel=2)
+    manifest = read_manifest(out)
+    listed = {path: digest for shard in manifest["shards"] for path, digest in shard["files"].items()}
+    present = {p.relative_to(out).as_posix() for name in TABLES for p in _parts(out / name)}
+    if present != set(listed):
+        extra, missing = sorted(present - set(listed)), sorted(set(listed) - present)
+        raise FleetError(f"{out}: the tables' files are not those of manifest.json"
+                         + (f"; not listed: {', '.join(extra[:3])}" if extra else "")
+                         + (f"; missing: {', '.join(missing[:3])}" if missing else ""))
     result = FleetResult()
     for name in TABLES:
-        parts = [pq.read_table(p, schema=schema(name)) for p in _parts(out / name)]
+        parts = []
+        for path in _parts(out / name):
+            content = path.read_bytes()
+            if hashlib.sha256(content).hexdigest() != listed[path.relative_to(out).as_posix()]:
+                raise FleetError(f"{path}: its SHA-256 is not the manifest's: the file was altered after the run")
+            parts.append(pq.read_table(pa.BufferReader(content), schema=schema(name)))
         if not parts:
             continue
         table = pa.concat_tables(parts)

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 import pytest
 
-from bgphm.errors import FleetError, FleetWarning, MissingExtraError, UsageError
+from bgphm.errors import FleetError, MissingExtraError, UsageError
 from bgphm.fleet import (CsvDirectory, FleetSpec, ParquetRecords, bucket_of, default_shard_size, open_source, plan,
                          read_fleet, run_fleet, shard_assets)
 from bgphm.fleet.spec import monitor_for
@@ -179,13 +179,13 @@ def test_a_second_run_replaces_the_parts_of_the_first(records, reference, tmp_pa
     assert same_tables(read_fleet(out), read_fleet(reference[0]))
 
 
-def test_read_fleet_refuses_a_folder_that_is_not_a_fleet_and_warns_on_an_unfinished_run(reference, tmp_path):
+def test_read_fleet_refuses_a_folder_that_is_not_a_fleet_and_a_run_without_its_manifest(reference, tmp_path):
     with pytest.raises(FleetError, match="not the output of a fleet run"):
         read_fleet(tmp_path)
     for name in ("alarms", "estimates", "rul"):
         (tmp_path / name).mkdir()
-    with pytest.warns(FleetWarning, match="did not finish"):
-        assert len(read_fleet(tmp_path).rul["asset"]) == 0
+    with pytest.raises(FleetError, match="no manifest.json: the fleet run did not finish"):
+        read_fleet(tmp_path)
 
 
 def test_a_bad_record_stops_the_run_naming_the_file(records, tmp_path):

@@ -87,6 +87,32 @@ def test_quiet_silences_the_progress_and_force_replaces_the_tables(records, flee
     assert read_fleet(folder).rul["p50"].tolist() == before["p50"].tolist()
 
 
+def test_resume_goes_on_with_an_interrupted_run_and_names_what_it_kept(records, fleet_run, capsys, tmp_path,
+                                                                        monkeypatch):
+    from bgphm.fleet import engine
+
+    out, real = tmp_path / "out", engine.run_shard
+    calls = []
+
+    def interrupted(task):   # Ctrl-C as the second shard starts
+        calls.append(task.shard)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(task)
+
+    monkeypatch.setattr(engine, "run_shard", interrupted)
+    argv = ["--quiet", "fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "0.2", *FAST,
+            "--shard-size", "1", "--out", str(out)]
+    code, _, err = run(capsys, *argv)
+    assert code == 1 and "interrupted" in err
+    monkeypatch.setattr(engine, "run_shard", real)
+    code, stdout, _ = run(capsys, *argv, "--resume")
+    assert code == 0 and "(1 of 3 shards kept from the interrupted run)" in stdout
+    assert read_fleet(out).rul["p50"].tolist() == read_fleet(fleet_run[3]).rul["p50"].tolist()
+    line = usage_error(capsys, *argv[1:], "--resume")
+    assert "nothing to resume (no interrupted fleet run there)" in line
+
+
 # ------------------------------------------------------------------------------------------------ bad input
 
 def test_a_missing_records_directory(capsys, tmp_path):
