@@ -7,7 +7,8 @@
     bgphm detect MODEL DATA.csv [--margin M | --calibrate T] [--persistence N] [--out DIR]
     bgphm prognose MODEL DATA.csv --fail PARAM=VALUE [--fail ...] [--candidate P] [--degradation LAW] [--out DIR]
     bgphm fleet MODEL RECORDS --fail PARAM=VALUE [--fail ...] --calibrate T --out DIR [--scheduler ADDRESS]
-                [--workers N] [--particles N] [--dt S] [--rul-every K] [--seed S] [--force] [--resume]
+                [--workers N] [--particles N] [--dt S] [--rul-every K] [--seed S] [--on-bad-record stop|skip]
+                [--force] [--resume]
     bgphm demo [dc-motor|torsion-bar|three-tank] [--out DIR] [--seed N]
 
 MODEL is a JSON file (networkx node-link form), a Python file defining ``model``, or a built-in example
@@ -271,11 +272,16 @@ def cmd_fleet(args, progress: Progress) -> int:
              f"particles each, dt = {dt:g} s")
     summary = run_fleet(job, source, out, scheduler=args.scheduler, workers=args.workers,
                         shard_size=args.shard_size, progress=_fleet_progress(progress), notes=calibration,
-                        resume=args.resume)
+                        resume=args.resume, on_bad_record=args.on_bad_record)
+    for asset, why in list(summary["skipped"].items())[:5]:
+        progress(f"skipped {asset}: {why}")
     print(f"{summary['assets']} assets, {summary['assets_with_alarm']} with an alarm, {summary['rows']['rul']} RUL "
           f"rows, in {summary['wall_s']:.1f} s ({1e3 * summary['seconds_per_asset']:.1f} ms per asset)")
     resumed = f" ({summary['resumed_shards']} of {summary['shards']} shards kept from the interrupted run)" \
         if args.resume else ""
+    if summary["skipped"]:
+        print(f"{len(summary['skipped'])} asset(s) skipped for a bad record, each with its reason in "
+              f"{out / 'summary.json'} (skipped)")
     print(f"wrote {out / 'alarms'}, {out / 'estimates'}, {out / 'rul'} (Parquet), {out / 'summary.json'} and "
           f"{out / 'manifest.json'}{resumed}")
     return EXIT_OK
@@ -994,6 +1000,10 @@ def _fleet_parser(sub, model_help: str) -> None:
     p.add_argument("--out", required=True, help="output directory (new or empty, unless --force)")
     p.add_argument("--force", action="store_true", help="write into a non-empty --out directory (a previous "
                    "fleet run's tables there are replaced, whole, when this one ends)")
+    p.add_argument("--on-bad-record", choices=("stop", "skip"), default="stop",
+                   help="a record that cannot be used (unreadable, a column without a value, a stuck sensor, too "
+                   "short): stop the run naming it (default), or skip the asset and list it with the reason in "
+                   "summary.json")
     p.add_argument("--resume", action="store_true", help="go on with the run interrupted in --out: the same "
                    "options and records, its finished shards kept (checked by SHA-256), the same tables as "
                    "an uninterrupted run")

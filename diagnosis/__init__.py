@@ -15,7 +15,7 @@ from .detectability import Detectability, detectability
 from .monitoring import Detection, consistent_faults, detect
 from .elimination import structural_arrs, unreached
 from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, compile_interval
-from .signals import Record, RecordError, RecordWarning, add_noise, as_record, read_csv
+from .signals import Record, RecordError, RecordWarning, add_noise, as_record, check_signals, read_csv
 from .resampling import resample
 from .signatures import SignatureMatrix, signature_matrix
 from .streaming import StreamChunk, StreamingEvaluation
@@ -25,7 +25,7 @@ __all__ = [
     "ARR", "ARRError", "ARRWarning", "Detectability", "Detection", "Evaluation", "Interval", "IntervalArray",
     "IntervalWarning", "Record", "RecordError", "RecordWarning", "SignatureMatrix", "StreamChunk",
     "StreamingEvaluation", "StructuralLimitError", "StructuralModel", "add_noise", "affine_range", "as_record",
-    "compile_interval", "consistent_faults", "delta", "derive_arrs", "detect", "detectability", "evaluable",
-    "evaluate", "noise_margin", "read_csv", "resample", "robust_std", "signature_matrix", "structural_arrs",
-    "structural_model", "unreached",
+    "check_signals", "compile_interval", "consistent_faults", "delta", "derive_arrs", "detect", "detectability",
+    "evaluable", "evaluate", "noise_margin", "read_csv", "resample", "robust_std", "signature_matrix",
+    "structural_arrs", "structural_model", "unreached",
 ]

@@ -88,7 +88,9 @@ __all__ = [
     "RecordError",
     "RecordWarning",
     "add_noise",
+    "MAX_RECORD_BYTES",
     "as_record",
+    "check_signals",
     "cumulative_integral",
     "read_csv",
     "central_derivative",
@@ -106,6 +108,10 @@ UNIFORM_RTOL = 1e-6
 #: is infinite and a value near 1e308 overflows in a single difference, leaving every sample it
 #: touches silently undecided.  No physical signal in SI units comes near it.
 MAX_MAGNITUDE = 1e150
+#: The largest CSV record read, in bytes.  Parsing takes several times the file's size in memory (a
+#: 2 GB file, sparse or not, grew past 3 GB): a larger record is refused before it is read.  A
+#: fleet's large records belong in a Parquet file, read by asset.
+MAX_RECORD_BYTES = 1 << 30
 
 
 class RecordError(PHMError, ValueError):
@@ -349,6 +355,10 @@ def _csv_rows(path, name: str) -> list[list[str]]:
     import csv
 
     try:
+        size = path.stat().st_size
+        if size > MAX_RECORD_BYTES:
+            raise RecordError(f"{name}: {size / 2**30:.2f} GiB, more than the {MAX_RECORD_BYTES / 2**30:g} GiB a CSV "
+                              "record may hold (MAX_RECORD_BYTES): split it, or give a fleet a Parquet file")
         with path.open(newline="", encoding="utf-8-sig") as handle:
             rows = list(csv.reader(handle))
     except FileNotFoundError:
@@ -454,6 +464,35 @@ def gaps(record: Record, signals: Iterable[str] | None = None) -> list[tuple[str
         for start, stop in _runs(missing):
             out.append((signal, float(record.t[start]), float(record.t[stop - 1]), stop - start))
     return out
+
+
+def check_signals(record: Record, signals: Iterable[str], sensors: Iterable[str] = (), *, name: str | None = None
+                  ) -> None:
+    """Refuse a record whose signals cannot tell a fault: a column without a value, a sensor that never changes.
+
+    A dead sensor (every cell empty) leaves every residual that reads it undecided, and a stuck one
+    (the same value throughout) makes them follow the model as if nothing moved: either way the
+    record raises no alarm and looks healthy.  ``signals``: the columns the ARRs read; ``sensors``:
+    those that are measurements (an input such as a set voltage may well be constant).
+
+    >>> record = as_record({"t": [0.0, 1.0, 2.0], "V": [5.0, 5.0, 5.0], "i": [0.2, 0.2, 0.2]})
+    >>> check_signals(record, ["V", "i"], sensors=["V"])
+    Traceback (most recent call last):
+    ...
+    diagnosis.signals.RecordError: record: sensor column 'V' never changes (every value is 5): a stuck ...
+    >>> check_signals(record, ["V", "i"])   # constant, but no sensor among them: an input may be
+    """
+    name = name or record.name
+    sensors = set(sensors)
+    for signal in signals:
+        values = record[signal]
+        finite = values[np.isfinite(values)]
+        if finite.size == 0:
+            raise RecordError(f"{name}: column {signal!r} has no value (every cell is empty or NaN): a dead sensor "
+                              "would hide any fault")
+        if signal in sensors and finite.size > 1 and np.all(finite == finite[0]):
+            raise RecordError(f"{name}: sensor column {signal!r} never changes (every value is {finite[0]:g}): a "
+                              "stuck sensor would hide any fault")
 
 
 def _table(data: object, name: str) -> dict:

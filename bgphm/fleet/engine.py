@@ -50,6 +50,7 @@ class Task(NamedTuple):
     assets: tuple
     out: str
     buckets: int
+    on_bad_record: str = "stop"  # or "skip": a record that cannot be used leaves its asset out, with the reason
 
 
 def default_shard_size(count: int, workers: int) -> int:
@@ -71,19 +72,25 @@ def shard_assets(assets: Sequence[str], size: int) -> list[tuple]:
     return [tuple(ids[i:i + size]) for i in range(0, len(ids), size)]
 
 
-def plan(spec: FleetSpec, source, out: str | Path, *, shard_size: int, buckets: int = BUCKETS) -> list[Task]:
+def plan(spec: FleetSpec, source, out: str | Path, *, shard_size: int, buckets: int = BUCKETS,
+         on_bad_record: str = "stop") -> list[Task]:
     """The tasks of a run: one per shard of the source's sorted asset ids."""
     out = str(Path(out).resolve())
-    return [Task(spec, source, i, ids, out, buckets) for i, ids in enumerate(shard_assets(source.assets(), shard_size))]
+    return [Task(spec, source, i, ids, out, buckets, on_bad_record)
+            for i, ids in enumerate(shard_assets(source.assets(), shard_size))]
 
 
 def run_shard(task: Task) -> dict:
     """Run one shard (on a worker, or in this process) and write its tables; return its small summary."""
     start, cpu = time.perf_counter(), time.process_time()
     built, new = monitor_for(task.spec)
-    result = built.monitor.run(task.source.read(task.assets, built.signals))
+    skipped = {}
+    records = task.source.read(task.assets, built.signals,
+                               skip=skipped.__setitem__ if task.on_bad_record == "skip" else None)
+    result = built.monitor.run(records, on_bad_record=task.on_bad_record)
+    skipped.update(result.skipped)
     rows, files = write_shard(result, task.out, task.shard, task.buckets)
-    return {"shard": task.shard, "assets": len(task.assets), "files": files,
+    return {"shard": task.shard, "assets": len(task.assets), "files": files, "skipped": dict(sorted(skipped.items())),
             "assets_with_alarm": int(len(set(result.alarms["asset"].tolist()))), "rows": rows,
             "seconds": time.perf_counter() - start, "cpu_seconds": time.process_time() - cpu,
             "built_monitor": new, "worker": f"{socket.gethostname()}:{os.getpid()}"}
@@ -92,7 +99,7 @@ def run_shard(task: Task) -> dict:
 def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, workers: int = 2,
               shard_size: int | None = None, buckets: int = BUCKETS,
               progress: Callable[[int, int], None] | None = None, notes: dict | None = None,
-              resume: bool = False) -> dict:
+              resume: bool = False, on_bad_record: str = "stop") -> dict:
     """Monitor every asset of ``sources`` and write the tables to Parquet under ``out``; return the summary.
 
     Parameters
@@ -122,6 +129,10 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
         ``progress(assets_done, assets_total)`` after each shard.
     notes : dict, optional
         Written into ``summary.json`` as they are (e.g. how the noise was calibrated).
+    on_bad_record : {"stop", "skip"}
+        A record that cannot be used (unreadable, a column without a value, a stuck sensor, too
+        short): "stop" ends the run with its error, naming the file or asset; "skip" leaves the asset
+        out and lists it with the reason in ``summary.json`` (``skipped``).
     resume : bool
         Go on with the interrupted run staged under ``out``: the same spec, records, shards and
         buckets are required, and its finished shards (their files checked against their SHA-256)
@@ -159,6 +170,8 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
     (['worn'], True)
     """
     _check_counts(workers, shard_size, buckets)
+    if on_bad_record not in ("stop", "skip"):
+        raise UsageError(f"on_bad_record must be 'stop' or 'skip', got {on_bad_record!r}")
     source = open_source(sources)
     serial = scheduler == SERIAL or (scheduler is None and workers == 0)
     assets = source.assets()
@@ -168,9 +181,9 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
     out = Path(out)
     with locked(out):
         output = Output(out)
-        tasks = plan(spec, source, output.staging, shard_size=size, buckets=buckets)
+        tasks = plan(spec, source, output.staging, shard_size=size, buckets=buckets, on_bad_record=on_bad_record)
         facts = {"spec": spec.as_dict(), "records": source.describe(), "buckets": buckets,
-                 "shards": [list(task.assets) for task in tasks]}
+                 "on_bad_record": on_bad_record, "shards": [list(task.assets) for task in tasks]}
         finished = output.start(facts, resume=resume)
         start = time.perf_counter()
         done = list(finished.values())
@@ -200,7 +213,7 @@ def _manifest(facts: dict, done: list, size: int) -> dict:
     return {"spec": facts["spec"], "records": facts["records"], "buckets": facts["buckets"], "shard_size": size,
             "assets": sum(len(a) for a in facts["shards"]),
             "shards": [{"shard": s["shard"], "assets": facts["shards"][s["shard"]], "rows": s["rows"],
-                        "files": s["files"]} for s in shards]}
+                        "files": s["files"], "skipped": s["skipped"]} for s in shards]}
 
 
 def _check_counts(workers, shard_size, buckets) -> None:
@@ -225,6 +238,7 @@ def _summary(spec, source, done, where, size, buckets, seconds, notes) -> dict:
             "seconds_per_asset": seconds / assets if assets else None,
             "monitors_built": sum(bool(s["built_monitor"]) for s in done),
             "workers": sorted({s["worker"] for s in done}), "spec": spec.as_dict(),
+            "skipped": {asset: why for s in done for asset, why in s["skipped"].items()},
             **({"notes": notes} if notes else {})}
 
 

@@ -31,7 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from bgphm.errors import MissingExtraError
-from diagnosis.signals import MISSING_CELLS, Record, RecordError, as_record, read_csv
+from diagnosis.signals import MAX_RECORD_BYTES, MISSING_CELLS, Record, RecordError, as_record, read_csv
 
 __all__ = ["CsvDirectory", "ParquetRecords", "open_source", "pyarrow_modules", "read_csv_fast"]
 
@@ -97,15 +97,23 @@ class CsvDirectory:
                               "file name)")
         return files
 
-    def read(self, assets: Iterable[str], signals: Sequence[str]) -> Iterator[tuple[str, Record]]:
+    def read(self, assets: Iterable[str], signals: Sequence[str], skip=None) -> Iterator[tuple[str, Record]]:
         """``(asset, record)`` for each id, read when the consumer asks for it.
 
         A well-formed file is parsed by pyarrow; any other goes through
-        :func:`~diagnosis.signals.read_csv`, which names what is wrong (:func:`read_csv_fast`).
+        :func:`~diagnosis.signals.read_csv`, which names what is wrong (:func:`read_csv_fast`).  A file
+        that cannot be read raises that error, or, with ``skip``, is reported as ``skip(asset, reason)``.
         """
         for asset in assets:
             path = Path(self.path) / f"{asset}.csv"
-            yield asset, read_csv_fast(path, signals) or read_csv(path, signals)
+            try:
+                record = read_csv_fast(path, signals) or read_csv(path, signals)
+            except RecordError as error:
+                if skip is None:
+                    raise
+                skip(asset, str(error))
+                continue
+            yield asset, record
 
     def describe(self) -> str:
         return f"CSV directory {self.path}"
@@ -145,12 +153,13 @@ class ParquetRecords:
     def inputs(self) -> list[Path]:
         return [Path(self.path)]
 
-    def read(self, assets: Iterable[str], signals: Sequence[str]) -> Iterator[tuple[str, Record]]:
-        """``(asset, record)`` for each id, read in chunks of :data:`READ_CHUNK` assets."""
+    def read(self, assets: Iterable[str], signals: Sequence[str], skip=None) -> Iterator[tuple[str, Record]]:
+        """``(asset, record)`` for each id, read in chunks of :data:`READ_CHUNK` assets (an asset's record
+        that cannot be read: its error raised, or reported as ``skip(asset, reason)``)."""
         self._check_columns(signals)
         assets = list(assets)
         for start in range(0, len(assets), READ_CHUNK):
-            yield from self._chunk(assets[start:start + READ_CHUNK], list(signals))
+            yield from self._chunk(assets[start:start + READ_CHUNK], list(signals), skip)
 
     def describe(self) -> str:
         return f"Parquet file {self.path}"
@@ -201,7 +210,7 @@ class ParquetRecords:
                 pass
         return column.cast(pa.string()).isin(list(assets))
 
-    def _chunk(self, assets: list, signals: list) -> Iterator[tuple[str, Record]]:
+    def _chunk(self, assets: list, signals: list, skip=None) -> Iterator[tuple[str, Record]]:
         pa, pc, _ = pyarrow_modules()
         # one thread: a Dask worker runs one task per core already (and the threaded scan was slower here)
         table = self._dataset().to_table(columns=[self.column, "t", *signals], filter=self.selection(assets),
@@ -218,11 +227,18 @@ class ParquetRecords:
         columns = {c: table.column(c).to_numpy(zero_copy_only=False) for c in ["t", *signals]}
         del table, order  # the chunk is held once, as the numpy columns
         for asset in assets:
-            if asset not in bounds:
-                raise RecordError(f"records {self.path}: no row for asset {asset!r}")
-            lo, hi = bounds[asset]
-            data = {c: _floats(v[lo:hi]) for c, v in columns.items()}
-            yield asset, as_record(data, signals, name=f"{self.path} (asset {asset!r})")
+            try:
+                if asset not in bounds:
+                    raise RecordError(f"records {self.path}: no row for asset {asset!r}")
+                lo, hi = bounds[asset]
+                data = {c: _floats(v[lo:hi]) for c, v in columns.items()}
+                record = as_record(data, signals, name=f"{self.path} (asset {asset!r})")
+            except RecordError as error:
+                if skip is None:
+                    raise
+                skip(asset, str(error))
+                continue
+            yield asset, record
 
 
 def read_csv_fast(path: Path, signals: Sequence[str]) -> Record | None:
@@ -252,6 +268,8 @@ def read_csv_fast(path: Path, signals: Sequence[str]) -> Record | None:
 
     columns = ["t", *signals]
     try:
+        if path.stat().st_size > MAX_RECORD_BYTES:  # read_csv refuses it, naming the limit
+            return None
         with path.open(newline="", encoding="utf-8-sig") as handle:
             header = next(csv.reader(handle), [])
     except (OSError, UnicodeDecodeError, csv.Error):

@@ -21,6 +21,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from diagnosis import RecordError, as_record, check_signals
+
 from ..hypotheses import LIFE_PRIOR, indistinguishable_groups, signature_candidates
 from ..isolation import DRIFT_AWAY_STEPS, EVIDENCE_RATIO, MIXTURE_FLOOR, PROCESS_NOISE, IsolatingMonitor, decide
 from ..monitor import filter_stride
@@ -141,6 +143,11 @@ class FleetMonitor:
         self.groups = indistinguishable_groups(self.arrs, candidates)
         self.noise = np.array([s.noise_std[a.name] for a in self.arrs])
         self.options = [s.options_for(a) for a in self.arrs]
+        # what a record must hold, checked before it is evaluated: every column read, the sensors not stuck
+        self._signals = list(dict.fromkeys(x for a in self.arrs for x in a.signals))
+        self._sensors = [x for x in self._signals if any(x in a.sensors for a in self.arrs)]
+        self._columns = list(dict.fromkeys([*self._signals, *(c for o in self.options
+                                                                for c in (o.get("antiderivatives") or {}).values())]))
         self.observations = [[observation_model(a, h.candidate) if h.candidate in a.parameters else None
                               for a in self.arrs] for h in self.hypotheses]
         self.boxes = np.array([s.healthy_box(h, self.arrs) for h in self.hypotheses]).reshape(-1, 2)
@@ -154,7 +161,7 @@ class FleetMonitor:
 
     # -- the batch pipeline ------------------------------------------------------------------
     def run(self, records: Mapping | Iterable, *, progress: Callable[[int, int], None] | None = None,
-            block: int = BLOCK, particles: bool = False) -> FleetResult:
+            block: int = BLOCK, particles: bool = False, on_bad_record: str = "stop") -> FleetResult:
         """Process whole records, ``{asset: record}`` or an iterable of ``(asset, record)`` pairs.
 
         Records are read one at a time and only their values at the filter steps are kept; ``block``
@@ -162,13 +169,29 @@ class FleetMonitor:
         number of assets done (``total`` is None for an iterable of unknown length).  With
         ``particles``, the result's :attr:`~prognosis.fleet.FleetResult.particles` holds each asset's
         particles after its last step (otherwise they are dropped with the block).
+
+        Each record is checked as ``bgphm prognose`` checks its own (:func:`diagnosis.check_signals`:
+        a column without a value, a sensor that never changes; then the ARRs' evaluation: too few
+        samples, bad times).  ``on_bad_record="stop"`` raises the error, naming the asset;
+        ``"skip"`` leaves the asset out and says why in the result's
+        :attr:`~prognosis.fleet.FleetResult.skipped`.
         """
+        if on_bad_record not in ("stop", "skip"):
+            raise PrognosisError(f"on_bad_record must be 'stop' or 'skip', got {on_bad_record!r}")
         self._keep_particles = bool(particles)
         pairs = records.items() if isinstance(records, Mapping) else records
         total = len(records) if hasattr(records, "__len__") else None
         result, done, batch = FleetResult(), 0, []
         for asset, record in pairs:
-            batch.append(self._prepare(asset, record, result))
+            try:
+                prepared = self._prepare(asset, record, result)
+            except (RecordError, PrognosisError) as error:
+                if on_bad_record == "stop":
+                    named = str(error) if str(asset) in str(error) else f"asset {asset!r}: {error}"
+                    raise type(error)(named) from None
+                result.skipped[str(asset)] = str(error)
+                prepared = None
+            batch.append(prepared)
             if len(batch) == block:
                 self._filter_block(batch, result)
                 done += len(batch)
@@ -185,6 +208,8 @@ class FleetMonitor:
     def _prepare(self, asset, record, result: FleetResult) -> _Asset | None:
         """Detection on one record; its observations at the filter steps from the alarm on (None if healthy)."""
         asset_key(asset)  # a clear error for an id that is neither an integer nor a string
+        record = as_record(record, self._columns, name=getattr(record, "name", None) or f"asset {asset!r}")
+        check_signals(record, self._signals, self._sensors)
         evaluations = [a.evaluate(record, **o) for a, o in zip(self.arrs, self.options)]
         t = evaluations[0].t
         alarm = np.zeros(t.size, bool)

@@ -60,6 +60,7 @@ class FleetResult:
 
     parts: dict = field(default_factory=lambda: {name: [] for name in TABLES})
     particles: dict = field(default_factory=dict)  # asset -> {hypothesis: {"theta", "gamma"}}, on request
+    skipped: dict = field(default_factory=dict)  # asset -> why its record was left out (on_bad_record="skip")
 
     def add(self, name: str, **columns) -> None:
         """Append rows to table ``name`` (every column of the table, arrays of one length)."""
@@ -117,6 +118,7 @@ class FleetResult:
             for name in TABLES:
                 out.parts[name] += result.parts[name]
             out.particles.update(result.particles)
+            out.skipped.update(result.skipped)
         return out
 
 
