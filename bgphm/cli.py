@@ -36,6 +36,7 @@ import numpy as np
 
 from bgphm.errors import UsageError
 from bgphm.files import check_output, csv_text, input_files, write_text
+from bgphm.terminal import terminal_streams
 from bondgraph.errors import PHMError
 from bondgraph.io import ModelSpec, load_model
 from diagnosis.signals import Record, RecordError, RecordWarning, gaps, read_csv
@@ -1037,9 +1038,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     >>> main(["--quiet", "simulate", "no-such-model.json"])   # exit code 2, message on stderr
     2
     """
-    parser = build_parser()
-    args = parser.parse_args(argv)  # exits with 2 on bad usage
-    progress = Progress(args.quiet)
+    with terminal_streams():  # a file name's escape sequence is shown, never obeyed (argparse's messages too)
+        args = build_parser().parse_args(argv)  # exits with 2 on bad usage
+        return _run(args, Progress(args.quiet))
+
+
+def _run(args, progress: Progress) -> int:
+    """Run the command; the exit code, and one line on stderr for an error."""
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("default")  # each distinct warning once, as one line without a source path

@@ -17,6 +17,7 @@ import contextlib
 import logging
 import math
 import os
+import signal
 import socket
 import time
 import warnings
@@ -297,12 +298,31 @@ def local_cluster(workers: int = 2) -> Iterator:
     dask, distributed = _distributed()
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise UsageError(f"workers must be at least 1 for a Dask run, got {workers!r}")
-    with _without_malloc_setting(dask):
+    with _without_malloc_setting(dask), _workers_ignore_interrupts():
         # the scheduler's HTTP server on a free port (with None it still takes 8787, or warns that it is taken)
         cluster = distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
                                            dashboard_address=":0", silence_logs=logging.CRITICAL)
     with cluster, distributed.Client(cluster) as client:
         yield client
+
+
+@contextlib.contextmanager
+def _workers_ignore_interrupts() -> Iterator[None]:
+    """Start worker processes with SIGINT ignored (they inherit it); this process keeps its own handler.
+
+    Ctrl-C in a terminal reaches every process of its group: the workers printed a traceback each
+    (67 lines for two workers), while the driver, which alone has something to say, stops the run and
+    closes the cluster, printing one line.
+    """
+    try:
+        previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    except ValueError:  # not the main thread: signals are not ours to change
+        yield
+        return
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 @contextlib.contextmanager

@@ -92,6 +92,12 @@ class CsvDirectory:
             raise RecordError(f"records {folder}: no such directory")
         files = sorted(p for p in folder.iterdir() if p.name.endswith(".csv") and not p.name.startswith(".")
                        and p.is_file())
+        for path in files:
+            try:
+                path.name.encode("utf-8")
+            except UnicodeEncodeError:  # bytes the file system gave that are not text: no id, no table cell
+                raise RecordError(f"records {folder}: the file name {path.name!r} is not valid UTF-8; asset ids are "
+                                  "text: rename the file") from None
         if not files:
             raise RecordError(f"records {folder}: no .csv file in it (one record per asset; the asset id is the "
                               "file name)")
@@ -175,10 +181,15 @@ class ParquetRecords:
             raise RecordError(f"records {self.path}: not a readable Parquet file ({reason})") from None
 
     def _check_columns(self, signals: Sequence[str]) -> None:
-        names = self._dataset().schema.names
-        missing = [c for c in (self.column, "t", *signals) if c not in names]
+        pa, _, _ = pyarrow_modules()
+        schema = self._dataset().schema
+        missing = [c for c in (self.column, "t", *signals) if c not in schema.names]
         if missing:
-            raise RecordError(f"records {self.path}: missing column(s) {missing}; columns present: {names}")
+            raise RecordError(f"records {self.path}: missing column(s) {missing}; columns present: {schema.names}")
+        kind = schema.field(self.column).type
+        if not (pa.types.is_string(kind) or pa.types.is_large_string(kind) or pa.types.is_integer(kind)):
+            raise RecordError(f"records {self.path}: column {self.column!r} holds {kind}; asset ids must be text or "
+                              "whole numbers")
 
     def selection(self, assets: Sequence[str]):
         """The dataset filter of these asset ids, on the column as stored.

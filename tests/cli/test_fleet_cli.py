@@ -196,3 +196,38 @@ def test_a_dask_run_without_dask_names_the_extra_before_any_work(capsys, records
                        "--out", str(tmp_path / "out"), "--workers", "2")
     assert "pip install 'bondgraph-phm[dask]'" in line and "--workers 0" in line
     assert not (tmp_path / "out").exists()
+
+
+def test_a_file_name_is_shown_never_obeyed(capsys, tmp_path):
+    hostile = str(tmp_path / "run\x1b[2J\x1b]0;owned\x07.csv")
+    line = usage_error(capsys, "detect", "rlc", hostile, "--calibrate", "0.1")
+    assert "\x1b" not in line and "\x07" not in line
+    assert "run\\x1b[2J\\x1b]0;owned\\x07.csv" in line
+
+
+def test_a_file_name_that_is_not_utf8_is_named_with_exit_2(capsys, records, tmp_path):
+    import os
+
+    folder = tmp_path / "records"
+    folder.mkdir()
+    (folder / "c0.csv").write_text((records / "c0.csv").read_text())
+    os.close(os.open(os.fsencode(folder) + b"/motor-\xff.csv", os.O_CREAT | os.O_WRONLY))
+    line = usage_error(capsys, "fleet", "rlc", str(folder), "--fail", "R=20", "--calibrate", "0.2",
+                       "--out", str(tmp_path / "out"), "--workers", "0")
+    assert "the file name 'motor-\\udcff.csv' is not valid UTF-8; asset ids are text" in line
+
+
+@pytest.mark.parametrize("kind", ["binary", "list", "struct"])
+def test_a_parquet_asset_column_of_another_type_is_named_with_exit_2(capsys, tmp_path, kind):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    values = {"binary": pa.array([b"a", b"a", b"a"]), "list": pa.array([[1], [1], [1]]),
+              "struct": pa.array([{"x": 1}] * 3)}[kind]
+    path = tmp_path / "fleet.parquet"
+    pq.write_table(pa.table({"asset": values, "t": [0.0, 0.5, 1.0], "V": [1.0] * 3, "i": [0.1, 0.2, 0.3],
+                             "v_C": [0.0, 0.1, 0.2]}), path)
+    line = usage_error(capsys, "fleet", "rlc", str(path), "--fail", "R=20", "--calibrate", "0.2",
+                       "--out", str(tmp_path / "out"), "--workers", "0")
+    assert "column 'asset' holds" in line and "asset ids must be text or whole numbers" in line
+

@@ -144,3 +144,41 @@ def test_the_command_on_a_parquet_file_with_two_workers(client, records, serial,
     assert code == 0
     assert same_tables(read_fleet(tmp_path / "out"), read_fleet(tmp_path / "csv"))
     assert np.all(read_fleet(tmp_path / "out").rul["t"] > 0.2)
+
+
+def _sigint_of_workers():
+    import signal
+    return signal.getsignal(signal.SIGINT) == signal.SIG_IGN
+
+
+def test_the_workers_leave_ctrl_c_to_the_driver(client):
+    import signal
+
+    assert set(client.run(_sigint_of_workers).values()) == {True}
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler   # this process keeps its own
+
+
+def test_ctrl_c_in_a_terminal_stops_a_dask_run_with_one_line(tmp_path):
+    """SIGINT to the whole process group, as a terminal sends it, once the first shard is done."""
+    import signal
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    folder = write_fleet(tmp_path / "records", {f"a{i:02d}": 0.3 if i % 2 else None for i in range(24)})
+    command = [sys.executable, "-m", "bgphm", "fleet", "rlc", str(folder), "--fail", "R=20", "--calibrate", "0.2",
+               "--workers", "2", "--shard-size", "1", "--particles", "5000", "--out", str(tmp_path / "out")]
+    root = str(Path(__file__).resolve().parents[2])
+    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True,
+                             env={**os.environ, "PYTHONPATH": root})
+    lines = []
+    for line in child.stderr:   # wait for the first shard, then Ctrl-C
+        lines.append(line)
+        if "fleet: " in line:
+            os.killpg(child.pid, signal.SIGINT)
+            break
+    rest = child.stderr.read()
+    child.wait(timeout=600)   # a guard against a hang, not a measure
+    assert child.returncode == 1
+    assert rest.strip() == "bgphm: interrupted" and "Traceback" not in rest
+    assert not (tmp_path / "out" / "manifest.json").exists() and (tmp_path / "out" / ".staging").is_dir()
