@@ -327,13 +327,17 @@ def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None) -> R
 
     path = Path(path)
     name = name or str(path)
+    _check_size(path, name)
+    signals = (signals,) if isinstance(signals, str) else tuple(signals)  # one name, not its letters
+    fast = _plain_record(path, name, signals)
+    if fast is not None:
+        return fast
     rows = _csv_rows(path, name)
     header = _csv_header(rows[0], name)
     for line, row in enumerate(rows[1:], start=2):
         if len(row) != len(header):
             raise RecordError(f"{name} line {line}: {len(row)} cells for {len(header)} columns"
                               + _separator_hint(row, ", as if"))
-    signals = (signals,) if isinstance(signals, str) else tuple(signals)  # one name, not its letters
     wanted = [c for c in header if not signals or c == TIME or c in signals]
     data = rows[1:]
     columns = {}
@@ -350,15 +354,50 @@ def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None) -> R
     return as_record(columns, signals, name=name)
 
 
+def _check_size(path, name: str) -> None:
+    """Refuse a file larger than :data:`MAX_RECORD_BYTES` before reading it (a missing file is read_csv's to say)."""
+    try:
+        size = path.stat().st_size
+    except OSError:
+        return
+    if size > MAX_RECORD_BYTES:
+        raise RecordError(f"{name}: {size / 2**30:.2f} GiB, more than the {MAX_RECORD_BYTES / 2**30:g} GiB a CSV "
+                          "record may hold (MAX_RECORD_BYTES): split it, or give a fleet a Parquet file")
+
+
+def _plain_record(path, name: str, signals: tuple) -> Record | None:
+    """The record of a file of plain numbers, parsed by pyarrow or numpy (:mod:`diagnosis._csv_fast`); None for
+    any file that needs the cell-by-cell reading, which names what is wrong (or reads what they cannot)."""
+    from ._csv_fast import parse
+
+    parsed = parse(path, MISSING_CELLS, _is_number_or_gap)
+    if parsed is None:
+        return None
+    row, numbers = parsed
+    try:
+        header = _csv_header(row, name)
+    except RecordError:
+        return None
+    wanted = [c for c in header if not signals or c == TIME or c in signals]
+    columns = {c: numbers[header.index(c)] for c in wanted}
+    if any(v is None for v in columns.values()) or any(s not in header for s in signals):
+        return None
+    # one NaN for every gap (a parser keeps the sign of "-nan"), in arrays of our own (pyarrow's are read-only)
+    columns = {c: np.where(np.isnan(v), np.nan, v) for c, v in columns.items()}
+    t = columns[TIME]
+    with np.errstate(invalid="ignore"):
+        plain = all(not np.isinf(v).any() and not (np.abs(v) > MAX_MAGNITUDE).any() for v in columns.values())
+        if not (plain and np.isfinite(t).all() and (np.diff(t) > 0).all()):
+            return None  # read_csv says which cell
+    _warn_text([c for i, c in enumerate(header) if numbers[i] is None and c not in wanted], name, stacklevel=4)
+    return as_record(columns, signals, name=name)
+
+
 def _csv_rows(path, name: str) -> list[list[str]]:
     """The rows of a CSV file, trailing blank lines dropped; RecordError if unreadable or empty."""
     import csv
 
     try:
-        size = path.stat().st_size
-        if size > MAX_RECORD_BYTES:
-            raise RecordError(f"{name}: {size / 2**30:.2f} GiB, more than the {MAX_RECORD_BYTES / 2**30:g} GiB a CSV "
-                              "record may hold (MAX_RECORD_BYTES): split it, or give a fleet a Parquet file")
         with path.open(newline="", encoding="utf-8-sig") as handle:
             rows = list(csv.reader(handle))
     except FileNotFoundError:
@@ -443,13 +482,17 @@ def _is_number_or_gap(cell: str) -> bool:
 
 def _warn_text_columns(header: list[str], wanted: list[str], rows: list[list[str]], name: str) -> None:
     """One RecordWarning naming the columns that are not read and hold text."""
-    text = [c for i, c in enumerate(header)
-            if c not in wanted and not all(_is_number_or_gap(row[i]) for row in rows)]
+    _warn_text([c for i, c in enumerate(header) if c not in wanted and not all(_is_number_or_gap(row[i])
+                                                                                for row in rows)], name, stacklevel=4)
+
+
+def _warn_text(text: list[str], name: str, stacklevel: int) -> None:
+    """One RecordWarning naming the unused columns ``text`` that hold text (none: no warning)."""
     if text:
         listed = ", ".join(map(repr, text))
         verb = "is" if len(text) == 1 else "are"
         warnings.warn(f"{name}: column{'s' * (len(text) > 1)} {listed} {verb} not numeric and not among the "
-                      f"signals read: ignored", RecordWarning, stacklevel=3)
+                      f"signals read: ignored", RecordWarning, stacklevel=stacklevel)
 
 
 def gaps(record: Record, signals: Iterable[str] | None = None) -> list[tuple[str, float, float, int]]:

@@ -31,9 +31,9 @@ from pathlib import Path
 import numpy as np
 
 from bgphm.errors import MissingExtraError
-from diagnosis.signals import MAX_RECORD_BYTES, MISSING_CELLS, Record, RecordError, as_record, read_csv
+from diagnosis.signals import Record, RecordError, as_record, read_csv
 
-__all__ = ["CsvDirectory", "ParquetRecords", "open_source", "pyarrow_modules", "read_csv_fast"]
+__all__ = ["CsvDirectory", "ParquetRecords", "open_source", "pyarrow_modules"]
 
 READ_CHUNK = 250  # assets read from a Parquet file at once: bounds a worker's memory, not its scans
 
@@ -106,14 +106,14 @@ class CsvDirectory:
     def read(self, assets: Iterable[str], signals: Sequence[str], skip=None) -> Iterator[tuple[str, Record]]:
         """``(asset, record)`` for each id, read when the consumer asks for it.
 
-        A well-formed file is parsed by pyarrow; any other goes through
-        :func:`~diagnosis.signals.read_csv`, which names what is wrong (:func:`read_csv_fast`).  A file
-        that cannot be read raises that error, or, with ``skip``, is reported as ``skip(asset, reason)``.
+        Each file is read by :func:`~diagnosis.signals.read_csv` (pyarrow or numpy parse a file of
+        plain numbers; any other is read cell by cell and what is wrong is named).  A file that cannot
+        be read raises that error, or, with ``skip``, is reported as ``skip(asset, reason)``.
         """
         for asset in assets:
             path = Path(self.path) / f"{asset}.csv"
             try:
-                record = read_csv_fast(path, signals) or read_csv(path, signals)
+                record = read_csv(path, signals)
             except RecordError as error:
                 if skip is None:
                     raise
@@ -250,53 +250,6 @@ class ParquetRecords:
                 skip(asset, str(error))
                 continue
             yield asset, record
-
-
-def read_csv_fast(path: Path, signals: Sequence[str]) -> Record | None:
-    r"""The record of a well-formed CSV file, parsed by pyarrow; None for any file it cannot vouch for.
-
-    :func:`~diagnosis.signals.read_csv` parses cells one by one in Python (about 25 us a row): for a
-    fleet of long records, reading took longer than monitoring.  This reads the same numbers (both
-    parsers round correctly; the gaps are the same words) about fifty times faster, and gives up --
-    returning None, so that ``read_csv`` reads the file and names what is wrong -- on anything
-    unusual: a header ``read_csv`` would refuse or strip, a cell pyarrow cannot parse (spaces around a
-    number, text), a record :func:`~diagnosis.signals.as_record` refuses.  ``read_csv``'s warning
-    about text in unused columns is not given here (those columns are not read at all).
-
-    >>> import tempfile, pathlib
-    >>> path = pathlib.Path(tempfile.mkdtemp()) / "a.csv"
-    >>> _ = path.write_text("t,x,note\n0,1.5,ok\n0.5,,ok\n1,2.5e-3,ok\n")
-    >>> read_csv_fast(path, ["x"])["x"].tolist()
-    [1.5, nan, 0.0025]
-    >>> _ = path.write_text("t,x\n0,1_000\n0.5,2\n1,3\n")   # not a number for read_csv: left to it
-    >>> read_csv_fast(path, ["x"]) is None
-    True
-    """
-    import csv
-
-    pa, _, _ = pyarrow_modules()
-    import pyarrow.csv as pcsv
-
-    columns = ["t", *signals]
-    try:
-        if path.stat().st_size > MAX_RECORD_BYTES:  # read_csv refuses it, naming the limit
-            return None
-        with path.open(newline="", encoding="utf-8-sig") as handle:
-            header = next(csv.reader(handle), [])
-    except (OSError, UnicodeDecodeError, csv.Error):
-        return None
-    if (len(set(header)) != len(header) or any(not c or c != c.strip() for c in header)
-            or any(c not in header for c in columns)):
-        return None
-    options = pcsv.ConvertOptions(include_columns=columns, column_types={c: pa.float64() for c in columns},
-                                  null_values=sorted(MISSING_CELLS), quoted_strings_can_be_null=False)
-    try:
-        # one thread: a Dask worker runs one task per core already
-        table = pcsv.read_csv(path, read_options=pcsv.ReadOptions(use_threads=False), convert_options=options)
-        record = as_record({c: table.column(c).to_numpy() for c in columns}, signals, name=str(path))
-    except (pa.ArrowException, OSError, ValueError, KeyError):
-        return None
-    return record if np.all(np.isfinite(record.t)) else None
 
 
 def _within(column, values):
