@@ -71,7 +71,7 @@ from .residuals import antiderivative_integral, trusted_edge
 from .signals import (MAX_MAGNITUDE, TIME, UNIFORM_RTOL, RecordError, RecordWarning, as_record, central_derivative,
                       check_savgol_settings, default_window)
 
-__all__ = ["StreamChunk", "StreamingEvaluation"]
+__all__ = ["CheckedBatch", "StreamChunk", "StreamingEvaluation"]
 
 #: The keys of :meth:`StreamingEvaluation.state`.
 STATE_KEYS = ("arr", "columns", "options", "samples", "final", "step", "t", "buffer", "origin", "run", "integrals",
@@ -123,6 +123,19 @@ class StreamChunk(Evaluation):
         points = [np.concatenate([c.points[k] for c in chunks]) for k in range(len(first.points))]
         return cls(first.name, join("t"), join("residual"), join("lower"), join("upper"), join("bglft"),
                    first.margin, first.persistence, join("violation"), join("alarm"), points, first.start)
+
+
+@dataclass(frozen=True)
+class CheckedBatch:
+    """A micro-batch :meth:`StreamingEvaluation.check` read and checked against a stream at ``samples`` samples."""
+
+    stream: object
+    samples: int
+    t: np.ndarray
+    block: np.ndarray
+    step: float
+    raw_t: object = None
+    signals: object = None
 
 
 class StreamingEvaluation:
@@ -269,7 +282,7 @@ class StreamingEvaluation:
                 f"method={self._options['method']!r})")
 
     # -- the stream ----------------------------------------------------------------------------------------
-    def push(self, t: ArrayLike, signals: Mapping[str, ArrayLike]) -> StreamChunk:
+    def push(self, t: "ArrayLike | CheckedBatch", signals: Mapping[str, ArrayLike] | None = None) -> StreamChunk:
         """Take the next samples of the stream and return those that became final.
 
         Parameters
@@ -292,7 +305,11 @@ class StreamingEvaluation:
             a step off the stream's step (``method="savgol"``).  Naming the signal: a signal missing,
             non-numeric, infinite, too large, or of another length than ``t``.  After :meth:`flush`.
         """
-        t, block, self._step = self._checked(t, signals)
+        if isinstance(t, CheckedBatch) and t.stream is self and t.samples == self._count:
+            t, block, self._step = t.t, t.block, t.step  # checked against this very state: not read again
+        else:
+            t, block, self._step = self._checked(t.raw_t if isinstance(t, CheckedBatch) else t,
+                                                 t.signals if isinstance(t, CheckedBatch) else signals)
         if t.size == 0:
             return self._empty()
         if self._count == 0:
@@ -306,11 +323,12 @@ class StreamingEvaluation:
             self._t, self._x = self._t[-self._keep:].copy(), self._x[:, -self._keep:].copy()
         return chunk
 
-    def check(self, t: ArrayLike, signals: Mapping[str, ArrayLike]) -> None:
+    def check(self, t: ArrayLike, signals: Mapping[str, ArrayLike]) -> "CheckedBatch":
         """Raise the error :meth:`push` would raise for these samples, without taking them.
 
         The stream is left as it was, so a caller with several streams (a fleet's assets, an asset's
-        ARRs) can check a whole batch before any of them moves.
+        ARRs) can check a whole batch before any of them moves.  Returns the batch as read, which
+        :meth:`push` then takes without reading it again (if the stream has not moved meanwhile).
 
         >>> from bondgraph.library import rlc_circuit
         >>> from diagnosis import derive_arrs
@@ -323,7 +341,8 @@ class StreamingEvaluation:
         >>> stream.samples
         0
         """
-        self._checked(t, signals)
+        read, block, step = self._checked(t, signals)
+        return CheckedBatch(self, self._count, read, block, step, t, signals)
 
     def _checked(self, t: ArrayLike, signals: Mapping) -> tuple[np.ndarray, np.ndarray, float]:
         """The batch read and checked: ``t``, the columns (columns, n) and the stream's step after it."""

@@ -39,13 +39,17 @@ def bglft_threshold(compiled: CompiledARR, points: list[np.ndarray]) -> np.ndarr
     """
     shape = points[0].shape if points else ()
     total = np.zeros(shape)
-    for parameter, term in compiled.terms.items():
-        d = delta(parameter)
-        function = compiled.function(f"term {parameter}", term, (d,))
-        lo, hi = compiled.arr.uncertainties[parameter]
-        ends = [np.abs(np.broadcast_to(np.asarray(function(*points, value), float), shape)) for value in (lo, hi)]
-        total += np.maximum(*ends)
+    for function, ends in compiled.cached("bglft terms", lambda: _bglft_terms(compiled)):
+        # both ends in one call (a stream judges a few samples at a time: the calls are the cost)
+        values = np.asarray(function(*(np.asarray(p)[..., None] for p in points), ends), float)
+        total += np.abs(np.broadcast_to(values, (*shape, 2))).max(axis=-1)
     return total
+
+
+def _bglft_terms(compiled: CompiledARR) -> list:
+    """Each uncertain parameter's term as a function of the points and its delta, with its delta's two ends."""
+    return [(compiled.function(f"term {parameter}", term, (delta(parameter),)),
+             np.asarray(compiled.arr.uncertainties[parameter], float)) for parameter, term in compiled.terms.items()]
 
 
 def _interval_evaluator(compiled: CompiledARR):

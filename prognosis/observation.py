@@ -116,7 +116,9 @@ class ObservationModel:
         ``rate``: theta's rate of change (like ``theta``), for an ARR with a ``rate_coefficient``.
         """
         values = [np.asarray(p, float)[..., None] for p in points]
-        y = np.broadcast_to(np.asarray(self.function()(theta, *values), float), np.shape(theta))
+        y = np.asarray(self.function()(theta, *values), float)
+        if y.shape != np.shape(theta):  # an expression free of theta, or of the points: one value per row
+            y = np.broadcast_to(y, np.shape(theta))
         if rate is not None and self.rate_coefficient is not None:
             y = y + rate * np.asarray(self.rate_function()(*values), float)
         return y

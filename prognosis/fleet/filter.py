@@ -162,17 +162,17 @@ class FleetFilter:
         draws = self._draws(rows, 1 + self.g)
         theta, gamma = self._predict(rows, draws)
         log_likelihood, finite = self._log_likelihood(rows, theta, y, points)
-        top = np.max(log_likelihood, axis=1, keepdims=True)
+        top = log_likelihood.max(axis=1, keepdims=True)  # methods: a stream steps one row at a time
         if not np.isfinite(top).all():
             top[~np.isfinite(top)] = 0.0
         log_likelihood -= top
         weights = np.exp(log_likelihood, out=log_likelihood)
-        total = np.sum(weights, axis=1)
+        total = weights.sum(axis=1)
         degenerate = ~(total > 0) | ~np.isfinite(total)
         if degenerate.any():  # every weight vanished: start again from equal weights, and say so
             weights[degenerate] = 1.0
             total[degenerate] = n
-        ess = total * total / np.sum(weights * weights, axis=1)
+        ess = total * total / (weights * weights).sum(axis=1)
         if finite.all():  # the common case: every ARR measured
             constant, measured = self._constant_sum, ~degenerate
         else:
@@ -248,8 +248,8 @@ class FleetFilter:
 
     def _smooth(self, rows: np.ndarray, gamma: np.ndarray) -> None:
         """Kernel smoothing's mean and jitter variance for the next move (equal weights after resampling)."""
-        mean = np.sum(gamma, axis=-1) / self.n
-        spread = np.sum(np.square(gamma - mean[:, :, None]), axis=-1) / self.n
+        mean = gamma.sum(axis=-1) / self.n
+        spread = np.square(gamma - mean[:, :, None]).sum(axis=-1) / self.n
         self.mean[rows] = mean
         self.variance[rows] = np.maximum((1 - self.shrinkage**2) * spread, np.square(self.floor * mean))
 

@@ -64,15 +64,16 @@ class LiveAsset:
         return cls(asset, evaluators, max(int(o.get("persistence", 1)) for o in options),
                    pending=[None] * len(evaluators))
 
-    def check(self, t: np.ndarray, signals: Mapping) -> None:
-        """Raise what :meth:`push` would raise for this micro-batch, for any ARR, before any evaluation moves."""
-        for evaluator in self.evaluators:
-            evaluator.check(t, signals)
+    def check(self, t: np.ndarray, signals: Mapping) -> list:
+        """Raise what :meth:`push` would raise for this micro-batch, for any ARR, before any evaluation moves;
+        the batch as each ARR's stream read it (for :meth:`push`, which then does not read it again)."""
+        return [evaluator.check(t, signals) for evaluator in self.evaluators]
 
-    def push(self, t: np.ndarray, signals: Mapping) -> Final | None:
-        """Feed a micro-batch; the samples that became final for every ARR (None if none did)."""
+    def push(self, t: np.ndarray, signals: Mapping, checked: list | None = None) -> Final | None:
+        """Feed a micro-batch (``checked``: what :meth:`check` returned for it); the samples that became final for
+        every ARR (None if none did)."""
         for m, evaluator in enumerate(self.evaluators):
-            chunk = evaluator.push(t, signals)
+            chunk = evaluator.push(t, signals) if checked is None else evaluator.push(checked[m])
             if len(chunk.t):
                 part = Final(chunk.t, -chunk.residual[:, None], chunk.alarm[:, None],
                              [np.stack(chunk.points, axis=1) if chunk.points else np.empty((len(chunk.t), 0))])

@@ -299,10 +299,10 @@ class FleetMonitor:
         """
         result = FleetResult()
         touched = []
-        for live, new, t, signals in self._checked_batch(_columns(batch)):
+        for live, new, t, signals, checked in self._checked_batch(_columns(batch)):
             if new:
                 self._live[str(live.asset)] = live
-            final = live.push(t, signals)
+            final = live.push(t, signals, checked)
             if final is not None:
                 self._watch(live, final, result)
                 touched.append(live)
@@ -310,7 +310,8 @@ class FleetMonitor:
         return result
 
     def _checked_batch(self, columns: dict) -> list:
-        """Each asset's part of a micro-batch, ``(live, new, t, signals)``, all checked before any stream moves.
+        """Each asset's part of a micro-batch, ``(live, new, t, signals, checked)``, all checked before any stream
+        moves (``checked``: the batch as each ARR's stream read it, not read again when pushed).
 
         A batch refused changes nothing, so it can be corrected and sent again.  Ids stay as given
         (text or whole numbers, their random streams keyed by them), but two that print the same (7
@@ -330,10 +331,10 @@ class FleetMonitor:
                     live, new = LiveAsset.start(asset, self.arrs, self.options), True
                 t = columns["t"][index]
                 signals = {name: values[index] for name, values in columns.items() if name not in ("asset", "t")}
-                live.check(t, signals)
+                checked = live.check(t, signals)
             except (TypeError, ValueError) as error:
                 raise PrognosisError(f"update: asset {asset!r}: {error}") from None
-            parts.append((live, new, t, signals))
+            parts.append((live, new, t, signals, checked))
         return parts
 
     def _watch(self, live: LiveAsset, final, result: FleetResult) -> None:
@@ -630,6 +631,9 @@ def _same_id(first, second) -> bool:
 def _by_asset(assets: np.ndarray):
     """(asset, indices of its samples in order) for each asset, in order of first appearance."""
     assets = np.asarray(assets, dtype=object)
+    if assets.size and len(set(map(str, assets))) == 1:
+        yield assets[0], np.arange(assets.size)  # one asset (a stream pushed sample by sample): no sort
+        return
     keys = np.array([str(a) for a in assets]) if assets.size else np.empty(0, str)
     _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
     order = np.argsort(inverse, kind="stable")
