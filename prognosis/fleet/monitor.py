@@ -40,6 +40,8 @@ from ..errors import PrognosisError
 __all__ = ["FleetMonitor"]
 
 BLOCK = 1000  # assets filtered together by run(): bounds the memory of the observations held
+PAD_STEPS = 64  # filter steps whose observations the block lays side by side at once
+STEP_ROWS = 256  # rows stepped at once: bounds a step's temporaries whatever the block
 
 
 @dataclass
@@ -143,6 +145,8 @@ class FleetMonitor:
         self.groups = indistinguishable_groups(self.arrs, candidates)
         self.noise = np.array([s.noise_std[a.name] for a in self.arrs])
         self.options = [s.options_for(a) for a in self.arrs]
+        # one text per hypothesis, shared by every row of the tables (a name is built anew at each call)
+        self._names = [h.name for h in self.hypotheses]
         # what a record must hold, checked before it is evaluated: every column read, the sensors not stuck
         self._signals = list(dict.fromkeys(x for a in self.arrs for x in a.signals))
         self._sensors = [x for x in self._signals if any(x in a.sensors for a in self.arrs)]
@@ -254,14 +258,22 @@ class FleetMonitor:
             return
         pf = self._new_filter()
         rows, owner = self._add_rows(pf, assets)
-        t, y, points = _padded(assets)
         length = np.array([a.t.size for a in assets])
         ids = np.array([a.asset for a in assets], dtype=object)
-        for j in range(int(length.max())):
-            index = np.flatnonzero(length[owner] > j)
-            mine = owner[index]
-            step = pf.step(rows[index], y[mine, j], [[p[mine, j] for p in m] for m in points])
-            self._outputs(pf, rows[index], mine, ids[mine], np.full(index.size, j), t[mine, j], step.ess, result)
+        for first in range(0, int(length.max()), PAD_STEPS):
+            # the block's observations side by side a few steps at a time: a padded copy of all of them
+            # would double the block's memory
+            t, y, points = _padded(assets, first, first + PAD_STEPS)
+            for j in range(first, min(first + PAD_STEPS, int(length.max()))):
+                live = np.flatnonzero(length[owner] > j)
+                # a few hundred rows at a time: a step's temporaries (a dozen arrays of rows x N) would
+                # otherwise grow with the block; rows do not interact, so the results are the same
+                for start in range(0, live.size, STEP_ROWS):
+                    index = live[start:start + STEP_ROWS]
+                    mine, k = owner[index], j - first
+                    step = pf.step(rows[index], y[mine, k], [[p[mine, k] for p in m] for m in points])
+                    self._outputs(pf, rows[index], mine, ids[mine], np.full(index.size, j), t[mine, k], step.ess,
+                                  result)
         if self._keep_particles:
             for a, item in enumerate(assets):
                 result.particles[str(item.asset)] = self._particles_of(pf, rows[owner == a])
@@ -504,7 +516,7 @@ class FleetMonitor:
         """Estimates with quantiles; reject hypotheses that left their domain or drift away from failure."""
         hypotheses = pf.hypothesis[rows]
         theta_q, gamma_q = pf.quantiles(rows)
-        result.add("estimates", asset=ids, hypothesis=[self.hypotheses[h].name for h in hypotheses], step=steps,
+        result.add("estimates", asset=ids, hypothesis=[self._names[h] for h in hypotheses], step=steps,
                    t=times, theta_mean=pf.theta_mean(rows), theta_p5=theta_q[:, 0], theta_p50=theta_q[:, 1],
                    theta_p95=theta_q[:, 2], gamma_mean=pf.gamma_mean(rows), gamma_p5=gamma_q[:, 0],
                    gamma_p50=gamma_q[:, 1], gamma_p95=gamma_q[:, 2], ess=ess, log_evidence=pf.log_evidence[rows])
@@ -544,7 +556,7 @@ class FleetMonitor:
         weights[empty, 0], samples[empty, 0] = 1.0, np.inf
         summary = summarize(samples, weights)
         best = np.argmax(p, axis=1)
-        names = ["" if e else self.hypotheses[h].name for h, e in zip(hypotheses[first + best], empty)]
+        names = ["" if e else self._names[h] for h, e in zip(hypotheses[first + best], empty)]
         status = self._status(position, hypotheses, rejected, log_z, empty)
         result.add("rul", asset=ids[first], step=steps[first], t=times[first], mean=summary["mean"],
                    p5=summary["p5"], p50=summary["p50"], p95=summary["p95"], censored=summary["censored"],
@@ -591,18 +603,19 @@ class FleetMonitor:
         return out
 
 
-def _padded(assets: list) -> tuple[np.ndarray, np.ndarray, list]:
-    """Times (A, K), measurements (A, K, M) and point values (per ARR, per point: (A, K)), NaN-padded."""
-    count, steps = len(assets), max(a.t.size for a in assets)
+def _padded(assets: list, first: int, stop: int) -> tuple[np.ndarray, np.ndarray, list]:
+    """Times (A, S), measurements (A, S, M) and point values (per ARR, per point: (A, S)) of the filter steps
+    ``first..stop`` of every asset (S = stop - first), NaN-padded where an asset has fewer."""
+    count, steps = len(assets), stop - first
     t = np.full((count, steps), np.nan)
     y = np.full((count, steps, assets[0].y.shape[1]), np.nan)
     points = [[np.full((count, steps), np.nan) for _ in range(p.shape[1])] for p in assets[0].points]
     for a, item in enumerate(assets):
-        size = item.t.size
-        t[a, :size], y[a, :size] = item.t, item.y
+        size = max(0, min(item.t.size, stop) - first)
+        t[a, :size], y[a, :size] = item.t[first:first + size], item.y[first:first + size]
         for m, values in enumerate(item.points):
             for p in range(values.shape[1]):
-                points[m][p][a, :size] = values[:, p]
+                points[m][p][a, :size] = values[first:first + size, p]
     return t, y, points
 
 
