@@ -114,8 +114,9 @@ class Output:
             raise FleetError(f"{self.out}: nothing to resume (no interrupted fleet run there)") from None
         except (OSError, ValueError) as error:
             raise FleetError(f"{self.out}: cannot resume: {self.staging / PLAN} is unreadable ({error})") from None
-        if staged != json.loads(json.dumps(plan, sort_keys=True)):
-            differs = sorted(k for k in set(staged) | set(plan) if staged.get(k) != json.loads(json.dumps(plan)).get(k))
+        plan = json.loads(json.dumps(plan))  # as the staged one was read back: lists, not tuples
+        if staged != plan:
+            differs = sorted(k for k in set(staged) | set(plan) if staged.get(k) != plan.get(k))
             raise FleetError(f"{self.out}: cannot resume: the interrupted run had other {', '.join(differs)}; run "
                              "without --resume to start again")
         return {s["shard"]: s for s in self._recorded() if self._intact(s)}

@@ -111,15 +111,7 @@ class CsvDirectory:
         be read raises that error, or, with ``skip``, is reported as ``skip(asset, reason)``.
         """
         for asset in assets:
-            path = Path(self.path) / f"{asset}.csv"
-            try:
-                record = read_csv(path, signals)
-            except RecordError as error:
-                if skip is None:
-                    raise
-                skip(asset, str(error))
-                continue
-            yield asset, record
+            yield from _readable(asset, lambda a=asset: read_csv(Path(self.path) / f"{a}.csv", signals), skip)
 
     def describe(self) -> str:
         return f"CSV directory {self.path}"
@@ -237,19 +229,28 @@ class ParquetRecords:
         bounds = dict(zip(counts[0].to_pylist(), zip((ends - counts[1].to_numpy()).tolist(), ends.tolist())))
         columns = {c: table.column(c).to_numpy(zero_copy_only=False) for c in ["t", *signals]}
         del table, order  # the chunk is held once, as the numpy columns
+        def record(asset):
+            if asset not in bounds:
+                raise RecordError(f"records {self.path}: no row for asset {asset!r}")
+            lo, hi = bounds[asset]
+            return as_record({c: _floats(v[lo:hi]) for c, v in columns.items()}, signals,
+                             name=f"{self.path} (asset {asset!r})")
+
         for asset in assets:
-            try:
-                if asset not in bounds:
-                    raise RecordError(f"records {self.path}: no row for asset {asset!r}")
-                lo, hi = bounds[asset]
-                data = {c: _floats(v[lo:hi]) for c, v in columns.items()}
-                record = as_record(data, signals, name=f"{self.path} (asset {asset!r})")
-            except RecordError as error:
-                if skip is None:
-                    raise
-                skip(asset, str(error))
-                continue
-            yield asset, record
+            yield from _readable(asset, lambda a=asset: record(a), skip)
+
+
+def _readable(asset: str, read, skip) -> Iterator[tuple[str, Record]]:
+    """``(asset, read())``; a record that cannot be read raises its error, or with ``skip`` is reported as
+    ``skip(asset, reason)`` and yields nothing."""
+    try:
+        record = read()
+    except RecordError as error:
+        if skip is None:
+            raise
+        skip(asset, str(error))
+        return
+    yield asset, record
 
 
 def _within(column, values):
