@@ -3,10 +3,10 @@
     python benchmarks/bench_records.py [--json] [--rows 200000] [--repeats 7]
 
 A record of ``--rows`` rows and 4 columns (t and three signals, 10 significant digits) is read by
-``numpy.loadtxt`` (the reference: no checks, no gaps), by ``read_csv`` as it runs (pyarrow's parser
-when pyarrow is installed), by ``read_csv`` with its pyarrow path turned off (numpy's parser, what a
-machine without pyarrow gets), and cell by cell (both fast paths off: the reader that names a bad
-cell, and what ``read_csv`` took for every file before).  The same again on a record with 1 % of its
+``numpy.loadtxt`` (the reference: no checks, no gaps), by ``read_csv(parser="pyarrow")`` (what it
+uses when pyarrow is installed), by ``read_csv(parser="numpy")`` (what a machine without pyarrow
+gets), and by ``read_csv(parser="cells")`` (cell by cell: the reader that names a bad cell, and what
+``read_csv`` took for every file before).  The same again on a record with 1 % of its
 cells empty (gaps).  CPU time per read after one untimed read (the first imports pyarrow's CSV
 module, about 0.2 s once per process), mean and worst over the repeats; the ratios are of the means.
 Targets: pyarrow <= 1x loadtxt, numpy <= 1.5x.
@@ -25,8 +25,6 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-import diagnosis._csv_fast as fast  # noqa: E402
-import diagnosis.signals as signals  # noqa: E402
 from diagnosis.signals import read_csv  # noqa: E402
 
 
@@ -53,22 +51,16 @@ def cpu(read, repeats: int) -> dict:
 
 
 def measure(path: Path, repeats: int, gaps: bool) -> dict:
-    by_pyarrow, careful = fast._by_pyarrow, signals._plain_record
     ways = {}
     if not gaps:  # loadtxt reads no empty cell
         ways["loadtxt"] = cpu(lambda: np.loadtxt(path, delimiter=",", skiprows=1), repeats)
     try:
         import pyarrow  # noqa: F401
-        ways["read_csv_pyarrow"] = cpu(lambda: read_csv(path), repeats)
+        ways["read_csv_pyarrow"] = cpu(lambda: read_csv(path, parser="pyarrow"), repeats)
     except ImportError:
         pass
-    fast._by_pyarrow = lambda *args: None
-    try:
-        ways["read_csv_numpy"] = cpu(lambda: read_csv(path), repeats)
-        signals._plain_record = lambda *args: None
-        ways["read_csv_cell_by_cell"] = cpu(lambda: read_csv(path), max(1, repeats // 3))
-    finally:
-        fast._by_pyarrow, signals._plain_record = by_pyarrow, careful
+    ways["read_csv_numpy"] = cpu(lambda: read_csv(path, parser="numpy"), repeats)
+    ways["read_csv_cell_by_cell"] = cpu(lambda: read_csv(path, parser="cells"), max(1, repeats // 3))
     return ways
 
 

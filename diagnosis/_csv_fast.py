@@ -23,14 +23,15 @@ import numpy as np
 __all__ = ["parse"]
 
 
-def parse(path: Path, missing: frozenset, numeric: Callable[[str], bool]) -> tuple[list[str], list] | None:
+def parse(path: Path, missing: frozenset, numeric: Callable[[str], bool],
+          parsers: tuple = ("pyarrow", "numpy")) -> tuple[list[str], list] | None:
     """``(header cells, columns)`` of a CSV file of numbers, or None to leave it to ``read_csv``.
 
     ``columns[i]`` is the float array of column ``i`` (NaN for a gap, an empty cell or a word of
     ``missing``), or None for a column that holds text (only pyarrow reads past one; numpy gives
     up).  ``numeric(cell)``: whether ``read_csv`` reads a cell as a number or a gap (a column
     pyarrow calls text but ``read_csv`` would not, its cells padded with spaces, is left to it).
-    The header is the first row as ``csv`` reads it, unchecked.
+    The header is the first row as ``csv`` reads it, unchecked.  ``parsers``: those tried, in order.
     """
     try:
         with path.open(newline="", encoding="utf-8-sig") as handle:
@@ -39,10 +40,12 @@ def parse(path: Path, missing: frozenset, numeric: Callable[[str], bool]) -> tup
         return None
     if not header:
         return None
-    columns = _by_pyarrow(path, len(header), missing, numeric)
-    if columns is None:
-        columns = _by_numpy(path, len(header))
-    return None if columns is None else (header, columns)
+    for name in parsers:
+        columns = (_by_pyarrow(path, len(header), missing, numeric) if name == "pyarrow"
+                   else _by_numpy(path, len(header)))
+        if columns is not None:
+            return header, columns
+    return None
 
 
 def _by_pyarrow(path: Path, width: int, missing: frozenset, numeric: Callable[[str], bool]) -> list | None:

@@ -290,7 +290,7 @@ def has_column(record, name: str) -> bool:
         return False
 
 
-def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None) -> Record:
+def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None, parser: str = "auto") -> Record:
     r"""Read a CSV file with a header row and a time column ``t`` into a :class:`Record`.
 
     Cells are parsed as numbers, never evaluated: decimal digits with an optional sign, point and
@@ -304,6 +304,11 @@ def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None) -> R
     or signal column, a duplicate column, a row with too many or too few cells, a file separated by
     ``;``, tabs or ``|`` instead of commas, a non-numeric, infinite or too large cell, a gap or a
     step back in ``t``.  ``signals`` and the rest of the checks are as in :func:`as_record`.
+
+    ``parser``: who parses a file of plain numbers first: ``"auto"`` (pyarrow when it is installed,
+    else numpy's ``loadtxt``), ``"pyarrow"``, ``"numpy"``, or ``"cells"`` (cell by cell, as every
+    file that either of them might read differently is read anyway).  The record, the warnings and
+    the errors are the same whichever it is; only the time differs.
 
     Examples
     --------
@@ -328,8 +333,10 @@ def read_csv(path, signals: Iterable[str] = (), *, name: str | None = None) -> R
     path = Path(path)
     name = name or str(path)
     _check_size(path, name)
+    if parser not in PARSERS:
+        raise RecordError(f"{name}: parser must be one of {', '.join(map(repr, PARSERS))}, got {parser!r}")
     signals = (signals,) if isinstance(signals, str) else tuple(signals)  # one name, not its letters
-    fast = _plain_record(path, name, signals)
+    fast = None if parser == "cells" else _plain_record(path, name, signals, PARSERS[parser])
     if fast is not None:
         return fast
     rows = _csv_rows(path, name)
@@ -365,12 +372,16 @@ def _check_size(path, name: str) -> None:
                           "record may hold (MAX_RECORD_BYTES): split it, or give a fleet a Parquet file")
 
 
-def _plain_record(path, name: str, signals: tuple) -> Record | None:
+#: read_csv's parsers of plain numbers, tried in this order before the cell-by-cell reading
+PARSERS = {"auto": ("pyarrow", "numpy"), "pyarrow": ("pyarrow",), "numpy": ("numpy",), "cells": ()}
+
+
+def _plain_record(path, name: str, signals: tuple, parsers: tuple) -> Record | None:
     """The record of a file of plain numbers, parsed by pyarrow or numpy (:mod:`diagnosis._csv_fast`); None for
     any file that needs the cell-by-cell reading, which names what is wrong (or reads what they cannot)."""
     from ._csv_fast import parse
 
-    parsed = parse(path, MISSING_CELLS, _is_number_or_gap)
+    parsed = parse(path, MISSING_CELLS, _is_number_or_gap, parsers)
     if parsed is None:
         return None
     row, numbers = parsed

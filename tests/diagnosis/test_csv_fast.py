@@ -1,8 +1,9 @@
 """read_csv's fast paths (pyarrow, numpy) read exactly what the cell-by-cell reader reads, or leave the file to it.
 
-Every file is read three ways: as read_csv reads it (pyarrow first), with pyarrow hidden (numpy), and
-cell by cell (both fast paths off).  The records must be equal to the bit, the warnings the same, and
-a file the careful reader refuses must be refused with its message whatever the path.
+Every file is read three ways: as read_csv reads it (``parser="auto"``: pyarrow first), with numpy
+(``parser="numpy"``), and cell by cell (``parser="cells"``).  The records must be equal to the bit,
+the warnings the same, and a file the careful reader refuses must be refused with its message
+whatever the path.
 """
 
 from __future__ import annotations
@@ -13,30 +14,24 @@ import numpy as np
 import pytest
 
 import diagnosis._csv_fast as fast
-import diagnosis.signals as signals
 from diagnosis.signals import RecordError, read_csv
 
 CELLS = ["1.5", " 1.5", "+.5e-3", "-0", "00012", "5.", "1e5", "", "NA", "nan", "NaN", "-nan", "null", '"1.5"', '"NA"',
          "1_000", "inf", "-Infinity", "1e400", "1e200", "0x10", "  ", "#N/A", "1d5", "text", "2.5e-300"]
 
 
-def three_ways(path, wanted, monkeypatch):
+def three_ways(path, wanted):
     """(outcome as read_csv reads, with numpy only, cell by cell): each a record's columns or the error."""
     outcomes = []
-    for mode in ("default", "numpy", "careful"):
-        with monkeypatch.context() as m:
-            if mode in ("numpy", "careful"):
-                m.setattr(fast, "_by_pyarrow", lambda *a: None)
-            if mode == "careful":
-                m.setattr(signals, "_plain_record", lambda *a: None)
-            with warnings.catch_warnings(record=True) as caught:
-                warnings.simplefilter("always")
-                try:
-                    record = read_csv(path, wanted)
-                    outcome = {"t": record.t, **record.columns}
-                except RecordError as error:
-                    outcome = str(error)
-            outcomes.append((outcome, [str(w.message) for w in caught]))
+    for parser in ("auto", "numpy", "cells"):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            try:
+                record = read_csv(path, wanted, parser=parser)
+                outcome = {"t": record.t, **record.columns}
+            except RecordError as error:
+                outcome = str(error)
+        outcomes.append((outcome, [str(w.message) for w in caught]))
     return outcomes
 
 
@@ -49,12 +44,12 @@ def same(a, b) -> bool:
 
 @pytest.mark.parametrize("cell", CELLS)
 @pytest.mark.parametrize("where", ["signal", "time", "unused"])
-def test_one_odd_cell_is_read_alike_three_ways(tmp_path, monkeypatch, cell, where):
+def test_one_odd_cell_is_read_alike_three_ways(tmp_path, cell, where):
     rows = [["0", "1", "7"], ["1", "2", "8"], ["2", "3", "9"]]
     rows[1][{"time": 0, "signal": 1, "unused": 2}[where]] = cell
     path = tmp_path / "odd.csv"
     path.write_text("t,x,note\n" + "\n".join(",".join(r) for r in rows) + "\n")
-    default, numpy_only, careful = three_ways(path, ["x"], monkeypatch)
+    default, numpy_only, careful = three_ways(path, ["x"])
     assert same(default, careful) and same(numpy_only, careful), (cell, where, default, numpy_only, careful)
 
 
@@ -81,10 +76,10 @@ def test_one_odd_cell_is_read_alike_three_ways(tmp_path, monkeypatch, cell, wher
     "t,x,label\n0,1,a\n1,2,b\n2,3,c\n",      # an unused text column
     "t,x\n0,#1\n1,2\n2,3\n",                 # a comment sign
 ])
-def test_files_of_every_shape_are_read_alike_three_ways(tmp_path, monkeypatch, text):
+def test_files_of_every_shape_are_read_alike_three_ways(tmp_path, text):
     path = tmp_path / "run.csv"
     path.write_bytes(text.encode("utf-8"))
-    default, numpy_only, careful = three_ways(path, ["x"], monkeypatch)
+    default, numpy_only, careful = three_ways(path, ["x"])
     assert same(default, careful) and same(numpy_only, careful), (text, default, numpy_only, careful)
 
 
@@ -97,7 +92,7 @@ def test_a_long_record_of_numbers_and_gaps_is_read_alike_and_by_a_fast_path(tmp_
         cells[i][int(rng.integers(0, 3))] = ""
     path = tmp_path / "long.csv"
     path.write_text("t,a,b,c\n" + "\n".join(f"{k * 1e-3:.6f}," + ",".join(row) for k, row in enumerate(cells)) + "\n")
-    default, numpy_only, careful = three_ways(path, ["a", "b", "c"], monkeypatch)
+    default, numpy_only, careful = three_ways(path, ["a", "b", "c"])
     assert same(default, careful) and same(numpy_only, careful)
     assert np.isnan(careful[0]["a"]).sum() + np.isnan(careful[0]["b"]).sum() + np.isnan(careful[0]["c"]).sum() > 150
     used = []
@@ -106,10 +101,23 @@ def test_a_long_record_of_numbers_and_gaps_is_read_alike_and_by_a_fast_path(tmp_
     assert used == [] or used == ["numpy"]   # pyarrow read it, or numpy was asked (no pyarrow here)
 
 
+def test_pyarrow_reads_alike_when_installed_and_a_bad_parser_is_named(tmp_path):
+    pytest.importorskip("pyarrow")
+    path = tmp_path / "run.csv"
+    path.write_text("t,x,note\n0,1,a\n1,,b\n2,3,c\n")
+    careful = three_ways(path, ["x"])[2]
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        record = read_csv(path, ["x"], parser="pyarrow")
+    assert same(({"t": record.t, **record.columns}, [str(w.message) for w in caught]), careful)
+    with pytest.raises(RecordError, match="parser must be one of 'auto', 'pyarrow', 'numpy', 'cells', got 'fast'"):
+        read_csv(path, parser="fast")
+
+
 @pytest.mark.parametrize("raw", [b"t,x\n0,1\n1,\xe9\n2,3\n", b"t,x,n\xe9\n0,1,2\n1,2,3\n2,3,4\n"])
-def test_bytes_that_are_not_utf8_are_left_to_the_careful_reader(tmp_path, monkeypatch, raw):
+def test_bytes_that_are_not_utf8_are_left_to_the_careful_reader(tmp_path, raw):
     path = tmp_path / "latin.csv"
     path.write_bytes(raw)
-    default, numpy_only, careful = three_ways(path, ["x"], monkeypatch)
+    default, numpy_only, careful = three_ways(path, ["x"])
     assert isinstance(careful[0], str) and "cannot be read" in careful[0]
     assert same(default, careful) and same(numpy_only, careful)
