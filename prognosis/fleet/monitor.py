@@ -15,8 +15,8 @@ Results are tidy tables (:class:`~prognosis.fleet.results.FleetResult`): alarms,
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterable, Mapping, Sequence
 import os
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
