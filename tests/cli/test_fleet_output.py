@@ -10,7 +10,8 @@ from bgphm.errors import FleetError
 from bgphm.fleet import read_fleet, run_fleet
 from bgphm.fleet.outdir import locked
 
-from .fleets import spec, write_fleet
+from .fleets import spec
+from .test_fleet import records, same_tables  # noqa: F401 (records: the fleet's fixture)
 
 pa = pytest.importorskip("pyarrow")
 pq = pytest.importorskip("pyarrow.parquet")
@@ -31,12 +32,7 @@ def interrupt_after(shards: int):
 
 
 @pytest.fixture(scope="module")
-def records(tmp_path_factory):
-    return write_fleet(tmp_path_factory.mktemp("fleet") / "records")
-
-
-@pytest.fixture(scope="module")
-def whole(records, tmp_path_factory):
+def whole(records, tmp_path_factory):  # noqa: F811
     """An uninterrupted run, a shard per asset: its tables and its manifest."""
     out = tmp_path_factory.mktemp("whole")
     run_fleet(spec(), records, out, workers=0, shard_size=1)
@@ -47,7 +43,7 @@ def digests(manifest: dict) -> dict:
     return {path: digest for shard in manifest["shards"] for path, digest in shard["files"].items()}
 
 
-def test_a_second_run_on_the_same_out_is_refused_while_the_first_writes(records, whole, tmp_path):
+def test_a_second_run_on_the_same_out_is_refused_while_the_first_writes(records, whole, tmp_path):  # noqa: F811
     out = tmp_path / "out"
     run_fleet(spec(), records, out, workers=0, shard_size=1)
     before = {p: p.read_bytes() for p in out.rglob("*") if p.is_file()}
@@ -58,7 +54,7 @@ def test_a_second_run_on_the_same_out_is_refused_while_the_first_writes(records,
     assert digests(json.loads((out / "manifest.json").read_text())) == digests(whole[1])
 
 
-def test_an_interrupted_run_is_not_read_as_whole_and_resumes_bitwise(records, whole, tmp_path):
+def test_an_interrupted_run_is_not_read_as_whole_and_resumes_bitwise(records, whole, tmp_path):  # noqa: F811
     out = tmp_path / "out"
     with pytest.raises(Interrupt):
         run_fleet(spec(), records, out, workers=0, shard_size=1, progress=interrupt_after(2))
@@ -70,25 +66,23 @@ def test_an_interrupted_run_is_not_read_as_whole_and_resumes_bitwise(records, wh
     manifest = json.loads((out / "manifest.json").read_text())
     assert digests(manifest) == digests(whole[1])   # the same files, to the last bit
     assert not (out / ".staging").exists()
-    from .test_fleet import same_tables
     assert same_tables(read_fleet(out), whole[0])
 
 
-def test_an_interrupted_run_leaves_the_previous_tables_whole(records, whole, tmp_path):
+def test_an_interrupted_run_leaves_the_previous_tables_whole(records, whole, tmp_path):  # noqa: F811
     out = tmp_path / "out"
     run_fleet(spec(), records, out, workers=0, shard_size=1)
     (out / "rul" / "notes.txt").write_text("mine")
     with pytest.raises(Interrupt):
         run_fleet(spec(seed=5), records, out, workers=0, shard_size=2, progress=interrupt_after(1))
     assert digests(json.loads((out / "manifest.json").read_text())) == digests(whole[1])
-    from .test_fleet import same_tables
     assert same_tables(read_fleet(out), whole[0])   # the first run's, whole
     run_fleet(spec(seed=5), records, out, workers=0, shard_size=2)
     assert (out / "rul" / "notes.txt").read_text() == "mine"   # a user's file stays with its table
     assert {p.name for p in out.glob("rul/bucket=*/*")} <= {f"part-0000{i}.parquet" for i in range(3)}
 
 
-def test_resume_refuses_another_job_and_reruns_a_damaged_shard(records, whole, tmp_path):
+def test_resume_refuses_another_job_and_reruns_a_damaged_shard(records, whole, tmp_path):  # noqa: F811
     out = tmp_path / "out"
     with pytest.raises(FleetError, match="nothing to resume"):
         run_fleet(spec(), records, out, workers=0, shard_size=1, resume=True)
@@ -107,7 +101,7 @@ def test_resume_refuses_another_job_and_reruns_a_damaged_shard(records, whole, t
     assert digests(json.loads((out / "manifest.json").read_text())) == digests(whole[1])
 
 
-def test_read_fleet_refuses_tables_that_are_not_the_manifests(records, tmp_path):
+def test_read_fleet_refuses_tables_that_are_not_the_manifests(records, tmp_path):  # noqa: F811
     out = tmp_path / "out"
     run_fleet(spec(), records, out, workers=0, shard_size=1)
     part = sorted(out.glob("rul/bucket=*/part-*.parquet"))[0]
