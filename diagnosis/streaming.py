@@ -282,7 +282,8 @@ class StreamingEvaluation:
                 f"method={self._options['method']!r})")
 
     # -- the stream ----------------------------------------------------------------------------------------
-    def push(self, t: "ArrayLike | CheckedBatch", signals: Mapping[str, ArrayLike] | None = None) -> StreamChunk:
+    def push(self, t: "ArrayLike | CheckedBatch", signals: Mapping[str, ArrayLike] | None = None, *,
+             thresholds: bool = True) -> StreamChunk:
         """Take the next samples of the stream and return those that became final.
 
         Parameters
@@ -292,6 +293,11 @@ class StreamingEvaluation:
         signals : mapping
             Signal name -> ``n`` samples, for every signal the ARR reads and every antiderivative
             column (:attr:`columns`); other entries are ignored.  NaN marks a gap.
+        thresholds : bool
+            False for the residual alone: the samples that become final are not judged (thresholds
+            NaN, no violation, no alarm, and the persistence run starts again), which saves the
+            interval evaluation, most of a short batch's cost, for a caller that no longer needs it
+            (a fleet's asset after its alarm).
 
         Returns
         -------
@@ -318,7 +324,7 @@ class StreamingEvaluation:
         self._x = np.concatenate((self._x, block), axis=1)
         self._count += t.size
         ready = self._count - self._lag if self._count >= self._ready_at else 0
-        chunk = self._advance(ready, at_end=False)
+        chunk = self._advance(ready, at_end=False, thresholds=thresholds)
         if self._t.size > self._keep:  # copies, so that the batch's arrays are not kept alive
             self._t, self._x = self._t[-self._keep:].copy(), self._x[:, -self._keep:].copy()
         return chunk
@@ -427,7 +433,7 @@ class StreamingEvaluation:
         return step
 
     # -- finalizing samples ----------------------------------------------------------------------------
-    def _advance(self, ready: int, at_end: bool) -> StreamChunk:
+    def _advance(self, ready: int, at_end: bool, thresholds: bool = True) -> StreamChunk:
         """Compute the samples ``final .. ready - 1`` from the buffer, then drop what is no longer needed."""
         first = self._final
         if ready <= first:
@@ -447,9 +453,14 @@ class StreamingEvaluation:
         self._t_final = float(t[-1])
         compiled = self.arr.compiled
         points = [values[p] for p in compiled.points]
-        residual, lower, upper, bglft, violation = judge(compiled, points, self._options["margin"],
-                                                         self._options["threshold"])
-        alarm = self._persistent(violation)
+        if thresholds:
+            residual, lower, upper, bglft, violation = judge(compiled, points, self._options["margin"],
+                                                             self._options["threshold"])
+            alarm = self._persistent(violation)
+        else:
+            residual, undecided = compiled.residual(points), np.full(t.size, np.nan)
+            lower, upper, bglft = undecided, undecided.copy(), undecided.copy()
+            violation, alarm, self._run = np.zeros(t.size, bool), np.zeros(t.size, bool), 0
         self._final = ready
         return StreamChunk(self.arr.name, t, residual, lower, upper, bglft, self._options["margin"],
                            self._options["persistence"], violation, alarm, points, first)

@@ -32,6 +32,7 @@ _INF = math.inf
 # Doubled so that the margin holds when the exact value lies across a power of two.
 _TRANS_REL = (2 * TRANSCENDENTAL_ULPS + 1) * EPS
 _TRANS_SUB = (TRANSCENDENTAL_ULPS + 1) * _TINY
+_SHORT = 256  # up to this size, up and down call nextafter (fewer calls); beyond, bit operations (faster)
 
 
 class IntervalWarning(PHMWarning, RuntimeWarning):
@@ -52,6 +53,20 @@ def _step_up(a: np.ndarray) -> np.ndarray:
     return a
 
 
+def _next_short(x, toward: float) -> np.ndarray:
+    """``np.nextafter(x, toward)`` with NaN sent to ``toward``: the same floats as the bit operations.
+
+    For a short array the calls are the cost, and this is 3 of them against 8; for a long one the
+    bit operations are faster than libm's ``nextafter`` per element.  Stepping the largest float to
+    ``inf`` raises numpy's overflow flag (a warning outside :func:`guarded`, where the kernels run).
+    """
+    a = np.nextafter(x, toward)
+    unknown = np.isnan(a)
+    if unknown.any():
+        a[unknown] = toward
+    return a
+
+
 def up(x):
     """``np.nextafter(x, +inf)``: one ulp up (exact; a bit operation, not a libm call per element).
 
@@ -64,6 +79,8 @@ def up(x):
     """
     if np.ndim(x) == 0:
         return np.nextafter(np.float64(x), _INF) if not np.isnan(x) else np.float64(_INF)
+    if np.size(x) <= _SHORT:
+        return _next_short(x, _INF)
     a = np.fmin(x, _MAX)  # MAX steps to +inf, as nextafter(+inf, +inf) = +inf; NaN becomes MAX, hence +inf
     a += 0.0  # -0.0 + 0.0 = +0.0, whose successor is the smallest subnormal
     return _step_up(a)
@@ -77,6 +94,8 @@ def down(x):
     """
     if np.ndim(x) == 0:
         return np.nextafter(np.float64(x), -_INF) if not np.isnan(x) else np.float64(-_INF)
+    if np.size(x) <= _SHORT:
+        return _next_short(x, -_INF)
     a = np.negative(x)
     np.fmin(a, _MAX, out=a)
     a += 0.0

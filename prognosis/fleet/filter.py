@@ -158,36 +158,39 @@ class FleetFilter:
         leaves that ARR out of the row's likelihood; a row with no finite ``y`` is only moved.
         """
         rows = np.asarray(rows, int)
+        at = _span(rows)
         n, y = self.n, np.asarray(y, float)
         draws = self._draws(rows, 1 + self.g)
-        theta, gamma = self._predict(rows, draws)
-        log_likelihood, finite = self._log_likelihood(rows, theta, y, points)
+        theta, gamma = self._predict(at, draws)
+        log_likelihood, finite = self._log_likelihood(at, theta, y, points)
         top = log_likelihood.max(axis=1, keepdims=True)  # methods: a stream steps one row at a time
         if not np.isfinite(top).all():
             top[~np.isfinite(top)] = 0.0
         log_likelihood -= top
         weights = np.exp(log_likelihood, out=log_likelihood)
         total = weights.sum(axis=1)
-        degenerate = ~(total > 0) | ~np.isfinite(total)
+        degenerate = ~((total > 0) & (total < np.inf))  # NaN too
         if degenerate.any():  # every weight vanished: start again from equal weights, and say so
             weights[degenerate] = 1.0
             total[degenerate] = n
         ess = total * total / (weights * weights).sum(axis=1)
+        evidence = top[:, 0] + np.log(total / n)
         if finite.all():  # the common case: every ARR measured
-            constant, measured = self._constant_sum, ~degenerate
+            evidence += self._constant_sum
+            measured = ~degenerate
         else:
-            constant = np.sum(np.where(finite, self._constant, 0.0), axis=1)
+            evidence += np.sum(np.where(finite, self._constant, 0.0), axis=1)
             measured = finite.any(axis=1) & ~degenerate
-        self.log_evidence[rows] += np.where(measured, top[:, 0] + np.log(total / n) + constant, 0.0)
+        self.log_evidence[at] += evidence if measured.all() else np.where(measured, evidence, 0.0)
         flat = systematic_indices(weights, total, ndtr(draws[:, -1].astype(float)), flat=True)
-        self.theta[rows] = theta.reshape(-1)[flat].reshape(theta.shape)
+        self.theta[at] = theta.reshape(-1)[flat].reshape(theta.shape)
         if self.g == 1:
             gamma = gamma.reshape(-1)[flat].reshape(gamma.shape)
         else:
             gamma = np.stack([gamma[:, g].reshape(-1)[flat].reshape(theta.shape) for g in range(self.g)], axis=1)
-        self._smooth(rows, gamma)
-        self.gamma[rows] = gamma
-        self.steps[rows] += 1
+        self._smooth(at, gamma)
+        self.gamma[at] = gamma
+        self.steps[at] += 1
         return FleetStep(ess, degenerate)
 
     def _draws(self, rows: np.ndarray, blocks: int) -> np.ndarray:
@@ -201,7 +204,8 @@ class FleetFilter:
                                    lane=int(self.hypothesis[row])).standard_normal(dtype=np.float32, out=out[i])
         return out
 
-    def _predict(self, rows: np.ndarray, draws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _predict(self, rows, draws: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The moved theta and the smoothed gamma of ``rows`` (indices or a slice: views, not written)."""
         n, g = self.n, self.g
         theta, gamma = self.theta[rows], self.gamma[rows]
         if len(self.laws) == 1:
@@ -215,20 +219,20 @@ class FleetFilter:
                     moved[mine] = law_step(law, theta[mine], gamma[mine], self.dt)
         moved += draws[:, :n] * self.sigma_v[rows][:, None]
         a = self.shrinkage
-        smoothed = draws[:, n:(1 + g) * n].reshape(rows.size, g, n) * np.sqrt(self.variance[rows])[:, :, None]
+        smoothed = draws[:, n:(1 + g) * n].reshape(len(draws), g, n) * np.sqrt(self.variance[rows])[:, :, None]
         smoothed += (1 - a) * self.mean[rows][:, :, None]
-        gamma *= a  # gamma is a copy (fancy indexing)
-        smoothed += gamma
+        smoothed += gamma * a
         return moved, smoothed
 
     def _log_likelihood(self, rows, theta, y, points) -> tuple[np.ndarray, np.ndarray]:
         """Gaussian log-likelihood (rows, N) without its constant, and which measurements were finite."""
         finite = np.isfinite(y)
+        complete = bool(finite.all())  # the common case: no column to check for gaps
         hypotheses = self.hypothesis[rows]
         single = len(self.observations) == 1
         total = None
         for m in range(y.shape[1]):
-            if not finite[:, m].any():
+            if not complete and not finite[:, m].any():
                 continue
             if single and self.observations[0][m] is not None:  # the common case: one hypothesis
                 predicted = self.observations[0][m](theta, points[m])
@@ -238,15 +242,15 @@ class FleetFilter:
                     mine = hypotheses == h
                     if models[m] is not None and mine.any():
                         predicted[mine] = models[m](theta[mine], [p[mine] for p in points[m]])
-            gap = np.where(finite[:, m], y[:, m], 0.0)[:, None] - predicted
+            gap = (y[:, m] if complete else np.where(finite[:, m], y[:, m], 0.0))[:, None] - predicted
             gap *= gap
             gap *= self._scale[m]
-            if not finite[:, m].all():
+            if not complete and not finite[:, m].all():
                 gap[~finite[:, m]] = 0.0
             total = gap if total is None else total + gap
         return (np.zeros_like(theta) if total is None else total), finite
 
-    def _smooth(self, rows: np.ndarray, gamma: np.ndarray) -> None:
+    def _smooth(self, rows, gamma: np.ndarray) -> None:
         """Kernel smoothing's mean and jitter variance for the next move (equal weights after resampling)."""
         mean = gamma.sum(axis=-1) / self.n
         spread = np.square(gamma - mean[:, :, None]).sum(axis=-1) / self.n
@@ -269,13 +273,23 @@ class FleetFilter:
         return theta, gamma
 
 
+def _span(rows: np.ndarray) -> "slice | np.ndarray":
+    """``rows`` as a slice when they are consecutive and ascending (a stream's asset, a fresh block): a slice
+    reads views and writes in place, where an index array copies on every read."""
+    first = int(rows[0]) if rows.size else 0
+    if rows.size == 1 or (rows.size and int(rows[-1]) - first + 1 == rows.size and (np.diff(rows) > 0).all()):
+        return slice(first, first + rows.size)
+    return rows
+
+
 def law_step(law, theta: np.ndarray, gamma: np.ndarray, dt: float) -> np.ndarray:
     """``theta_k`` from ``theta_{k-1}`` (R, N) and ``gamma`` (R, G, N) by the law's deterministic step."""
     if isinstance(law, LinearDegradation):
         return theta + gamma[:, 0] * dt
     if isinstance(law, ExponentialDegradation):
         return theta * np.exp(gamma[:, 0] * dt)
-    return np.asarray(law.step(theta, np.moveaxis(gamma, 1, -1), dt), float)
+    # a copy: a law may hand back its input, and the filter's rows are views that the step must not write
+    return np.array(law.step(theta, np.moveaxis(gamma, 1, -1), dt), float)
 
 
 def systematic_indices(weights: np.ndarray, total: np.ndarray, u: np.ndarray, flat: bool = False) -> np.ndarray:
@@ -289,12 +303,13 @@ def systematic_indices(weights: np.ndarray, total: np.ndarray, u: np.ndarray, fl
     [[0, 2, 2]]
     """
     rows, n = weights.shape
-    edges = np.cumsum(weights, axis=1)
+    edges = np.add.accumulate(weights, axis=1)  # cumsum's values, with fewer layers of calls
     edges *= (n / total)[:, None]
     edges -= u[:, None]
     np.ceil(edges, out=edges)
     edges[:, -1] = n
-    np.clip(edges, 0, n, out=edges)
+    np.minimum(edges, n, out=edges)
+    np.maximum(edges, 0, out=edges)
     counts = edges.astype(np.int64)
     counts[:, 1:] -= counts[:, :-1].copy()
     ancestors = np.repeat(np.arange(rows * n), counts.reshape(-1))

@@ -72,8 +72,9 @@ class LiveAsset:
     def push(self, t: np.ndarray, signals: Mapping, checked: list | None = None) -> Final | None:
         """Feed a micro-batch (``checked``: what :meth:`check` returned for it); the samples that became final for
         every ARR (None if none did)."""
+        judged = self.alarm is None  # after the first alarm only the residuals matter: no thresholds
         for m, evaluator in enumerate(self.evaluators):
-            chunk = evaluator.push(t, signals) if checked is None else evaluator.push(checked[m])
+            chunk = evaluator.push(t if checked is None else checked[m], signals, thresholds=judged)
             if len(chunk.t):
                 part = Final(chunk.t, -chunk.residual[:, None], chunk.alarm[:, None],
                              [np.stack(chunk.points, axis=1) if chunk.points else np.empty((len(chunk.t), 0))])

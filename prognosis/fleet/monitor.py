@@ -273,7 +273,7 @@ class FleetMonitor:
                     mine, k = owner[index], j - first
                     step = pf.step(rows[index], y[mine, k], [[p[mine, k] for p in m] for m in points])
                     self._outputs(pf, rows[index], mine, ids[mine], np.full(index.size, j), t[mine, k], step.ess,
-                                  result)
+                                  result, common=j)
         if self._keep_particles:
             for a, item in enumerate(assets):
                 result.particles[str(item.asset)] = self._particles_of(pf, rows[owner == a])
@@ -288,8 +288,18 @@ class FleetMonitor:
         return {self.hypotheses[pf.hypothesis[r]].name: {"theta": pf.theta[r].copy(), "gamma": pf.gamma[r].copy()}
                 for r in rows}
 
-    def _outputs(self, pf, rows, owner, ids, steps, times, ess, result: FleetResult) -> None:
-        """The estimates and RUL of the rows whose step (``steps``, taken before the step) is due."""
+    def _outputs(self, pf, rows, owner, ids, steps, times, ess, result: FleetResult, common: int | None = None) -> None:
+        """The estimates and RUL of the rows whose step (``steps``, taken before the step) is due.
+
+        ``common``: the step of every row when they share one (a block's tick, a stream's asset), so that
+        the usual tick, with nothing due, costs two remainders of integers.
+        """
+        if common is not None:
+            if common % self.report_every == 0:
+                self._report(pf, rows, ids, steps, times, ess, result)
+            if common % self.settings.rul_every == 0:
+                self._predict(pf, rows, owner, ids, steps, times, result)
+            return
         report = steps % self.report_every == 0
         if report.any():
             self._report(pf, rows[report], ids[report], steps[report], times[report], ess[report], result)
@@ -385,18 +395,24 @@ class FleetMonitor:
             if not waiting:
                 return
             items = [live.queue.pop(0) for live in waiting]
-            if len(waiting) == 1:
-                rows, owner = waiting[0].rows, np.zeros(waiting[0].rows.size, int)
+            if len(waiting) == 1:  # a stream's usual tick: one asset's rows, its sample broadcast, not copied
+                rows, (t, y, points) = waiting[0].rows, items[0]
+                owner, size = np.zeros(rows.size, int), rows.size
+                y = np.broadcast_to(y, (size, y.size))
+                points = [list(np.broadcast_to(p, (size, p.size)).T) for p in points]
+                times, ids = np.full(size, t), np.full(size, waiting[0].asset, dtype=object)
             else:
                 rows = np.concatenate([live.rows for live in waiting])
                 owner = np.repeat(np.arange(len(waiting)), [live.rows.size for live in waiting])
-            y = np.array([item[1] for item in items])[owner]
-            points = [list(np.array([item[2][m] for item in items])[owner].T) for m in range(len(self.arrs))]
+                y = np.array([item[1] for item in items])[owner]
+                points = [list(np.array([item[2][m] for item in items])[owner].T) for m in range(len(self.arrs))]
+                times = np.array([item[0] for item in items])[owner]
+                ids = np.array([live.asset for live in waiting], dtype=object)[owner]
             steps = pf.steps[rows].copy()
-            times = np.array([item[0] for item in items])[owner]
-            ids = np.array([live.asset for live in waiting], dtype=object)[owner]
             step = pf.step(rows, y, points)
-            self._outputs(pf, rows, owner, ids, steps, times, step.ess, result)
+            # one asset's rows were started together and step together: one step count
+            common = int(steps[0]) if len(waiting) == 1 and steps.size else None
+            self._outputs(pf, rows, owner, ids, steps, times, step.ess, result, common)
 
     def _streaming_filter(self) -> FleetFilter:
         if self._filter is None:
@@ -532,8 +548,10 @@ class FleetMonitor:
 
         ``owner`` labels the rows of one asset (consecutive); ``ids``, ``steps``, ``times`` are per row.
         """
-        first = np.flatnonzero(np.r_[True, owner[1:] != owner[:-1]])  # each asset's first row
-        count = np.diff(np.r_[first, rows.size])
+        starts = np.ones(rows.size, bool)  # each asset's first row
+        np.not_equal(owner[1:], owner[:-1], out=starts[1:])
+        first = np.flatnonzero(starts)
+        count = np.diff(first, append=rows.size)
         position = np.repeat(np.arange(first.size), count)
         lane = np.arange(rows.size) - first[position]  # rank of a row in its asset
         hypotheses, rejected = pf.hypothesis[rows], pf.rejected[rows]
@@ -543,15 +561,20 @@ class FleetMonitor:
         with np.errstate(invalid="ignore"):
             p = np.exp(log_z - np.where(np.isfinite(top), top, 0.0))
             p /= np.sum(p, axis=1, keepdims=True)
-        p = np.nan_to_num(p)
+        if not np.isfinite(p).all():  # every hypothesis of an asset rejected: 0 / 0
+            p = np.nan_to_num(p)
         probability = p[position, lane]
         crossing = self._crossings(pf, rows, hypotheses, ids, steps)
         n = pf.n
-        samples = np.full((first.size, log_z.shape[1] * n), np.inf)
-        weights = np.zeros(samples.shape)
-        columns = lane[:, None] * n + np.arange(n)
-        samples[position[:, None], columns] = crossing
-        weights[position[:, None], columns] = np.where(probability >= MIXTURE_FLOOR, probability, 0.0)[:, None] / n
+        share = np.where(probability >= MIXTURE_FLOOR, probability, 0.0)[:, None] / n
+        if first.size == rows.size:  # one hypothesis per asset: its particles are the asset's samples
+            samples, weights = crossing, np.repeat(share, n, axis=1)
+        else:  # each asset's hypotheses side by side, padded with censored samples of no weight
+            samples = np.full((first.size, log_z.shape[1] * n), np.inf)
+            weights = np.zeros(samples.shape)
+            columns = lane[:, None] * n + np.arange(n)
+            samples[position[:, None], columns] = crossing
+            weights[position[:, None], columns] = share
         empty = np.sum(weights, axis=1) == 0  # every hypothesis rejected: one censored sample
         weights[empty, 0], samples[empty, 0] = 1.0, np.inf
         summary = summarize(samples, weights)

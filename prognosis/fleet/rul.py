@@ -71,14 +71,15 @@ def summarize(samples: np.ndarray, weights: np.ndarray) -> dict:
     ([2.3333], [2.0], [inf], [0.25])
     """
     order = np.argsort(samples, axis=1, kind="stable")
-    ordered = np.take_along_axis(samples, order, axis=1)
-    cumulative = np.cumsum(np.take_along_axis(weights, order, axis=1), axis=1)
+    row = np.arange(samples.shape[0])[:, None]
+    ordered = samples[row, order]
+    cumulative = np.cumsum(weights[row, order], axis=1)
     total = cumulative[:, -1:]
     cumulative = cumulative / np.where(total > 0, total, 1.0)
     out = {}
     for level, name in zip(LEVELS, ("p5", "p50", "p95")):
         index = np.argmax(cumulative >= level - 1e-12, axis=1)
-        out[name] = ordered[np.arange(samples.shape[0]), index]
+        out[name] = ordered[row[:, 0], index]
     finite = np.isfinite(samples)
     crossed = np.where(finite, weights, 0.0)
     mass = np.sum(crossed, axis=1)

@@ -250,6 +250,27 @@ def test_persistence_counts_violations_across_batch_borders(rlc):
     assert alarm.tolist() == batch.alarm.tolist()
 
 
+def test_a_push_without_thresholds_gives_the_residual_and_judges_nothing(rlc):
+    """Residuals alone: the same residual bits, thresholds undecided (NaN), no violation, and the
+    persistence run starts again when judging resumes."""
+    arrs, record = rlc
+    arr = arrs[0]  # the loop: it sees the resistance step at 0.1 s
+    judged, unjudged = StreamingEvaluation(arr, persistence=2), StreamingEvaluation(arr, persistence=2)
+    t = record.t
+    for a, b in ((0, 90), (90, 150), (150, t.size)):
+        part = {name: record[name][a:b] for name in ("V", "i", "v_C")}
+        full = judged.push(t[a:b], part)
+        bare = unjudged.push(t[a:b], part, thresholds=(a != 90))
+        assert np.array_equal(full.residual, bare.residual) and np.array_equal(full.t, bare.t)
+        if a == 90:  # the stretch of the step: unjudged
+            assert np.isnan(bare.lower).all() and np.isnan(bare.upper).all() and np.isnan(bare.bglft).all()
+            assert not bare.violation.any() and not bare.alarm.any() and full.alarm.any()
+        else:
+            assert np.array_equal(full.lower, bare.lower) and np.array_equal(full.violation, bare.violation)
+    # the last stretch: the run of violations restarted after the unjudged one, so its first alarm comes later
+    assert bare.violation[0] and full.alarm[0] and not bare.alarm[0]
+
+
 def test_the_newest_half_window_waits_and_the_buffer_stays_bounded(rlc):
     arrs, record = rlc
     evaluation = StreamingEvaluation(arrs[0], window=15)

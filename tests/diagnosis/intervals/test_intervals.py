@@ -496,6 +496,25 @@ def test_division_by_an_interval_containing_zero():
     assert (B.lo == -math.inf).all() and (B.hi == math.inf).all()
 
 
+def test_short_and_long_arrays_step_to_the_same_floats():
+    """up and down take nextafter on short arrays and bit operations on long ones: the same floats, bit for bit."""
+    from diagnosis.intervals import rounding
+
+    tiny, huge = 5e-324, float(np.finfo(float).max)
+    special = [0.0, -0.0, math.inf, -math.inf, math.nan, tiny, -tiny, huge, -huge, 1.0, -1.0, 2.2250738585072014e-308]
+    rng = np.random.default_rng(11)
+    values = np.concatenate([special, rng.standard_normal(400) * 10.0 ** rng.integers(-300, 300, 400)])
+    for step in (rounding.up, rounding.down):
+        with np.errstate(over="ignore"):  # as inside rounding.guarded, where the kernels call them
+            long = step(values)  # above the short size: bit operations
+            short = np.concatenate([step(values[i:i + 100]) for i in range(0, values.size, 100)])
+            expected = np.nextafter(values, (1 if step is rounding.up else -1) * math.inf)
+        assert values.size > rounding._SHORT >= 100
+        assert np.array_equal(long.view(np.int64), short.view(np.int64))
+        finite = np.isfinite(values)
+        assert np.array_equal(long[finite], expected[finite])
+
+
 def test_a_missing_point_gives_the_whole_line_whatever_the_arrays_length():
     """A NaN point value is a missing sample: (-inf, inf), never a finite bound made of a NaN's bits."""
     from diagnosis.intervals import rounding
