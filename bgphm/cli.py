@@ -37,14 +37,15 @@ import numpy as np
 from bgphm.errors import UsageError
 from bgphm.files import check_output, csv_text, input_files, write_text
 from bgphm.terminal import terminal_streams
-from bondgraph.errors import PHMError
+from bondgraph.errors import PHMError, SettingError
 from bondgraph.io import ModelSpec, load_model
+from diagnosis import DetectionSettings, pooled_calibration
 from diagnosis.signals import Record, RecordError, RecordWarning, gaps, read_csv
+from prognosis import MAX_PARTICLES, PrognosisSettings, filter_step, rul_horizon
 
 __all__ = ["main"]
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
-MAX_PARTICLES = 100_000  # per hypothesis: the filter holds (hypotheses, particles) arrays at every step
 
 
 class Progress:
@@ -113,26 +114,19 @@ def cmd_detect(args, progress: Progress) -> int:
     and ``--integrals`` fix them); the split-half check refuses a calibration stretch that holds a fault.
     With ``--out``: ``detection.json``, ``residuals.csv`` and residual plots.
     """
-    from diagnosis.monitoring import detect
+    from diagnosis import detect
 
+    settings = _detection_settings(args)
     out = _output_directory(args)
     spec = load_model(args.model)
     arrs = _arrs(spec, progress, args.arr, "avoid" if args.integrals == "auto" else args.integrals)
     record = _record(args.data, arrs, progress, args.resample, extra=spec.model.inputs)
-    until = _calibration_end(record, args) if args.margin is None else None
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RecordWarning)
-        result = detect(spec.model, record, calibrate=until, margin=args.margin, k=args.k,
-                        persistence=args.persistence, window=args.window, integrals=args.integrals,
+        result = detect(spec.model, record, settings, integrals=args.integrals,
                         arrs=arrs if args.arr or args.integrals != "auto" else None)
     for w in caught:
         progress(f"warning: {w.message}")
-    if args.margin is None:
-        steps = result.steps
-        for arr, e in zip(result.arrs, result.evaluations):
-            options = {k: v for k, v in result.forms[e.name].items() if k == "window" and v}
-            _check_calibration(arr, record, e, until, args, {"persistence": args.persistence, "steps": steps,
-                                                             "ends": True, **options})
     evaluations = result.evaluations
     summary = {"model": spec.model.name, "data": str(args.data), "samples": len(record),
                "arrs": {e.name: _evaluation_summary(e) for e in evaluations}, **result.as_dict()}
@@ -180,41 +174,35 @@ def cmd_prognose(args, progress: Progress) -> int:
     them.  Prints the decision and the last RUL; with ``--out`` writes ``prognosis.json``,
     ``estimates.csv``, ``rul.csv`` and plots.  Returns 0.
     """
-    from diagnosis.detection import robust_std
-    from prognosis.isolation import IsolatingMonitor
+    from prognosis import prognose
 
+    detection = _detection_settings(args)
     out = _output_directory(args)
     spec, arrs, failures, candidates, laws = _what_can_fail(args, progress)
+    settings = PrognosisSettings(detection=detection, laws=tuple(laws),
+                                 candidates=None if candidates is None else tuple(candidates), sensors=args.sensors,
+                                 pairs=args.pairs, particles=args.particles, method=args.filter, dt=args.dt,
+                                 rate=None if args.rate is None else tuple(args.rate), rul_every=args.rul_every,
+                                 horizon=args.horizon, seed=args.seed)
     record = _record(args.data, arrs, progress, args.resample)
-    evaluations = _detect(arrs, record, args, progress)
-    until = _calibration_end(record, args, otherwise="")
-    # each residual's noise on the healthy stretch, even when --margin is given
-    noise = {e.name: max(robust_std(e.residual[record.t <= until]), 1e-300) for e in evaluations}
-    dt = _filter_step(record, args)
-    _check_horizon(args, dt, len(failures) * len(laws))
-    detection = {e.name: {"margin": e.margin, "persistence": args.persistence,
-                          **({"window": args.window} if args.window else {})} for e in evaluations}
-    if args.rate is not None and not (all(math.isfinite(v) for v in args.rate) and args.rate[0] < args.rate[1]):
-        raise UsageError(f"--rate {args.rate[0]:g} {args.rate[1]:g}: need two finite numbers with lo < hi")
-    if args.pairs and (args.filter != "resample-move" or candidates is not None):
-        raise UsageError("--pairs: two faults at once are weighed with --filter resample-move and without "
-                         "--candidate only")
-    monitor = IsolatingMonitor(arrs, failures, noise_std=noise, laws=laws, candidates=candidates,
-                               sensors=args.sensors, pairs=args.pairs, dt=dt,
-                               n_particles=args.particles, rate=None if args.rate is None else tuple(args.rate),
-                               rul_every=args.rul_every, horizon=args.horizon, detection=detection,
-                               healthy_until=until, domains=spec.model.domains, method=args.filter,
-                               seed=args.seed)
-    progress(f"particle filter from the first alarm after t = {until:g} s: {len(laws)} law(s) per candidate, "
-             f"{args.particles} particles each, dt = {dt:g} s")
-    result = monitor.run(record, evaluations=evaluations, progress=_filter_progress(progress))
+    progress(f"calibrating, then the particle filter from the first alarm: {len(laws)} law(s) per candidate, "
+             f"{args.particles} particles each")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RecordWarning)
+        result = prognose(arrs, record, failures, settings, domains=spec.model.domains,
+                          progress=_filter_progress(progress))
+    for w in caught:
+        progress(f"warning: {w.message}")
+    summary = result.as_dict()
+    for name, margin in summary["margins"].items():
+        progress(f"{name}: margin {margin:.3g}, residual noise {summary['residual_noise_std'][name]:.3g} (t <= "
+                 f"{summary['calibration_end']:g} s), filter step {summary['filter_step']:g} s")
     # said even with --quiet: no answer, or no wear left but a sensor's offset (a wrong failure value?)
     if result.decision is not None and result.decision.status == "rejected":
         print(f"bgphm: warning: every hypothesis was rejected: {'; '.join(_first_reasons(result))}", file=sys.stderr)
     elif result.decision is not None and all(h.name in result.rejected for h in result.hypotheses if not h.sensor):
         print(f"bgphm: warning: every wear hypothesis was rejected, only sensors' faults are left: "
               f"{'; '.join(_first_reasons(result))}", file=sys.stderr)
-    summary = _prognosis_summary(args, result, failures, dt, noise)
     print(_prognosis_line(result, summary))
     if out is not None:
         write_text(out / "prognosis.json", json.dumps(summary, indent=2, default=_json_value))
@@ -255,15 +243,24 @@ def cmd_fleet(args, progress: Progress) -> int:
     # --resume goes on in the run's own --out: it is not empty, and needs no --force
     out = check_output(args.out, kind="directory", inputs=input_files(args.model) + source.inputs(),
                        force=args.force or args.resume)
+    detection = _detection_settings(args)
     spec, arrs, failures, candidates, laws = _what_can_fail(args, progress)
     assets = source.assets()
     progress(f"{len(assets)} assets in {source.describe()}")
-    calibration, first = _fleet_calibration(arrs, source, assets[:args.calibrate_assets], args, progress)
-    dt = _filter_step(first, args)
-    _check_horizon(args, dt, len(failures) * len(laws))
-    window = {"window": args.window} if args.window else {}
-    detection = {name: {"margin": margin, "persistence": args.persistence, **window}
-                 for name, margin in calibration["margin"].items()}
+    calibrated = assets[:args.calibrate_assets]
+    signals = list(dict.fromkeys(s for arr in arrs for s in arr.signals))
+    try:
+        pooled, first = pooled_calibration(arrs, source.read(calibrated, signals), detection)
+        dt = filter_step(first, detection.window, args.dt)
+        rul_horizon(dt, args.horizon, args.particles, len(failures) * len(laws))
+    except SettingError as exc:
+        raise exc.within("records: ") if exc.setting == "calibrate" else exc from None
+    calibration = {"assets": list(calibrated), "until": args.calibrate, "noise_std": pooled.noise_std,
+                   "margin": pooled.margin}
+    for name in pooled.noise_std:
+        progress(f"{name}: residual noise {pooled.noise_std[name]:.3g}, margin {pooled.margin[name]:.3g} (median "
+                 f"over {len(calibrated)} record(s), t <= {args.calibrate:g} s)")
+    detection = {name: {"margin": margin, **detection.options()} for name, margin in pooled.margin.items()}
     job = FleetSpec(model_reference(args.model), failures, noise_std=calibration["noise_std"], detection=detection,
                     laws=laws, candidates=candidates, arrs=None if args.arr is None else [args.arr],
                     integrals=args.integrals, dt=dt, n_particles=args.particles, rul_every=args.rul_every,
@@ -377,75 +374,6 @@ def _header(path) -> list[str]:
         return []
 
 
-def _calibration_end(record: Record, args, *, otherwise: str = " (or give --margin)") -> float:
-    """End of the healthy stretch that calibrates the residual noise: --calibrate (default: the first 20 %)."""
-    t0, t1 = float(record.t[0]), float(record.t[-1])
-    if args.calibrate is not None and args.calibrate >= t1:
-        raise UsageError(f"--calibrate {args.calibrate:g}: at or past the end of the record (t = {t1:g} s); the "
-                         "calibration stretch must be fault-free and leave data to monitor")
-    until = args.calibrate if args.calibrate is not None else t0 + 0.2 * (t1 - t0)
-    count = int(np.count_nonzero(record.t <= until))
-    if count < 20:
-        raise UsageError(f"--calibrate {until:g}: only {count} samples before it; at least 20 are needed "
-                         f"to estimate the residual noise{otherwise}")
-    return until
-
-
-def _detect(arrs: list, record: Record, args, progress: Progress) -> list:
-    options = {"persistence": args.persistence}
-    if args.window:
-        options["window"] = args.window
-    evaluations = []
-    for arr in arrs:
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always", RecordWarning)
-            if args.margin is not None:
-                margin = args.margin
-            else:
-                from diagnosis.detection import noise_margin
-
-                until = _calibration_end(record, args)
-                margin = noise_margin(arr, record.between(end=until), k=args.k, **options)
-            evaluation = arr.evaluate(record, margin=margin, **options)
-        for w in caught:
-            progress(f"warning: {w.message}")
-        if args.margin is None:
-            _check_calibration(arr, record, evaluation, until, args, options)
-        evaluations.append(evaluation)
-        progress(f"{arr.name}: evaluated with margin {margin:.3g}")
-    return evaluations
-
-
-def _fleet_calibration(arrs: list, source, assets: list, args, progress: Progress) -> tuple[dict, Record]:
-    """Noise std and margin per ARR: the median over the calibration assets; and the first asset's record.
-
-    Each record is checked as ``prognose`` checks its own (the stretch before ``--calibrate`` must be
-    fault-free, split-half validation); an error names the record.
-    """
-    from diagnosis.detection import robust_std
-
-    signals = list(dict.fromkeys(s for arr in arrs for s in arr.signals))
-    quiet = Progress(True)  # per-record lines would repeat for every calibration asset
-    noise, margins, first = {a.name: [] for a in arrs}, {a.name: [] for a in arrs}, None
-    for asset, record in source.read(assets, signals):
-        try:
-            until = _calibration_end(record, args, otherwise="")
-            evaluations = _detect(arrs, record, args, quiet)
-        except UsageError as exc:
-            raise UsageError(f"records: asset {asset!r}: {exc}") from None
-        for e in evaluations:
-            noise[e.name].append(max(robust_std(e.residual[record.t <= until]), 1e-300))
-            margins[e.name].append(e.margin)
-        first = record if first is None else first
-    calibration = {"assets": list(assets), "until": args.calibrate,
-                   "noise_std": {n: float(np.median(v)) for n, v in noise.items()},
-                   "margin": {n: float(np.median(v)) for n, v in margins.items()}}
-    for name in noise:
-        progress(f"{name}: residual noise {calibration['noise_std'][name]:.3g}, margin "
-                 f"{calibration['margin'][name]:.3g} (median over {len(assets)} record(s), t <= {args.calibrate:g} s)")
-    return calibration, first
-
-
 def _fleet_progress(progress: Progress, every: float = 2.0):
     """The ``progress`` callback of :func:`bgphm.fleet.run_fleet`: assets done, at most every ``every`` s."""
     if progress.quiet:
@@ -462,74 +390,18 @@ def _fleet_progress(progress: Progress, every: float = 2.0):
     return report
 
 
-def _filter_step(record: Record, args) -> float:
-    """``--dt``, by default one derivative window of samples, checked against the record's step and span."""
-    from diagnosis.signals import default_window
-
-    step = float(np.median(np.diff(record.t)))
-    window = args.window or default_window(3)
-    # one filter step per derivative window: the residuals it reads are then nearly independent
-    dt = args.dt if args.dt is not None else float(f"{step * window:.12g}")
-    span = float(record.t[-1] - record.t[0])
-    if dt >= span:
-        raise UsageError(f"--dt {dt:g}: the filter step is not shorter than the record ({span:g} s)")
-    if args.dt is not None and abs(round(dt / step) * step - dt) > 1e-6 * dt:
-        raise UsageError(f"--dt {dt:g}: the filter step must be a multiple of the record's step {step:g} s")
-    return dt
+def _detection_settings(args) -> DetectionSettings:
+    """``--calibrate``, ``--margin``, ``--k``, ``--persistence`` and ``--window`` as the library's settings."""
+    return DetectionSettings(calibrate=args.calibrate, margin=getattr(args, "margin", None), k=args.k,
+                             persistence=args.persistence, window=args.window)
 
 
-def _check_horizon(args, dt: float, hypotheses: int) -> None:
-    """``--horizon`` (default 2000 filter steps) within the predictors' limits, before the filter runs."""
-    from prognosis.isolation import HORIZON_STEPS
-    from prognosis.rul import check_horizon
-
-    horizon = args.horizon if args.horizon is not None else HORIZON_STEPS * dt
-    try:
-        check_horizon(horizon, dt, particles=args.particles, predictors=hypotheses)
-    except ValueError as exc:
-        raise UsageError(f"--horizon {horizon:g}: {exc} (--particles {args.particles}, {hypotheses} hypotheses)"
-                         ) from None
+#: The options of the library's settings whose names differ from the settings' (``--`` + the name otherwise).
+OPTIONS = {"method": "--filter", "laws": "--degradation", "candidates": "--candidate"}
 
 
-def _check_calibration(arr, record: Record, evaluation, until: float, args, options: dict) -> None:
-    """Refuse a calibration stretch that holds a fault: split-half validation.
-
-    A margin calibrated on a stretch that holds a fault absorbs it, and the alarm comes late or never.
-    A degradation, once there, stays: a fault in the stretch keeps the ARR in alarm up to the stretch's
-    end.  So the margin is calibrated again on the first half alone, and the stretch is refused if the
-    ARR is in alarm in the last quarter of the stretch, with that margin or with the whole stretch's.
-    An alarm that ends before (a transient at an input step, a start-up) is no fault.  A
-    first half under 20 samples is not checked.
-    """
-    from diagnosis.detection import noise_margin
-    from diagnosis.monitoring import SAFETY, START_SHARE, quiet_margin
-
-    t0 = float(record.t[0])
-    half = t0 + 0.5 * (until - t0)
-    last = (record.t > t0 + 0.75 * (until - t0)) & (record.t <= until)
-    stretch = (f"--calibrate {until:g}" if args.calibrate is not None
-               else f"the default calibration stretch (the first 20 % of the record, t <= {until:g} s)")
-    hint = "give a shorter --calibrate (or --margin)"
-    if _stays_in_alarm(evaluation.alarm, last):
-        when = float(record.t[last][evaluation.alarm[last]][0])
-        raise UsageError(f"{stretch} is not fault-free: {evaluation.name} is in alarm at t = {when:g} s, in the last "
-                         "quarter of it; " + hint)
-    if np.count_nonzero(record.t <= half) < 20:
-        return
-    first = record.between(end=half)
-    start = t0 + START_SHARE * (half - t0)
-    margin = max(noise_margin(arr, first, k=args.k, **options),
-                 SAFETY * quiet_margin(arr.evaluate(first, **options), after=start))
-    check = arr.evaluate(record, margin=margin, **options)
-    if _stays_in_alarm(check.alarm, last):
-        when = float(record.t[last][check.alarm[last]][0])
-        raise UsageError(f"{stretch} is not fault-free: calibrated on its first half (t <= {half:g} s), "
-                         f"{evaluation.name} is in alarm at t = {when:g} s, in the last quarter of it; {hint}")
-
-
-def _stays_in_alarm(alarm: np.ndarray, last: np.ndarray) -> bool:
-    """In alarm on some sample of ``last`` (the last quarter of a calibration stretch)."""
-    return bool(alarm[last].any())
+def _option(setting: str) -> str:
+    return OPTIONS.get(setting, "--" + setting.replace("_", "-"))
 
 
 def _evaluation_summary(e) -> dict:
@@ -575,10 +447,11 @@ def _what_can_fail(args, progress: Progress) -> tuple:
 def _laws(args) -> list:
     """The competing laws: ``--degradation`` (once in ``fleet``, repeatable in ``prognose``), else the library's
     default (``fleet``: the laws with one rate)."""
+    from prognosis.fleet import FLEET_LAWS
     from prognosis.isolation import LAWS
 
     if not args.degradation:
-        return list(LAWS) if args.command == "prognose" else ["linear", "exponential"]
+        return list(LAWS if args.command == "prognose" else FLEET_LAWS)
     return list(dict.fromkeys(args.degradation if isinstance(args.degradation, list) else [args.degradation]))
 
 
@@ -631,71 +504,6 @@ def _candidates(args, arrs: list, failures: dict, parameters: dict) -> list | No
                          f"{name!r} for --direction {args.direction}: it lies {side} nominal; give --direction "
                          f"{inferred} (or leave --direction out: it follows from --fail)")
     return [name]
-
-
-def _prognosis_summary(args, result, failures: dict, dt: float, noise: dict) -> dict:
-    """What ``prognosis.json`` holds: the decision, the evidence, the predictions and the settings."""
-    decision = result.decision
-    summary = {"detection_time": result.detection_time, "fired": result.fired, "transient": result.transient,
-               "late": result.late, "candidates": result.candidates,
-               # every fault of the model (sensors too) a single fault of which fires the ARRs that fired
-               "consistent": result.consistent,
-               # sensors consistent with them whose fault is not weighed (an ARR integrates the reading)
-               "unweighed": result.unweighed,
-               "indistinguishable": [g for g in result.groups if len(g) > 1], "arrs": result.arrs,
-               # pairs the structure tells apart but this record's operating regime does not
-               "indistinguishable_on_record": result.on_record,
-               "candidate": None if decision is None else decision.candidate,
-               "status": "no alarm" if result.detection_time is None else (
-                   "no candidate" if decision is None else decision.status),
-               "degradation": None if decision is None else decision.degradation,
-               "same_signature": [] if decision is None else list(decision.same_signature),
-               # ARRs that fired later and that no candidate sees: another fault than the one decided on
-               "unexplained": {} if decision is None else dict(decision.unexplained),
-               # why the status is not the evidence's alone (every law of every candidate contradicted)
-               "reason": "" if decision is None else decision.reason,
-               "failure_values": failures, "filter_step": dt, "filter": args.filter,
-               "particles_per_hypothesis": args.particles,
-               "residual_noise_std": noise, "seed": args.seed, "evidence": {}, "predictions": [], "decisions": []}
-    if decision is None:
-        return summary
-    summary.update({"candidate_ratio": _finite(min(decision.candidate_ratio, 1e300)),
-                    "degradation_decided": decision.degradation_decided,
-                    "degradation_ratio": _finite(min(decision.degradation_ratio, 1e300))})
-    for row, h in enumerate(result.hypotheses):
-        summary["evidence"][h.name] = {"log_evidence": _finite(result.log_evidence[-1, row]),
-                                       "probability": decision.probabilities[h.name],
-                                       "rejected": result.rejected.get(h.name),
-                                       "inadequate": result.inadequate.get(h.name),
-                                       "theta_mean": float(result.theta["mean"][-1, row]),
-                                       "gamma_mean": float(result.gamma["mean"][-1, row]),
-                                       # a pair's estimate of each of its parameters
-                                       **({"parameters": {c: float(v[-1]) for c, v in result.parts[h.name].items()}}
-                                          if h.name in result.parts else {})}
-    best = result.monitor_result()
-    percentiles = best.rul_percentiles((5, 25, 50, 75, 95))
-    for k, t in enumerate(result.rul_t):
-        withheld = result.withheld[k] if k < len(result.withheld) else None
-        if withheld:  # undecided: no figure rather than a band from a law the data contradict
-            summary["predictions"].append({"t": float(t), **{key: None for key in RUL_KEYS}, "withheld": withheld})
-        else:
-            summary["predictions"].append({
-                "t": float(t), "rul_mean": _finite(best.rul_mean[k]), "rul_p5": _finite(percentiles[k, 0]),
-                "rul_p25": _finite(percentiles[k, 1]), "rul_median": _finite(percentiles[k, 2]),
-                "rul_p75": _finite(percentiles[k, 3]), "rul_p95": _finite(percentiles[k, 4]),
-                "censored": float(result.rul[k].censored_weight[0])})
-        d = result.decisions[k]
-        summary["decisions"].append({"t": float(t), "candidate": d.candidate, "status": d.status,
-                                     "degradation": d.degradation, "unexplained": sorted(d.unexplained)})
-    top = result.index(max(decision.probabilities, key=decision.probabilities.get))
-    summary["last"] = {**(summary["predictions"][-1] if summary["predictions"] else {"t": float(result.t[-1])}),
-                       "hypothesis": result.hypotheses[top].name,
-                       "theta_mean": float(result.theta["mean"][-1, top]),
-                       "gamma_mean": float(result.gamma["mean"][-1, top])}
-    return summary
-
-
-RUL_KEYS = ("rul_mean", "rul_p5", "rul_p25", "rul_median", "rul_p75", "rul_p95", "censored")
 
 
 def _prognosis_line(result, summary: dict) -> str:
@@ -1051,6 +859,9 @@ def _run(args, progress: Progress) -> int:
             warnings.showwarning = _warning_line
             _check_options(args)
             return args.run(args, progress)
+    except SettingError as exc:  # a setting that does not fit the input: named as the option that gave it
+        print(f"bgphm: error: {_one_line(exc.naming(_option))}", file=sys.stderr)
+        return EXIT_USAGE
     except PHMError as exc:  # bad usage or bad input: a model, a record, equations, a simulation
         print(f"bgphm: error: {_one_line(exc)}", file=sys.stderr)
         return EXIT_USAGE

@@ -10,7 +10,8 @@ from .causality import Causality, CausalIssue, assign_causality
 from .control import PIController
 from .equations import (AlgebraicLoopError, ModelEquation, StateEquations, causal_equations, labelled_equations,
                         model_equations, state_equations)
-from .errors import CausalityError, EquationError, LawError, ModelError, PHMError, PHMWarning, SimulationError
+from .errors import (CausalityError, EquationError, LawError, ModelError, PHMError, PHMWarning, SettingError,
+                     SimulationError)
 from .model import BondGraph
 from .structure import Bond, Element, signal_function
 from .simulation import SimulationResult, simulate
@@ -18,9 +19,9 @@ from .drawing import to_svg, to_tikz
 from .io import load_model, to_json
 
 __all__ = [
-    "BondGraph", "Bond", "Element", "Causality", "CausalIssue", "PIController", "StateEquations", "ModelEquation",
-    "SimulationResult", "assign_causality", "causal_equations", "labelled_equations", "model_equations",
-    "state_equations", "simulate", "signal_function", "PHMError", "PHMWarning", "ModelError", "LawError",
-    "CausalityError", "EquationError", "SimulationError", "AlgebraicLoopError", "load_model", "to_json", "to_svg",
-    "to_tikz",
+    "AlgebraicLoopError", "Bond", "BondGraph", "CausalIssue", "Causality", "CausalityError", "Element",
+    "EquationError", "LawError", "ModelEquation", "ModelError", "PHMError", "PHMWarning", "PIController",
+    "SettingError", "SimulationError", "SimulationResult", "StateEquations", "assign_causality", "causal_equations",
+    "labelled_equations", "load_model", "model_equations", "signal_function", "simulate", "state_equations",
+    "to_json", "to_svg", "to_tikz",
 ]

@@ -13,6 +13,9 @@ ModelError - node 'X': unknown kind 'Q' (expected one of 0, 1, C, De, Df, GY, I,
 
 from __future__ import annotations
 
+import re
+from collections.abc import Callable
+
 
 class PHMError(Exception):
     """Base of every error the toolkit raises on bad input, so that a user can catch them all.
@@ -72,3 +75,31 @@ class EquationError(PHMError, ValueError):
 
 class SimulationError(PHMError, ValueError):
     """Bad simulation input: missing signal, unknown parameter or state, wrong shape."""
+
+
+class SettingError(PHMError, ValueError):
+    """A setting that does not fit the data (a calibration stretch holding a fault, a filter step longer
+    than the record); ``setting`` is its Python name.
+
+    The message names the setting where ``{setting}`` stands in ``template`` (and another setting
+    where ``{setting:name}`` stands), so that a command line can name its own options instead
+    (:meth:`naming`).
+
+    >>> error = SettingError("pairs", "{setting}: needs {setting:method} 'resample-move'")
+    >>> print(error)
+    pairs: needs method 'resample-move'
+    >>> print(error.naming(lambda name: {"method": "--filter"}.get(name, "--" + name)))
+    --pairs: needs --filter 'resample-move'
+    """
+
+    def __init__(self, setting: str, template: str):
+        self.setting, self.template = setting, template
+        super().__init__(self.naming(str))
+
+    def naming(self, name: Callable[[str], str]) -> str:
+        """The message with ``name(setting)`` for each setting it names (a value's braces stay as they are)."""
+        return re.sub(r"\{setting(?::(\w+))?\}", lambda m: name(m.group(1) or self.setting), self.template)
+
+    def within(self, prefix: str) -> "SettingError":
+        """The same error with ``prefix`` before its message (e.g. the asset whose record it concerns)."""
+        return SettingError(self.setting, prefix + self.template)

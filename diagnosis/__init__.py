@@ -11,6 +11,7 @@ from .relation import ARR, ARRWarning
 from .residuals import ARRError
 from .deltas import delta
 from .detection import Evaluation, evaluate, noise_margin, robust_std
+from .calibration import Calibration, DetectionSettings, calibrate, calibration_end, pooled_calibration
 from .detectability import Detectability, detectability
 from .monitoring import Detection, consistent_faults, detect
 from .elimination import structural_arrs, unreached
@@ -22,10 +23,10 @@ from .streaming import StreamChunk, StreamingEvaluation
 from .structural import StructuralLimitError, StructuralModel, structural_model
 
 __all__ = [
-    "ARR", "ARRError", "ARRWarning", "Detectability", "Detection", "Evaluation", "Interval", "IntervalArray",
-    "IntervalWarning", "Record", "RecordError", "RecordWarning", "SignatureMatrix", "StreamChunk",
-    "StreamingEvaluation", "StructuralLimitError", "StructuralModel", "add_noise", "affine_range", "as_record",
-    "check_signals", "compile_interval", "consistent_faults", "delta", "derive_arrs", "detect", "detectability",
-    "evaluable", "evaluate", "noise_margin", "read_csv", "resample", "robust_std", "signature_matrix",
-    "structural_arrs", "structural_model", "unreached",
+    "ARR", "ARRError", "ARRWarning", "Calibration", "Detectability", "Detection", "DetectionSettings", "Evaluation",
+    "Interval", "IntervalArray", "IntervalWarning", "Record", "RecordError", "RecordWarning", "SignatureMatrix",
+    "StreamChunk", "StreamingEvaluation", "StructuralLimitError", "StructuralModel", "add_noise", "affine_range",
+    "as_record", "calibrate", "calibration_end", "check_signals", "compile_interval", "consistent_faults", "delta",
+    "derive_arrs", "detect", "detectability", "evaluable", "evaluate", "noise_margin", "pooled_calibration",
+    "read_csv", "resample", "robust_std", "signature_matrix", "structural_arrs", "structural_model", "unreached",
 ]

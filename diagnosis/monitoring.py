@@ -31,10 +31,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
 
 from .arrs import derive_arrs
 from .detectability import Detectability, detectability, summary
+from .calibration import (CALIBRATION_SHARE, SAFETY, START_SHARE, DetectionSettings, calibration_end, check_healthy,
+                          quiet_margin)
 from .detection import CalibrationError, Evaluation, noise_margin
 from .residuals import integral_depth as _integral_depth
 from .signatures import SignatureMatrix, signature_matrix
@@ -46,16 +47,9 @@ __all__ = ["SAFETY", "WINDOWS", "Detection", "consistent_faults", "detect", "qui
 #: Derivative windows tried for each differentiated ARR (Savitzky-Golay samples; None is the default 11),
 #: those up to a tenth of the calibration stretch.
 WINDOWS = (None, 21, 41, 81, 161)
-#: The calibrated margin is at least this multiple of the smallest margin that keeps the fault-free stretch
-#: quiet (:func:`quiet_margin`): estimator bias at transients, which the noise's robust spread ignores.
-SAFETY = 1.25
 #: A fired ARR takes part in isolation when its alarms last this many times ``persistence`` samples in all.
 SUSTAINED = 3
-#: The share of the calibration stretch at its start that the quiet margin leaves out (a start from rest).
-START_SHARE = 0.1
 STEPS_IN_SENSORS = True
-#: The share of the record that calibrates the margins when no calibration stretch is given.
-CALIBRATION_SHARE = 0.2
 
 
 @dataclass
@@ -125,8 +119,7 @@ class Detection:
                 "forms": self.forms, "detectability": {k: d.as_dict() for k, d in self.detectability.items()}}
 
 
-def detect(bg, record, *, calibrate: float | None = None, margin: float | None = None, k: float = 4.0,
-           persistence: int = 5, window: int | None = None, integrals: str = "auto",
+def detect(bg, record, settings: DetectionSettings | None = None, *, integrals: str = "auto",
            arrs: Sequence | None = None, steps: bool = True) -> Detection:
     """Evaluate the ARRs of ``bg`` on ``record`` with forms, margins and masks chosen from the record.
 
@@ -134,13 +127,12 @@ def detect(bg, record, *, calibrate: float | None = None, margin: float | None =
     ----------
     bg : BondGraph
     record : mapping, DataFrame or Record
-    calibrate : float, optional
-        End of the fault-free stretch (default: the first 20 % of the record).
-    margin : float, optional
-        A fixed noise margin for every ARR instead of the calibrated ones.
-    k, persistence : noise margin in robust standard deviations; consecutive violations for an alarm.
-    window : int, optional
-        A fixed derivative window (no choice among :data:`WINDOWS`).
+    settings : DetectionSettings, optional
+        The healthy stretch (``calibrate``, default the first 20 % of the record), a fixed
+        ``margin`` for every ARR instead of the calibrated ones, ``k`` and ``persistence``, a fixed
+        derivative ``window`` (no choice among :data:`WINDOWS`).  With calibrated margins, the
+        stretch is checked to hold no fault (:func:`~diagnosis.calibration.check_healthy`): a
+        :class:`~bondgraph.errors.SettingError` names the ARR in alarm there.
     integrals : {"auto", "avoid", "keep"}
         ``"auto"`` chooses per ARR (see the module), the others force the form for every ARR.
     arrs : sequence of ARR, optional
@@ -156,18 +148,22 @@ def detect(bg, record, *, calibrate: float | None = None, margin: float | None =
     >>> t = np.linspace(0.0, 2.0, 2001)
     >>> run = simulate(bg, (0.0, 2.0), {"V": lambda t: np.sin(20 * t)}, t_eval=t,
     ...                parameters={"R": lambda t: 10.0 if t < 1.0 else 14.0}).record()
-    >>> result = detect(bg, run, calibrate=0.8, margin=1e-3)
+    >>> result = detect(bg, run, DetectionSettings(calibrate=0.8, margin=1e-3))
     >>> result.fired, result.candidates[:2]
     (['ARR_J1'], ['R', 'L'])
     """
     if integrals not in ("auto", "avoid", "keep"):
         raise ValueError(f"option integrals: {integrals!r} is not one of auto, avoid, keep")
+    settings = settings or DetectionSettings()
+    calibrate, margin, k, persistence, window = (settings.calibrate, settings.margin, settings.k,
+                                                 settings.persistence, settings.window)
     inputs = list(bg.inputs)
     given = arrs is not None
     first = list(arrs) if given else derive_arrs(bg, integrals="avoid" if integrals == "auto" else integrals)
     names = list(dict.fromkeys(s for arr in first for s in arr.signals))
     data = as_record(record, names + [n for n in inputs if has_column(record, n) and n not in names])
-    until = _calibration_end(data, calibrate)
+    until = calibration_end(data, calibrate, hint=" (or give a fixed {setting:margin})") if margin is None else \
+        _calibration_end(data, calibrate)
     healthy = data.between(end=until)
     kept = {"avoid": {a.name: a for a in first}}
     if integrals == "auto" and not given:
@@ -182,6 +178,10 @@ def detect(bg, record, *, calibrate: float | None = None, margin: float | None =
         if chosen is None:
             undecided[arr.name] = reason.removeprefix("undecided: ")
             continue
+        if margin is None:  # a calibrated margin: the stretch must hold no fault
+            check_healthy(chosen, data, evaluation, until, settings,
+                          {"persistence": persistence, "steps": step_inputs, "ends": True,
+                           **({"window": options["window"]} if options.get("window") else {})})
         evaluations.append(evaluation)
         forms[arr.name] = {"form": chosen.form, "window": options.get("window"), "margin": options["margin"],
                            "reason": reason}
@@ -198,31 +198,6 @@ def detect(bg, record, *, calibrate: float | None = None, margin: float | None =
     isolating = sustained or fired
     return Detection(evaluations, forms, seen, signatures, fired, consistent_faults(signatures, isolating), until,
                      used, undecided, list(step_inputs or []), isolating)
-
-
-def quiet_margin(evaluation: Evaluation, after: float = -np.inf) -> float:
-    """The smallest margin under which ``evaluation`` (of a fault-free stretch) raises no alarm after ``after``.
-
-    The start of a record may hold a start-up transient whose alarms the monitors ignore anyway (they
-    watch from the end of the calibration stretch): :func:`detect` looks at the second half only.
-
-    A violation is ``-r_n`` beyond the band by more than the margin; an alarm needs ``persistence`` of
-    them in a row, so the margin need only exceed, in every run of ``persistence`` samples, the
-    smallest excess of the run.  Derivative estimates are biased where the signals bend sharply (the
-    start of a transient): the noise's robust spread does not see that bias, this does.
-
-    >>> e = Evaluation("ARR", np.arange(6.0), np.array([0, -3.0, -3.0, 0, -1.0, 0]), np.zeros(6), np.zeros(6),
-    ...                np.zeros(6), 0.0, 2, np.zeros(6, bool), np.zeros(6, bool))
-    >>> quiet_margin(e)   # -r_n exceeds the band by 3 on two samples in a row
-    3.0
-    """
-    excess = np.maximum(-evaluation.residual - evaluation.upper, evaluation.lower + evaluation.residual)
-    excess = np.where(np.isfinite(excess) & (evaluation.t > after), np.maximum(excess, 0.0), 0.0)
-    p = evaluation.persistence
-    if excess.size < p:
-        return 0.0
-    runs = sliding_window_view(excess, p).min(axis=1) if p > 1 else excess
-    return float(runs.max()) if runs.size else 0.0
 
 
 def consistent_faults(signatures: SignatureMatrix, fired: Sequence[str]) -> list:

@@ -32,6 +32,8 @@ from .degradation import (CustomDegradation, ExponentialDegradation, LinearDegra
                           degradation_model)
 from .metrics import alpha_lambda, prognostic_horizon, relative_accuracy, relative_rmse, rmad
 from .monitor import HealthMonitor, MonitorResult
+from .isolation import IsolatingMonitor, IsolationResult
+from .pipeline import MAX_PARTICLES, PrognosisSettings, filter_step, prognose, rul_horizon
 from .observation import ObservationModel, observation_model
 from .likelihood import ResidualNoise
 from .particle_filter import ParticleFilter, StepDiagnostics, VarianceAdaptation
@@ -40,10 +42,10 @@ from .resampling import effective_sample_size
 from .rul import RULDistribution, RULPredictor, predict_rul
 
 __all__ = [
-    "CustomDegradation", "ExponentialDegradation", "HealthMonitor", "LinearDegradation", "MonitorResult",
-    "ObservationModel", "ParticleFilter", "PowerDegradation", "PrognosisError", "RULDistribution", "RULPredictor",
-    "ResampleMoveFilter",
-    "ResidualNoise", "StepDiagnostics", "VarianceAdaptation",
-    "alpha_lambda", "degradation_model", "effective_sample_size", "observation_model", "predict_rul",
-    "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad",
+    "CustomDegradation", "ExponentialDegradation", "HealthMonitor", "IsolatingMonitor", "IsolationResult",
+    "LinearDegradation", "MAX_PARTICLES", "MonitorResult", "ObservationModel", "ParticleFilter", "PowerDegradation",
+    "PrognosisError", "PrognosisSettings", "RULDistribution", "RULPredictor", "ResampleMoveFilter", "ResidualNoise",
+    "StepDiagnostics", "VarianceAdaptation", "alpha_lambda", "degradation_model", "effective_sample_size",
+    "filter_step", "observation_model", "predict_rul", "prognose", "prognostic_horizon", "relative_accuracy",
+    "relative_rmse", "rmad", "rul_horizon",
 ]

@@ -289,6 +289,9 @@ class IsolationResult:
         ``record_groups`` are ``groups`` merged with those pairs, the groups the final decision uses.
     parts : dict
         Joint hypothesis name -> parameter -> its mean estimate (K,) (``theta`` holds the first's).
+    settings : dict
+        What produced the result, for its JSON (:func:`~prognosis.pipeline.prognose` fills it: the
+        failure values, the calibration end, the filter step, the residual noise...).
     """
 
     detection_time: float | None
@@ -320,6 +323,67 @@ class IsolationResult:
     on_record: dict = field(default_factory=dict)
     record_groups: list = field(default_factory=list)
     parts: dict = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
+
+    def as_dict(self) -> dict:
+        """Plain data for JSON (what ``prognosis.json`` holds): the decision, the evidence, the predictions and the
+        settings (:attr:`settings`); ``status`` is ``"no alarm"``, ``"no candidate"`` or the decision's."""
+        result, decision = self, self.decision
+        summary = {"detection_time": result.detection_time, "fired": result.fired, "transient": result.transient,
+                   "late": result.late, "candidates": result.candidates,
+                   # every fault of the model (sensors too) a single fault of which fires the ARRs that fired
+                   "consistent": result.consistent,
+                   # sensors consistent with them whose fault is not weighed (an ARR integrates the reading)
+                   "unweighed": result.unweighed,
+                   "indistinguishable": [g for g in result.groups if len(g) > 1], "arrs": result.arrs,
+                   # pairs the structure tells apart but this record's operating regime does not
+                   "indistinguishable_on_record": result.on_record,
+                   "candidate": None if decision is None else decision.candidate,
+                   "status": "no alarm" if result.detection_time is None else (
+                       "no candidate" if decision is None else decision.status),
+                   "degradation": None if decision is None else decision.degradation,
+                   "same_signature": [] if decision is None else list(decision.same_signature),
+                   # ARRs that fired later and that no candidate sees: another fault than the one decided on
+                   "unexplained": {} if decision is None else dict(decision.unexplained),
+                   # why the status is not the evidence's alone (every law of every candidate contradicted)
+                   "reason": "" if decision is None else decision.reason,
+                   **self.settings, "evidence": {}, "predictions": [], "decisions": []}
+        if decision is None:
+            return summary
+        summary.update({"candidate_ratio": _finite(min(decision.candidate_ratio, 1e300)),
+                        "degradation_decided": decision.degradation_decided,
+                        "degradation_ratio": _finite(min(decision.degradation_ratio, 1e300))})
+        for row, h in enumerate(result.hypotheses):
+            summary["evidence"][h.name] = {"log_evidence": _finite(result.log_evidence[-1, row]),
+                                           "probability": decision.probabilities[h.name],
+                                           "rejected": result.rejected.get(h.name),
+                                           "inadequate": result.inadequate.get(h.name),
+                                           "theta_mean": float(result.theta["mean"][-1, row]),
+                                           "gamma_mean": float(result.gamma["mean"][-1, row]),
+                                           # a pair's estimate of each of its parameters
+                                           **({"parameters": {c: float(v[-1]) for c, v in result.parts[h.name].items()}}
+                                              if h.name in result.parts else {})}
+        best = result.monitor_result()
+        percentiles = best.rul_percentiles((5, 25, 50, 75, 95))
+        for k, t in enumerate(result.rul_t):
+            withheld = result.withheld[k] if k < len(result.withheld) else None
+            if withheld:  # undecided: no figure rather than a band from a law the data contradict
+                summary["predictions"].append({"t": float(t), **{key: None for key in RUL_KEYS}, "withheld": withheld})
+            else:
+                summary["predictions"].append({
+                    "t": float(t), "rul_mean": _finite(best.rul_mean[k]), "rul_p5": _finite(percentiles[k, 0]),
+                    "rul_p25": _finite(percentiles[k, 1]), "rul_median": _finite(percentiles[k, 2]),
+                    "rul_p75": _finite(percentiles[k, 3]), "rul_p95": _finite(percentiles[k, 4]),
+                    "censored": float(result.rul[k].censored_weight[0])})
+            d = result.decisions[k]
+            summary["decisions"].append({"t": float(t), "candidate": d.candidate, "status": d.status,
+                                         "degradation": d.degradation, "unexplained": sorted(d.unexplained)})
+        top = result.index(max(decision.probabilities, key=decision.probabilities.get))
+        summary["last"] = {**(summary["predictions"][-1] if summary["predictions"] else {"t": float(result.t[-1])}),
+                           "hypothesis": result.hypotheses[top].name,
+                           "theta_mean": float(result.theta["mean"][-1, top]),
+                           "gamma_mean": float(result.gamma["mean"][-1, top])}
+        return summary
 
     @property
     def decision(self) -> Decision | None:
@@ -1224,6 +1288,10 @@ def _logmeanexp(values) -> float:
     """log of the mean of exp(values): a candidate's evidence under a uniform prior over its laws."""
     values = np.asarray(values, float)
     return _logsumexp(values) - math.log(values.size) if values.size else -np.inf
+
+
+#: The RUL columns of a prediction in :meth:`IsolationResult.as_dict`.
+RUL_KEYS = ("rul_mean", "rul_p5", "rul_p25", "rul_median", "rul_p75", "rul_p95", "censored")
 
 
 def _finite(value: float) -> float | None:

@@ -39,6 +39,8 @@ from ..errors import PrognosisError
 
 __all__ = ["FleetMonitor"]
 
+#: The laws a fleet weighs by default: those with one rate, which the fleet filter carries per particle.
+FLEET_LAWS = ("linear", "exponential")
 BLOCK = 1000  # assets filtered together by run(): bounds the memory of the observations held
 PAD_STEPS = 64  # filter steps whose observations the block lays side by side at once
 STEP_ROWS = 256  # rows stepped at once: bounds a step's temporaries whatever the block
@@ -115,7 +117,7 @@ class FleetMonitor:
     """
 
     def __init__(self, arrs: Sequence, failures: Mapping[str, float], *, noise_std: Mapping[str, float],
-                 laws: Sequence[str] | Mapping = ("linear", "exponential"), candidates: Sequence[str] | None = None,
+                 laws: Sequence[str] | Mapping = FLEET_LAWS, candidates: Sequence[str] | None = None,
                  dt: float = 0.1, n_particles: int = 500, inflation: float = 4.0, life: tuple = LIFE_PRIOR,
                  rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
                  rul_every: int = 10, report_every: int | None = None, horizon: float | None = None,

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from bondgraph.errors import PHMError
-from diagnosis import derive_arrs, detect, signature_matrix
+from diagnosis import DetectionSettings, derive_arrs, detect, signature_matrix
 from diagnosis.report import arr_report
 
 from .identity import identity_error
@@ -84,7 +84,7 @@ def run_chain(case, *, faults: bool = True) -> ChainOutcome:
     healthy = record(simulate_reference(case, inputs="step"), noise=case.noise, seed=1)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        result = detect(bg, healthy, calibrate=CALIBRATE * t_end)
+        result = detect(bg, healthy, DetectionSettings(calibrate=CALIBRATE * t_end))
     detectable = {}
     for d in result.detectability.values():
         for p in d.rise:
@@ -103,7 +103,7 @@ def run_chain(case, *, faults: bool = True) -> ChainOutcome:
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 try:
-                    seen = detect(bg, faulty, calibrate=CALIBRATE * t_end)
+                    seen = detect(bg, faulty, DetectionSettings(calibrate=CALIBRATE * t_end))
                 except PHMError as exc:
                     outcome.errors.append((f"detect {p}", str(exc)))
                     continue

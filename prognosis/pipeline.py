@@ -1,0 +1,199 @@
+"""The whole prognosis of one record, as ``bgphm prognose`` runs it: calibrate, detect, isolate, predict.
+
+:func:`prognose` takes the ARRs, a record and the failure values, and decides everything else from
+the record and :class:`PrognosisSettings`: the healthy stretch and its check, each residual's margin
+and noise (:func:`diagnosis.calibration.calibrate`), the filter step (one derivative window of
+samples, :func:`filter_step`), the RUL horizon and its memory bound; then
+:class:`~prognosis.isolation.IsolatingMonitor` weighs the candidates and laws from the first alarm.
+A setting that does not fit the record raises a :class:`~bondgraph.errors.SettingError` naming it.
+
+>>> import numpy as np
+>>> from bondgraph import simulate
+>>> from bondgraph.library import rlc_circuit
+>>> from diagnosis import add_noise, derive_arrs
+>>> bg = rlc_circuit()
+>>> t = np.linspace(0.0, 3.0, 3001)
+>>> run = simulate(bg, (0.0, 3.0), {"V": lambda t: 5 + np.sin(7 * t)}, t_eval=t,
+...                parameters={"R": lambda t: 10.0 + 4.0 * max(0.0, t - 1.0)}).record()
+>>> record = add_noise(run, {"i": 1e-4}, seed=0)
+>>> settings = PrognosisSettings(detection=DetectionSettings(calibrate=0.8), laws=("linear",),
+...                              particles=100, sensors=False)
+>>> result = prognose(derive_arrs(bg), record, {"R": 20.0}, settings)
+>>> result.decision.candidate, result.settings["filter_step"]
+('R', 0.011)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from bondgraph.errors import SettingError
+from diagnosis.calibration import DetectionSettings, calibrate
+from diagnosis.signals import Record, as_record, default_window
+
+from .errors import PrognosisError
+from .isolation import HORIZON_STEPS, LAWS, METHODS, IsolatingMonitor, IsolationResult
+from .rul import check_horizon
+
+__all__ = ["MAX_PARTICLES", "PrognosisSettings", "filter_step", "prognose", "rul_horizon"]
+
+#: Particles per hypothesis at most: the filter holds (hypotheses, particles) arrays at every step.
+MAX_PARTICLES = 100_000
+
+
+@dataclass(frozen=True)
+class PrognosisSettings:
+    """The settings of :func:`prognose`, checked once.
+
+    Parameters
+    ----------
+    detection : DetectionSettings
+        The healthy stretch, margins and persistence (:mod:`diagnosis.calibration`).
+    laws : tuple of str
+        Competing degradation laws (default :data:`~prognosis.isolation.LAWS`).
+    candidates : tuple of str, optional
+        Only these candidates instead of those of the fault signature.
+    sensors, pairs : bool
+        Weigh the sensors' faults too (default); weigh two parameters wearing at once too (off).
+    particles : int
+        Particles per hypothesis, 2 to :data:`MAX_PARTICLES`.
+    method : {"resample-move", "sir"}
+        The filter (:class:`~prognosis.isolation.IsolatingMonitor`).
+    dt : float, optional
+        Filter step (s), a multiple of the record's step; default :func:`filter_step`.
+    rate : (float, float), optional
+        A uniform prior interval of the rate instead of the life prior.
+    rul_every : int
+        Filter steps between RUL predictions.
+    horizon : float, optional
+        RUL horizon cap (s); default :data:`~prognosis.isolation.HORIZON_STEPS` filter steps.
+    seed : int
+
+    >>> PrognosisSettings(particles=1)
+    Traceback (most recent call last):
+    ...
+    bondgraph.errors.SettingError: particles must be in [2, 100000], got 1
+    """
+
+    detection: DetectionSettings = field(default_factory=DetectionSettings)
+    laws: tuple = LAWS
+    candidates: tuple | None = None
+    sensors: bool = True
+    pairs: bool = False
+    particles: int = 500
+    method: str = "resample-move"
+    dt: float | None = None
+    rate: tuple | None = None
+    rul_every: int = 10
+    horizon: float | None = None
+    seed: int = 0
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.particles, (int, np.integer)) and 2 <= self.particles <= MAX_PARTICLES):
+            raise SettingError("particles", f"{{setting}} must be in [2, {MAX_PARTICLES}], got {self.particles!r}")
+        if not (isinstance(self.rul_every, (int, np.integer)) and self.rul_every >= 1):
+            raise SettingError("rul_every", f"{{setting}} must be at least 1 filter step, got {self.rul_every!r}")
+        for name in ("horizon", "dt"):
+            value = getattr(self, name)
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise SettingError(name, f"{{setting}} must be a positive number of seconds, got {value!r}")
+        if not (isinstance(self.seed, (int, np.integer)) and 0 <= self.seed < 2**63):
+            raise SettingError("seed", f"{{setting}} must be an integer in [0, 2**63), got {self.seed!r}")
+        if self.method not in METHODS:
+            raise SettingError("method", f"{{setting}} must be one of {', '.join(METHODS)}, got {self.method!r}")
+        if not self.laws:
+            raise SettingError("laws", "{setting}: give at least one degradation law")
+        if self.rate is not None and not (len(self.rate) == 2 and all(math.isfinite(v) for v in self.rate)
+                                          and self.rate[0] < self.rate[1]):
+            raise SettingError("rate", f"{{setting}} {' '.join(f'{v:g}' for v in self.rate)}: need two finite "
+                                       "numbers with lo < hi")
+        if self.pairs and (self.method != "resample-move" or self.candidates is not None):
+            raise SettingError("pairs", "{setting}: two faults at once are weighed with {setting:method} "
+                                        "resample-move and without {setting:candidates} only")
+
+
+def filter_step(record: Record, window: int | None = None, dt: float | None = None) -> float:
+    """The filter step: ``dt``, by default one derivative window of samples, checked against the record.
+
+    One filter step per derivative window: the residuals it reads are then nearly independent.
+    Raises a :class:`~bondgraph.errors.SettingError` (``dt``) for a step not shorter than the record
+    or not a multiple of its sampling step.
+
+    >>> filter_step(Record(np.arange(0.0, 10.0, 0.01), {}))
+    0.11
+    """
+    step = float(np.median(np.diff(record.t)))
+    chosen = dt if dt is not None else float(f"{step * (window or default_window(3)):.12g}")
+    span = float(record.t[-1] - record.t[0])
+    if chosen >= span:
+        raise SettingError("dt", f"{{setting}} {chosen:g}: the filter step is not shorter than the record ({span:g} s)")
+    if dt is not None and abs(round(dt / step) * step - dt) > 1e-6 * dt:
+        raise SettingError("dt", f"{{setting}} {dt:g}: the filter step must be a multiple of the record's step "
+                                 f"{step:g} s")
+    return chosen
+
+
+def rul_horizon(dt: float, horizon: float | None, particles: int, hypotheses: int) -> float:
+    """The RUL horizon (s): ``horizon``, by default :data:`~prognosis.isolation.HORIZON_STEPS` filter steps,
+    within the predictors' limits (:func:`~prognosis.rul.check_horizon`) before any filter runs.
+
+    >>> rul_horizon(0.1, None, 500, 2)
+    200.0
+    """
+    chosen = horizon if horizon is not None else HORIZON_STEPS * dt
+    try:
+        check_horizon(chosen, dt, particles=particles, predictors=hypotheses)
+    except PrognosisError as exc:
+        raise SettingError("horizon", f"{{setting}} {chosen:g}: {exc} (particles {particles}, {hypotheses} "
+                                      "hypotheses)") from None
+    return chosen
+
+
+def prognose(arrs: Sequence, record, failures: Mapping[str, float], settings: PrognosisSettings | None = None, *,
+             domains: Mapping[str, tuple] | None = None,
+             progress: Callable[[int, int, float], None] | None = None) -> IsolationResult:
+    """Calibrate on the healthy stretch, detect, weigh the candidates and laws, predict the RUL.
+
+    Parameters
+    ----------
+    arrs : sequence of ARR
+    record : mapping, DataFrame or Record
+        ``t`` and the ARRs' signals.
+    failures : mapping
+        Failure value of each parameter that can fail.
+    settings : PrognosisSettings, optional
+    domains : mapping, optional
+        The model's physical domains (:attr:`bondgraph.BondGraph.domains`).
+    progress : callable, optional
+        ``progress(done, total, t)`` during the filter (:meth:`IsolatingMonitor.run`).
+
+    Returns
+    -------
+    IsolationResult
+        With ``settings``: what the run decided from the record (``calibration_end``,
+        ``filter_step``, ``horizon``, ``residual_noise_std``, ``margins``) beside the settings given.
+    """
+    settings = settings or PrognosisSettings()
+    arrs = list(arrs)
+    record = as_record(record, list(dict.fromkeys(s for a in arrs for s in a.signals)))
+    detection = settings.detection
+    healthy = calibrate(arrs, record, detection)
+    dt = filter_step(record, detection.window, settings.dt)
+    horizon = rul_horizon(dt, settings.horizon, settings.particles, len(failures) * len(settings.laws))
+    options = {name: {"margin": margin, **detection.options()} for name, margin in healthy.margin.items()}
+    monitor = IsolatingMonitor(arrs, failures, noise_std=healthy.noise_std, laws=list(settings.laws),
+                               candidates=None if settings.candidates is None else list(settings.candidates),
+                               sensors=settings.sensors, pairs=settings.pairs, dt=dt, n_particles=settings.particles,
+                               rate=settings.rate, rul_every=settings.rul_every, horizon=settings.horizon,
+                               detection=options, healthy_until=healthy.until, domains=domains,
+                               method=settings.method, seed=settings.seed)
+    result = monitor.run(record, evaluations=healthy.evaluations, progress=progress)
+    result.settings = {"failure_values": dict(failures), "calibration_end": healthy.until, "filter_step": dt,
+                       "horizon": horizon, "filter": settings.method, "particles_per_hypothesis": settings.particles,
+                       "residual_noise_std": dict(healthy.noise_std), "margins": dict(healthy.margin),
+                       "seed": settings.seed}
+    return result
