@@ -9,6 +9,9 @@ from __future__ import annotations
 
 from bondgraph.errors import PHMError, PHMWarning
 
+#: The exit codes of ``bgphm``: success, anything unexpected (an interrupted run too), bad usage or input.
+EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
+
 
 class UsageError(PHMError, ValueError):
     """Bad arguments or input found after parsing (exit code 2)."""

@@ -11,7 +11,7 @@ from .relation import ARR, ARRWarning
 from .residuals import ARRError
 from .deltas import delta
 from .detection import Evaluation, evaluate, noise_margin, robust_std
-from .calibration import Calibration, DetectionSettings, calibrate, calibration_end, pooled_calibration
+from .calibration import POOLED_RECORDS, Calibration, DetectionSettings, calibrate, calibration_end, pooled_calibration
 from .detectability import Detectability, detectability
 from .monitoring import Detection, consistent_faults, detect
 from .elimination import structural_arrs, unreached
@@ -24,9 +24,10 @@ from .structural import StructuralLimitError, StructuralModel, structural_model
 
 __all__ = [
     "ARR", "ARRError", "ARRWarning", "Calibration", "Detectability", "Detection", "DetectionSettings", "Evaluation",
-    "Interval", "IntervalArray", "IntervalWarning", "Record", "RecordError", "RecordWarning", "SignatureMatrix",
-    "StreamChunk", "StreamingEvaluation", "StructuralLimitError", "StructuralModel", "add_noise", "affine_range",
-    "as_record", "calibrate", "calibration_end", "check_signals", "compile_interval", "consistent_faults", "delta",
-    "derive_arrs", "detect", "detectability", "evaluable", "evaluate", "noise_margin", "pooled_calibration",
-    "read_csv", "resample", "robust_std", "signature_matrix", "structural_arrs", "structural_model", "unreached",
+    "Interval", "IntervalArray", "IntervalWarning", "POOLED_RECORDS", "Record", "RecordError", "RecordWarning",
+    "SignatureMatrix", "StreamChunk", "StreamingEvaluation", "StructuralLimitError", "StructuralModel", "add_noise",
+    "affine_range", "as_record", "calibrate", "calibration_end", "check_signals", "compile_interval",
+    "consistent_faults", "delta", "derive_arrs", "detect", "detectability", "evaluable", "evaluate", "noise_margin",
+    "pooled_calibration", "read_csv", "resample", "robust_std", "signature_matrix", "structural_arrs",
+    "structural_model", "unreached",
 ]

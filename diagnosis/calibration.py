@@ -42,13 +42,16 @@ from bondgraph.errors import SettingError
 from .detection import Evaluation, noise_margin, robust_std
 from .signals import Record
 
-__all__ = ["CALIBRATION_SHARE", "MIN_CALIBRATION_SAMPLES", "Calibration", "DetectionSettings", "calibrate",
-           "calibration_end", "check_healthy", "pooled_calibration", "quiet_margin"]
+__all__ = ["CALIBRATION_SHARE", "MIN_CALIBRATION_SAMPLES", "POOLED_RECORDS", "Calibration", "DetectionSettings",
+           "calibrate", "calibration_end", "check_healthy", "pooled_calibration", "quiet_margin"]
 
 #: The share of the record that calibrates the margins when no calibration stretch is given.
 CALIBRATION_SHARE = 0.2
 #: Samples a calibration stretch needs at least: fewer give no estimate of the residual noise.
 MIN_CALIBRATION_SAMPLES = 20
+#: Records a fleet's calibration pools by default (:func:`pooled_calibration`): the median of a few
+#: resists one odd record, and each costs a calibration.
+POOLED_RECORDS = 10
 #: A calibrated margin is at least this multiple of the smallest margin that keeps the fault-free stretch
 #: quiet (:func:`quiet_margin`): estimator bias at transients, which the noise's robust spread ignores.
 SAFETY = 1.25

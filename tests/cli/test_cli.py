@@ -146,19 +146,19 @@ def test_json_round_trip_keeps_the_model():
 
 
 def test_unexpected_errors_exit_1_and_interrupts_are_clean(monkeypatch, capsys):
-    import bgphm.cli as cli
+    import bgphm.commands.arr as command
 
     def boom(args, progress):
         raise RuntimeError("disk on fire")
 
-    monkeypatch.setattr(cli, "cmd_arr", boom)
+    monkeypatch.setattr(command, "run", boom)
     code, _, err = run(capsys, "arr", "dc-motor")
     assert code == 1 and "RuntimeError: disk on fire" in err and "--debug" in err
 
     def interrupted(args, progress):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(cli, "cmd_arr", interrupted)
+    monkeypatch.setattr(command, "run", interrupted)
     code, _, err = run(capsys, "arr", "dc-motor")
     assert code == 1 and "interrupted" in err
 

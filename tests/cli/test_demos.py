@@ -8,7 +8,7 @@ import re
 
 import pytest
 
-from bgphm import cli
+import bgphm.commands.prognose as prognose_command
 from bgphm.cli import main
 from bondgraph.control import PIController
 from bondgraph.io import load_model
@@ -138,7 +138,7 @@ def test_an_interrupted_prognose_exits_1(demos, capsys, monkeypatch):
             raise KeyboardInterrupt
         return report
 
-    monkeypatch.setattr(cli, "_filter_progress", interrupted)
+    monkeypatch.setattr(prognose_command, "filter_progress", interrupted)
     code, _, err = run(capsys, "--quiet", "prognose", str(path / "model.json"), str(path / "data.csv"),
                        "--candidate", "az2", "--degradation", "exponential", "--fail", "1.2", "--calibrate", "190",
                        "--particles", "50")

@@ -111,7 +111,8 @@ def test_output_paths_are_checked_before_any_work(monkeypatch, tmp_path, capsys,
         raise AssertionError("the command started working before checking --out")
 
     monkeypatch.setattr(bondgraph.io, "load_model", no_work)
-    monkeypatch.setattr("bgphm.cli.load_model", no_work)
+    for command in ("_inputs", "arr", "simulate", "detect"):  # each command module that loads a model
+        monkeypatch.setattr(f"bgphm.commands.{command}.load_model", no_work)
     monkeypatch.setattr("bgphm.demo.prepare_demo", no_work)
     (tmp_path / "d").mkdir()
     (tmp_path / "f.csv").write_text("t,x\n")
@@ -188,13 +189,13 @@ def test_calibrating_over_a_fault_is_refused(tmp_path, capsys):
 
 
 def test_library_warnings_reach_stderr_as_one_line_without_a_source_path(monkeypatch, capsys):
-    import bgphm.cli as cli
+    import bgphm.commands.arr as command
 
     def noisy(args, progress):
         np.log(np.zeros(1))  # numpy's RuntimeWarning, raised in site-packages
         return 0
 
-    monkeypatch.setattr(cli, "cmd_arr", noisy)
+    monkeypatch.setattr(command, "run", noisy)
     code, _, err = run(capsys, "arr", "rlc")
     assert code == 0 and err.startswith("bgphm: warning: divide by zero") and err.count("\n") == 1
     assert ".py" not in err

@@ -1,0 +1,181 @@
+"""What the commands read: models' ARRs, records, failure values, candidates, laws, settings."""
+
+from __future__ import annotations
+
+import math
+import warnings
+from collections.abc import Sequence
+
+import numpy as np
+
+from bgphm.errors import UsageError
+from bondgraph.io import ModelSpec, load_model
+from diagnosis import DetectionSettings
+from diagnosis.signals import Record, RecordError, RecordWarning, gaps, read_csv
+
+from ._progress import Progress
+
+
+def load_arrs(spec: ModelSpec, progress: Progress, name: str | None, integrals: str = "avoid") -> list:
+    from diagnosis.arrs import ARRWarning, derive_arrs
+
+    progress(f"deriving the ARRs of {spec.model.name!r}")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", ARRWarning)
+        arrs = derive_arrs(spec.model, integrals=integrals)
+    for w in caught:
+        progress(f"warning: {w.message}")
+    if not arrs:
+        raise UsageError(f"{spec.source}: the model gives no ARR (it needs De/Df sensors on its junctions)")
+    return arrs if name is None else [named_arr(arrs, name)]
+
+
+def named_arr(arrs: list, name: str):
+    for arr in arrs:
+        if arr.name == name:
+            return arr
+    raise UsageError(f"--arr {name!r}: no such ARR (available: {', '.join(a.name for a in arrs)})")
+
+
+def load_record(path, arrs: list, progress: Progress, resample: bool = False, extra: Sequence[str] = ()) -> Record:
+    """The record's columns for the ARRs' signals (and those of ``extra`` it holds: inputs whose steps matter)."""
+    signals = list(dict.fromkeys(s for arr in arrs for s in arr.signals))
+    present = csv_header(path) if extra else []
+    signals += [s for s in extra if s in present and s not in signals]
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always", RecordWarning)
+            record = read_csv(path, signals)
+            if resample:
+                from diagnosis.resampling import resample as uniform
+
+                record = uniform(record)
+                progress(f"resampled {path} to a uniform step of {record.dt:g} s ({len(record)} samples)")
+    except RecordError as exc:
+        message = str(exc)
+        if "missing column" in message:
+            message += f" (the ARRs {[a.name for a in arrs]} use the signals {signals})"
+        raise RecordError(message) from None
+    for w in caught:
+        progress(f"warning: {w.message}")
+    for signal in signals:
+        if np.isnan(record[signal]).all():
+            raise RecordError(f"{path}: column {signal!r} has no value (every cell is empty or NaN)")
+    for signal, first, last, count in gaps(record, signals):
+        progress(f"warning: {path}: column {signal!r} has a gap of {count} sample(s) for t in [{first:g}, {last:g}]; "
+                 "no decision is made there")
+    progress(f"read {len(record)} samples of {signals} from {path}")
+    return record
+
+
+def csv_header(path) -> list[str]:
+    """The column names of a CSV file's header row (empty if it cannot be read: read_csv says why)."""
+    import csv
+
+    try:
+        with open(path, newline="", encoding="utf-8") as handle:
+            return [c.strip() for c in next(csv.reader(handle), [])]
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return []
+
+
+def detection_settings(args) -> DetectionSettings:
+    """``--calibrate``, ``--margin``, ``--k``, ``--persistence`` and ``--window`` as the library's settings."""
+    return DetectionSettings(calibrate=args.calibrate, margin=getattr(args, "margin", None), k=args.k,
+                             persistence=args.persistence, window=args.window)
+
+
+def what_can_fail(args, progress: Progress) -> tuple:
+    """``prognose`` and ``fleet``: the model, its ARRs, the failure values, the candidates and the laws."""
+    spec = load_model(args.model)
+    arrs = load_arrs(spec, progress, args.arr, args.integrals)
+    parameters, domains = spec.model.parameters, spec.model.domains
+    failures = failures_of(args, parameters, domains)
+    candidates = candidates_of(args, arrs, failures, parameters)
+    return spec, arrs, failures, candidates, laws_of(args)
+
+
+def laws_of(args) -> list:
+    """The competing laws: ``--degradation`` (once in ``fleet``, repeatable in ``prognose``), else the library's
+    default (``fleet``: the laws with one rate)."""
+    from prognosis.fleet import FLEET_LAWS
+    from prognosis.isolation import LAWS
+
+    if not args.degradation:
+        return list(LAWS if args.command == "prognose" else FLEET_LAWS)
+    return list(dict.fromkeys(args.degradation if isinstance(args.degradation, list) else [args.degradation]))
+
+
+def failures_of(args, parameters: dict, domains: dict) -> dict:
+    """``--fail`` as {parameter: failure value}: ``PARAM=VALUE`` items, or one VALUE for ``--candidate``."""
+    if args.candidate is not None and args.candidate not in parameters:
+        raise UsageError(f"--candidate {args.candidate!r}: the model has no such parameter "
+                         f"(parameters: {', '.join(parameters)})")
+    named = [item for item in args.fail if "=" in item]
+    bare = [item for item in args.fail if "=" not in item]
+    failures = assignments(named, parameters, "--fail")
+    if bare:
+        if args.candidate is None or len(bare) > 1:
+            raise UsageError(f"--fail {bare[0]}: give PARAM=VALUE (repeatable), or one VALUE with --candidate")
+        failures.update(assignments([f"{args.candidate}={bare[0]}"], parameters, "--fail"))
+    for name, value in failures.items():
+        lo, hi = domains.get(name, (-math.inf, math.inf))
+        if not lo <= value <= hi:
+            raise UsageError(f"--fail {name}={value:g}: outside the physical domain ({lo:g}, {hi:g}) the model "
+                             f"declares for {name!r}")
+        if value == parameters[name]:
+            raise UsageError(f"--fail {name}={value:g} equals the nominal value of {name!r}: the failure value must "
+                             "differ from it")
+    return failures
+
+
+def candidates_of(args, arrs: list, failures: dict, parameters: dict) -> list | None:
+    """``--candidate`` checked against the model, the failure values, the ARRs and ``--direction``; None without it."""
+    from diagnosis.signatures import signature_matrix
+
+    for name, value in failures.items():
+        if laws_of(args) == ["exponential"] and value * parameters[name] <= 0:
+            raise UsageError(f"--fail {name}={value:g}: an exponential degradation keeps the sign of {name!r} "
+                             f"(nominal {parameters[name]:g}); the failure value must have the same sign")
+    if args.candidate is None:
+        if args.direction is not None:
+            raise UsageError("--direction checks the failure value of --candidate: give --candidate too")
+        return None
+    name = args.candidate
+    if not any(name in a.parameters for a in arrs):
+        rows = signature_matrix(arrs)
+        raise UsageError(f"--candidate {name!r}: no ARR is sensitive to it, so it cannot be monitored "
+                         f"(detectable parameters: {[r for r, d in zip(rows.rows, rows.detectable) if d]})")
+    if name not in failures:
+        raise UsageError(f"--candidate {name!r}: give its failure value (--fail {name}=VALUE)")
+    inferred = "up" if failures[name] > parameters[name] else "down"
+    if args.direction is not None and args.direction != inferred:
+        side = "above" if inferred == "up" else "below"
+        raise UsageError(f"--fail {failures[name]:g} is on the wrong side of the nominal value {parameters[name]:g} of "
+                         f"{name!r} for --direction {args.direction}: it lies {side} nominal; give --direction "
+                         f"{inferred} (or leave --direction out: it follows from --fail)")
+    return [name]
+
+
+def assignments(items: Sequence[str] | None, parameters: dict, option: str) -> dict:
+    out = {}
+    for item in items or ():
+        name, sep, value = item.partition("=")
+        name = name.strip()
+        if not sep:
+            raise UsageError(f"{option} {item!r}: expected PARAM=VALUE")
+        if name not in parameters:
+            raise UsageError(f"{option} {item!r}: the model has no parameter {name!r} "
+                             f"(parameters: {', '.join(parameters)})")
+        try:
+            number = float(value)
+        except ValueError:
+            raise UsageError(f"{option} {item!r}: {value!r} is not a number") from None
+        if not math.isfinite(number):
+            raise UsageError(f"{option} {item!r}: the value must be finite")
+        out[name] = number
+    return out
+
+
+def has_value(model, signal: str) -> bool:
+    return any(e.signal == signal and e.value is not None for e in model.elements.values())

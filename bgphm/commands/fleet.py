@@ -1,0 +1,79 @@
+"""``bgphm fleet``: many assets' records to Parquet tables (:func:`bgphm.fleet.run_fleet`)."""
+
+from __future__ import annotations
+
+from bgphm.errors import EXIT_OK
+from bgphm.files import check_output, input_files
+from bondgraph.errors import SettingError
+from diagnosis import pooled_calibration
+from prognosis import filter_step, rul_horizon
+
+from ._inputs import (
+    detection_settings,
+    what_can_fail,
+)
+from ._progress import Progress, fleet_progress
+
+
+def run(args, progress: Progress) -> int:
+    """``bgphm fleet``: detection, estimation and RUL for every asset of a fleet, to Parquet; returns 0.
+
+    RECORDS is a directory of CSV files (one per asset, the asset id is the file name) or a Parquet
+    file with an ``asset`` column.  The residual noise and the detection margins are calibrated on the
+    first ``--calibrate`` seconds of the first ``--calibrate-assets`` records (by asset id): the median
+    over them, per ARR, serves every asset.  The assets then run in shards on a local Dask cluster
+    (``--workers``), on a running one (``--scheduler``), or in this process (``--workers 0``), through
+    :func:`bgphm.fleet.run_fleet`, which writes the tables ``alarms/``, ``estimates/`` and ``rul/`` and
+    ``summary.json`` under ``--out``.  Progress goes to stderr by assets done.
+    """
+    from bgphm.fleet import FleetSpec, model_reference, open_source, run_fleet
+    from bgphm.fleet.engine import require_dask
+    from bgphm.fleet.sources import pyarrow_modules
+
+    pyarrow_modules()  # the missing extra named before any work
+    if args.scheduler is not None or args.workers > 0:
+        require_dask()
+    source = open_source(args.records)
+    # --resume goes on in the run's own --out: it is not empty, and needs no --force
+    out = check_output(args.out, kind="directory", inputs=input_files(args.model) + source.inputs(),
+                       force=args.force or args.resume)
+    detection = detection_settings(args)
+    spec, arrs, failures, candidates, laws = what_can_fail(args, progress)
+    assets = source.assets()
+    progress(f"{len(assets)} assets in {source.describe()}")
+    calibrated = assets[:args.calibrate_assets]
+    signals = list(dict.fromkeys(s for arr in arrs for s in arr.signals))
+    try:
+        pooled, first = pooled_calibration(arrs, source.read(calibrated, signals), detection)
+        dt = filter_step(first, detection.window, args.dt)
+        rul_horizon(dt, args.horizon, args.particles, len(failures) * len(laws))
+    except SettingError as exc:
+        raise exc.within("records: ") if exc.setting == "calibrate" else exc from None
+    calibration = {"assets": list(calibrated), "until": args.calibrate, "noise_std": pooled.noise_std,
+                   "margin": pooled.margin}
+    for name in pooled.noise_std:
+        progress(f"{name}: residual noise {pooled.noise_std[name]:.3g}, margin {pooled.margin[name]:.3g} (median "
+                 f"over {len(calibrated)} record(s), t <= {args.calibrate:g} s)")
+    detection = {name: {"margin": margin, **detection.options()} for name, margin in pooled.margin.items()}
+    job = FleetSpec(model_reference(args.model), failures, noise_std=calibration["noise_std"], detection=detection,
+                    laws=laws, candidates=candidates, arrs=None if args.arr is None else [args.arr],
+                    integrals=args.integrals, dt=dt, n_particles=args.particles, rul_every=args.rul_every,
+                    horizon=args.horizon, healthy_until=args.calibrate, seed=args.seed)
+    where = args.scheduler or ("this process" if args.workers == 0 else f"a local cluster of {args.workers} workers")
+    progress(f"monitoring {len(assets)} assets ({where}): {len(laws)} law(s) per candidate, {args.particles} "
+             f"particles each, dt = {dt:g} s")
+    summary = run_fleet(job, source, out, scheduler=args.scheduler, workers=args.workers,
+                        shard_size=args.shard_size, progress=fleet_progress(progress), notes=calibration,
+                        resume=args.resume, on_bad_record=args.on_bad_record)
+    for asset, why in list(summary["skipped"].items())[:5]:
+        progress(f"skipped {asset}: {why}")
+    print(f"{summary['assets']} assets, {summary['assets_with_alarm']} with an alarm, {summary['rows']['rul']} RUL "
+          f"rows, in {summary['wall_s']:.1f} s ({1e3 * summary['seconds_per_asset']:.1f} ms per asset)")
+    resumed = f" ({summary['resumed_shards']} of {summary['shards']} shards kept from the interrupted run)" \
+        if args.resume else ""
+    if summary["skipped"]:
+        print(f"{len(summary['skipped'])} asset(s) skipped for a bad record, each with its reason in "
+              f"{out / 'summary.json'} (skipped)")
+    print(f"wrote {out / 'alarms'}, {out / 'estimates'}, {out / 'rul'} (Parquet), {out / 'summary.json'} and "
+          f"{out / 'manifest.json'}{resumed}")
+    return EXIT_OK

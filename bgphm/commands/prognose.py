@@ -1,0 +1,126 @@
+"""``bgphm prognose``: the candidate, its law and the RUL from a record (:func:`prognosis.prognose`)."""
+
+from __future__ import annotations
+
+import json
+import sys
+import warnings
+
+from bgphm.errors import EXIT_OK
+from bgphm.files import csv_text, write_text
+from diagnosis.signals import RecordWarning
+from prognosis import PrognosisSettings
+
+from ._inputs import (
+    detection_settings,
+    load_record,
+    what_can_fail,
+)
+from ._outputs import fmt, json_value, output_directory, write_plots
+from ._progress import Progress, filter_progress
+
+
+def run(args, progress: Progress) -> int:
+    """``bgphm prognose``: detect, find the degrading parameter and its law by evidence, predict the RUL.
+
+    ``--fail PARAM=VALUE`` (repeatable) gives the failure value of each parameter that can fail; the
+    candidates are those whose fault signature matches the ARRs that fired, each with each law
+    (linear, exponential, power), weighed in one particle filter from the first alarm
+    (:class:`~prognosis.isolation.IsolatingMonitor`).  ``--candidate`` and ``--degradation`` restrict
+    them.  Prints the decision and the last RUL; with ``--out`` writes ``prognosis.json``,
+    ``estimates.csv``, ``rul.csv`` and plots.  Returns 0.
+    """
+    from prognosis import prognose
+
+    detection = detection_settings(args)
+    out = output_directory(args)
+    spec, arrs, failures, candidates, laws = what_can_fail(args, progress)
+    settings = PrognosisSettings(detection=detection, laws=tuple(laws),
+                                 candidates=None if candidates is None else tuple(candidates), sensors=args.sensors,
+                                 pairs=args.pairs, particles=args.particles, method=args.filter, dt=args.dt,
+                                 rate=None if args.rate is None else tuple(args.rate), rul_every=args.rul_every,
+                                 horizon=args.horizon, seed=args.seed)
+    record = load_record(args.data, arrs, progress, args.resample)
+    progress(f"calibrating, then the particle filter from the first alarm: {len(laws)} law(s) per candidate, "
+             f"{args.particles} particles each")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", RecordWarning)
+        result = prognose(arrs, record, failures, settings, domains=spec.model.domains,
+                          progress=filter_progress(progress))
+    for w in caught:
+        progress(f"warning: {w.message}")
+    summary = result.as_dict()
+    for name, margin in summary["margins"].items():
+        progress(f"{name}: margin {margin:.3g}, residual noise {summary['residual_noise_std'][name]:.3g} (t <= "
+                 f"{summary['calibration_end']:g} s), filter step {summary['filter_step']:g} s")
+    # said even with --quiet: no answer, or no wear left but a sensor's offset (a wrong failure value?)
+    if result.decision is not None and result.decision.status == "rejected":
+        print(f"bgphm: warning: every hypothesis was rejected: {'; '.join(first_reasons(result))}", file=sys.stderr)
+    elif result.decision is not None and all(h.name in result.rejected for h in result.hypotheses if not h.sensor):
+        print(f"bgphm: warning: every wear hypothesis was rejected, only sensors' faults are left: "
+              f"{'; '.join(first_reasons(result))}", file=sys.stderr)
+    print(prognosis_line(result, summary))
+    if out is not None:
+        write_text(out / "prognosis.json", json.dumps(summary, indent=2, default=json_value))
+        written = [out / "prognosis.json"]
+        if result.t.size:
+            write_text(out / "estimates.csv", csv_text(estimate_columns(result)))
+            p = result.monitor_result().rul_percentiles((5, 50, 95))
+            write_text(out / "rul.csv", csv_text({"t": result.rul_t, "rul_mean": result.monitor_result().rul_mean,
+                                                  "rul_p5": p[:, 0], "rul_median": p[:, 1], "rul_p95": p[:, 2]}))
+            written += [out / "estimates.csv", out / "rul.csv"]
+        primary = next((e for e in result.evaluations if e.name in result.fired), result.evaluations[0])
+        best = result.monitor_result() if result.t.size else None
+        written += write_plots("prognosis", out, (primary, best), progress)
+        for path in written:
+            print(f"wrote {path}")
+    return EXIT_OK
+
+
+def prognosis_line(result, summary: dict) -> str:
+    if result.detection_time is None:
+        return "no alarm, so no prognosis (the filter starts at the first alarm)"
+    head = f"alarm at t = {result.detection_time:g} s ({', '.join(result.fired)})"
+    if summary["candidate"] is None:
+        why = (f"no parameter with a failure value is sensitive to every ARR that fired (consistent with them: "
+               f"{', '.join(result.consistent) or 'no single fault of the model'})" if not result.candidates
+               else "every hypothesis was rejected: " + "; ".join(first_reasons(result)))
+        return f"{head}; {why}"
+    last = summary["last"]
+    later = "".join(f"; but {reason}" for reason in summary["unexplained"].values())
+    if summary["reason"]:
+        rejected = f" ({'; '.join(first_reasons(result))})" if summary["status"] == "rejected" else ""
+        return f"{head}; {summary['status']}: {summary['reason']}{rejected}; at t = {last['t']:g} s no RUL{later}"
+    law = summary["degradation"] + ("" if summary["degradation_decided"] else " (undecided)")
+    status = summary["status"]
+    if summary["same_signature"]:   # isolable in the model only when no other fault shares the signature
+        status = f"indistinguishable from {', '.join(summary['same_signature'])} (same signature)"
+    reported = summary["candidate"] if isinstance(summary["candidate"], list) else [summary["candidate"]]
+    if any(set(pair.split(" ~ ")) <= set(reported) for pair in summary["indistinguishable_on_record"]):
+        status += ", on this record (the operating regime does not tell them apart)"
+    if last.get("withheld"):
+        return (f"{head}; candidate {summary['candidate']} ({status}), degradation {law}; at t = "
+                f"{last['t']:g} s no RUL (undecided: {last['withheld']}){later}")
+    return (f"{head}; candidate {summary['candidate']} ({status}), degradation {law}; at t = "
+            f"{last['t']:g} s RUL median {fmt(last['rul_median'])} s, 5-95 % [{fmt(last['rul_p5'])}, "
+            f"{fmt(last['rul_p95'])}] s{later}")
+
+
+def first_reasons(result) -> list[str]:
+    """The first rejection reason of each candidate (its laws are often rejected for the same reason)."""
+    reasons = {}
+    for h in result.hypotheses:
+        if h.name in result.rejected:
+            reasons.setdefault(h.candidate, f"{h.name}: {result.rejected[h.name]}")
+    return list(reasons.values())
+
+
+def estimate_columns(result) -> dict:
+    columns = {"t": result.t}
+    for row, h in enumerate(result.hypotheses):
+        columns[f"{h.name}.theta_mean"] = result.theta["mean"][:, row]
+        for parameter, mean in result.parts.get(h.name, {}).items():  # a pair's: each of its parameters
+            columns[f"{h.name}.{parameter}.theta_mean"] = mean
+        columns[f"{h.name}.gamma_mean"] = result.gamma["mean"][:, row]
+        columns[f"{h.name}.log_evidence"] = result.log_evidence[:, row]
+    return columns
