@@ -5,3 +5,5 @@ equations, simulation) -> ``diagnosis`` (ARRs, intervals, thresholds, detection)
 (fault model, filters, RUL); this package sits on top of them and is the only one that may use
 matplotlib (optional: ``pip install 'bondgraph-phm[plot]'``).
 """
+
+__all__ = []

@@ -4,4 +4,7 @@ import sys
 
 from bgphm.cli import main
 
-sys.exit(main())
+__all__: list[str] = []  # a script: nothing to import from it
+
+if __name__ == "__main__":
+    sys.exit(main())

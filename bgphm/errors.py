@@ -9,6 +9,10 @@ from __future__ import annotations
 
 from bondgraph.errors import PHMError, PHMWarning
 
+__all__ = [
+    "EXIT_FAILURE", "EXIT_OK", "EXIT_USAGE", "FleetError", "FleetWarning", "MissingExtraError", "UsageError",
+]
+
 #: The exit codes of ``bgphm``: success, anything unexpected (an interrupted run too), bad usage or input.
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
 

@@ -31,7 +31,12 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from bgphm.files import write_with
-from bondgraph._optional import import_optional
+from bondgraph.optional import import_optional
+
+__all__ = [
+    "MATPLOTLIB_MISSING", "band", "plot_estimate", "plot_evaluation", "plot_rul", "plot_rul_distribution",
+    "plot_simulation", "pyplot", "save_figure", "write_figures",
+]
 
 if TYPE_CHECKING:  # annotations only: matplotlib stays optional
     from matplotlib.axes import Axes

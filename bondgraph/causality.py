@@ -41,6 +41,8 @@ from .laws import solve_for
 from .errors import LawError
 from .structure import PORT_SYMBOLS, Bond, BondGraphLike, require_model
 
+__all__ = ["DERIVATIVE", "INTEGRAL", "CausalIssue", "Causality", "assign_causality", "diagnosis_causality"]
+
 INTEGRAL, DERIVATIVE = "integral", "derivative"
 
 

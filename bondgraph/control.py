@@ -19,6 +19,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+__all__ = ["PIController"]
+
 
 @dataclass
 class PIController:

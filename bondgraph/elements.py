@@ -12,6 +12,12 @@ The kinds follow the model contract of docs/design.md::
 
 from __future__ import annotations
 
+__all__ = [
+    "DETECTORS", "DETECTOR_JUNCTION", "EFFORT_SOURCES", "FLOW_SOURCES", "GYRATORS", "JUNCTIONS", "KINDS",
+    "LAW_VARIABLES", "MODULATED_TWO_PORTS", "ONE_PORTS", "PARAMETRIC", "SOURCES", "STORAGE", "TRANSFORMERS",
+    "TWO_PORTS", "normalize_kind",
+]
+
 SOURCES = frozenset({"Se", "Sf", "MSe", "MSf"})
 EFFORT_SOURCES = frozenset({"Se", "MSe"})
 FLOW_SOURCES = frozenset({"Sf", "MSf"})

@@ -41,6 +41,12 @@ from .laws import solve_for
 from .memo import ContentCache, content_key
 from .structure import PORT_SYMBOLS, T, BondGraphLike, Element, require_model, signal_function
 
+__all__ = [
+    "E_", "F_", "P_", "Q_", "REMEMBERED", "AlgebraicLoopError", "CausalEquations", "ModelEquation",
+    "StateEquations", "causal_equations", "constitutive_law", "ddt", "effort", "energy_variable", "flow",
+    "labelled_equations", "model_equations", "resolve", "solve_loop", "state_equations", "substitute",
+]
+
 E_, F_, Q_, P_ = (PORT_SYMBOLS[n] for n in "efqp")
 
 

@@ -16,6 +16,11 @@ from __future__ import annotations
 import re
 from collections.abc import Callable
 
+__all__ = [
+    "CausalityError", "EquationError", "LawError", "ModelError", "PHMError", "PHMWarning", "SettingError",
+    "SimulationError",
+]
+
 
 class PHMError(Exception):
     """Base of every error the toolkit raises on bad input, so that a user can catch them all.

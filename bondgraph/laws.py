@@ -16,6 +16,11 @@ import sympy as sp
 
 from .errors import LawError
 
+__all__ = [
+    "CONSTANTS", "FUNCTIONS", "MAX_EXPONENT", "MAX_LENGTH", "MAX_POWER_BITS", "check_finite",
+    "parse_expression", "signed_power_inverse", "solve_for",
+]
+
 FUNCTIONS = {
     "sign": sp.sign,
     "Abs": sp.Abs,

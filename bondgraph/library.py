@@ -24,6 +24,12 @@ from dataclasses import dataclass, field
 from .control import PIController
 from .model import BondGraph
 
+__all__ = [
+    "MASS_LOAD", "MU_UNCERTAINTY", "OMEGA_M_REF", "THREE_TANK", "TORSION_BAR", "U_MAX", "Example", "dc_motor",
+    "example", "friction_drive", "mass_spring_chain", "rlc_circuit", "three_tank", "torsion_bar",
+    "torsion_bar_controller", "torsion_bar_monitorable", "torsion_bar_with_load", "with_suspended_load",
+]
+
 
 def rlc_circuit(R: float = 10.0, L: float = 0.1, C: float = 1e-3) -> BondGraph:
     """Series RLC circuit driven by a voltage source ``V``.

@@ -64,6 +64,8 @@ from .structure import (BOND_ATTRIBUTES, NODE_ATTRIBUTES, PORT_SYMBOLS, RESERVED
                         signal_function)
 from .validation import check_model, parameter_domains
 
+__all__ = ["MISSPELLING", "BondGraph"]
+
 
 class BondGraph:
     """A bond graph model following the model contract of docs/design.md.

@@ -49,11 +49,16 @@ import numpy as np
 import sympy as sp
 from scipy.integrate import solve_ivp
 
-from ._optional import pandas_for
+from .optional import pandas_for
 from .equations import StateEquations
 from .errors import PHMWarning, SimulationError
 from .model import BondGraph
 from .structure import T, signal_function
+
+__all__ = [
+    "FALLBACK_METHOD", "MAX_EVALUATIONS", "MAX_SAMPLES", "MIN_SPAN", "PACE_MARGIN", "PACE_START", "SPAN_RTOL",
+    "STALL_EVALUATIONS", "SimulationResult", "SimulationWarning", "check_sample_count", "simulate",
+]
 
 
 @dataclass

@@ -23,6 +23,11 @@ import sympy as sp
 
 from . import elements as el
 
+__all__ = [
+    "BOND_ATTRIBUTES", "NODE_ATTRIBUTES", "PORT_SYMBOLS", "RESERVED_NAMES", "T", "Bond", "BondGraphLike",
+    "Element", "Structure", "require_model", "signal_function",
+]
+
 #: The time symbol of the contract: signals are ``name(t)``, energy variables ``q_<C>(t)``, ``p_<I>(t)``.
 T = sp.Symbol("t")
 #: The port variables a law may relate: effort, flow, charge (integral of flow), momentum (of effort).

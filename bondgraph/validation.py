@@ -16,6 +16,8 @@ from .domains import bounds, describe, intersect
 from .errors import ModelError
 from .structure import Bond, Element
 
+__all__ = ["check_model", "parameter_domains"]
+
 
 def check_model(elements: Mapping[Hashable, Element], bonds: list[Bond]) -> dict[str, float]:
     """Check connectivity and names; return the nominal value of every parameter.

@@ -27,6 +27,8 @@ from sympy.printing.mathml import MathMLPresentationPrinter
 
 from bondgraph.drawing import latex_escape
 
+__all__ = ["MATHML_ELEMENTS", "PREFIX", "delta", "delta_parameter", "latex", "mathml"]
+
 PREFIX = "delta_"
 
 #: A symbol or function name sympy may typeset in LaTeX as it likes (split at ``_``, Greek letters): an

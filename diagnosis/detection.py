@@ -36,12 +36,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bondgraph._optional import pandas_for
+from bondgraph.optional import pandas_for
 
 from .residuals import read_record
 from .signals import RecordError, default_window, has_column
 from .steps import step_mask
 from .thresholds import bglft_threshold, interval_threshold
+
+__all__ = [
+    "CalibrationError", "Evaluation", "check_arr", "check_options", "evaluate", "fitting_order", "judge",
+    "noise_margin", "persistent", "robust_std",
+]
 
 
 class CalibrationError(RecordError):

@@ -55,6 +55,11 @@ from .relation import (ARR, ARRWarning, candidate_parameters, check_integral_for
                        parameter_intervals, split_relation, uncertain_structure, written_without_integrals)
 from .structural import StructuralLimitError, StructuralModel, sensor_fault, structural_model
 
+__all__ = [
+    "ISOLATION_LIMIT", "MAX_ELIMINATIONS", "MAX_OPERATIONS", "MAX_ORDER", "MAX_SEARCHES",
+    "MAX_SEARCH_EQUATIONS", "arr_from_set", "faults_of_arr", "structural_arrs", "unreached",
+]
+
 #: The default bound on the derivatives an ARR added for isolation may need: as high as the ARRs the model
 #: needs anyway (its junction ARRs and those added for detection), no higher.  A second derivative of a
 #: sampled signal is only as good as the sampling resolves the signal's fastest transient; an ARR that

@@ -46,6 +46,8 @@ from bondgraph.structure import Structure, T, require_model, signal_function
 from .relation import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
                        parameter_intervals, split_relation, uncertain_structure, written_without_integrals)
 
+__all__ = ["junction_arrs"]
+
 def junction_arrs(bg, *, integrals: str = "avoid") -> list[ARR]:
     """The I-ARRs of a bond graph along causal paths, one per junction carrying a sensor.
 

@@ -29,6 +29,12 @@ from .detection import Evaluation, evaluate
 from .integral_forms import factor_out_of_integrals
 from .residuals import CompiledARR, compile_arr
 
+__all__ = [
+    "ARR", "INTEGRAL_FORMS", "TIDY_LIMIT", "ARRWarning", "candidate_parameters", "check_integral_form",
+    "measured_signals", "parameter_intervals", "split_relation", "uncertain_structure",
+    "written_without_integrals",
+]
+
 
 class ARRWarning(PHMWarning):
     """A candidate ARR that could not be expressed in known variables."""

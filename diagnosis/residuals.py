@@ -31,6 +31,11 @@ from bondgraph.errors import PHMError
 from .deltas import delta_parameter
 from .signals import Record, RecordError, as_record, cumulative_integral, default_window, derivative
 
+__all__ = [
+    "NUMERIC_FUNCTIONS", "T", "ARRError", "CompiledARR", "antiderivative_integral", "compile_arr",
+    "integral_depth", "read_record", "trusted_edge",
+]
+
 
 @dataclass
 class CompiledARR:

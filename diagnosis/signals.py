@@ -83,20 +83,9 @@ from scipy.signal import savgol_filter
 from bondgraph.errors import PHMError, PHMWarning
 
 __all__ = [
-    "MAX_MAGNITUDE",
-    "Record",
-    "RecordError",
-    "RecordWarning",
-    "add_noise",
-    "MAX_RECORD_BYTES",
-    "as_record",
-    "check_signals",
-    "cumulative_integral",
-    "read_csv",
-    "central_derivative",
-    "check_savgol_settings",
-    "default_window",
-    "derivative",
+    "MAX_MAGNITUDE", "Record", "RecordError", "RecordWarning", "add_noise", "MAX_RECORD_BYTES", "as_record",
+    "check_signals", "cumulative_integral", "read_csv", "central_derivative", "check_savgol_settings",
+    "default_window", "derivative", "gaps",
 ]
 
 TIME = "t"

@@ -40,6 +40,8 @@ import numpy as np
 
 from .structural import sensor_fault
 
+__all__ = ["SignatureMatrix", "signature_matrix"]
+
 
 @dataclass(frozen=True)
 class SignatureMatrix:

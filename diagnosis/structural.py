@@ -53,6 +53,8 @@ from bondgraph.equations import ModelEquation, effort, energy_variable, flow, la
 from bondgraph.errors import PHMError
 from bondgraph.structure import Structure, require_model
 
+__all__ = ["MSO_SEARCH_LIMIT", "StructuralLimitError", "StructuralModel", "sensor_fault", "structural_model"]
+
 #: The most overdetermined subsets :meth:`StructuralModel.mso_sets` explores before it gives up.
 MSO_SEARCH_LIMIT = 20000
 

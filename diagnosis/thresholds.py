@@ -22,6 +22,8 @@ from .deltas import delta
 from .intervals import affine_range, compile_interval
 from .residuals import CompiledARR
 
+__all__ = ["bglft_threshold", "interval_threshold"]
+
 
 def interval_threshold(compiled: CompiledARR, points: list[np.ndarray]) -> tuple[np.ndarray, np.ndarray]:
     """``(B_lo, B_hi)`` of Psi_2 at every sample; ``-r_n`` is normal inside it."""

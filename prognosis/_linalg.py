@@ -25,6 +25,11 @@ import numpy as np
 
 from .errors import PrognosisError
 
+__all__ = [
+    "block", "covariance_matrix", "eigen_root", "psd_sqrt", "solve", "solve_psd", "solve_psd_stack",
+    "state_vector", "symmetric", "tria",
+]
+
 
 def symmetric(a: np.ndarray) -> np.ndarray:
     """The symmetric part ``(a + a^T) / 2`` (round-off makes products of covariances drift apart)."""

@@ -29,6 +29,12 @@ import numpy as np
 
 from .errors import PrognosisError
 
+__all__ = [
+    "MODELS", "POWER_EXPONENTS", "CustomDegradation", "ExponentialDegradation", "JointDegradation",
+    "LinearDegradation", "PerAssetDegradation", "PowerDegradation", "degradation_model", "prefix_sum",
+    "stepped_path", "trajectory",
+]
+
 
 @dataclass(frozen=True)
 class LinearDegradation:

@@ -48,7 +48,9 @@ from .rul import RULDistribution, RULPredictor
 from .seeds import check_seed
 from .errors import PrognosisError
 
-__all__ = ["Decision", "IsolatingMonitor", "IsolationResult", "decide", "held_back"]
+__all__ = [
+    "Decision", "IsolatingMonitor", "IsolationResult", "decide", "held_back", "LAWS", "HORIZON_STEPS", "METHODS",
+]
 
 METHODS = ("resample-move", "sir")
 #: the competing laws by default: the two of Jha et al. (2016) and the flexible power law, which holds the

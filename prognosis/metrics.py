@@ -48,8 +48,8 @@ from .errors import PrognosisError
 
 __all__ = [
     "MetricWarning", "alpha_lambda", "convergence", "cumulative_relative_accuracy", "format_ranking",
-    "mean_relative_accuracy", "mean_rmad", "prognostic_horizon", "rank_with_ties", "relative_accuracy", "relative_rmse",
-    "rmad", "weighted_median",
+    "mean_relative_accuracy", "mean_rmad", "prognostic_horizon", "rank_with_ties", "relative_accuracy",
+    "relative_rmse", "rmad", "weighted_median", "weighted_quantiles",
 ]
 
 

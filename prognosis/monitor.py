@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bondgraph._optional import pandas_for
+from bondgraph.optional import pandas_for
 from diagnosis.streaming import StreamChunk, StreamingEvaluation
 
 from . import metrics, seeds
@@ -27,6 +27,8 @@ from .observation import observation_model
 from .rul import ParallelRUL, RULPredictor
 from .seeds import check_seed
 from .errors import PrognosisError
+
+__all__ = ["HealthMonitor", "MonitorResult", "check_failure_side", "filter_stride"]
 
 
 def check_failure_side(candidate: str, theta_fail: float, nominal: float, direction: str) -> None:

@@ -26,6 +26,8 @@ from sympy.core.function import AppliedUndef
 
 from .errors import PrognosisError
 
+__all__ = ["SENSOR", "ObservationModel", "observation_model", "sensor_model"]
+
 #: the prefix of a sensor's fault candidate, ``"sensor <signal>"``, as in the signature matrix
 SENSOR = "sensor "
 

@@ -34,6 +34,11 @@ from .resampling import effective_sample_size, get_scheme, normalize_log_weights
 from .seeds import check_seed
 from .errors import PrognosisError
 
+__all__ = [
+    "COLLAPSE_BELOW", "KernelSmoothing", "ParticleFilter", "StepDiagnostics", "VarianceAdaptation",
+    "check_particles", "check_positive", "cloud_estimate",
+]
+
 
 @dataclass
 class VarianceAdaptation:

@@ -30,6 +30,11 @@ from .metrics import weighted_quantiles
 from .seeds import check_seed, generator
 from .errors import PrognosisError
 
+__all__ = [
+    "BANK_BYTES_PER_STEP", "MAX_BANK_BYTES", "MAX_HORIZON_STEPS", "ParallelRUL", "ParallelWarning",
+    "RULDistribution", "RULPredictor", "check_horizon", "predict_rul",
+]
+
 MAX_HORIZON_STEPS = 1_000_000  # a horizon longer than this many filter steps is refused
 BANK_BYTES_PER_STEP = 16  # per particle and horizon step: four float32 banks (Z, CW, V, CV)
 MAX_BANK_BYTES = 2**31  # the random-number bank of one predictor (rows x steps x 16 bytes) stays under 2 GiB

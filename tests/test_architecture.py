@@ -104,6 +104,58 @@ def test_no_module_imports_a_private_name_of_another_module():
     assert not offenders, "\n".join(offenders)
 
 
+def _declared(module: str) -> set[str] | None:
+    """The names of ``module``'s ``__all__`` (None without one)."""
+    path, _ = MODULES[module]
+    for node in ast.parse(path.read_text(), str(path)).body:
+        if isinstance(node, (ast.Assign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            if any(getattr(t, "id", None) == "__all__" for t in targets):
+                return set(ast.literal_eval(node.value))
+    return None
+
+
+def _private(module: str) -> bool:
+    return any(part.startswith("_") and not part.startswith("__") for part in module.split("."))
+
+
+def test_every_module_declares_its_public_names():
+    missing = sorted(module for module in MODULES if _declared(module) is None)
+    assert not missing, f"modules without __all__: {missing}"
+
+
+def test_no_module_imports_a_private_module_of_another_package():
+    offenders = [f"{a}:{data['line']} imports {b}" for a, b, data in import_graph().edges(data=True)
+                 if _private(b) and a.split(".")[0] != b.split(".")[0]]
+    assert not offenders, "\n".join(offenders)
+
+
+def _outside_imports() -> list[tuple[str, int, str, str]]:
+    """(file, line, module, name) of every ``from <library module> import name`` in bgphm, examples, benchmarks."""
+    files = [path for module, (path, _) in MODULES.items() if module.split(".")[0] == "bgphm"]
+    files += sorted((ROOT / "examples").rglob("*.py")) + sorted((ROOT / "benchmarks").rglob("*.py"))
+    found = []
+    for path in files:
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.ImportFrom) and not node.level and node.module \
+                    and node.module.split(".")[0] in PACKAGES[:3]:
+                found += [(str(path.relative_to(ROOT)), node.lineno, node.module, alias.name) for alias in node.names]
+    return found
+
+
+def test_bgphm_examples_and_benchmarks_use_only_public_names():
+    """Each name they import from the library is declared public by the module it comes from (its ``__all__``),
+    in no private module: what a user may rely on is what the application and the figures rely on."""
+    offenders = []
+    for where, line, module, name in _outside_imports():
+        if f"{module}.{name}" in MODULES:  # a module: public unless its name is private
+            if _private(f"{module}.{name}"):
+                offenders.append(f"{where}:{line} imports the private module {module}.{name}")
+        elif module not in MODULES or _private(module) or name not in (_declared(module) or set()):
+            offenders.append(f"{where}:{line} imports {name} from {module}, which does not declare it public")
+    assert not offenders, "\n".join(offenders)
+
+
 # ------------------------------------------------------------------------------------------------ README
 
 

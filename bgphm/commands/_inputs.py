@@ -15,6 +15,11 @@ from diagnosis.signals import Record, RecordError, RecordWarning, gaps, read_csv
 
 from ._progress import Progress
 
+__all__ = [
+    "assignments", "candidates_of", "csv_header", "detection_settings", "failures_of", "has_value", "laws_of",
+    "load_arrs", "load_record", "named_arr", "what_can_fail",
+]
+
 
 def load_arrs(spec: ModelSpec, progress: Progress, name: str | None, integrals: str = "avoid") -> list:
     from diagnosis.arrs import ARRWarning, derive_arrs

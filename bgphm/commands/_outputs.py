@@ -12,6 +12,8 @@ from bgphm.files import check_output, input_files, write_text
 
 from ._progress import Progress
 
+__all__ = ["emit", "finite_or_none", "fmt", "json_value", "output_directory", "output_file", "write_plots"]
+
 
 def output_file(args) -> Path | None:
     """``--out`` of a command writing one file, checked before any work; None for stdout."""

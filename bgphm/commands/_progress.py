@@ -6,6 +6,8 @@ import math
 import sys
 import time
 
+__all__ = ["Progress", "filter_progress", "fleet_progress"]
+
 
 class Progress:
     """Progress lines on stderr (nothing with ``quiet``)."""

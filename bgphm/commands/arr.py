@@ -8,6 +8,8 @@ from bondgraph.io import load_model
 from ._outputs import emit, output_file
 from ._progress import Progress
 
+__all__ = ["run"]
+
 
 def run(args, progress: Progress) -> int:
     """``bgphm arr``: the ARR report of ``args.model`` in ``args.format``, to stdout or ``args.out``; returns 0.

@@ -7,6 +7,8 @@ from bgphm.files import check_output
 
 from ._progress import Progress
 
+__all__ = ["run"]
+
 
 def run(args, progress: Progress) -> int:
     """``bgphm demo``: write the files of the demo ``args.name`` into ``args.out`` and run its commands.

@@ -20,6 +20,8 @@ from ._inputs import (
 from ._outputs import json_value, output_directory, write_plots
 from ._progress import Progress
 
+__all__ = ["detectable_line", "evaluation_summary", "run"]
+
 
 def run(args, progress: Progress) -> int:
     """``bgphm detect``: evaluate the ARRs (or ``--arr``) on the record ``args.data``, print each alarm; returns 0.

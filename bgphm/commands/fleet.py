@@ -14,6 +14,8 @@ from ._inputs import (
 )
 from ._progress import Progress, fleet_progress
 
+__all__ = ["run"]
+
 
 def run(args, progress: Progress) -> int:
     """``bgphm fleet``: detection, estimation and RUL for every asset of a fleet, to Parquet; returns 0.

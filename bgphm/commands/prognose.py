@@ -19,6 +19,8 @@ from ._inputs import (
 from ._outputs import fmt, json_value, output_directory, write_plots
 from ._progress import Progress, filter_progress
 
+__all__ = ["estimate_columns", "first_reasons", "prognosis_line", "run"]
+
 
 def run(args, progress: Progress) -> int:
     """``bgphm prognose``: detect, find the degrading parameter and its law by evidence, predict the RUL.

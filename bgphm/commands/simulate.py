@@ -17,6 +17,8 @@ from ._inputs import (
 from ._outputs import emit, output_file
 from ._progress import Progress
 
+__all__ = ["run"]
+
 
 def run(args, progress: Progress) -> int:
     """``bgphm simulate``: simulate ``args.model`` over ``[0, t_end]`` and write its record as CSV; returns 0.

@@ -21,6 +21,8 @@ from . import interval, kernels, rounding
 from .interval import Interval, IntervalArray
 from .kernels import Pair
 
+__all__ = ["EXPAND_LIMIT", "Node", "affine_range", "compile_interval", "enclose"]
+
 Node = Callable[[Sequence[np.ndarray]], Pair]
 
 _UNARY = {

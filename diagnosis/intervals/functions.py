@@ -15,6 +15,10 @@ import numpy as np
 from . import interval, kernels
 from .interval import Interval, IntervalArray, Number
 
+__all__ = [
+    "Operand", "absolute", "cos", "exp", "log", "maximum", "minimum", "power", "sign", "sin", "sqrt", "tanh",
+]
+
 Operand = Union[Interval, IntervalArray, Number, np.ndarray]
 
 

@@ -18,6 +18,8 @@ import numpy as np
 from . import kernels, rounding
 from .kernels import Pair
 
+__all__ = ["Interval", "IntervalArray", "Number", "apply", "fit", "trusted_array", "trusted_interval"]
+
 Number = Union[int, float, np.integer, np.floating]
 
 _INF = math.inf

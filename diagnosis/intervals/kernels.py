@@ -22,6 +22,11 @@ import numpy as np
 
 from . import rounding
 
+__all__ = [
+    "Pair", "absolute", "add", "cos", "div", "exp", "is_point", "log", "maximum", "minimum", "mul", "neg",
+    "point", "pow_int", "power", "real_pow", "sign", "sin", "sqrt", "sub", "tanh",
+]
+
 Pair = tuple[Any, Any]  # (lo, hi), floats or arrays; ``lo is hi`` marks an exact point
 
 _INF = math.inf

@@ -22,6 +22,11 @@ import numpy as np
 
 from bondgraph.errors import PHMWarning
 
+__all__ = [
+    "EPS", "TRANSCENDENTAL_ULPS", "IntervalWarning", "down", "down_transcendental", "guarded", "rounded",
+    "sanitize", "up", "up_transcendental", "warn",
+]
+
 TRANSCENDENTAL_ULPS = 4
 """Assumed worst error, in ulps, of numpy's exp, log, tanh, sin, cos and power."""
 

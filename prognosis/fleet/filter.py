@@ -27,6 +27,8 @@ from scipy.special import ndtr
 from ..degradation import ExponentialDegradation, LinearDegradation
 from ..streams import MOVES, STARTS
 
+__all__ = ["QUANTILES", "ROW_STATE", "FleetFilter", "FleetStep", "law_step", "systematic_indices"]
+
 QUANTILES = (0.05, 0.5, 0.95)
 ROW_STATE = ("theta", "gamma", "hypothesis", "mean", "variance", "sigma_v", "log_evidence", "steps", "rejected",
              "away")  # what a row is: a checkpoint saves these

@@ -17,6 +17,8 @@ import numpy as np
 
 from diagnosis import StreamingEvaluation
 
+__all__ = ["Final", "LiveAsset"]
+
 
 @dataclass
 class Final:

@@ -37,7 +37,7 @@ from .results import FleetResult
 from .rul import crossing_times, has_closed_form, summarize
 from ..errors import PrognosisError
 
-__all__ = ["FleetMonitor"]
+__all__ = ["FleetMonitor", "BLOCK", "FLEET_LAWS"]
 
 #: The laws a fleet weighs by default: those with one rate, which the fleet filter carries per particle.
 FLEET_LAWS = ("linear", "exponential")

@@ -22,9 +22,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from bondgraph._optional import pandas_for
+from bondgraph.optional import pandas_for
 
 from ..errors import PrognosisError
+
+__all__ = ["COLUMNS", "INTEGER", "TABLES", "TEXT", "FleetResult", "empty_table"]
 
 TABLES = ("alarms", "estimates", "rul")
 COLUMNS = {

@@ -26,6 +26,8 @@ import numpy as np
 
 from ..degradation import ExponentialDegradation, LinearDegradation
 
+__all__ = ["LEVELS", "crossing_times", "has_closed_form", "summarize"]
+
 LEVELS = (0.05, 0.5, 0.95)
 
 

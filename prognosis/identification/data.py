@@ -14,6 +14,10 @@ import numpy as np
 
 from ..errors import PrognosisError
 
+__all__ = [
+    "as_columns", "check_covariance", "check_data", "check_future_inputs", "check_inputs", "check_matrix",
+]
+
 
 def check_matrix(name: str, value, rows: int | None = None) -> np.ndarray:
     """``value`` as a finite 2-D float matrix (a 1-D one of ``rows`` entries as a column); the error names ``name``."""

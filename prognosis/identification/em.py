@@ -19,6 +19,11 @@ from .model import IdentificationWarning, LinearGaussianModel, check_model_data
 from .smoother import SmootherResult, filter_arrays, smooth_arrays
 from ..errors import PrognosisError
 
+__all__ = [
+    "EIGENVALUE_FLOOR", "EIGENVALUE_FLOOR_ABSOLUTE", "EMResult", "em_arrays_step", "em_step", "fit_em",
+    "initial_model",
+]
+
 
 def em_step(model: LinearGaussianModel, y: ArrayLike, u: ArrayLike | None = None, *, cross_covariance: bool = True,
             estimate_initial: bool = True) -> tuple[LinearGaussianModel, float]:

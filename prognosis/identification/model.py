@@ -13,6 +13,8 @@ from .. import _linalg as linalg
 from .data import check_covariance, check_data, check_inputs, check_matrix
 from ..errors import PrognosisError
 
+__all__ = ["IdentificationWarning", "LinearGaussianModel", "check_model_data"]
+
 
 class IdentificationWarning(PHMWarning, RuntimeWarning):
     """An M-step had to floor the eigenvalues of a noise covariance (the model is close to degenerate)."""

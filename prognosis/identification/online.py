@@ -14,6 +14,8 @@ from .model import LinearGaussianModel
 from .smoother import SmootherResult, smooth_arrays
 from ..errors import PrognosisError
 
+__all__ = ["OnlineEM", "WindowIdentification", "whitened_model"]
+
 
 @dataclass(frozen=True, eq=False)
 class WindowIdentification:

@@ -15,6 +15,11 @@ from numpy.typing import ArrayLike
 from .. import _linalg as linalg
 from .model import LinearGaussianModel, check_model_data
 
+__all__ = [
+    "STATIONARY_TOLERANCE", "SmootherResult", "filter_arrays", "kalman_smoother", "log_likelihood",
+    "smooth_arrays",
+]
+
 
 @dataclass(frozen=True, eq=False)
 class SmootherResult:

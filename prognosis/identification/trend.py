@@ -16,6 +16,8 @@ from .data import check_future_inputs
 from .model import LinearGaussianModel
 from ..errors import PrognosisError
 
+__all__ = ["FeaturePrediction", "detect_trend", "fault_trend", "predict_feature"]
+
 
 def fault_trend(model: LinearGaussianModel, margin: float = 0.0) -> bool:
     """Whether the fault is progressing: ``rho(A) > 1 + margin`` (Gasperin et al. (2011), section 5.1).

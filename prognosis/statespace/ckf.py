@@ -31,6 +31,8 @@ from .. import _linalg as linalg
 from .gaussian import GaussianFilter
 from .strong_tracking import StrongTracking
 
+__all__ = ["CubatureKalmanFilter"]
+
 
 class CubatureKalmanFilter(GaussianFilter):
     """Square-root cubature Kalman filter (Du et al. (n.d.), eqs. 21-46); with ``fading``, the STSCKF.

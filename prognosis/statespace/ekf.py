@@ -9,6 +9,8 @@ from .. import _linalg as linalg
 from .gaussian import GaussianFilter
 from .strong_tracking import StrongTracking
 
+__all__ = ["ExtendedKalmanFilter"]
+
 
 class ExtendedKalmanFilter(GaussianFilter):
     """EKF with the model's sympy Jacobians (no finite differences).

@@ -27,6 +27,11 @@ from .. import _linalg as linalg
 from .strong_tracking import StrongTracking
 from ..errors import PrognosisError
 
+__all__ = [
+    "FilterWarning", "GaussianFilter", "Innovation", "cholesky_or_repair", "innovation", "measured_rows",
+    "noises",
+]
+
 
 class FilterWarning(PHMWarning, RuntimeWarning):
     """A covariance had to be repaired, or a measurement was rejected as non-finite."""

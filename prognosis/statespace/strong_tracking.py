@@ -30,6 +30,8 @@ import numpy as np
 from .. import _linalg as linalg
 from ..errors import PrognosisError
 
+__all__ = ["StrongTracking"]
+
 
 @dataclass
 class StrongTracking:

@@ -10,6 +10,8 @@ from .gaussian import GaussianFilter, cholesky_or_repair
 from .strong_tracking import StrongTracking
 from ..errors import PrognosisError
 
+__all__ = ["UnscentedKalmanFilter"]
+
 
 class UnscentedKalmanFilter(GaussianFilter):
     """UKF with the scaled unscented transform (Julier 2002; Wan and van der Merwe 2000).

@@ -9,6 +9,8 @@ from __future__ import annotations
 import importlib
 from types import ModuleType
 
+__all__ = ["import_optional", "pandas_for"]
+
 
 def import_optional(name: str, message: str) -> ModuleType:
     """Import module ``name``, or raise ``ImportError(message)`` chained to the original error.
