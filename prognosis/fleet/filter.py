@@ -36,10 +36,17 @@ ROW_STATE = ("theta", "gamma", "hypothesis", "mean", "variance", "sigma_v", "log
 
 @dataclass
 class FleetStep:
-    """What one step did to its rows: the ESS after the update and the rows whose weights all vanished."""
+    """What one step did to its rows: their weights after the update (unnormalized, ``total`` per row) and the
+    rows whose weights all vanished; :attr:`ess` from them, computed when asked (a report's, not every step's)."""
 
-    ess: np.ndarray
+    weights: np.ndarray
+    total: np.ndarray
     degenerate: np.ndarray
+
+    @property
+    def ess(self) -> np.ndarray:
+        """The effective sample size of each row after the update."""
+        return self.total * self.total / (self.weights * self.weights).sum(axis=1)
 
 
 class FleetFilter:
@@ -175,7 +182,6 @@ class FleetFilter:
         if degenerate.any():  # every weight vanished: start again from equal weights, and say so
             weights[degenerate] = 1.0
             total[degenerate] = n
-        ess = total * total / (weights * weights).sum(axis=1)
         evidence = top[:, 0] + np.log(total / n)
         if finite.all():  # the common case: every ARR measured
             evidence += self._constant_sum
@@ -193,7 +199,7 @@ class FleetFilter:
         self._smooth(at, gamma)
         self.gamma[at] = gamma
         self.steps[at] += 1
-        return FleetStep(ess, degenerate)
+        return FleetStep(weights, total, degenerate)
 
     def _draws(self, rows: np.ndarray, blocks: int) -> np.ndarray:
         """(rows, blocks N + 1) normals: theta's process noise, gamma's jitter, the resampling's uniform.

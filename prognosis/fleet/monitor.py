@@ -274,7 +274,7 @@ class FleetMonitor:
                     index = live[start:start + STEP_ROWS]
                     mine, k = owner[index], j - first
                     step = pf.step(rows[index], y[mine, k], [[p[mine, k] for p in m] for m in points])
-                    self._outputs(pf, rows[index], mine, ids[mine], np.full(index.size, j), t[mine, k], step.ess,
+                    self._outputs(pf, rows[index], mine, ids[mine], np.full(index.size, j), t[mine, k], step,
                                   result, common=j)
         if self._keep_particles:
             for a, item in enumerate(assets):
@@ -290,21 +290,23 @@ class FleetMonitor:
         return {self.hypotheses[pf.hypothesis[r]].name: {"theta": pf.theta[r].copy(), "gamma": pf.gamma[r].copy()}
                 for r in rows}
 
-    def _outputs(self, pf, rows, owner, ids, steps, times, ess, result: FleetResult, common: int | None = None) -> None:
-        """The estimates and RUL of the rows whose step (``steps``, taken before the step) is due.
+    def _outputs(self, pf, rows, owner, ids, steps, times, step, result: FleetResult, common: int | None = None
+                 ) -> None:
+        """The estimates and RUL of the rows whose step (``steps``, taken before the step; ``step``, what it did) is
+        due.
 
         ``common``: the step of every row when they share one (a block's tick, a stream's asset), so that
         the usual tick, with nothing due, costs two remainders of integers.
         """
         if common is not None:
             if common % self.report_every == 0:
-                self._report(pf, rows, ids, steps, times, ess, result)
+                self._report(pf, rows, ids, steps, times, step.ess, result)
             if common % self.settings.rul_every == 0:
                 self._predict(pf, rows, owner, ids, steps, times, result)
             return
         report = steps % self.report_every == 0
         if report.any():
-            self._report(pf, rows[report], ids[report], steps[report], times[report], ess[report], result)
+            self._report(pf, rows[report], ids[report], steps[report], times[report], step.ess[report], result)
         due = steps % self.settings.rul_every == 0
         if due.any():
             self._predict(pf, rows[due], owner[due], ids[due], steps[due], times[due], result)
@@ -400,8 +402,8 @@ class FleetMonitor:
             if len(waiting) == 1:  # a stream's usual tick: one asset's rows, its sample broadcast, not copied
                 rows, (t, y, points) = waiting[0].rows, items[0]
                 owner, size = np.zeros(rows.size, int), rows.size
-                y = np.broadcast_to(y, (size, y.size))
-                points = [list(np.broadcast_to(p, (size, p.size)).T) for p in points]
+                y = y[None, :] if size == 1 else np.broadcast_to(y, (size, y.size))
+                points = [list(p[:, None] if size == 1 else np.broadcast_to(p, (size, p.size)).T) for p in points]
                 times, ids = np.full(size, t), np.full(size, waiting[0].asset, dtype=object)
             else:
                 rows = np.concatenate([live.rows for live in waiting])
@@ -414,7 +416,7 @@ class FleetMonitor:
             step = pf.step(rows, y, points)
             # one asset's rows were started together and step together: one step count
             common = int(steps[0]) if len(waiting) == 1 and steps.size else None
-            self._outputs(pf, rows, owner, ids, steps, times, step.ess, result, common)
+            self._outputs(pf, rows, owner, ids, steps, times, step, result, common)
 
     def _streaming_filter(self) -> FleetFilter:
         if self._filter is None:
