@@ -40,10 +40,11 @@ from numpy.lib.stride_tricks import sliding_window_view
 from bondgraph.errors import SettingError
 
 from .detection import Evaluation, noise_margin, robust_std
-from .signals import Record
+from .signals import Record, default_window
 
 __all__ = ["CALIBRATION_SHARE", "MIN_CALIBRATION_SAMPLES", "POOLED_RECORDS", "Calibration", "DetectionSettings",
-           "calibrate", "calibration_end", "check_healthy", "pooled_calibration", "quiet_margin"]
+           "calibrate", "calibration_end", "check_healthy", "pooled_calibration", "quiet_margin",
+           "stays_in_alarm"]
 
 #: The share of the record that calibrates the margins when no calibration stretch is given.
 CALIBRATION_SHARE = 0.2
@@ -147,34 +148,66 @@ def check_healthy(arr, record: Record, evaluation: Evaluation, until: float, set
     """Refuse a calibration stretch that holds a fault (split-half validation, see the module docstring).
 
     ``evaluation``: ``arr`` on ``record`` with the margin calibrated on ``t <= until``, with the
-    options of :func:`~diagnosis.evaluate` ``options`` (default ``settings.options()``).  A first half
-    under :data:`MIN_CALIBRATION_SAMPLES` samples is not checked.  Raises a
-    :class:`~bondgraph.errors.SettingError` (``calibrate``) naming the ARR and the time.
+    options of :func:`~diagnosis.evaluate` ``options`` (default ``settings.options()``).  The ARR
+    holds a fault there when, in the stretch's last quarter, it stays in alarm (:func:`stays_in_alarm`)
+    with that margin or with one calibrated on the first half alone; the samples whose derivative
+    estimate reads past the stretch's end are not the stretch's (a fault that starts right after it
+    shows there).  A first half under :data:`MIN_CALIBRATION_SAMPLES` samples, or an ARR that
+    integrates measured signals (its healthy residual is a random walk that outgrows an earlier
+    half's margin), is not recalibrated.
+    Raises a :class:`~bondgraph.errors.SettingError` (``calibrate``) naming the ARR and the time.
     """
+    options = settings.options() if options is None else options
     t0 = float(record.t[0])
     half = t0 + 0.5 * (until - t0)
-    last = (record.t > t0 + 0.75 * (until - t0)) & (record.t <= until)
+    end = int(np.count_nonzero(record.t <= until)) - _reach(arr, options)
+    last = (record.t > t0 + 0.75 * (until - t0)) & (np.arange(record.t.size) < end)
     stretch = (f"{{setting}} {until:g}" if settings.calibrate is not None
                else f"the default calibration stretch (the first {CALIBRATION_SHARE:.0%} of the record, "
                     f"t <= {until:g} s)")
     hint = "give a shorter {setting} (or a fixed {setting:margin})"
-    if evaluation.alarm[last].any():
-        when = float(record.t[last][evaluation.alarm[last]][0])
-        raise SettingError("calibrate", f"{stretch} is not fault-free: {evaluation.name} is in alarm at t = {when:g} "
-                                        f"s, in the last quarter of it; {hint}")
-    if np.count_nonzero(record.t <= half) < MIN_CALIBRATION_SAMPLES:
+    when = stays_in_alarm(evaluation.alarm[last], record.t[last])
+    if when is not None:
+        raise SettingError("calibrate", f"{stretch} is not fault-free: {evaluation.name} is in alarm from t = "
+                                        f"{when:g} s, in the last quarter of it; {hint}")
+    if np.count_nonzero(record.t <= half) < MIN_CALIBRATION_SAMPLES or getattr(arr, "integrals", None):
+        # an integral of measured noise is a random walk: its spread on a healthy record grows past any
+        # margin set on an earlier half (the margin of an integral form is widened for that growth instead)
         return
     first = record.between(end=half)
-    options = settings.options() if options is None else options
     start = t0 + START_SHARE * (half - t0)
     margin = max(noise_margin(arr, first, k=settings.k, **options),
                  SAFETY * quiet_margin(arr.evaluate(first, **options), after=start))
-    check = arr.evaluate(record, margin=margin, **options)
-    if check.alarm[last].any():
-        when = float(record.t[last][check.alarm[last]][0])
+    when = stays_in_alarm(arr.evaluate(record, margin=margin, **options).alarm[last], record.t[last])
+    if when is not None:
         raise SettingError("calibrate", f"{stretch} is not fault-free: calibrated on its first half (t <= {half:g} "
-                                        f"s), {evaluation.name} is in alarm at t = {when:g} s, in the last quarter "
+                                        f"s), {evaluation.name} is in alarm from t = {when:g} s, in the last quarter "
                                         f"of it; {hint}")
+
+
+def stays_in_alarm(alarm: np.ndarray, t: np.ndarray) -> float | None:
+    """The time of the first alarm when the ARR stays in alarm from there to the end of ``t``: on at least
+    half of those samples (a degradation, once there, stays; a transient's alarm ends), else None.
+
+    >>> t = np.arange(8.0)
+    >>> stays_in_alarm(np.array([0, 1, 1, 0, 0, 0, 0, 0], bool), t) is None   # a transient
+    True
+    >>> stays_in_alarm(np.array([0, 0, 0, 1, 1, 0, 1, 1], bool), t)
+    3.0
+    """
+    if not alarm.any():
+        return None
+    first = int(np.argmax(alarm))
+    return float(t[first]) if alarm[first:].mean() >= 0.5 else None
+
+
+def _reach(arr, options: dict) -> int:
+    """Samples a derivative estimate of ``arr`` reads on either side of its own (0 without derivatives)."""
+    if not getattr(arr, "order", 0):
+        return 0
+    if options.get("method", "savgol") == "central":
+        return int(arr.order) + 1
+    return int(options.get("window") or default_window(int(options.get("polyorder", 3)))) // 2
 
 
 def quiet_margin(evaluation: Evaluation, after: float = -np.inf) -> float:
