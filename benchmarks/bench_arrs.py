@@ -10,7 +10,7 @@ factor of.
     python benchmarks/bench_arrs.py            # table
     python benchmarks/bench_arrs.py --json     # {"n": [...], "seconds": [...], "growth_exponent": ...}
 
-Target (issue 20): n = 200 in under 5 s, growth exponent under 1.3.
+Target: n = 200 in under 5 s, growth exponent under 1.3.
 """
 
 from __future__ import annotations

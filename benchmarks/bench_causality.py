@@ -10,7 +10,7 @@ reports how many times faster the causal route is.
     python benchmarks/bench_causality.py            # table
     python benchmarks/bench_causality.py --json     # {"n": [...], "seconds": [...], "growth_exponent": ...}
 
-Target (issue 2): 200 stages in under 5 s, near-linear growth.
+Target: 200 stages in under 5 s, near-linear growth.
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ fifths (pooled over the ARRs) and the alarms.
     python benchmarks/bench_drift.py            # table
     python benchmarks/bench_drift.py --json     # {"avoid": {...}, "keep": {...}}
 
-Target (issue 20): no alarm with the default form, last-fifth violation rate within 2x the first's.
+Target: no alarm with the default form, last-fifth violation rate within 2x the first's.
 """
 
 from __future__ import annotations

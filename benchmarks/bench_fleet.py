@@ -50,10 +50,10 @@ What is measured, all in one run of this script (one JSON line with ``--json``):
     python benchmarks/bench_fleet.py --assets 1000 --json # one JSON line
     python benchmarks/bench_fleet.py --assets 100 --keep /tmp/fleet   # keep the records and the tables
 
-Targets (issue 23, this 2-core machine): 10^4 assets under 15 minutes on 2 workers, <= 90 ms per
+Targets (this 2-core machine): 10^4 assets under 15 minutes on 2 workers, <= 90 ms per
 asset at K = 1000; the filter with mean estimates at >= 10 M particle-steps/s per core; RUL <= 0.5 ms
 per asset-prediction; memory <= 100 KB per asset beside a fixed <= 1 GB; streaming <= 20 us per
-sample at 10^5 samples with RSS growth < 1 % over the last half (issue 32: also after the alarm, and
+sample at 10^5 samples with RSS growth < 1 % over the last half (also after the alarm, and
 per-sample pushes at most 25x the micro-batches' cost per sample); bitwise identical tables under
 sharding; RA within 0.5 % of HealthMonitor's.
 """

@@ -1,4 +1,4 @@
-"""Would a slowly wandering offset in the likelihood calibrate the torsion-bar demo's RUL band? (issue 31)
+"""Would a slowly wandering offset in the likelihood calibrate the torsion-bar demo's RUL band?
 
 The resample-move filter's band on ``bgphm demo torsion-bar`` is too narrow: the residual of
 ARR_1_2 (the integral form of Jha et al. (2016)) carries, besides its white noise, an offset that

@@ -8,7 +8,7 @@ its own virtualenv, benchmarks/.venv-progpy, not a dependency of the toolkit)
 filters the same model and predicts the RUL at a handful of points with its
 Monte-Carlo predictor; the ratios compare the two.
 
-Multi-hypothesis prognosis (issue 21): the filter of
+Multi-hypothesis prognosis: the filter of
 :class:`prognosis.isolation.IsolatingMonitor`, whose rows are hypotheses (candidate x law), runs on
 the same b_Md data with H = 1, 2, 4, 6 hypotheses (b_Md, J_Md, b_Ld x exponential, linear; N = 500
 particles each), a RUL prediction of every hypothesis every 10 steps.  Its times are given as ratios
@@ -21,11 +21,11 @@ hypothesis is the slope of a least-squares line through time vs H.
     python benchmarks/bench_prognosis.py --no-progpy
     python benchmarks/bench_prognosis.py --hypotheses ""   # skip the multi-hypothesis sweep
 
-Targets (issue 4): whole run under 3 s on this 2-core machine (the RUL
+Targets: whole run under 3 s on this 2-core machine (the RUL
 predictions run in worker processes beside the filter: they are independent
 given the particles, and keyed by step so the results equal the one-process
 run, which is checked); RUL prediction >= 500x faster than ProgPy's per
-prediction (measured in one process); filter step no slower than ProgPy's.  Issue 21: a RUL prediction of one
+prediction (measured in one process); filter step no slower than ProgPy's; a RUL prediction of one
 hypothesis in the multi-hypothesis filter within 2x of the single-hypothesis
 filter's.
 """
@@ -195,7 +195,8 @@ def sweep(counts: list[int], single: dict, steps: int, particles: int, dt: float
     fits of time vs H; ``*_ratio_vs_single`` divide by the single filter's time, ``*_ratio_vs_h1``
     by the multi-hypothesis filter's at H = 1 (when 1 is among ``counts``).  ``rul_ratio_vs_single``
     compares a prediction of all H hypotheses with one of the single filter;
-    ``rul_one_hypothesis_ratio_vs_single`` is its value at H = 1, the figure of issue 21 (target <= 2).
+    ``rul_one_hypothesis_ratio_vs_single`` is its value at H = 1, the multi-hypothesis filter's
+    acceptance figure (target <= 2).
     """
     runs = [hypotheses(h, steps, particles, dt, seed, rul_every) for h in counts]
     step = np.array([r["filter_seconds_per_step"] for r in runs])
@@ -213,7 +214,7 @@ def sweep(counts: list[int], single: dict, steps: int, particles: int, dt: float
             out[f"{name}_extra_hypothesis_ratio_vs_single"] = slope / base
             if 1 in counts:
                 out[f"{name}_extra_hypothesis_ratio_vs_h1"] = slope / times[counts.index(1)]
-    if 1 in counts:  # the acceptance figure of issue 21
+    if 1 in counts:  # the multi-hypothesis filter's acceptance figure
         out["rul_one_hypothesis_ratio_vs_single"] = out["rul_ratio_vs_single"][counts.index(1)]
     return out
 

@@ -1,4 +1,4 @@
-"""Reading records: diagnosis.read_csv against numpy's loadtxt (issue 32).
+"""Reading records: diagnosis.read_csv against numpy's loadtxt.
 
     python benchmarks/bench_records.py [--json] [--rows 200000] [--repeats 7]
 

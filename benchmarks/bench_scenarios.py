@@ -1,4 +1,4 @@
-"""Prognosis scenarios (issue 31): wear laws simulated from the physics, run through ``bgphm prognose``.
+"""Prognosis scenarios: wear laws simulated from the physics, run through ``bgphm prognose``.
 
     python benchmarks/bench_scenarios.py [--json] [--seeds 10] [--particles 300] [--rul-every 10]
                                          [--jobs 2] [--filter sir|resample-move] [--pairs] [--system NAME]
@@ -27,7 +27,7 @@ share of predictions whose median RUL is within 20 % of the truth (mean and wors
 the pooled coverage of the 5-95 % and 25-75 % bands, the PIT histogram per quarter of the life (the
 truth's place among the predicted 5, 25, 50, 75 and 95 % quantiles: 5, 20, 25, 25, 20, 5 % when
 calibrated), and the relative accuracy (mean and worst).  The
-targets of issue 31: found in every run, within-20 % >= 0.8, coverage 0.85-0.97 and 0.40-0.65.
+targets: found in every run, within-20 % >= 0.8, coverage 0.85-0.97 and 0.40-0.65.
 ``--json`` prints one JSON object per scenario, one per line.
 """
 

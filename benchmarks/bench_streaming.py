@@ -14,7 +14,7 @@ stream is compared with ``evaluate()`` on the whole record.
     python benchmarks/bench_streaming.py --json             # one JSON line
     python benchmarks/bench_streaming.py --samples 20000    # a quicker run
 
-Target (issue 23): <= 20 us per sample at 1e5 samples, RSS growth < 1 % over the last half, the
+Target: <= 20 us per sample at 1e5 samples, RSS growth < 1 % over the last half, the
 same cost per sample at 1e5 as at 1e3.
 """
 

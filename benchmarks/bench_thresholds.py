@@ -10,7 +10,7 @@ a subsample, extrapolated per sample.
     python benchmarks/bench_thresholds.py            # table
     python benchmarks/bench_thresholds.py --json     # {"samples_per_second": ..., "speedup_vs_mpmath": ...}
 
-Target (issue 3): >= 10^6 samples per second.
+Target: >= 10^6 samples per second.
 """
 
 from __future__ import annotations

@@ -166,7 +166,7 @@ CASES = {
 
 
 def linear_case(gamma: float, onset: float = 25.0, fail: float = 0.3) -> Case:
-    """b_Md growing linearly at ``gamma`` from ``onset``, failing at ``fail`` (the table of issue 21).
+    """b_Md growing linearly at ``gamma`` from ``onset``, failing at ``fail`` (one row of the ``--table`` run).
 
     Its figures are taken over the second half of the fault's life (``after``), an evaluation
     window only: nothing the monitor uses comes from it.
@@ -420,7 +420,7 @@ def _rul_hits(result, case: Case) -> dict:
 
 
 def _threshold_widths(evaluation) -> dict:
-    """Median widths of the interval and BG-LFT thresholds on the nominal record (issue 3)."""
+    """Median widths of the interval and BG-LFT thresholds on the nominal record."""
     width = evaluation.upper - evaluation.lower
     decided = np.isfinite(width) & np.isfinite(evaluation.bglft)  # samples left undecided (input steps) aside
     return {"interval_width_median": float(np.median(width[decided])),

@@ -1,4 +1,4 @@
-"""Random valid bond graphs through every stage: causality, equations, ARRs, signatures, evaluation (issue 30).
+"""Random valid bond graphs through every stage: causality, equations, ARRs, signatures, evaluation.
 
 The strategies draw a plain description of a model (:func:`model_specs`): a tree of 0 and 1 junctions
 joined by bonds or by TF/GY two-ports, sources (Se, Sf, MSe, MSf), C/I/R elements with positive values,
@@ -102,7 +102,7 @@ def smooth_record(signals: list[str], seed: int, samples: int = 101) -> dict:
     return record
 
 
-#: Defects the fuzzer found in ARR derivation or evaluation that are being fixed elsewhere (issue 30):
+#: Defects the fuzzer found in ARR derivation or evaluation that are being fixed elsewhere:
 #: (exception type, message pattern, where).  The random-model tests let them pass, so that they find
 #: other defects; :data:`FOUND` keeps an example of each, run strictly and expected to fail until fixed.
 KNOWN_DEFECTS: list = []  # the four the fuzzer found (re/im terms, Integral, DiracDelta, sign') are fixed

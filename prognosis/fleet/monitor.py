@@ -2,8 +2,9 @@
 
 :class:`FleetMonitor` is :class:`~prognosis.isolation.IsolatingMonitor` for many assets at once.  Each
 asset's records go through detection with the ARRs; at an asset's first alarm, its rows start: one
-row of particles per hypothesis (a candidate with a law, from the failure values, as in issue 11's
-isolation by evidence; a single named hypothesis is one row per asset).  From then on all started
+row of particles per hypothesis (a candidate with a law, from the failure values, as in
+:class:`~prognosis.isolation.IsolatingMonitor`'s isolation by evidence; a single named hypothesis is one row
+per asset).  From then on all started
 rows step together, each at its own filter step, on random streams keyed by (seed, asset, step)
 (:mod:`prognosis.streams`), so an asset's results are bitwise the same alone, in any batch and on
 any worker.  The RUL is predicted in closed form (:mod:`prognosis.fleet.rul`) and mixed over the

@@ -349,7 +349,7 @@ def test_non_string_law_is_rejected():
 
 
 @pytest.mark.parametrize("law, match", [
-    ("e/0 - f", r"division by zero in 'e / 0'"),            # found by tests/cli/test_fuzz.py (issue 30)
+    ("e/0 - f", r"division by zero in 'e / 0'"),            # found by tests/cli/test_fuzz.py
     ("f - a*e/(e - e)", r"division by zero in 'a \* e / \(e - e\)'"),
     ("f - log(0)*e", "is infinite or undefined"),
     ("f - 0**-1*e", "is infinite or undefined"),

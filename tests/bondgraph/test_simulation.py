@@ -134,7 +134,7 @@ def test_input_derivative_needed_is_a_clear_error():
         simulate(bg, (0.0, 1.0), {"V": np.sin})
 
 
-# --- argument checks and resource guards (issue 22) -------------------------------------------------
+# --- argument checks and resource guards ------------------------------------------------------------
 
 @pytest.mark.parametrize(
     "t_span, message",

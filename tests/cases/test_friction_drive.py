@@ -48,7 +48,7 @@ def test_example_runs_the_three_scenarios(example_run):
 
 
 def test_example_records_and_reports_each_decision_the_controller_did_not_converge_on(fd, monkeypatch):
-    """Issue 22: a budget of one iteration cannot locate the boundary; the example applies the controller's
+    """A budget of one iteration cannot locate the boundary; the example applies the controller's
     fallback (the largest feasible theta met), records when and what, and prints it."""
     monkeypatch.setitem(fd.CONTROL, "max_iterations", 1)
     s = fd.Scenario().scaled(10)

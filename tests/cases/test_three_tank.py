@@ -1,4 +1,4 @@
-"""Issue 6: the three-tank system of Du et al. (examples/three_tank.py), diagnosis and estimation."""
+"""The three-tank system of Du et al. (examples/three_tank.py): diagnosis and estimation."""
 
 import json
 
@@ -70,7 +70,7 @@ def test_main_writes_the_table_and_plots(tank, tmp_path, capsys):
     assert set(data["table"]) == {"SCKF", "STSCKF", "STUKF", "PF"}
     for row in data["table"].values():
         assert row["rmse"] >= row["mae"] > 0 and row["rmse"] ** 2 <= row["mse"] * (1 + 1e-12) and row["seconds"] > 0
-    # issue 22: STSCKF and STUKF differ by about 1e-9 in every seed: a tie, printed and written as one
+    # STSCKF and STUKF differ by about 1e-9 in every seed: a tie, printed and written as one
     groups = data["ranking_by_mae"]
     assert groups[-1][-1] == "SCKF" and sorted(sum(groups, [])) == ["PF", "SCKF", "STSCKF", "STUKF"]
     assert any({"STSCKF", "STUKF"} <= set(group) for group in groups)

@@ -32,7 +32,7 @@ def test_torsion_bar_example_reproduces_the_degradation_scenario(example, b_md):
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_torsion_bar_detection_without_false_alarms(example, b_md, seed):
-    """Issue 3: no false alarm on a 100 s nominal run; the b_Md degradation from t = 10 s is detected."""
+    """No false alarm on a 100 s nominal run; the b_Md degradation from t = 10 s is detected."""
     figures = example.detect("b-md", b_md, seed=seed, noise="quiet")
     assert figures["arrs"] == ["ARR_1_1", "ARR_1_2"]
     assert figures["false_alarms_nominal"] == 0

@@ -361,7 +361,7 @@ def test_demo_runs_the_chain_and_predicts_the_injected_end_of_life(tmp_path, cap
     assert last["theta_mean"] == pytest.approx(b_true, rel=0.1)
 
 
-# ------------------------------------------------------------------------------------------- guards (issue 22)
+# ------------------------------------------------------------------------------------------- guards
 
 @pytest.mark.parametrize("argv, message", [
     (["simulate", "rlc", "--samples", "100000000"], "--samples"),
@@ -374,7 +374,7 @@ def test_simulation_guards_name_the_option(capsys, argv, message):
 
 
 def test_an_open_circuit_or_a_tiny_capacitance_simulates_with_a_warning(tmp_path, capsys):
-    # LSODA gives up on both (issue 30); the CLI used to end in AttributeError, exit 1
+    # LSODA gives up on both; the CLI used to end in AttributeError, exit 1
     for setting, column, expected in [("R=1e12", "i", 1.0 / 1e12), ("C=1e-300", "v_C", 1.0)]:
         out = tmp_path / f"{setting}.csv"
         code, _, err = run(capsys, "simulate", "rlc", "--set", setting, "--out", str(out))

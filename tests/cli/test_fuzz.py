@@ -1,4 +1,4 @@
-"""Generated hostile input for the command line: model files, CSV records and options (issue 22).
+"""Generated hostile input for the command line: model files, CSV records and options.
 
 Whatever the input, ``bgphm`` ends with exit code 0, or 2 and one line naming what is wrong; never a
 traceback (exit 1), never a hang past HANG_CPU_SECONDS of CPU, never a changed input file.  The model files and
@@ -151,7 +151,7 @@ def model_documents(draw) -> str:
 
 @FUZZ
 @given(document=model_documents(), command=st.sampled_from(["arr-md", "arr-html", "arr-tex", "simulate"]))
-@example(document=_with_law("R_a", "e/0 - f"), command="arr-md")  # issue 30: exit 1 in ARR elimination
+@example(document=_with_law("R_a", "e/0 - f"), command="arr-md")  # used to exit 1 in ARR elimination
 @example(document=_with_law("R_a", "e/0 - f"), command="simulate")
 def test_generated_model_files_exit_0_or_2_and_stay_unchanged(document, command):
     with tempfile.TemporaryDirectory() as folder:
@@ -260,9 +260,9 @@ def option_choices(draw) -> tuple[str, list[tuple[str, list[str]]]]:
 
 @FUZZ
 @given(choice=option_choices())
-# issue 30: an undamped LC circuit over 3e7 periods ran for minutes (now stopped by the solver's pace check)
+# regressions: an undamped LC circuit over 3e7 periods ran for minutes (now stopped by the solver's pace check)
 @example(choice=("simulate", [("--set", ["R=0"]), ("--t-end", ["1436643"])]))
-@example(choice=("simulate", [("--set", ["R=1e12"])]))  # issue 30: LSODA failed, then AttributeError
+@example(choice=("simulate", [("--set", ["R=1e12"])]))  # LSODA failed, then AttributeError
 @example(choice=("simulate", [("--set", ["C=1e-300"])]))
 def test_generated_options_exit_0_or_2(record, choice):
     command, options = choice

@@ -1,6 +1,6 @@
-"""The report writers escape every user text (issue 22), even text the model validation never sees.
+"""The report writers escape every user text, even text the model validation never sees.
 
-Names can no longer carry markup (tests/bondgraph/test_trust.py), so these tests reach the writers
+Names can no longer carry markup (tests/bondgraph/test_model_input_rules.py), so these tests reach the writers
 without it: through the model's display name, which is free text, and by calling the equation
 printers on sympy expressions with hostile symbol and function names.
 """

@@ -55,7 +55,7 @@ def test_unknowns_are_bond_variables_and_states_never_signals_or_parameters():
     assert model.unknowns[sensor] == {"f_1"}
 
 
-# ------------------------------------------------------------------- what the issue found missing
+# -------------------------------------------------- detectability and isolability on whole models
 
 def test_dc_motor_with_its_speed_sensor_only_has_one_relation_that_sees_every_parameter():
     model = structural_model(MODELS["dc motor, speed sensor only"]())

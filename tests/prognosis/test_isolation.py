@@ -1,4 +1,4 @@
-"""Prognosis without being told the answer: candidates, laws, evidence, truth-free priors (issue 21)."""
+"""Prognosis without being told the answer: candidates, laws, evidence, truth-free priors."""
 
 import json
 import math
@@ -235,7 +235,7 @@ def test_the_models_domains_decide_what_is_rejected():
 
 @pytest.mark.slow  # simulates the torsion bar under its PI loop (tests/wear) and runs bgphm prognose
 def test_resample_move_follows_a_clean_linear_wear_that_collapsed_the_random_walk_filter():
-    """Issue 31: noise on the speeds only, the alarm within a filter step of the onset."""
+    """A wear scenario of tests/wear: noise on the speeds only, the alarm within a filter step of the onset."""
     from tests.wear import run as wear
 
     scenario = wear.Scenario("torsion_bar", "b_Md", "linear", "clean")

@@ -230,7 +230,7 @@ def test_convergence_degenerate_inputs():
         convergence([0.0, 2.0, 1.0], [1.0, 1.0, 1.0])
 
 
-# ---------------------------------------------------------------- ranking with ties (issue 22)
+# ------------------------------------------------------------ ranking with ties
 
 def _three_tank_like():
     """Per-seed MAEs shaped like examples/three_tank.py's: three strong-tracking filters 1e-9 and 2e-6 apart in

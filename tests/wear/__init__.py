@@ -1,1 +1,1 @@
-"""Wear scenarios for prognosis (issue 31): degradations simulated from the physics, run through ``bgphm prognose``."""
+"""Wear scenarios for prognosis: degradations simulated from the physics, run through ``bgphm prognose``."""

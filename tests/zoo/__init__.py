@@ -1,1 +1,1 @@
-"""The model zoo: systems written from textbooks and datasheets, each with its own reference physics (issue 30)."""
+"""The model zoo: systems written from textbooks and datasheets, each with its own reference physics."""

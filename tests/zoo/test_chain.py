@@ -1,4 +1,4 @@
-"""Every stage on zoo models with the defaults (issue 30): the chain of tests/zoo/chain.py.
+"""Every stage on zoo models with the defaults: the chain of tests/zoo/chain.py.
 
 The whole zoo runs in ``benchmarks/zoo.py`` (docs/zoo.md); here, models that cover a closed loop and a
 nonlinear law (the speed loop with quadratic drag, and more) in the slow tier; the fast tier runs the

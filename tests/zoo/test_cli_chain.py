@@ -1,4 +1,4 @@
-"""The command line over the zoo (issue 30): ``arr`` (md, html, tex), ``simulate``, ``detect`` and ``prognose``.
+"""The command line over the zoo: ``arr`` (md, html, tex), ``simulate``, ``detect`` and ``prognose``.
 
 Each ends with exit 0, or 2 and one line naming what is wrong: never exit 1 (an internal error).  The
 model goes in as JSON (constant inputs where the zoo's are constant), the records are the model's

@@ -11,7 +11,7 @@ from tests.zoo.check import inside_box, library_run, load_case, relative_errors
 from tests.zoo.identity import identity_error
 from tests.zoo.reference import simulate_reference
 
-# about 1-2 s of CPU per model: the fast tier keeps tests/zoo/test_chain.py's subset (issue 30)
+# about 1-2 s of CPU per model: the fast tier keeps tests/zoo/test_chain.py's subset
 pytestmark = pytest.mark.slow
 
 MODELS = ["rc_ladder2", "rlc_ladder3", "pi_filter", "transformer_load", "wheatstone_rc", "buck_averaged",

@@ -17,7 +17,7 @@ from tests.zoo.check_b import inside_box, load, simulation_errors
 from tests.zoo.identity import identity_error
 from tests.zoo.reference import simulate_reference
 
-# about 1-2 s of CPU per model: the fast tier keeps tests/zoo/test_chain.py's subset (issue 30)
+# about 1-2 s of CPU per model: the fast tier keeps tests/zoo/test_chain.py's subset
 pytestmark = pytest.mark.slow
 
 # model -> shortened horizon of the test (s), about 300 samples: the reference's tight Radau sets the cost.

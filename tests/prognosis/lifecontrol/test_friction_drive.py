@@ -624,7 +624,7 @@ def _crawl_life(theta):
 
 
 def test_rul_controller_crawling_from_the_infeasible_side_still_converges():
-    """Issue 22: with a small gain, eq. 53 from just above the boundary converges to it from the infeasible side
+    """With a small gain, eq. 53 from just above the boundary converges to it from the infeasible side
     (each step multiplies the distance by 1 - K |dq/dtheta| = 0.86) and never crosses it; the bracket stayed
     [lower, ~theta*] and the lower bound came back after 60 iterations (theta = -15 on the friction drive)."""
     controller = RULController(rul_ref=12.0, eta=0.05, gain=0.01, lower=-0.9)
@@ -719,7 +719,7 @@ def test_rul_controller_on_the_friction_drive(fd, estimate):
 
 @pytest.mark.slow  # about 1 s: a dozen Monte Carlo predictions of 1000 draws over 1 h
 def test_rul_controller_on_seed_2_at_7_hours_finds_the_boundary_not_the_lower_bound(fd):
-    """Issue 22, the case reported: examples/friction_drive.py, seed 2, the decision at 7.0 h (RUL_ref = 1 h, from
+    """A regression case: examples/friction_drive.py, seed 2, the decision at 7.0 h (RUL_ref = 1 h, from
     theta0 = -2.895).  The EKF's (alpha, m, D) estimate then, as the example had it; the controller used to crawl
     to theta* = -2.999 from above for 60 iterations and return theta = -15, applied for 30 min."""
     mean = np.array([416.6, 17.10, 4.2640583403589662, 2.0063625341882931e-06, 3.8849438543091100e+06])

@@ -1,4 +1,4 @@
-"""What a model may hold (issue 22): names not markup, physical domains, a strict DSL, bounded model files.
+"""What a model may hold: names not markup, physical domains, a strict DSL, bounded model files.
 
 Each rule is checked where the model reads its elements and bonds, so the DSL, a graph built with
 networkx and a JSON file obey it alike; each error names the node and the field at fault.
