@@ -47,7 +47,7 @@ DETECTION, PROGNOSIS = DetectionSettings(), PrognosisSettings()  # the library's
 
 
 #: The options of the library's settings whose names differ from the settings' (``--`` + the name otherwise).
-OPTIONS = {"method": "--filter", "laws": "--degradation", "candidates": "--candidate"}
+OPTIONS = {"method": "--filter", "laws": "--degradation", "candidates": "--candidate", "failures": "--fail"}
 
 
 def _option(setting: str) -> str:

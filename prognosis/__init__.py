@@ -33,7 +33,8 @@ from .degradation import (CustomDegradation, ExponentialDegradation, LinearDegra
 from .metrics import alpha_lambda, prognostic_horizon, relative_accuracy, relative_rmse, rmad
 from .monitor import HealthMonitor, MonitorResult
 from .isolation import IsolatingMonitor, IsolationResult
-from .pipeline import MAX_PARTICLES, PrognosisSettings, filter_step, prognose, rul_horizon
+from .pipeline import (MAX_PARTICLES, PrognosisSettings, check_candidate, check_failures, filter_step, prognose,
+                       rul_horizon)
 from .observation import ObservationModel, observation_model
 from .likelihood import ResidualNoise
 from .particle_filter import ParticleFilter, StepDiagnostics, VarianceAdaptation
@@ -45,7 +46,7 @@ __all__ = [
     "CustomDegradation", "ExponentialDegradation", "HealthMonitor", "IsolatingMonitor", "IsolationResult",
     "LinearDegradation", "MAX_PARTICLES", "MonitorResult", "ObservationModel", "ParticleFilter", "PowerDegradation",
     "PrognosisError", "PrognosisSettings", "RULDistribution", "RULPredictor", "ResampleMoveFilter", "ResidualNoise",
-    "StepDiagnostics", "VarianceAdaptation", "alpha_lambda", "degradation_model", "effective_sample_size",
-    "filter_step", "observation_model", "predict_rul", "prognose", "prognostic_horizon", "relative_accuracy",
-    "relative_rmse", "rmad", "rul_horizon",
+    "StepDiagnostics", "VarianceAdaptation", "alpha_lambda", "check_candidate", "check_failures",
+    "degradation_model", "effective_sample_size", "filter_step", "observation_model", "predict_rul", "prognose",
+    "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad", "rul_horizon",
 ]

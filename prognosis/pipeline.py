@@ -39,7 +39,8 @@ from .errors import PrognosisError
 from .isolation import HORIZON_STEPS, LAWS, METHODS, IsolatingMonitor, IsolationResult
 from .rul import check_horizon
 
-__all__ = ["MAX_PARTICLES", "PrognosisSettings", "filter_step", "prognose", "rul_horizon"]
+__all__ = ["MAX_PARTICLES", "PrognosisSettings", "check_candidate", "check_failures", "filter_step", "prognose",
+           "rul_horizon"]
 
 #: Particles per hypothesis at most: the filter holds (hypotheses, particles) arrays at every step.
 MAX_PARTICLES = 100_000
@@ -137,6 +138,60 @@ def filter_step(record: Record, window: int | None = None, dt: float | None = No
     return chosen
 
 
+def check_failures(failures: Mapping[str, float], parameters: Mapping[str, float],
+                   domains: Mapping[str, tuple] | None = None, laws: Sequence[str] = LAWS) -> None:
+    """Each failure value inside its parameter's physical domain, not its nominal value, and of the nominal's
+    sign when the only law is exponential (which keeps the sign); a :class:`~bondgraph.errors.SettingError`
+    (``failures``) naming the parameter.
+
+    >>> check_failures({"b": -1.0}, {"b": 1e-4}, {"b": (0.0, float("inf"))})
+    Traceback (most recent call last):
+    ...
+    bondgraph.errors.SettingError: failures b=-1: outside the physical domain (0, inf) the model declares for 'b'
+    """
+    for name, value in failures.items():
+        if name not in parameters:
+            raise SettingError("failures", f"{{setting}} {name}={value:g}: the model has no parameter {name!r} "
+                                           f"(parameters: {', '.join(parameters)})")
+        lo, hi = (domains or {}).get(name, (-math.inf, math.inf))
+        if not lo <= value <= hi:
+            raise SettingError("failures", f"{{setting}} {name}={value:g}: outside the physical domain ({lo:g}, "
+                                           f"{hi:g}) the model declares for {name!r}")
+        if value == parameters[name]:
+            raise SettingError("failures", f"{{setting}} {name}={value:g} equals the nominal value of {name!r}: the "
+                                           "failure value must differ from it")
+        if list(laws) == ["exponential"] and value * parameters[name] <= 0:
+            raise SettingError("failures", f"{{setting}} {name}={value:g}: an exponential degradation keeps the sign "
+                                           f"of {name!r} (nominal {parameters[name]:g}); the failure value must have "
+                                           "the same sign")
+
+
+def check_candidate(candidate: str, arrs: Sequence, failures: Mapping[str, float],
+                    direction: str | None = None) -> str:
+    """A named candidate that some ARR is sensitive to, with a failure value on the ``direction`` side of its
+    nominal value (when given); returns the direction.  A :class:`~bondgraph.errors.SettingError` names what
+    is wrong (``candidates``, ``failures`` or ``direction``)."""
+    from diagnosis import signature_matrix
+
+    if not any(candidate in a.parameters for a in arrs):
+        rows = signature_matrix(arrs)
+        raise SettingError("candidates", f"{{setting}} {candidate!r}: no ARR is sensitive to it, so it cannot be "
+                                         f"monitored (detectable parameters: "
+                                         f"{[r for r, d in zip(rows.rows, rows.detectable) if d]})")
+    if candidate not in failures:
+        raise SettingError("candidates", f"{{setting}} {candidate!r}: give its failure value ({{setting:failures}} "
+                                         f"{candidate}=VALUE)")
+    nominal = next(a.values[candidate] for a in arrs if candidate in a.parameters)
+    inferred = "up" if failures[candidate] > nominal else "down"
+    if direction is not None and direction != inferred:
+        side = "above" if inferred == "up" else "below"
+        raise SettingError("direction", f"{{setting:failures}} {failures[candidate]:g} is on the wrong side of the "
+                                        f"nominal value {nominal:g} of {candidate!r} for {{setting}} {direction}: it "
+                                        f"lies {side} nominal; give {{setting}} {inferred} (or leave {{setting}} out: "
+                                        f"it follows from the failure value)")
+    return inferred
+
+
 def rul_horizon(dt: float, horizon: float | None, particles: int, hypotheses: int) -> float:
     """The RUL horizon (s): ``horizon``, by default :data:`~prognosis.isolation.HORIZON_STEPS` filter steps,
     within the predictors' limits (:func:`~prognosis.rul.check_horizon`) before any filter runs.
@@ -179,6 +234,7 @@ def prognose(arrs: Sequence, record, failures: Mapping[str, float], settings: Pr
     """
     settings = settings or PrognosisSettings()
     arrs = list(arrs)
+    check_failures(failures, {p: a.values[p] for a in arrs for p in a.parameters}, domains, settings.laws)
     record = as_record(record, list(dict.fromkeys(s for a in arrs for s in a.signals)))
     detection = settings.detection
     healthy = calibrate(arrs, record, detection)

@@ -112,7 +112,10 @@ def laws_of(args) -> list:
 
 
 def failures_of(args, parameters: dict, domains: dict) -> dict:
-    """``--fail`` as {parameter: failure value}: ``PARAM=VALUE`` items, or one VALUE for ``--candidate``."""
+    """``--fail`` as {parameter: failure value}: ``PARAM=VALUE`` items, or one VALUE for ``--candidate``, checked
+    by the library (:func:`prognosis.check_failures`)."""
+    from prognosis import check_failures
+
     if args.candidate is not None and args.candidate not in parameters:
         raise UsageError(f"--candidate {args.candidate!r}: the model has no such parameter "
                          f"(parameters: {', '.join(parameters)})")
@@ -123,43 +126,21 @@ def failures_of(args, parameters: dict, domains: dict) -> dict:
         if args.candidate is None or len(bare) > 1:
             raise UsageError(f"--fail {bare[0]}: give PARAM=VALUE (repeatable), or one VALUE with --candidate")
         failures.update(assignments([f"{args.candidate}={bare[0]}"], parameters, "--fail"))
-    for name, value in failures.items():
-        lo, hi = domains.get(name, (-math.inf, math.inf))
-        if not lo <= value <= hi:
-            raise UsageError(f"--fail {name}={value:g}: outside the physical domain ({lo:g}, {hi:g}) the model "
-                             f"declares for {name!r}")
-        if value == parameters[name]:
-            raise UsageError(f"--fail {name}={value:g} equals the nominal value of {name!r}: the failure value must "
-                             "differ from it")
+    check_failures(failures, parameters, domains, laws_of(args))
     return failures
 
 
 def candidates_of(args, arrs: list, failures: dict, parameters: dict) -> list | None:
-    """``--candidate`` checked against the model, the failure values, the ARRs and ``--direction``; None without it."""
-    from diagnosis.signatures import signature_matrix
+    """``--candidate`` checked by the library against the ARRs, the failure values and ``--direction``
+    (:func:`prognosis.check_candidate`); None without it."""
+    from prognosis import check_candidate
 
-    for name, value in failures.items():
-        if laws_of(args) == ["exponential"] and value * parameters[name] <= 0:
-            raise UsageError(f"--fail {name}={value:g}: an exponential degradation keeps the sign of {name!r} "
-                             f"(nominal {parameters[name]:g}); the failure value must have the same sign")
     if args.candidate is None:
         if args.direction is not None:
             raise UsageError("--direction checks the failure value of --candidate: give --candidate too")
         return None
-    name = args.candidate
-    if not any(name in a.parameters for a in arrs):
-        rows = signature_matrix(arrs)
-        raise UsageError(f"--candidate {name!r}: no ARR is sensitive to it, so it cannot be monitored "
-                         f"(detectable parameters: {[r for r, d in zip(rows.rows, rows.detectable) if d]})")
-    if name not in failures:
-        raise UsageError(f"--candidate {name!r}: give its failure value (--fail {name}=VALUE)")
-    inferred = "up" if failures[name] > parameters[name] else "down"
-    if args.direction is not None and args.direction != inferred:
-        side = "above" if inferred == "up" else "below"
-        raise UsageError(f"--fail {failures[name]:g} is on the wrong side of the nominal value {parameters[name]:g} of "
-                         f"{name!r} for --direction {args.direction}: it lies {side} nominal; give --direction "
-                         f"{inferred} (or leave --direction out: it follows from --fail)")
-    return [name]
+    check_candidate(args.candidate, arrs, failures, args.direction)
+    return [args.candidate]
 
 
 def assignments(items: Sequence[str] | None, parameters: dict, option: str) -> dict:

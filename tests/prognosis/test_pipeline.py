@@ -11,7 +11,8 @@ from bondgraph import SettingError, simulate
 from bondgraph.io import to_json
 from bondgraph.library import rlc_circuit
 from diagnosis import DetectionSettings, Record, add_noise, as_record, derive_arrs, read_csv
-from prognosis import PrognosisSettings, filter_step, prognose, rul_horizon
+from prognosis import PrognosisSettings, check_candidate, check_failures, filter_step, prognose, rul_horizon
+from prognosis.isolation import LAWS
 
 
 @pytest.fixture(scope="module")
@@ -70,3 +71,26 @@ def test_the_filter_step_and_the_horizon_are_checked_against_the_record():
     assert rul_horizon(0.1, None, 500, 3) == pytest.approx(200.0)
     with pytest.raises(SettingError, match=r"^horizon 1e\+12: .*MAX_HORIZON_STEPS"):
         rul_horizon(0.1, 1e12, 500, 3)
+
+
+def test_failure_values_and_candidates_are_checked_by_the_library(files):
+    bg = files[0]
+    arrs = derive_arrs(bg)
+    parameters = bg.parameters
+    for failures, domains, laws, message in [
+            ({"R": 10.0}, bg.domains, LAWS, "equals the nominal value of 'R'"),
+            ({"R": -5.0}, bg.domains, LAWS, r"outside the physical domain \(0, inf\)"),
+            ({"R": -5.0}, None, ("exponential",), "an exponential degradation keeps the sign"),
+            ({"Q": 1.0}, bg.domains, LAWS, "the model has no parameter 'Q'")]:
+        with pytest.raises(SettingError, match=message) as caught:
+            check_failures(failures, parameters, domains, laws)
+        assert caught.value.setting == "failures"
+    with pytest.raises(SettingError, match=r"^candidates 'R': give its failure value \(failures R=VALUE\)"):
+        check_candidate("R", arrs, {"L": 2.0})
+    with pytest.raises(SettingError, match=r"wrong side of the nominal value 10 of 'R' for direction down") as caught:
+        check_candidate("R", arrs, {"R": 20.0}, "down")
+    assert caught.value.setting == "direction"
+    assert check_candidate("R", arrs, {"R": 20.0}) == "up" and check_candidate("R", arrs, {"R": 5.0}) == "down"
+    with pytest.raises(SettingError, match="failures R=10 equals the nominal value"):  # prognose checks them too
+        prognose(arrs, {"t": np.linspace(0, 1, 101), "V": np.ones(101), "i": np.zeros(101), "v_C": np.ones(101)},
+                 {"R": 10.0})
