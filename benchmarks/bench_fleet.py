@@ -97,7 +97,7 @@ from prognosis.hypotheses import Hypothesis, rate_prior  # noqa: E402
 from prognosis.metrics import mean_relative_accuracy, relative_accuracy  # noqa: E402
 from prognosis.monitor import filter_stride  # noqa: E402
 from prognosis.observation import observation_model  # noqa: E402
-from prognosis.streams import AssetStreams  # noqa: E402
+from prognosis.random_streams import AssetStreams  # noqa: E402
 
 CASE = tb.CASES["b-md"]
 # the stream's case: the same law 8x slower from t = 280 s, failing at t = 999 s, so that 10^5 samples

@@ -173,7 +173,7 @@ def layout(bg: BondGraphLike, causality: str | Causality | None = None) -> Drawi
         None draws the acausal bond graph (no strokes).  ``"integral"``
         assigns integral causality.  ``"derivative"`` assigns derivative
         causality with the detectors dualized as the diagnosis does (as many
-        as causality allows, like :func:`diagnosis.arrs.derive_arrs`).
+        as causality allows, like :func:`diagnosis.derivation.derive_arrs`).
         A :class:`~bondgraph.causality.Causality` is drawn as given; bonds it
         could not assign (conflicts) get no stroke.
 

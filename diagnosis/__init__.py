@@ -6,8 +6,8 @@
 ['ARR_1_1', 'ARR_1_2', 'ARR_MSO_1']
 """
 
-from .arrs import derive_arrs, evaluable
-from .relation import ARR, ARRWarning
+from .derivation import derive_arrs, evaluable
+from .arr import ARR, ARRWarning
 from .residuals import ARRError
 from .deltas import delta
 from .detection import Evaluation, evaluate, noise_margin, robust_std
@@ -17,7 +17,7 @@ from .monitoring import Detection, consistent_faults, detect
 from .elimination import structural_arrs, unreached
 from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, compile_interval
 from .signals import Record, RecordError, RecordWarning, add_noise, as_record, check_signals, read_csv
-from .resampling import resample
+from .uniform_grid import resample
 from .signatures import SignatureMatrix, signature_matrix
 from .streaming import StreamChunk, StreamingEvaluation
 from .structural import StructuralLimitError, StructuralModel, structural_model

@@ -79,7 +79,7 @@ class Evaluation:
 
     Examples
     --------
-    Returned by :func:`evaluate` (or :meth:`ARR.evaluate <diagnosis.arrs.ARR.evaluate>`):
+    Returned by :func:`evaluate` (or :meth:`ARR.evaluate <diagnosis.derivation.ARR.evaluate>`):
 
     >>> from bondgraph import simulate
     >>> from bondgraph.library import rlc_circuit

@@ -51,7 +51,7 @@ from bondgraph.laws import signed_power_inverse, solve_for
 from bondgraph.structure import T, require_model
 
 from .junctions import junction_arrs
-from .relation import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
+from .arr import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
                        parameter_intervals, split_relation, uncertain_structure, written_without_integrals)
 from .structural import StructuralLimitError, StructuralModel, sensor_fault, structural_model
 

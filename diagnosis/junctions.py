@@ -15,7 +15,7 @@ After Samantaray, Djeziri and Ould Bouamama's BG-LFT:
 4. the uncertain parameters split each ARR into a nominal part ``r_n``
    (Psi_1, nominal values) and an uncertain part Psi_2 in the multiplicative
    deviations ``delta_<param>``, true value ``value * (1 + delta)``
-   (:func:`diagnosis.relation.split_relation`).
+   (:func:`diagnosis.arr.split_relation`).
 
 An integral of measured signals is a random walk of their noise, and it assumes the storage was
 empty at the start of the record.  With ``integrals="avoid"`` (the default of
@@ -43,7 +43,7 @@ from bondgraph.causality import diagnosis_causality
 from bondgraph.equations import causal_equations, substitute
 from bondgraph.structure import Structure, T, require_model, signal_function
 
-from .relation import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
+from .arr import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
                        parameter_intervals, split_relation, uncertain_structure, written_without_integrals)
 
 __all__ = ["junction_arrs"]

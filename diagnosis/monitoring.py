@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .arrs import derive_arrs
+from .derivation import derive_arrs
 from .detectability import Detectability, detectability, summary
 from .calibration import (CALIBRATION_SHARE, SAFETY, START_SHARE, DetectionSettings, calibration_end, check_healthy,
                           quiet_margin)

@@ -44,7 +44,7 @@ from bondgraph.causality import diagnosis_causality
 from bondgraph.errors import ModelError
 from bondgraph.structure import require_model
 
-from .arrs import ARR, ARRWarning, derive_arrs
+from .derivation import ARR, ARRWarning, derive_arrs
 from .deltas import latex, mathml
 from .elimination import unreached
 from .signatures import SignatureMatrix, signature_matrix
@@ -70,7 +70,7 @@ class _Content:
 def arr_report(bg: BondGraph, format: str = "md", *, arrs: list[ARR] | None = None) -> str:
     """The ARR report of a bond graph as a string in ``format`` (``"md"``, ``"html"`` or ``"tex"``).
 
-    ``arrs`` defaults to :func:`~diagnosis.arrs.derive_arrs` of the model; candidates that cannot be
+    ``arrs`` defaults to :func:`~diagnosis.derivation.derive_arrs` of the model; candidates that cannot be
     expressed in known variables are listed as notes.
     """
     require_model(bg, "arr_report")

@@ -268,13 +268,13 @@ def _check_numeric(name: str, nominal: sp.Expr, uncertain: sp.Expr, integrals: M
 
 
 def compile_arr(arr) -> CompiledARR:
-    """Compile an :class:`~diagnosis.arrs.ARR`: its signals, derivatives and integrals become point symbols.
+    """Compile an :class:`~diagnosis.derivation.ARR`: its signals, derivatives and integrals become point symbols.
 
     A signal ``x(t)`` becomes the symbol ``x``, its ``n``-th time derivative ``dn_x`` and the ``k``-th integral
     (in sorted order) ``int<k>`` (with ``_`` appended while the name is a signal's or another symbol's);
     nominal parameter values are substituted, the ``delta_*`` symbols of the uncertain part are kept.
 
-    Each call compiles afresh; :attr:`ARR.compiled <diagnosis.arrs.ARR.compiled>` keeps one per ARR, so that
+    Each call compiles afresh; :attr:`ARR.compiled <diagnosis.derivation.ARR.compiled>` keeps one per ARR, so that
     its lambdified functions are built once.
 
     Raises

@@ -22,7 +22,7 @@ need not be uniform.
   accurate than the interior.  It needs uniform sampling (every step within
   a relative 1e-6 of the median step) and refuses an uneven grid with a
   :class:`RecordError` suggesting ``method="central"`` or
-  :func:`diagnosis.resampling.resample`, which puts a record on a uniform grid.
+  :func:`diagnosis.uniform_grid.resample`, which puts a record on a uniform grid.
 * ``derivative(method="central")`` uses :func:`numpy.gradient` with
   second-order differences in the interior and at the ends, second-order
   accurate on uneven grids too.  Order 2 applies it twice: exact for

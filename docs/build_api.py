@@ -44,14 +44,14 @@ PACKAGES = [
     ("prognosis.identification", "linear Gaussian models by EM, fault trend, posterior predictive", []),
     ("prognosis.lifecontrol", "energy-driven deterioration, Chebyshev bounds, Monte Carlo RUL, RUL control", []),
     ("prognosis.fleet", "many assets in one vectorized filter: streaming, checkpoints, closed-form RUL, tables",
-     ["prognosis.streams", "prognosis.fleet.rul"]),
+     ["prognosis.random_streams", "prognosis.fleet.rul"]),
     ("bgphm", "command line, plots and long runs", ["bgphm.plotting", "bgphm.runs"]),
     ("bgphm.fleet", "fleets on Dask workers, from records to Parquet tables (guide: [docs/fleet.md](fleet.md))", []),
 ]
 #: Modules first in this order within each package (the rest follow alphabetically).
 MODULE_ORDER = ["bondgraph.model", "bondgraph.structure", "bondgraph.causality", "bondgraph.equations",
                 "bondgraph.simulation", "bondgraph.control", "bondgraph.errors", "bondgraph.library", "bondgraph.io",
-                "bondgraph.drawing", "diagnosis.arrs", "diagnosis.deltas", "diagnosis.signatures",
+                "bondgraph.drawing", "diagnosis.derivation", "diagnosis.deltas", "diagnosis.signatures",
                 "diagnosis.detection", "diagnosis.signals", "diagnosis.intervals.rounding",
                 "diagnosis.intervals.kernels", "diagnosis.intervals.interval", "diagnosis.intervals.functions",
                 "diagnosis.intervals.compiler", "prognosis.observation", "prognosis.degradation",

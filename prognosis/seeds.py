@@ -37,7 +37,7 @@ FILTER = 0  # the particle filter: initial particles, moves, resampling
 RUL = 1  # the RUL predictor of a HealthMonitor
 RATE_PRIOR = 2  # the initial rate particles of an IsolatingMonitor's hypotheses
 PREDICTORS = 3  # an IsolatingMonitor's RUL predictors, one per hypothesis row: key (PREDICTORS, row)
-ASSETS = 4  # a fleet's per-asset streams (prognosis.streams): key (ASSETS, asset key)
+ASSETS = 4  # a fleet's per-asset streams (prognosis.random_streams): key (ASSETS, asset key)
 RESOLUTION = 5  # an IsolatingMonitor's spread of a RUL over the filter step: key (RESOLUTION, prediction)
 
 

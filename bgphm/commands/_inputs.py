@@ -22,7 +22,7 @@ __all__ = [
 
 
 def load_arrs(spec: ModelSpec, progress: Progress, name: str | None, integrals: str = "avoid") -> list:
-    from diagnosis.arrs import ARRWarning, derive_arrs
+    from diagnosis.derivation import ARRWarning, derive_arrs
 
     progress(f"deriving the ARRs of {spec.model.name!r}")
     with warnings.catch_warnings(record=True) as caught:
@@ -52,7 +52,7 @@ def load_record(path, arrs: list, progress: Progress, resample: bool = False, ex
             warnings.simplefilter("always", RecordWarning)
             record = read_csv(path, signals)
             if resample:
-                from diagnosis.resampling import resample as uniform
+                from diagnosis.uniform_grid import resample as uniform
 
                 record = uniform(record)
                 progress(f"resampled {path} to a uniform step of {record.dt:g} s ({len(record)} samples)")

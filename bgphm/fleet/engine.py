@@ -7,7 +7,7 @@ the ARRs and the :class:`~prognosis.fleet.FleetMonitor` once (:func:`~bgphm.flee
 reads its shard's records one at a time, runs them through the monitor and writes the tables to
 Parquet (:mod:`bgphm.fleet.store`); only a small summary comes back to the driver.
 
-Randomness is keyed by (seed, asset, step) (:mod:`prognosis.streams`), so an asset's rows are the
+Randomness is keyed by (seed, asset, step) (:mod:`prognosis.random_streams`), so an asset's rows are the
 same in any shard, on any worker, and in the serial run.
 """
 

@@ -198,7 +198,7 @@ def monitor_for(spec: FleetSpec) -> tuple[Built, bool]:
 def build(spec: FleetSpec) -> Built:
     """Load the model, derive its ARRs and build the monitor of ``spec`` (no cache)."""
     from bondgraph.io import load_model
-    from diagnosis.arrs import ARRWarning, derive_arrs
+    from diagnosis.derivation import ARRWarning, derive_arrs
     from prognosis.degradation import degradation_model
     from prognosis.fleet import FleetMonitor
 

@@ -7,7 +7,7 @@ Layout of a table (under the staging area while a run goes, published whole at i
     estimates/bucket=.../part-....parquet
     rul/bucket=.../part-....parquet
 
-An asset's bucket is ``asset_key(asset) % buckets`` (:func:`prognosis.streams.asset_key`, a hash
+An asset's bucket is ``asset_key(asset) % buckets`` (:func:`prognosis.random_streams.asset_key`, a hash
 that is the same in every process), so all of an asset's rows are in one bucket, and in one file
 (one shard holds the asset).  Each file is written whole or not at all (:func:`bgphm.files.write_with`:
 a hidden temporary file, then a rename), and readers skip hidden files.  pandas reads a published
@@ -27,7 +27,7 @@ from bgphm.errors import FleetError
 from bgphm.files import write_with
 from prognosis.fleet import FleetResult
 from prognosis.fleet.results import COLUMNS, INTEGER, TABLES, TEXT
-from prognosis.streams import asset_key
+from prognosis.random_streams import asset_key
 
 from .outdir import BUCKET, MANIFEST, PART, STAGING, file_digest, read_manifest
 from .sources import pyarrow_modules

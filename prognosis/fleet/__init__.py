@@ -3,7 +3,7 @@
 * :class:`FleetMonitor` (:mod:`.monitor`): detection, isolation by evidence, estimation and RUL per
   asset, each asset starting at its own alarm;
 * :class:`FleetFilter` (:mod:`.filter`): the particle arrays of every (asset, hypothesis) row and the
-  vectorized SIR step on per-asset random streams (:mod:`prognosis.streams`);
+  vectorized SIR step on per-asset random streams (:mod:`prognosis.random_streams`);
 * :mod:`.rul`: closed-form crossing times and per-asset RUL summaries;
 * :class:`FleetResult` (:mod:`.results`): the tidy tables (alarms, estimates, RUL);
 * :func:`write_checkpoint`, :func:`read_checkpoint` (:mod:`.checkpoint`): a stream's state on disk as

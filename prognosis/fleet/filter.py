@@ -12,7 +12,7 @@ systematic resampling at every step (so the weights are equal between steps and 
 plain means).  Systematic resampling here counts offspring in O(N) per row (``ceil(N C_i - U) -
 ceil(N C_{i-1} - U)`` copies of particle ``i``) instead of merging sorted uniforms.
 
-Every random number of a row at a step comes from :class:`~prognosis.streams.AssetStreams` keyed by
+Every random number of a row at a step comes from :class:`~prognosis.random_streams.AssetStreams` keyed by
 (seed, asset, step) with the hypothesis as lane, and no operation mixes rows (no BLAS product, no
 reduction across rows), so a row's numbers are bitwise the same in any batch.
 """
@@ -25,7 +25,7 @@ import numpy as np
 from scipy.special import ndtr
 
 from ..degradation import ExponentialDegradation, LinearDegradation
-from ..streams import MOVES, STARTS
+from ..random_streams import MOVES, STARTS
 
 __all__ = ["QUANTILES", "ROW_STATE", "FleetFilter", "FleetStep", "law_step", "systematic_indices"]
 
@@ -67,7 +67,7 @@ class FleetFilter:
 
     Examples
     --------
-    >>> from prognosis.streams import AssetStreams
+    >>> from prognosis.random_streams import AssetStreams
     >>> pf = FleetFilter([LinearDegradation()], [[lambda theta, points: theta]], noise_std=[0.05],
     ...                  n_particles=200, dt=1.0, inflation=1.0, streams=AssetStreams(0))
     >>> rows = pf.add(["a", "b"], hypothesis=[0, 0], lo=[0.0, 0.0], hi=[2.0, 2.0],

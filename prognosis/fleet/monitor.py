@@ -6,7 +6,7 @@ row of particles per hypothesis (a candidate with a law, from the failure values
 :class:`~prognosis.isolation.IsolatingMonitor`'s isolation by evidence; a single named hypothesis is one row
 per asset).  From then on all started
 rows step together, each at its own filter step, on random streams keyed by (seed, asset, step)
-(:mod:`prognosis.streams`), so an asset's results are bitwise the same alone, in any batch and on
+(:mod:`prognosis.random_streams`), so an asset's results are bitwise the same alone, in any batch and on
 any worker.  The RUL is predicted in closed form (:mod:`prognosis.fleet.rul`) and mixed over the
 hypotheses by posterior probability.
 
@@ -30,7 +30,7 @@ from ..monitor import filter_stride
 from ..observation import observation_model
 from .. import seeds
 from ..rul import RULPredictor
-from ..streams import RATES, AssetStreams, asset_key
+from ..random_streams import RATES, AssetStreams, asset_key
 from .checkpoint import check_state, read_checkpoint, write_checkpoint
 from .filter import ROW_STATE, FleetFilter
 from .live import LiveAsset

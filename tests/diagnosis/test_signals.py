@@ -18,7 +18,7 @@ from diagnosis.signals import (
     derivative,
     read_csv,
 )
-from diagnosis.resampling import resample
+from diagnosis.uniform_grid import resample
 
 DT = 0.01
 T = np.arange(0.0, 10.0 + DT / 2, DT)

@@ -11,7 +11,7 @@ from prognosis.fleet import FleetFilter, FleetMonitor, FleetResult
 from prognosis.fleet.filter import systematic_indices
 from prognosis.fleet.rul import crossing_times, summarize
 from prognosis.rul import RULDistribution, RULPredictor
-from prognosis.streams import AssetStreams, asset_key
+from prognosis.random_streams import AssetStreams, asset_key
 
 T = np.linspace(0.0, 2.0, 1001)
 ONSETS = {"c1": 0.3, "c2": None, "c3": 0.8, "c4": 0.5}

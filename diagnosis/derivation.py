@@ -9,7 +9,7 @@ Two routes write relations, and :func:`derive_arrs` combines them:
    fault the structure lets detect and tells apart every pair it lets tell apart, within a derivative
    order.
 
-Each ARR keeps the BG-LFT split ``r_n + Psi_2 = 0`` (:mod:`diagnosis.relation`), names the equations it
+Each ARR keeps the BG-LFT split ``r_n + Psi_2 = 0`` (:mod:`diagnosis.arr`), names the equations it
 comes from (``origin``) and how it is written (``form``), and says which derivatives and integrals
 it needs.  Faults are the element parameters and, by default, one per sensor (a bias or drift on its
 read-out).
@@ -31,10 +31,10 @@ from bondgraph import BondGraph
 from bondgraph.memo import ContentCache, content_key
 from bondgraph.structure import require_model
 
-from . import elimination, relation, structural
+from . import arr as arr_module, elimination, structural
 from .elimination import MAX_ORDER, structural_arrs
 from .junctions import junction_arrs
-from .relation import ARR, ARRWarning
+from .arr import ARR, ARRWarning
 from .residuals import ARRError
 
 __all__ = ["ARR", "ARRError", "ARRWarning", "derive_arrs", "evaluable"]
@@ -127,7 +127,7 @@ def _key(bg, *options):
     """The model's content, the options and the search budgets: everything the derivation depends on."""
     budgets = (elimination.MAX_ELIMINATIONS, elimination.MAX_SEARCHES, elimination.MAX_SEARCH_EQUATIONS,
                elimination.MAX_OPERATIONS, elimination.ISOLATION_LIMIT, structural.MSO_SEARCH_LIMIT,
-               relation.TIDY_LIMIT)
+               arr_module.TIDY_LIMIT)
     return content_key(("derive_arrs", type(bg).__name__, getattr(bg, "name", None), bg.structure(), options,
                         budgets))
 
