@@ -32,7 +32,7 @@ from bgphm.demo import prepare_demo
 from bondgraph.io import load_model
 from diagnosis import derive_arrs
 from diagnosis.signals import read_csv
-from prognosis.metrics import weighted_quantiles
+from prognosis.weighted import weighted_quantiles
 
 HEALTHY = (1.0, 9.5)   # s: the demo's --calibrate stretch (after the start-up second)
 STEP = 100             # samples per filter step (0.1 s at 1 kHz, the demo's --dt)

@@ -39,7 +39,7 @@ PACKAGES = [
     ("diagnosis", "ARRs, intervals, thresholds, signatures, detection", ["diagnosis.signals"]),
     ("diagnosis.intervals", "outward-rounded interval arithmetic and the sympy-to-interval compiler", []),
     ("prognosis", "degradation laws, observation model, particle filter, RUL, metrics, health monitoring",
-     ["prognosis.metrics", "prognosis.seeds"]),
+     ["prognosis.metrics", "prognosis.weighted", "prognosis.ranking", "prognosis.seeds"]),
     ("prognosis.statespace", "discrete models, Kalman filters, bootstrap filter, consistency, look-ahead, ROS-ELM", []),
     ("prognosis.identification", "linear Gaussian models by EM, fault trend, posterior predictive", []),
     ("prognosis.lifecontrol", "energy-driven deterioration, Chebyshev bounds, Monte Carlo RUL, RUL control", []),
@@ -57,7 +57,8 @@ MODULE_ORDER = ["bondgraph.model", "bondgraph.structure", "bondgraph.causality",
                 "diagnosis.intervals.compiler", "prognosis.observation", "prognosis.degradation",
                 "prognosis.particle_filter", "prognosis.resample_move", "prognosis.likelihood", "prognosis.wander",
                 "prognosis.rul",
-                "prognosis.monitor", "prognosis.metrics", "bgphm.cli", "bgphm.plotting", "bgphm.runs"]
+                "prognosis.monitor", "prognosis.metrics", "prognosis.weighted", "prognosis.ranking", "bgphm.cli",
+                "bgphm.plotting", "bgphm.runs"]
 #: Names documented for a package that has no useful ``__all__``.
 EXPLICIT = {"bgphm": ["bgphm.cli.main"]}
 

@@ -52,7 +52,7 @@ from bgphm.plotting import pyplot, save_figure, write_figures  # noqa: E402
 from bgphm.runs import over_seeds, progress_line, run_main  # noqa: E402
 from bondgraph.library import THREE_TANK, three_tank  # noqa: E402
 from diagnosis import derive_arrs, noise_margin, signature_matrix  # noqa: E402
-from prognosis.metrics import format_ranking, rank_with_ties  # noqa: E402
+from prognosis.ranking import format_ranking, rank_with_ties  # noqa: E402
 from prognosis.statespace import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter,  # noqa: E402
                                   SeriesForecaster, StrongTracking, UnscentedKalmanFilter, discretize, predict_ahead)
 

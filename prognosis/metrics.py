@@ -14,9 +14,8 @@ offline evaluation of prognostic performance", Int. J. Prognostics and Health
 Management 1(1), which also defines the prognostic horizon, the cumulative
 relative accuracy and the convergence of a metric, given here too.
 
-Beside them, :func:`rank_with_ties` and :func:`format_ranking` order methods
-compared on the same runs by a score, printing as ties the differences the
-runs do not resolve or that are too small to matter.
+The weighted medians and quantiles they use are in :mod:`prognosis.weighted`; ranking methods by a
+score is :mod:`prognosis.ranking`.
 
 Conventions: the last axis of a sample array holds the particles (or the
 time steps ``k`` for a sequence); every leading axis (assets, prediction
@@ -36,116 +35,23 @@ Example
 from __future__ import annotations
 
 import warnings
-from collections.abc import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy import stats
 
 from bondgraph.errors import PHMWarning
 
 from .errors import PrognosisError
+from .weighted import last_axis, median_along_last, moved_weights, weights_like
 
 __all__ = [
-    "MetricWarning", "alpha_lambda", "convergence", "cumulative_relative_accuracy", "format_ranking",
-    "mean_relative_accuracy", "mean_rmad", "prognostic_horizon", "rank_with_ties", "relative_accuracy",
-    "relative_rmse", "rmad", "weighted_median", "weighted_quantiles",
+    "MetricWarning", "alpha_lambda", "convergence", "cumulative_relative_accuracy", "mean_relative_accuracy",
+    "mean_rmad", "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad",
 ]
 
 
 class MetricWarning(PHMWarning):
     """A metric undefined at some points (set to NaN there)."""
-
-
-def _weights_like(samples: np.ndarray, weights: ArrayLike | None) -> np.ndarray:
-    """Weights broadcast to ``samples``, checked, each slice along the last axis summing to 1."""
-    if weights is None:
-        return np.full(samples.shape, 1.0 / samples.shape[-1])
-    w = np.broadcast_to(np.asarray(weights, dtype=float), samples.shape)
-    if not np.isfinite(w).all():
-        raise PrognosisError("weights contain NaN or infinite values")
-    if (w < 0).any():
-        raise PrognosisError("weights contain negative values")
-    total = w.sum(axis=-1, keepdims=True)
-    if (total == 0).any():
-        raise PrognosisError("weights sum to 0 along the particle axis")
-    return w / total
-
-
-def _moved_weights(weights: ArrayLike | None, shape: tuple[int, ...], axis: int) -> np.ndarray | None:
-    """Weights broadcast to ``shape`` with ``axis`` moved last; a 1-D vector lies along ``axis``."""
-    if weights is None:
-        return None
-    w = np.asarray(weights, dtype=float)
-    if w.ndim == 1 and len(shape) > 1:
-        w = np.expand_dims(w, tuple(range(1, len(shape) - axis % len(shape))))
-    return np.moveaxis(np.broadcast_to(w, shape), axis, -1)
-
-
-def _last_axis(values: ArrayLike, axis: int) -> np.ndarray:
-    x = np.asarray(values, dtype=float)
-    if x.ndim == 0 or x.shape[axis] == 0:
-        raise PrognosisError(f"need at least one value along axis {axis}, got shape {x.shape}")
-    return np.moveaxis(x, axis, -1)
-
-
-def _weighted_median_last(x: np.ndarray, w: np.ndarray | None) -> np.ndarray:
-    """Weighted median along the last axis (``w`` normalized, or None for ``np.median``)."""
-    if w is None:
-        return np.median(x, axis=-1)
-    n = x.shape[-1]
-    order = np.argsort(x, axis=-1)
-    xs = np.take_along_axis(x, order, axis=-1)
-    cw = np.cumsum(np.take_along_axis(w, order, axis=-1), axis=-1)
-    tol = 4 * n * np.finfo(float).eps
-    lower = np.argmax(cw >= 0.5 - tol, axis=-1)[..., None]
-    upper = np.argmax(cw > 0.5 + tol, axis=-1)[..., None]
-    median = 0.5 * (np.take_along_axis(xs, lower, axis=-1) + np.take_along_axis(xs, upper, axis=-1))[..., 0]
-    return np.where(np.isnan(x).any(axis=-1), np.nan, median)
-
-
-def weighted_median(samples: ArrayLike, weights: ArrayLike | None = None, axis: int = -1) -> np.ndarray | float:
-    """Median of a weighted sample along ``axis``.
-
-    With the samples sorted, ``x_(1) <= ... <= x_(n)``, and ``C_k`` the
-    cumulative normalized weight of the first ``k``:
-
-    ``lower = x_(k)`` for the smallest ``k`` with ``C_k >= 1/2``,
-    ``upper = x_(k)`` for the smallest ``k`` with ``C_k > 1/2``,
-    ``median = (lower + upper) / 2``.
-
-    ``C_k`` within ``4 n eps`` of one half counts as exactly one half, so
-    uniform weights give ``numpy.median`` (the mean of the two middle values
-    for even ``n``) despite rounding in the cumulative sum.  Zero-weight
-    samples are never picked.  Without weights this *is* ``numpy.median``.
-    A slice containing NaN gives NaN.
-
-    Parameters
-    ----------
-    samples : array_like
-    weights : array_like, optional
-        Non-negative; a 1-D vector lies along ``axis``, otherwise broadcastable
-        to ``samples``.  Normalized along ``axis``.
-    axis : int
-        Axis of the samples (default: last).
-
-    Returns
-    -------
-    ndarray or float
-        The input's shape without ``axis``.
-
-    Examples
-    --------
-    >>> float(weighted_median([1.0, 2.0, 3.0, 4.0]))
-    2.5
-    >>> float(weighted_median([1.0, 2.0, 3.0, 4.0], [1, 1, 1, 1]))
-    2.5
-    >>> float(weighted_median([1.0, 2.0, 3.0, 4.0], [1, 1, 3, 1]))
-    3.0
-    """
-    x = _last_axis(samples, axis)
-    w = _moved_weights(weights, np.shape(samples), axis)
-    return _weighted_median_last(x, None if w is None else _weights_like(x, w))[()]
 
 
 def rmad(samples: ArrayLike, weights: ArrayLike | None = None, axis: int = -1) -> np.ndarray | float:
@@ -154,7 +60,7 @@ def rmad(samples: ArrayLike, weights: ArrayLike | None = None, axis: int = -1) -
     ``RMAD(X) = Median_i |X_i - Median_j X_j| / Median_j X_j``
 
     With particle weights both medians are the weighted medians of
-    :func:`weighted_median` (midpoint of the lower and upper weighted medians)
+    :func:`~prognosis.weighted.weighted_median` (midpoint of the lower and upper weighted medians)
     with the same weights.  A zero median gives ``inf`` (or NaN if the
     deviation is also zero); a negative median gives a negative RMAD.
 
@@ -177,12 +83,12 @@ def rmad(samples: ArrayLike, weights: ArrayLike | None = None, axis: int = -1) -
     >>> float(rmad([1.0, 2.0, 3.0, 4.0, 10.0]))  # median 3, deviations 2 1 0 1 7, their median 1
     0.3333333333333333
     """
-    x = _last_axis(samples, axis)
-    w = _moved_weights(weights, np.shape(samples), axis)
-    w = None if w is None else _weights_like(x, w)
-    median = _weighted_median_last(x, w)
+    x = last_axis(samples, axis)
+    w = moved_weights(weights, np.shape(samples), axis)
+    w = None if w is None else weights_like(x, w)
+    median = median_along_last(x, w)
     with np.errstate(invalid="ignore"):
-        deviation = _weighted_median_last(np.abs(x - median[..., None]), w)
+        deviation = median_along_last(np.abs(x - median[..., None]), w)
     with np.errstate(divide="ignore", invalid="ignore"):
         return (deviation / median)[()]
 
@@ -198,7 +104,7 @@ def mean_rmad(rmads: ArrayLike, axis: int = -1) -> np.ndarray | float:
     >>> round(float(mean_rmad([0.1, 0.2, np.nan, 0.3])), 12)
     0.2
     """
-    values = _last_axis(rmads, axis)
+    values = last_axis(rmads, axis)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)  # all-NaN slice -> NaN, documented
         return np.nanmean(values, axis=-1)[()]
@@ -227,7 +133,7 @@ def relative_rmse(estimates: ArrayLike, truth: ArrayLike, axis: int = -1) -> np.
     0.395284707521
     """
     x, x_true = np.broadcast_arrays(np.asarray(estimates, dtype=float), np.asarray(truth, dtype=float))
-    x, x_true = _last_axis(x, axis), np.moveaxis(x_true, axis, -1)
+    x, x_true = last_axis(x, axis), np.moveaxis(x_true, axis, -1)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.sqrt(np.mean(((x - x_true) / x_true) ** 2, axis=-1))[()]
 
@@ -335,10 +241,10 @@ def mass_within(rul_samples: ArrayLike, weights: ArrayLike | None, lower: ArrayL
     >>> float(mass_within([1.0, 2.0, 3.0, np.inf], None, 1.5, 3.0))
     0.5
     """
-    x = _last_axis(rul_samples, -1)
+    x = last_axis(rul_samples, -1)
     lo, hi = np.asarray(lower, dtype=float)[..., None], np.asarray(upper, dtype=float)[..., None]
     x = np.broadcast_to(x, np.broadcast_shapes(x.shape, lo.shape, hi.shape))
-    w = _weights_like(x, weights)
+    w = weights_like(x, weights)
     return np.sum(w * ((x >= lo) & (x <= hi)), axis=-1)[()]
 
 
@@ -408,8 +314,8 @@ def cumulative_relative_accuracy(ra: ArrayLike, weights: ArrayLike | None = None
     >>> round(float(cumulative_relative_accuracy([0.5, 0.9, 1.0], [1, 2, 3])), 12)  # (0.5 + 1.8 + 3) / 6
     0.883333333333
     """
-    values = _last_axis(ra, axis)
-    w = _weights_like(values, _moved_weights(weights, np.shape(ra), axis))
+    values = last_axis(ra, axis)
+    w = weights_like(values, moved_weights(weights, np.shape(ra), axis))
     known = ~np.isnan(values)
     w = np.where(known, w, 0.0)
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -467,136 +373,3 @@ def convergence(times: ArrayLike, metric_values: ArrayLike, t_start: ArrayLike |
     return np.hypot(x_c - start, y_c)[()]
 
 
-def rank_with_ties(scores: Mapping[str, ArrayLike], *, rtol: float = 1e-3,
-                   confidence: float = 0.95) -> list[list[str]]:
-    """Order methods by their mean score, lowest first, in groups of methods the runs do not tell apart.
-
-    The methods are scored on the same runs (seeds), so run ``i`` of every method saw the same
-    data and two methods are compared by their paired differences ``d_i = b_i - a_i``.  Two
-    neighbours in the order are told apart only when the mean difference exceeds both
-
-    * the half-width of the paired t-interval, ``t_{(1 + confidence)/2, n-1} std(d) / sqrt(n)``:
-      the runs resolve it (not checked with a single run);
-    * ``rtol`` times the larger of the two mean scores: a resolution below which a difference does
-      not matter, however consistently the runs show it (filters that linearize one nearly linear
-      step differently differ by 1e-9 in every seed).
-
-    Ties chain: a method joins its predecessor's group when the two are not told apart, so ``<``
-    separates only neighbours that are, and ``=`` may join methods that differ end to end.
-
-    Parameters
-    ----------
-    scores : mapping of str to array (n,) or float
-        Each method's score on each of the same ``n`` runs, lower is better (an MAE, say).
-    rtol : float
-        Relative resolution (default 0.1 %, below the digits a table of such scores shows).
-    confidence : float
-        Level of the paired t-interval, in (0, 1).
-
-    Returns
-    -------
-    list of list of str
-        The groups, best first; each group in the order of its mean scores.
-
-    Raises
-    ------
-    PrognosisError
-        No methods, a method with no or non-finite scores or another number of runs, or ``rtol`` or
-        ``confidence`` out of range.
-
-    Examples
-    --------
-    Two filters 1e-9 apart in every run tie, and both beat a third:
-
-    >>> runs = {"EKF": [0.150, 0.146, 0.148], "STUKF": [0.0300, 0.0270, 0.0285],
-    ...         "STSCKF": [0.0300 - 1e-9, 0.0270 - 1e-9, 0.0285 - 1e-9]}
-    >>> rank_with_ties(runs)
-    [['STSCKF', 'STUKF'], ['EKF']]
-
-    A 2 % difference in the mean that the runs do not resolve (it changes sign between them) is a
-    tie too, and one the runs resolve is not:
-
-    >>> rank_with_ties({"A": [1.0, 2.0, 3.0], "B": [1.2, 1.9, 3.02]})
-    [['A', 'B']]
-    >>> rank_with_ties({"A": [1.0, 2.0, 3.0], "B": [1.04, 2.04, 3.05]})
-    [['A'], ['B']]
-    """
-    if not 0.0 < confidence < 1.0:
-        raise PrognosisError(f"confidence must be in (0, 1), got {confidence!r}")
-    if not rtol >= 0.0:
-        raise PrognosisError(f"rtol must be non-negative, got {rtol!r}")
-    runs = _paired_runs(scores)
-    order = sorted(runs, key=lambda name: runs[name].mean())
-    groups = [[order[0]]]
-    for previous, name in zip(order, order[1:]):
-        if _told_apart(runs[previous], runs[name], rtol, confidence):
-            groups.append([name])
-        else:
-            groups[-1].append(name)
-    return groups
-
-
-def _paired_runs(scores: Mapping[str, ArrayLike]) -> dict[str, np.ndarray]:
-    """Each method's scores as a finite 1-D array, all of one length."""
-    if not scores:
-        raise PrognosisError("scores: no methods to rank")
-    runs = {name: np.atleast_1d(np.asarray(values, float)).reshape(-1) for name, values in scores.items()}
-    first = next(iter(runs))
-    for name, values in runs.items():
-        if values.size == 0 or not np.all(np.isfinite(values)):
-            raise PrognosisError(f"scores of {name!r}: need finite values, got {values.tolist()}")
-        if values.size != runs[first].size:
-            raise PrognosisError(f"scores of {name!r}: {values.size} runs, but {runs[first].size} for {first!r}; "
-                                 "methods are compared run by run")
-    return runs
-
-
-def _told_apart(a: np.ndarray, b: np.ndarray, rtol: float, confidence: float) -> bool:
-    """Whether ``b``'s mean exceeds ``a``'s by more than the resolution and the paired t-interval."""
-    difference = b - a
-    threshold = rtol * max(abs(a.mean()), abs(b.mean()))
-    if difference.size > 1:
-        t = stats.t.ppf(0.5 + 0.5 * confidence, difference.size - 1)
-        threshold = max(threshold, t * difference.std(ddof=1) / np.sqrt(difference.size))
-    return bool(difference.mean() > threshold)
-
-
-def format_ranking(groups: Sequence[Sequence[str]]) -> str:
-    """``"A = B < C"`` from the groups of :func:`rank_with_ties`.
-
-    Parameters
-    ----------
-    groups : sequence of sequences of str
-        Best group first; the members of a group are tied.
-
-    Returns
-    -------
-    str
-
-    Examples
-    --------
-    >>> format_ranking([["STSCKF", "STUKF"], ["EKF"]])
-    'STSCKF = STUKF < EKF'
-    >>> format_ranking(rank_with_ties({"A": [1.0, 2.0], "B": [1.0, 2.0]}))   # equal scores are tied
-    'A = B'
-    """
-    return " < ".join(" = ".join(group) for group in groups)
-
-
-def weighted_quantiles(values: np.ndarray, weights: np.ndarray, levels) -> np.ndarray:
-    """Quantiles along the last axis: the smallest value whose cumulative weight reaches each level.
-
-    ``levels`` in [0, 1]; the output has the shape of ``values`` without its
-    last axis, plus one axis of ``len(levels)``.  ``+inf`` samples (censored
-    RULs) sort last.
-
-    >>> import numpy as np
-    >>> weighted_quantiles(np.array([3.0, 1.0, 2.0]), np.array([0.2, 0.5, 0.3]), (0.5, 0.9)).tolist()
-    [1.0, 3.0]
-    """
-    order = np.argsort(values, axis=-1)
-    sorted_values = np.take_along_axis(values, order, axis=-1)
-    cumulative = np.cumsum(np.take_along_axis(np.broadcast_to(weights, values.shape), order, axis=-1), axis=-1)
-    cumulative = cumulative / cumulative[..., -1:]
-    index = np.stack([np.argmax(cumulative >= level - 1e-12, axis=-1) for level in levels], axis=-1)
-    return np.take_along_axis(sorted_values, index, axis=-1)

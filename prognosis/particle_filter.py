@@ -29,7 +29,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .metrics import rmad, weighted_quantiles
+from .metrics import rmad
+from .weighted import weighted_quantiles
 from .resampling import effective_sample_size, get_scheme, normalize_log_weights
 from .seeds import check_seed
 from .errors import PrognosisError

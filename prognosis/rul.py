@@ -26,7 +26,7 @@ import numpy as np
 from bondgraph.errors import PHMWarning
 
 from .degradation import LinearDegradation
-from .metrics import weighted_quantiles
+from .weighted import weighted_quantiles
 from .seeds import check_seed, generator
 from .errors import PrognosisError
 

@@ -6,9 +6,11 @@ import numpy as np
 import pytest
 
 from prognosis.metrics import (
-    MetricWarning, alpha_lambda, convergence, cumulative_relative_accuracy, format_ranking, mean_relative_accuracy,
-    mean_rmad, prognostic_horizon, rank_with_ties, relative_accuracy, relative_rmse, rmad, weighted_median,
+    MetricWarning, alpha_lambda, convergence, cumulative_relative_accuracy, mean_relative_accuracy, mean_rmad,
+    prognostic_horizon, relative_accuracy, relative_rmse, rmad,
 )
+from prognosis.ranking import format_ranking, rank_with_ties
+from prognosis.weighted import weighted_median
 
 
 # ---------------------------------------------------------------- RMSE (eq. 40)
