@@ -88,7 +88,7 @@ from bgphm.fleet.sources import pyarrow_modules  # noqa: E402
 from bgphm.fleet.spec import build  # noqa: E402
 from diagnosis import derive_arrs  # noqa: E402
 from diagnosis.detection import noise_margin  # noqa: E402
-from diagnosis.signals import add_noise, as_record  # noqa: E402
+from diagnosis.records import add_noise, as_record  # noqa: E402
 from prognosis import HealthMonitor  # noqa: E402
 from prognosis.degradation import ExponentialDegradation  # noqa: E402
 from prognosis.fleet import FleetFilter  # noqa: E402

@@ -31,7 +31,7 @@ import numpy as np
 from bgphm.demo import prepare_demo
 from bondgraph.io import load_model
 from diagnosis import derive_arrs
-from diagnosis.signals import read_csv
+from diagnosis.csv_reading import read_csv
 from prognosis.weighted import weighted_quantiles
 
 HEALTHY = (1.0, 9.5)   # s: the demo's --calibrate stretch (after the start-up second)

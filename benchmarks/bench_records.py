@@ -25,7 +25,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from diagnosis.signals import read_csv  # noqa: E402
+from diagnosis.csv_reading import read_csv  # noqa: E402
 
 
 def write_record(path: Path, rows: int, gaps: float, seed: int = 0) -> None:

@@ -13,7 +13,7 @@
 
 MODEL is a JSON file (networkx node-link form), a Python file defining ``model``, or a built-in example
 name (see :func:`bondgraph.io.load_model`).  DATA.csv has a header row with a time column ``t`` and one
-column per signal the ARRs use (see :func:`diagnosis.signals.read_csv`).  RECORDS is a directory of
+column per signal the ARRs use (see :func:`diagnosis.csv_reading.read_csv`).  RECORDS is a directory of
 such CSV files, one per asset, or a Parquet file with an ``asset`` column (``docs/fleet.md``).
 
 Exit codes: 0 success, 2 bad usage or bad input (one line on stderr naming the file, line, column,

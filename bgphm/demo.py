@@ -44,7 +44,7 @@ from bgphm.errors import UsageError
 from bgphm.files import csv_text, write_text
 from bondgraph.io import to_json
 from bondgraph.library import Example, example
-from diagnosis.signals import add_noise, as_record
+from diagnosis.records import add_noise, as_record
 
 __all__ = ["Demo", "DEMOS", "DemoPlan", "prepare_demo"]
 

@@ -10,7 +10,7 @@ Three rules keep a user's files safe:
 Each check runs when a command starts, before it reads a record or derives an ARR, and names the
 option at fault in a :class:`~bgphm.errors.UsageError` (exit code 2).
 
-:func:`csv_text` is the counterpart of :func:`diagnosis.signals.read_csv`: what ``bgphm simulate`` and
+:func:`csv_text` is the counterpart of :func:`diagnosis.csv_reading.read_csv`: what ``bgphm simulate`` and
 ``bgphm demo`` write reads back as the same record.
 """
 
@@ -165,7 +165,7 @@ def csv_text(columns: Mapping[str, ArrayLike]) -> str:
     """CSV text of equally long columns: a header row of the names, one row per sample.
 
     Values are written with ``repr`` so that they read back exactly; NaN and infinities are
-    written as empty cells, which :func:`~diagnosis.signals.read_csv` reads as gaps.
+    written as empty cells, which :func:`~diagnosis.csv_reading.read_csv` reads as gaps.
 
     Parameters
     ----------

@@ -16,7 +16,8 @@ from .detectability import Detectability, detectability
 from .monitoring import Detection, consistent_faults, detect
 from .elimination import structural_arrs, unreached
 from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, compile_interval
-from .signals import Record, RecordError, RecordWarning, add_noise, as_record, check_signals, read_csv
+from .csv_reading import read_csv
+from .records import Record, RecordError, RecordWarning, add_noise, as_record, check_signals
 from .uniform_grid import resample
 from .signatures import SignatureMatrix, signature_matrix
 from .streaming import StreamChunk, StreamingEvaluation

@@ -1,4 +1,4 @@
-"""The fast paths of :func:`diagnosis.signals.read_csv`: a file of plain numbers parsed by pyarrow or numpy.
+"""The fast paths of :func:`diagnosis.csv_reading.read_csv`: a file of plain numbers parsed by pyarrow or numpy.
 
 ``read_csv`` checks every cell against a strict number grammar and names the first bad one; for a
 file of plain numbers, that is what pyarrow's or numpy's C parser does in a fraction of the time

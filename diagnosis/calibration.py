@@ -40,7 +40,8 @@ from numpy.lib.stride_tricks import sliding_window_view
 from bondgraph.errors import SettingError
 
 from .detection import Evaluation, noise_margin, robust_std
-from .signals import Record, default_window
+from .derivatives import default_window
+from .records import Record
 
 __all__ = ["CALIBRATION_SHARE", "MIN_CALIBRATION_SAMPLES", "POOLED_RECORDS", "Calibration", "DetectionSettings",
            "calibrate", "calibration_end", "check_healthy", "pooled_calibration", "quiet_margin",
@@ -80,7 +81,7 @@ class DetectionSettings:
         Consecutive violations for an alarm.
     window : int, optional
         Savitzky-Golay window of the derivative estimates (odd); default that of
-        :func:`~diagnosis.signals.default_window` (or, in :func:`~diagnosis.detect`, chosen per ARR).
+        :func:`~diagnosis.derivatives.default_window` (or, in :func:`~diagnosis.detect`, chosen per ARR).
 
     >>> DetectionSettings(persistence=0)
     Traceback (most recent call last):

@@ -39,7 +39,8 @@ import numpy as np
 from bondgraph.optional import pandas_for
 
 from .residuals import read_record
-from .signals import RecordError, default_window, has_column
+from .derivatives import default_window
+from .records import RecordError, has_column
 from .steps import step_mask
 from .thresholds import bglft_threshold, interval_threshold
 
@@ -277,7 +278,7 @@ def check_options(arr, caller: str, *, method: str = "savgol", antiderivatives: 
                   margin: float = 0.0, persistence: int = 1, threshold: str = "interval") -> None:
     """The checks of :func:`evaluate`'s options, shared by every caller that evaluates an ARR.
 
-    Raises a TypeError unless ``arr`` is an ARR, a :class:`~diagnosis.signals.RecordError` for an unknown
+    Raises a TypeError unless ``arr`` is an ARR, a :class:`~diagnosis.records.RecordError` for an unknown
     derivative method or antiderivatives that are not a mapping of names, a ValueError naming the option
     for a bad ``threshold``, ``persistence`` or ``margin``.
 

@@ -40,7 +40,8 @@ from .detection import CalibrationError, Evaluation, noise_margin
 from .residuals import integral_depth as _integral_depth
 from .signatures import SignatureMatrix, signature_matrix
 from .structural import sensor_fault
-from .signals import Record, RecordWarning, as_record, default_window, has_column
+from .derivatives import default_window
+from .records import Record, RecordWarning, as_record, has_column
 
 __all__ = ["SAFETY", "WINDOWS", "Detection", "consistent_faults", "detect", "quiet_margin"]
 

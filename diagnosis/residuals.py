@@ -7,7 +7,7 @@ record into the point values those symbols take at every sample:
 
 * signals are read from the record's columns;
 * derivatives are estimated (Savitzky-Golay by default, central differences,
-  or exact values the user supplies), see :mod:`diagnosis.signals`;
+  or exact values the user supplies), see :mod:`diagnosis.records`;
 * integrals are cumulative trapezoids of the integrand from the start of the
   record (the energy variable is taken as zero there), or, when the record
   holds the antiderivative of a signal (encoder angles for measured speeds),
@@ -29,7 +29,8 @@ from sympy.core.function import AppliedUndef
 from bondgraph.errors import PHMError
 
 from .deltas import delta_parameter
-from .signals import Record, RecordError, as_record, cumulative_integral, default_window, derivative
+from .derivatives import cumulative_integral, default_window, derivative
+from .records import Record, RecordError, as_record
 
 __all__ = [
     "NUMERIC_FUNCTIONS", "T", "ARRError", "CompiledARR", "antiderivative_integral", "compile_arr",

@@ -68,8 +68,8 @@ from scipy.signal import savgol_coeffs, savgol_filter
 
 from .detection import Evaluation, check_options, fitting_order, judge
 from .residuals import antiderivative_integral, trusted_edge
-from .signals import (MAX_MAGNITUDE, TIME, UNIFORM_RTOL, RecordError, RecordWarning, as_record, central_derivative,
-                      check_savgol_settings, default_window)
+from .derivatives import central_derivative, check_savgol_settings, default_window
+from .records import MAX_MAGNITUDE, RecordError, RecordWarning, TIME, UNIFORM_RTOL, as_record
 
 __all__ = ["CheckedBatch", "StreamChunk", "StreamingEvaluation"]
 

@@ -4,7 +4,7 @@ The Savitzky-Golay derivative (the default of :func:`diagnosis.evaluate`) needs 
 logger with jitter or dropped samples gives an uneven grid.  Either estimate derivatives with
 ``method="central"``, which takes any grid, or resample the record first with :func:`resample`:
 linear interpolation between neighbouring samples, never across a gap (NaN stays NaN where a grid
-time falls next to a missing sample), with a :class:`~diagnosis.signals.RecordWarning` when the
+time falls next to a missing sample), with a :class:`~diagnosis.records.RecordWarning` when the
 record has steps much longer than the new one (the values there are straight lines, not data).
 """
 
@@ -18,7 +18,7 @@ import numpy as np
 
 from bondgraph.simulation import MAX_SAMPLES
 
-from .signals import TIME, Record, RecordError, RecordWarning, as_record
+from .records import Record, RecordError, RecordWarning, TIME, as_record
 
 __all__ = ["RESAMPLE_METHODS", "resample"]
 
@@ -32,7 +32,7 @@ def resample(record: Record | object, step: float | None = None, *, method: str 
     Parameters
     ----------
     record : Record, mapping or DataFrame
-        Column ``t`` and the signals (see :func:`~diagnosis.signals.as_record`).
+        Column ``t`` and the signals (see :func:`~diagnosis.records.as_record`).
     step : float, optional
         The new sampling step (s); default the record's median step.  The grid is
         ``t0, t0 + step, ...`` up to the last time of the record, at least 3 and at most

@@ -8,7 +8,7 @@
 The reference covers every name in ``__all__`` of ``bondgraph``, ``diagnosis``, ``prognosis`` and its
 subpackages,
 the modules the tutorials use beside them (``bondgraph.library``, ``bondgraph.io``, ``bondgraph.drawing``,
-``diagnosis.signals``, ``prognosis.metrics``), the rules of a model's names and domains (``bondgraph.names``,
+``diagnosis.records``, ``prognosis.metrics``), the rules of a model's names and domains (``bondgraph.names``,
 ``bondgraph.domains``), ``bgphm.cli.main``, the public functions of
 ``bgphm.plotting`` and the fleet API of ``bgphm.fleet``.  Names are grouped by the module that defines
 them, in source order; a class is followed by its public methods and properties.  Signatures come from
@@ -36,7 +36,7 @@ OUTPUT = ROOT / "docs" / "api.md"
 PACKAGES = [
     ("bondgraph", "model, causality, equations, simulation",
      ["bondgraph.library", "bondgraph.io", "bondgraph.drawing", "bondgraph.names", "bondgraph.domains"]),
-    ("diagnosis", "ARRs, intervals, thresholds, signatures, detection", ["diagnosis.signals"]),
+    ("diagnosis", "ARRs, intervals, thresholds, signatures, detection", ["diagnosis.records"]),
     ("diagnosis.intervals", "outward-rounded interval arithmetic and the sympy-to-interval compiler", []),
     ("prognosis", "degradation laws, observation model, particle filter, RUL, metrics, health monitoring",
      ["prognosis.metrics", "prognosis.weighted", "prognosis.ranking", "prognosis.seeds"]),
@@ -52,7 +52,7 @@ PACKAGES = [
 MODULE_ORDER = ["bondgraph.model", "bondgraph.structure", "bondgraph.causality", "bondgraph.equations",
                 "bondgraph.simulation", "bondgraph.control", "bondgraph.errors", "bondgraph.library", "bondgraph.io",
                 "bondgraph.drawing", "diagnosis.derivation", "diagnosis.deltas", "diagnosis.signatures",
-                "diagnosis.detection", "diagnosis.signals", "diagnosis.intervals.rounding",
+                "diagnosis.detection", "diagnosis.records", "diagnosis.intervals.rounding",
                 "diagnosis.intervals.kernels", "diagnosis.intervals.interval", "diagnosis.intervals.functions",
                 "diagnosis.intervals.compiler", "prognosis.observation", "prognosis.degradation",
                 "prognosis.particle_filter", "prognosis.resample_move", "prognosis.likelihood", "prognosis.wander",

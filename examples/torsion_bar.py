@@ -53,7 +53,7 @@ from bondgraph.library import (MASS_LOAD, OMEGA_M_REF, TORSION_BAR, U_MAX, torsi
                                torsion_bar_monitorable, with_suspended_load)
 from diagnosis import derive_arrs
 from diagnosis.detection import noise_margin
-from diagnosis.signals import add_noise, as_record
+from diagnosis.records import add_noise, as_record
 from prognosis import ExponentialDegradation, HealthMonitor, LinearDegradation, VarianceAdaptation
 from prognosis.hypotheses import Hypothesis, rate_prior
 from prognosis.isolation import IsolatingMonitor

@@ -33,7 +33,8 @@ import numpy as np
 
 from bondgraph.errors import SettingError
 from diagnosis.calibration import DetectionSettings, calibrate
-from diagnosis.signals import Record, as_record, default_window
+from diagnosis.derivatives import default_window
+from diagnosis.records import Record, as_record
 
 from .errors import PrognosisError
 from .isolation import HORIZON_STEPS, LAWS, METHODS, IsolatingMonitor, IsolationResult

@@ -11,7 +11,8 @@ import numpy as np
 from bgphm.errors import UsageError
 from bondgraph.io import ModelSpec, load_model
 from diagnosis import DetectionSettings
-from diagnosis.signals import Record, RecordError, RecordWarning, gaps, read_csv
+from diagnosis.csv_reading import read_csv
+from diagnosis.records import Record, RecordError, RecordWarning, gaps
 
 from ._progress import Progress
 

@@ -10,7 +10,7 @@ import numpy as np
 from bgphm.errors import EXIT_OK
 from bgphm.files import csv_text, write_text
 from bondgraph.io import load_model
-from diagnosis.signals import RecordWarning
+from diagnosis.records import RecordWarning
 
 from ._inputs import (
     detection_settings,

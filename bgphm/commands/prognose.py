@@ -8,7 +8,7 @@ import warnings
 
 from bgphm.errors import EXIT_OK
 from bgphm.files import csv_text, write_text
-from diagnosis.signals import RecordWarning
+from diagnosis.records import RecordWarning
 from prognosis import PrognosisSettings
 
 from ._inputs import (

@@ -31,7 +31,8 @@ from pathlib import Path
 import numpy as np
 
 from bgphm.errors import MissingExtraError
-from diagnosis.signals import Record, RecordError, as_record, read_csv
+from diagnosis.csv_reading import read_csv
+from diagnosis.records import Record, RecordError, as_record
 
 __all__ = ["CsvDirectory", "ParquetRecords", "open_source", "pyarrow_modules"]
 
@@ -75,7 +76,7 @@ def open_source(records: str | os.PathLike | "CsvDirectory | ParquetRecords"):
 class CsvDirectory:
     """A directory of ``*.csv`` records, one per asset; the asset id is the file name without ``.csv``.
 
-    Each file is read with :func:`diagnosis.signals.read_csv` (a header row with ``t`` and the signals).
+    Each file is read with :func:`diagnosis.csv_reading.read_csv` (a header row with ``t`` and the signals).
     Hidden files (a name starting with ``.``) are skipped.
     """
 
@@ -106,7 +107,7 @@ class CsvDirectory:
     def read(self, assets: Iterable[str], signals: Sequence[str], skip=None) -> Iterator[tuple[str, Record]]:
         """``(asset, record)`` for each id, read when the consumer asks for it.
 
-        Each file is read by :func:`~diagnosis.signals.read_csv` (pyarrow or numpy parse a file of
+        Each file is read by :func:`~diagnosis.csv_reading.read_csv` (pyarrow or numpy parse a file of
         plain numbers; any other is read cell by cell and what is wrong is named).  A file that cannot
         be read raises that error, or, with ``skip``, is reported as ``skip(asset, reason)``.
         """

@@ -13,7 +13,7 @@ from bgphm.cli import main
 from bondgraph.control import PIController
 from bondgraph.io import load_model
 from diagnosis import derive_arrs
-from diagnosis.signals import read_csv
+from diagnosis.csv_reading import read_csv
 from prognosis.degradation import ExponentialDegradation
 from prognosis.monitor import HealthMonitor
 

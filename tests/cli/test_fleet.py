@@ -17,7 +17,7 @@ from bgphm.fleet import (CsvDirectory, FleetSpec, ParquetRecords, bucket_of, def
                          read_fleet, run_fleet, shard_assets)
 from bgphm.fleet.spec import monitor_for
 from bondgraph.errors import PHMError
-from diagnosis.signals import RecordError
+from diagnosis.records import RecordError
 
 from .fleets import ONSETS, spec, without_dask, write_fleet
 
@@ -220,7 +220,7 @@ def test_a_dask_run_without_dask_names_the_extra(records, tmp_path, monkeypatch)
 
 def parquet_of(records, path, *, integer_ids=False, shuffle=True):
     """The CSV records as one Parquet file (rows shuffled), asset ids as strings or integers."""
-    from diagnosis.signals import read_csv
+    from diagnosis.csv_reading import read_csv
 
     columns = {"asset": [], "t": [], "V": [], "i": [], "v_C": []}
     for k, csv in enumerate(sorted(records.glob("*.csv"))):

@@ -9,7 +9,7 @@ import pytest
 from bgphm.cli import main
 from bgphm.fleet import read_fleet, run_fleet
 from diagnosis import RecordError
-from diagnosis.signals import MAX_RECORD_BYTES
+from diagnosis.csv_reading import MAX_RECORD_BYTES
 
 from .fleets import spec, write_fleet
 from .test_fleet import same_tables
@@ -81,11 +81,11 @@ def test_the_command_skips_and_says_so(fleet, tmp_path, capsys):
 
 
 def test_a_csv_record_beyond_the_size_limit_is_refused_before_it_is_read(tmp_path, monkeypatch):
-    import diagnosis.signals as signals
+    import diagnosis.csv_reading as csv_reading
 
     path = tmp_path / "huge.csv"
     path.write_text("t,x\n0,1\n1,2\n2,3\n")
-    monkeypatch.setattr(signals, "MAX_RECORD_BYTES", 10)   # as if the file were larger than 1 GiB
+    monkeypatch.setattr(csv_reading, "MAX_RECORD_BYTES", 10)   # as if the file were larger than 1 GiB
     with pytest.raises(RecordError, match=r"huge\.csv: .* GiB, more than the .* GiB a CSV record may hold"):
-        signals.read_csv(path)
+        csv_reading.read_csv(path)
     assert MAX_RECORD_BYTES == 1 << 30

@@ -16,7 +16,7 @@ from bgphm.cli import main
 from bgphm.errors import FleetError, FleetWarning
 from bgphm.fleet import local_cluster, read_fleet, run_fleet
 from bgphm.fleet.engine import MALLOC, malloc_setting
-from diagnosis.signals import RecordError
+from diagnosis.records import RecordError
 
 from .fleets import spec, write_fleet
 from .test_fleet import parquet_of, same_tables

@@ -171,7 +171,7 @@ def test_calibrating_over_a_fault_is_refused(tmp_path, capsys):
     """Friction b x20 from t = 0.5 s: calibrating on t <= 0.9 would absorb the fault in the margin."""
     from bondgraph.simulation import simulate
     from bgphm.files import csv_text
-    from diagnosis.signals import add_noise, as_record
+    from diagnosis.records import add_noise, as_record
 
     t = np.linspace(0.0, 1.0, 1001)
     b = lambda time: 1e-4 * (1.0 + 19.0 * (time >= 0.5))  # noqa: E731

@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 import diagnosis._csv_fast as fast
-from diagnosis.signals import RecordError, read_csv
+from diagnosis.csv_reading import read_csv
+from diagnosis.records import RecordError
 
 CELLS = ["1.5", " 1.5", "+.5e-3", "-0", "00012", "5.", "1e5", "", "NA", "nan", "NaN", "-nan", "null", '"1.5"', '"NA"',
          "1_000", "inf", "-Infinity", "1e400", "1e200", "0x10", "  ", "#N/A", "1d5", "text", "2.5e-300"]

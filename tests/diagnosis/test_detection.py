@@ -7,7 +7,7 @@ from bondgraph import simulate
 from bondgraph.library import rlc_circuit
 from diagnosis import derive_arrs
 from diagnosis.detection import evaluate, noise_margin, persistent
-from diagnosis.signals import RecordError, RecordWarning
+from diagnosis.records import RecordError, RecordWarning
 
 
 @pytest.fixture(scope="module")

@@ -7,17 +7,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from diagnosis.signals import (
-    Record,
-    RecordError,
-    RecordWarning,
-    add_noise,
-    as_record,
-    cumulative_integral,
-    default_window,
-    derivative,
-    read_csv,
-)
+from diagnosis.csv_reading import read_csv
+from diagnosis.derivatives import cumulative_integral, default_window, derivative
+from diagnosis.records import Record, RecordError, RecordWarning, add_noise, as_record
 from diagnosis.uniform_grid import resample
 
 DT = 0.01

@@ -17,7 +17,7 @@ from bondgraph.library import rlc_circuit, torsion_bar_monitorable
 from diagnosis import ARR, Evaluation, RecordError, RecordWarning, StreamChunk, StreamingEvaluation, derive_arrs
 from diagnosis.deltas import delta
 from diagnosis.detection import evaluate
-from diagnosis.signals import add_noise, as_record
+from diagnosis.records import add_noise, as_record
 
 ANTIDERIVATIVES = {"omega_m": "theta_m", "omega_Ld": "theta_Ld"}  # encoder angles
 FIELDS = ("t", "residual", "lower", "upper", "bglft")

@@ -11,7 +11,7 @@ from bgphm.files import csv_text
 from bondgraph.io import to_json
 from bondgraph.library import TORSION_BAR, rlc_circuit, torsion_bar_monitorable
 from diagnosis import derive_arrs
-from diagnosis.signals import add_noise, as_record
+from diagnosis.records import add_noise, as_record
 from prognosis.degradation import LinearDegradation
 from prognosis.hypotheses import Hypothesis, indistinguishable_groups, rate_prior, signature_candidates
 from prognosis.isolation import IsolatingMonitor, decide

@@ -8,7 +8,7 @@ import pytest
 from bondgraph import PHMError, simulate
 from bondgraph.library import torsion_bar, torsion_bar_controller, torsion_bar_monitorable
 from diagnosis import derive_arrs
-from diagnosis.signals import add_noise, as_record
+from diagnosis.records import add_noise, as_record
 from prognosis.degradation import ExponentialDegradation
 from prognosis.particle_filter import VarianceAdaptation
 from prognosis.errors import PrognosisError

@@ -18,7 +18,7 @@ from bondgraph import simulate
 from bondgraph.errors import PHMWarning
 from bondgraph.library import rlc_circuit
 from diagnosis import derive_arrs
-from diagnosis.signals import add_noise, as_record
+from diagnosis.records import add_noise, as_record
 from prognosis.degradation import ExponentialDegradation, LinearDegradation
 from prognosis.hypotheses import Hypothesis, HypothesisObservation
 from prognosis.isolation import IsolatingMonitor

@@ -16,7 +16,7 @@ from scipy.stats import multivariate_normal
 
 from bondgraph.library import TORSION_BAR, torsion_bar_monitorable
 from diagnosis import derive_arrs
-from diagnosis.signals import add_noise, as_record
+from diagnosis.records import add_noise, as_record
 from prognosis.degradation import LinearDegradation
 from prognosis.hypotheses import integral_increments
 from prognosis.likelihood import ResidualNoise, integral_walk
