@@ -30,6 +30,7 @@ import warnings
 from collections.abc import Sequence
 
 from bgphm.commands import Progress
+from bgphm.commands._inputs import detection_settings
 from bgphm.errors import EXIT_FAILURE, EXIT_USAGE, UsageError
 from bgphm.terminal import terminal_streams
 from bondgraph.errors import PHMError, SettingError
@@ -283,8 +284,7 @@ def _check_options(args) -> None:
     """The options checked before any file is read: the library's settings (an error names the option, see
     :func:`_run`) and the fleet engine's sizes (a UsageError)."""
     if hasattr(args, "k"):  # detect, prognose, fleet
-        DetectionSettings(calibrate=args.calibrate, margin=getattr(args, "margin", None), k=args.k,
-                          persistence=args.persistence, window=args.window)
+        detection_settings(args)
     if hasattr(args, "particles"):  # prognose, fleet
         PrognosisSettings(particles=args.particles, rul_every=args.rul_every, horizon=args.horizon, dt=args.dt,
                           seed=args.seed)

@@ -122,17 +122,25 @@ class Calibration:
     noise_std: dict = field(default_factory=dict)
     margin: dict = field(default_factory=dict)
 
+    def options(self, settings: DetectionSettings) -> dict:
+        """ARR name -> the options of :func:`~diagnosis.evaluate` that judge its residual: its margin and the
+        settings' persistence and window (a monitor's ``detection``)."""
+        return {name: {"margin": margin, **settings.options()} for name, margin in self.margin.items()}
 
-def calibration_end(record: Record, calibrate: float | None = None, *, hint: str = "") -> float:
+
+def calibration_end(record: Record, calibrate: float | None = None, *, hint: str = "", checked: bool = True) -> float:
     """The end of the healthy stretch: ``calibrate``, by default the first :data:`CALIBRATION_SHARE` of the record.
 
     Raises a :class:`~bondgraph.errors.SettingError` (``calibrate``) for a stretch that reaches the
     record's end or holds fewer than :data:`MIN_CALIBRATION_SAMPLES` samples; ``hint`` ends that message.
+    ``checked=False``: the end alone (a fixed margin calibrates nothing on the stretch).
 
     >>> calibration_end(Record(np.linspace(0.0, 10.0, 101), {}))
     2.0
     """
     t0, t1 = float(record.t[0]), float(record.t[-1])
+    if not checked:
+        return float(calibrate) if calibrate is not None else t0 + CALIBRATION_SHARE * (t1 - t0)
     if calibrate is not None and calibrate >= t1:
         raise SettingError("calibrate", f"{{setting}} {calibrate:g}: at or past the end of the record (t = {t1:g} s); "
                                         "the calibration stretch must be fault-free and leave data to monitor")

@@ -34,7 +34,7 @@ import numpy as np
 
 from .derivation import derive_arrs
 from .detectability import Detectability, detectability, summary
-from .calibration import (CALIBRATION_SHARE, SAFETY, START_SHARE, DetectionSettings, calibration_end, check_healthy,
+from .calibration import (SAFETY, START_SHARE, DetectionSettings, calibration_end, check_healthy,
                           quiet_margin)
 from .detection import CalibrationError, Evaluation, noise_margin
 from .residuals import integral_depth as _integral_depth
@@ -163,8 +163,7 @@ def detect(bg, record, settings: DetectionSettings | None = None, *, integrals: 
     first = list(arrs) if given else derive_arrs(bg, integrals="avoid" if integrals == "auto" else integrals)
     names = list(dict.fromkeys(s for arr in first for s in arr.signals))
     data = as_record(record, names + [n for n in inputs if has_column(record, n) and n not in names])
-    until = calibration_end(data, calibrate, hint=" (or give a fixed {setting:margin})") if margin is None else \
-        _calibration_end(data, calibrate)
+    until = calibration_end(data, calibrate, hint=" (or give a fixed {setting:margin})", checked=margin is None)
     healthy = data.between(end=until)
     kept = {"avoid": {a.name: a for a in first}}
     if integrals == "auto" and not given:
@@ -284,11 +283,6 @@ def _score(d: Detectability) -> float:
 def _first_alarm(evaluation: Evaluation, after: float) -> float | None:
     late = evaluation.alarm & (evaluation.t > after)
     return float(evaluation.t[np.argmax(late)]) if late.any() else None
-
-
-def _calibration_end(data: Record, calibrate: float | None) -> float:
-    t0, t1 = float(data.t[0]), float(data.t[-1])
-    return t0 + CALIBRATION_SHARE * (t1 - t0) if calibrate is None else float(calibrate)
 
 
 def _span(data: Record) -> float:

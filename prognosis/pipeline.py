@@ -241,12 +241,11 @@ def prognose(arrs: Sequence, record, failures: Mapping[str, float], settings: Pr
     healthy = calibrate(arrs, record, detection)
     dt = filter_step(record, detection.window, settings.dt)
     horizon = rul_horizon(dt, settings.horizon, settings.particles, len(failures) * len(settings.laws))
-    options = {name: {"margin": margin, **detection.options()} for name, margin in healthy.margin.items()}
     monitor = IsolatingMonitor(arrs, failures, noise_std=healthy.noise_std, laws=list(settings.laws),
                                candidates=None if settings.candidates is None else list(settings.candidates),
                                sensors=settings.sensors, pairs=settings.pairs, dt=dt, n_particles=settings.particles,
-                               rate=settings.rate, rul_every=settings.rul_every, horizon=settings.horizon,
-                               detection=options, healthy_until=healthy.until, domains=domains,
+                               rate=settings.rate, rul_every=settings.rul_every, horizon=horizon,
+                               detection=healthy.options(detection), healthy_until=healthy.until, domains=domains,
                                method=settings.method, seed=settings.seed)
     result = monitor.run(record, evaluations=healthy.evaluations, progress=progress)
     result.settings = {"failure_values": dict(failures), "calibration_end": healthy.until, "filter_step": dt,

@@ -56,7 +56,7 @@ def run(args, progress: Progress) -> int:
     for name in pooled.noise_std:
         progress(f"{name}: residual noise {pooled.noise_std[name]:.3g}, margin {pooled.margin[name]:.3g} (median "
                  f"over {len(calibrated)} record(s), t <= {args.calibrate:g} s)")
-    detection = {name: {"margin": margin, **detection.options()} for name, margin in pooled.margin.items()}
+    detection = pooled.options(detection)
     job = FleetSpec(model_reference(args.model), failures, noise_std=calibration["noise_std"], detection=detection,
                     laws=laws, candidates=candidates, arrs=None if args.arr is None else [args.arr],
                     integrals=args.integrals, dt=dt, n_particles=args.particles, rul_every=args.rul_every,
