@@ -19,6 +19,7 @@ reduction across rows), so a row's numbers are bitwise the same in any batch.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -173,23 +174,28 @@ class FleetFilter:
         theta, gamma = self._predict(at, draws)
         log_likelihood, finite = self._log_likelihood(at, theta, y, points)
         top = log_likelihood.max(axis=1, keepdims=True)  # methods: a stream steps one row at a time
-        if not np.isfinite(top).all():
+        # a finite top (the common case) puts the total in [1, N]: no row can be degenerate
+        tracking = bool(np.isfinite(top).all())
+        if not tracking:
             top[~np.isfinite(top)] = 0.0
         log_likelihood -= top
         weights = np.exp(log_likelihood, out=log_likelihood)
         total = weights.sum(axis=1)
-        degenerate = ~((total > 0) & (total < np.inf))  # NaN too
-        if degenerate.any():  # every weight vanished: start again from equal weights, and say so
+        if tracking:
+            degenerate = np.zeros(total.size, bool)
+        else:
+            degenerate = ~((total > 0) & (total < np.inf))  # NaN too
+            # every weight vanished: start again from equal weights, and say so
             weights[degenerate] = 1.0
             total[degenerate] = n
         evidence = top[:, 0] + np.log(total / n)
         if finite.all():  # the common case: every ARR measured
             evidence += self._constant_sum
-            measured = ~degenerate
+            measured = None if tracking else ~degenerate
         else:
             evidence += np.sum(np.where(finite, self._constant, 0.0), axis=1)
             measured = finite.any(axis=1) & ~degenerate
-        self.log_evidence[at] += evidence if measured.all() else np.where(measured, evidence, 0.0)
+        self.log_evidence[at] += evidence if measured is None or measured.all() else np.where(measured, evidence, 0.0)
         flat = systematic_indices(weights, total, ndtr(draws[:, -1].astype(float)), flat=True)
         self.theta[at] = theta.reshape(-1)[flat].reshape(theta.shape)
         if self.g == 1:
@@ -275,7 +281,7 @@ class FleetFilter:
 
     def quantiles(self, rows) -> tuple[np.ndarray, np.ndarray]:
         """5, 50 and 95 % of theta and of the first gamma per row, (rows, 3) each (equal weights)."""
-        positions = [int(np.ceil(q * self.n - 1e-9)) - 1 for q in QUANTILES]
+        positions = _ranks(self.n)
         theta = np.partition(self.theta[rows], positions, axis=1)[:, positions]
         gamma = np.partition(self.gamma[rows, 0], positions, axis=1)[:, positions]
         return theta, gamma
@@ -306,6 +312,8 @@ def systematic_indices(weights: np.ndarray, total: np.ndarray, u: np.ndarray, fl
     Particle ``i`` gets ``ceil(N C_i - u) - ceil(N C_{i-1} - u)`` copies, ``C`` the normalized
     cumulative weights: the number of points ``(j + u) / N`` in ``[C_{i-1}, C_i)``.  Returns the
     ancestors' indices per row (R, N), or with ``flat`` their indices into the flattened (R * N) array.
+    A single row (a stream's tick) finds the same ancestors by binary search: point ``j`` descends
+    from the number of edges ``N C_i - u`` at or below ``j``, two calls where the counts take ten.
 
     >>> systematic_indices(np.array([[1.0, 0.0, 1.0]]), np.array([2.0]), np.array([0.5])).tolist()
     [[0, 2, 2]]
@@ -314,6 +322,10 @@ def systematic_indices(weights: np.ndarray, total: np.ndarray, u: np.ndarray, fl
     edges = np.add.accumulate(weights, axis=1)  # cumsum's values, with fewer layers of calls
     edges *= (n / total)[:, None]
     edges -= u[:, None]
+    if rows == 1:  # a stream's tick: point j's ancestor is the number of edges <= j (ceil(e) > j iff e > j)
+        edges[0, -1] = n
+        ancestors = np.searchsorted(edges[0], _points(n), side="right")
+        return ancestors if flat else ancestors[None, :]
     np.ceil(edges, out=edges)
     edges[:, -1] = n
     np.minimum(edges, n, out=edges)
@@ -322,3 +334,17 @@ def systematic_indices(weights: np.ndarray, total: np.ndarray, u: np.ndarray, fl
     counts[:, 1:] -= counts[:, :-1].copy()
     ancestors = np.repeat(np.arange(rows * n), counts.reshape(-1))
     return ancestors if flat else ancestors.reshape(rows, n) - (n * np.arange(rows))[:, None]
+
+
+@functools.lru_cache(maxsize=8)
+def _ranks(n: int) -> list[int]:
+    """The ranks of the :data:`QUANTILES` among ``n`` equally weighted particles."""
+    return [int(np.ceil(q * n - 1e-9)) - 1 for q in QUANTILES]
+
+
+@functools.lru_cache(maxsize=8)
+def _points(n: int) -> np.ndarray:
+    """0, 1, ..., n - 1, read-only: the systematic points of a row, scaled by N and shifted by its uniform."""
+    points = np.arange(n, dtype=float)
+    points.flags.writeable = False
+    return points

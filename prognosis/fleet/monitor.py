@@ -400,24 +400,34 @@ class FleetMonitor:
             if not waiting:
                 return
             items = [live.queue.pop(0) for live in waiting]
-            if len(waiting) == 1:  # a stream's usual tick: one asset's rows, its sample broadcast, not copied
-                rows, (t, y, points) = waiting[0].rows, items[0]
-                owner, size = np.zeros(rows.size, int), rows.size
-                y = y[None, :] if size == 1 else np.broadcast_to(y, (size, y.size))
-                points = [list(p[:, None] if size == 1 else np.broadcast_to(p, (size, p.size)).T) for p in points]
-                times, ids = np.full(size, t), np.full(size, waiting[0].asset, dtype=object)
-            else:
-                rows = np.concatenate([live.rows for live in waiting])
-                owner = np.repeat(np.arange(len(waiting)), [live.rows.size for live in waiting])
-                y = np.array([item[1] for item in items])[owner]
-                points = [list(np.array([item[2][m] for item in items])[owner].T) for m in range(len(self.arrs))]
-                times = np.array([item[0] for item in items])[owner]
-                ids = np.array([live.asset for live in waiting], dtype=object)[owner]
+            if len(waiting) == 1:
+                self._tick(pf, waiting[0], *items[0], result)
+                continue
+            rows = np.concatenate([live.rows for live in waiting])
+            owner = np.repeat(np.arange(len(waiting)), [live.rows.size for live in waiting])
+            y = np.array([item[1] for item in items])[owner]
+            points = [list(np.array([item[2][m] for item in items])[owner].T) for m in range(len(self.arrs))]
+            times = np.array([item[0] for item in items])[owner]
+            ids = np.array([live.asset for live in waiting], dtype=object)[owner]
             steps = pf.steps[rows].copy()
             step = pf.step(rows, y, points)
-            # one asset's rows were started together and step together: one step count
-            common = int(steps[0]) if len(waiting) == 1 and steps.size else None
-            self._outputs(pf, rows, owner, ids, steps, times, step, result, common)
+            self._outputs(pf, rows, owner, ids, steps, times, step, result)
+
+    def _tick(self, pf: FleetFilter, live: LiveAsset, t: float, y: np.ndarray, points: list, result: FleetResult
+              ) -> None:
+        """A stream's usual tick: one step of one asset's rows, its sample broadcast, not copied, and the
+        output columns built only on the ticks that report."""
+        rows, size = live.rows, live.rows.size
+        if size == 0:
+            return
+        y = y[None, :] if size == 1 else np.broadcast_to(y, (size, y.size))
+        points = [list(p[:, None] if size == 1 else np.broadcast_to(p, (size, p.size)).T) for p in points]
+        steps = pf.steps[rows].copy()
+        step = pf.step(rows, y, points)
+        common = int(steps[0])  # one asset's rows were started together and step together: one step count
+        if common % self.report_every == 0 or common % self.settings.rul_every == 0:
+            self._outputs(pf, rows, np.zeros(size, int), np.full(size, live.asset, dtype=object), steps,
+                          np.full(size, t), step, result, common)
 
     def _streaming_filter(self) -> FleetFilter:
         if self._filter is None:
@@ -553,6 +563,9 @@ class FleetMonitor:
 
         ``owner`` labels the rows of one asset (consecutive); ``ids``, ``steps``, ``times`` are per row.
         """
+        if rows.size == 1 or (np.diff(owner) > 0).all():
+            self._predict_alone(pf, rows, ids, steps, times, result)
+            return
         starts = np.ones(rows.size, bool)  # each asset's first row
         np.not_equal(owner[1:], owner[:-1], out=starts[1:])
         first = np.flatnonzero(starts)
@@ -591,12 +604,32 @@ class FleetMonitor:
                    hypothesis=names, probability=np.where(empty, 0.0, p[np.arange(first.size), best]),
                    status=status)
 
+    def _predict_alone(self, pf, rows, ids, steps, times, result: FleetResult) -> None:
+        """:meth:`_predict` where every asset has one row: its hypothesis has probability 1, or 0 where it is
+        rejected (or its evidence is not finite), and its particles are equally weighted samples."""
+        hypotheses, rejected = pf.hypothesis[rows], pf.rejected[rows]
+        log_z = np.where(rejected, -np.inf, pf.log_evidence[rows])
+        probability = np.isfinite(log_z).astype(float)
+        empty = probability == 0  # rejected: one censored sample
+        crossing = self._crossings(pf, rows, hypotheses, ids, steps)
+        summary = summarize(crossing, np.full(crossing.shape, 1.0 / pf.n), equal=True)
+        if empty.any():
+            for name in ("p5", "p50", "p95"):
+                summary[name][empty] = np.inf
+            summary["mean"][empty], summary["censored"][empty] = np.nan, 1.0
+        names = ["" if e else self._names[h] for h, e in zip(hypotheses, empty)]
+        status = self._status(np.arange(rows.size), hypotheses, rejected, log_z[:, None], empty)
+        result.add("rul", asset=ids, step=steps, t=times, mean=summary["mean"], p5=summary["p5"], p50=summary["p50"],
+                   p95=summary["p95"], censored=summary["censored"], hypothesis=names, probability=probability,
+                   status=status)
+
     def _crossings(self, pf, rows, hypotheses, ids, steps) -> np.ndarray:
         """Crossing times (rows, N): closed form per law where it exists, else propagated paths."""
         s = self.settings
         times = np.empty((rows.size, pf.n))
-        for h in np.unique(hypotheses):
-            mine = hypotheses == h
+        single = len(self.hypotheses) == 1  # every row is hypothesis 0: no grouping
+        for h in (hypotheses[:1] if single else np.unique(hypotheses)):
+            mine = slice(None) if single else np.flatnonzero(hypotheses == h)
             law, hypothesis = self._laws[h], self.hypotheses[h]
             theta, rate = pf.theta[rows[mine]], pf.gamma[rows[mine], 0]
             if has_closed_form(law):
@@ -608,10 +641,10 @@ class FleetMonitor:
                 predictor = self._predictors[h] = RULPredictor(law, dt=s.dt, theta_fail=hypothesis.failure,
                                                                direction=hypothesis.direction, horizon=s.horizon,
                                                                seed=seeds.spawn(s.seed, seeds.PREDICTORS, int(h)))
-            for i, (row, asset, step) in enumerate(zip(rows[mine], ids[mine], steps[mine])):
+            for i, row, asset, step in zip(np.arange(rows.size)[mine], rows[mine], ids[mine], steps[mine]):
                 gamma = np.moveaxis(pf.gamma[row:row + 1], 1, -1)
                 key = (asset_key(asset) << 32) | int(step)
-                times[np.flatnonzero(mine)[i]] = predictor.predict(
+                times[i] = predictor.predict(
                     pf.theta[row:row + 1], gamma, np.full((1, pf.n), 1.0 / pf.n), 0.0, key=key).samples[0]
         return times
 

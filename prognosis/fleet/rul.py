@@ -63,29 +63,47 @@ def crossing_times(law, theta: np.ndarray, rate: np.ndarray, theta_fail: np.ndar
     return t
 
 
-def summarize(samples: np.ndarray, weights: np.ndarray) -> dict:
+def summarize(samples: np.ndarray, weights: np.ndarray, equal: bool = False) -> dict:
     """Mean (over crossed samples), 5/50/95 % quantiles (censored as ``+inf``) and censored weight per row.
 
-    ``samples``, ``weights`` (A, S); weights need not be normalized.
+    ``samples``, ``weights`` (A, S); weights need not be normalized.  ``equal``: every row's weights
+    are one positive value (one hypothesis per asset), so the quantiles are order statistics, found by
+    a partial sort instead of a sort and a cumulative sum.
 
     >>> s = summarize(np.array([[1.0, 2.0, 4.0, np.inf]]), np.full((1, 4), 0.25))
     >>> np.round(s["mean"], 4).tolist(), s["p50"].tolist(), s["p95"].tolist(), s["censored"].tolist()
     ([2.3333], [2.0], [inf], [0.25])
     """
+    out = _order_statistics(samples) if equal else _weighted_quantiles(samples, weights)
+    # the total as the sorted path sums it (a running sum, not numpy's pairwise one): the same last bit
+    total = np.add.accumulate(weights, axis=1)[:, -1] if equal else out.pop("total")
+    finite = np.isfinite(samples)
+    crossed = np.where(finite, weights, 0.0)
+    mass = np.sum(crossed, axis=1)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out["mean"] = np.where(mass > 0, np.sum(crossed * np.where(finite, samples, 0.0), axis=1) / mass, np.nan)
+        out["censored"] = np.where(total > 0, 1.0 - mass / total, 1.0)
+    return out
+
+
+def _weighted_quantiles(samples: np.ndarray, weights: np.ndarray) -> dict:
+    """The first sample, in sorted order, whose cumulative weight reaches each level; with the weights' totals."""
     order = np.argsort(samples, axis=1, kind="stable")
     row = np.arange(samples.shape[0])[:, None]
     ordered = samples[row, order]
     cumulative = np.cumsum(weights[row, order], axis=1)
     total = cumulative[:, -1:]
     cumulative = cumulative / np.where(total > 0, total, 1.0)
-    out = {}
+    out = {"total": total[:, 0]}
     for level, name in zip(LEVELS, ("p5", "p50", "p95")):
         index = np.argmax(cumulative >= level - 1e-12, axis=1)
         out[name] = ordered[row[:, 0], index]
-    finite = np.isfinite(samples)
-    crossed = np.where(finite, weights, 0.0)
-    mass = np.sum(crossed, axis=1)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        out["mean"] = np.where(mass > 0, np.sum(crossed * np.where(finite, samples, 0.0), axis=1) / mass, np.nan)
-        out["censored"] = np.where(total[:, 0] > 0, 1.0 - mass / total[:, 0], 1.0)
     return out
+
+
+def _order_statistics(samples: np.ndarray) -> dict:
+    """:func:`_weighted_quantiles` under equal weights: the sample of rank ``ceil(S (level - 1e-12)) - 1``."""
+    size = samples.shape[1]
+    ranks = [max(int(np.ceil(size * (level - 1e-12))) - 1, 0) for level in LEVELS]
+    chosen = np.partition(samples, ranks, axis=1)[:, ranks]
+    return {name: chosen[:, i] for i, name in enumerate(("p5", "p50", "p95"))}

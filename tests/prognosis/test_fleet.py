@@ -151,6 +151,19 @@ def test_systematic_offspring_are_floor_or_ceil():
     assert np.all((counts >= np.floor(expected - 1e-9)) & (counts <= np.ceil(expected + 1e-9)))
 
 
+def test_single_row_search_gives_the_counts_ancestors():
+    rng = np.random.default_rng(5)
+    weights = rng.random((60, 30)) ** 6
+    weights[rng.random((60, 30)) < 0.3] = 0.0  # particles with no offspring
+    weights[10:, -1] += 1e-3  # every row has a particle with weight
+    weights[:10] = 1.0  # equal weights with u = 0 put the edges on the points: ties decide
+    u = rng.random(60)
+    u[:5] = [0.0, 0.5, 1.0 - 1e-12, 1e-300, 0.25]
+    together = systematic_indices(weights, weights.sum(axis=1), u)
+    alone = np.array([systematic_indices(w[None], w.sum(keepdims=True), u[i:i + 1])[0] for i, w in enumerate(weights)])
+    assert np.array_equal(alone, together)
+
+
 @pytest.mark.parametrize("law", [LinearDegradation(), ExponentialDegradation()])
 def test_closed_form_crossings_match_propagated_paths(law):
     rng = np.random.default_rng(2)
@@ -170,6 +183,18 @@ def test_summary_matches_rul_distribution():
     assert np.allclose(mine["mean"], theirs.mean)
     assert np.array_equal(np.stack([mine["p5"], mine["p50"], mine["p95"]], axis=1), theirs.quantile([0.05, 0.5, 0.95]))
     assert np.allclose(mine["censored"], theirs.censored_weight / weights.sum(axis=1))
+
+
+@pytest.mark.parametrize("size", [1, 2, 3, 19, 20, 21, 40, 99, 100, 101, 500, 999, 1000, 1001])
+def test_equal_weights_summary_is_the_weighted_one(size):
+    rng = np.random.default_rng(size)
+    samples = np.where(rng.random((4, size)) < 0.3, np.inf, rng.uniform(0, 10, (4, size)))
+    samples[1] = np.round(samples[1])  # ties
+    samples[2] = np.inf  # every sample censored
+    weights = np.full(samples.shape, 0.7 / size)
+    fast, sorted_ = summarize(samples, weights, equal=True), summarize(samples, weights)
+    for name in ("p5", "p50", "p95", "mean", "censored"):
+        assert np.array_equal(fast[name], sorted_[name], equal_nan=True), name
 
 
 # -- streaming ----------------------------------------------------------------------------------
