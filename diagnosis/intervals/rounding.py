@@ -61,15 +61,14 @@ def _step_up(a: np.ndarray) -> np.ndarray:
 def _next_short(x, toward: float) -> np.ndarray:
     """``np.nextafter(x, toward)`` with NaN sent to ``toward``: the same floats as the bit operations.
 
-    For a short array the calls are the cost, and this is 3 of them against 8; for a long one the
-    bit operations are faster than libm's ``nextafter`` per element.  Stepping the largest float to
-    ``inf`` raises numpy's overflow flag (a warning outside :func:`guarded`, where the kernels run).
+    ``fmin(x, inf)`` (``fmax(x, -inf)`` going down) is ``x`` itself, or ``toward`` for a NaN, whose
+    step toward itself stays there: two calls with no test of the values.  For a short array the
+    calls are the cost; for a long one the bit operations are faster than libm's ``nextafter`` per
+    element.  Stepping the largest float to ``inf`` raises numpy's overflow flag (a warning outside
+    :func:`guarded`, where the kernels run).
     """
-    a = np.nextafter(x, toward)
-    unknown = np.isnan(a)
-    if unknown.any():
-        a[unknown] = toward
-    return a
+    known = np.fmin(x, toward) if toward > 0 else np.fmax(x, toward)
+    return np.nextafter(known, toward)
 
 
 def up(x):
