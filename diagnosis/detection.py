@@ -307,11 +307,14 @@ def check_options(arr, caller: str, *, method: str = "savgol", antiderivatives: 
                           f"{{'omega_m': 'theta_m'}}, got {antiderivatives!r}")
 
 
-def judge(compiled, points: list[np.ndarray], margin: float, threshold: str) -> tuple[np.ndarray, ...]:
+def judge(compiled, points: list[np.ndarray], margin: float, threshold: str, both: bool = True
+          ) -> tuple[np.ndarray, ...]:
     """``(residual, lower, upper, bglft, violation)`` at every sample of the point values ``points``.
 
     Each sample is judged on its own point values (no sample depends on another here), so a stream
     can judge its samples a batch at a time (:class:`diagnosis.streaming.StreamingEvaluation`).
+    ``both=False`` computes only the band of ``threshold`` (the other is NaN): for a caller that
+    keeps the alarms alone.
 
     >>> from bondgraph.library import rlc_circuit
     >>> from diagnosis import derive_arrs
@@ -322,8 +325,12 @@ def judge(compiled, points: list[np.ndarray], margin: float, threshold: str) -> 
     ([0.0, 1.0], [False, True])
     """
     residual = compiled.residual(points)
-    lower, upper = interval_threshold(compiled, points)
-    bglft = bglft_threshold(compiled, points)
+    undecided = np.full(np.shape(residual), np.nan)
+    if both or threshold == "interval":
+        lower, upper = interval_threshold(compiled, points)
+    else:
+        lower, upper = undecided, undecided.copy()
+    bglft = bglft_threshold(compiled, points) if both or threshold != "interval" else undecided.copy()
     lo, hi = (lower, upper) if threshold == "interval" else (-bglft, bglft)
     with np.errstate(invalid="ignore"):
         violation = (-residual < lo - margin) | (-residual > hi + margin)

@@ -71,7 +71,10 @@ from .residuals import antiderivative_integral, trusted_edge
 from .derivatives import central_derivative, check_savgol_settings, default_window
 from .records import MAX_MAGNITUDE, RecordError, RecordWarning, TIME, UNIFORM_RTOL, as_record
 
-__all__ = ["CheckedBatch", "StreamChunk", "StreamingEvaluation"]
+__all__ = ["BANDS", "CheckedBatch", "StreamChunk", "StreamingEvaluation"]
+
+#: what :meth:`StreamingEvaluation.push` can compute for the samples that become final
+BANDS = ("both", "alarm", "none")
 
 #: The keys of :meth:`StreamingEvaluation.state`.
 STATE_KEYS = ("arr", "columns", "options", "samples", "final", "step", "t", "buffer", "origin", "run", "integrals",
@@ -283,7 +286,7 @@ class StreamingEvaluation:
 
     # -- the stream ----------------------------------------------------------------------------------------
     def push(self, t: "ArrayLike | CheckedBatch", signals: Mapping[str, ArrayLike] | None = None, *,
-             thresholds: bool = True) -> StreamChunk:
+             thresholds: str = "both") -> StreamChunk:
         """Take the next samples of the stream and return those that became final.
 
         Parameters
@@ -293,11 +296,12 @@ class StreamingEvaluation:
         signals : mapping
             Signal name -> ``n`` samples, for every signal the ARR reads and every antiderivative
             column (:attr:`columns`); other entries are ignored.  NaN marks a gap.
-        thresholds : bool
-            False for the residual alone: the samples that become final are not judged (thresholds
-            NaN, no violation, no alarm, and the persistence run starts again), which saves the
-            interval evaluation, most of a short batch's cost, for a caller that no longer needs it
-            (a fleet's asset after its alarm).
+        thresholds : {"both", "alarm", "none"}
+            Which bands the samples that become final get: both (the interval and BG-LFT ones); the
+            one the alarm is judged on (the other NaN), for a caller that keeps the alarms alone; or
+            none, for the residual alone: not judged (thresholds NaN, no violation, no alarm, and the
+            persistence run starts again), which saves the interval evaluation, most of a short
+            batch's cost, for a caller that no longer needs it (a fleet's asset after its alarm).
 
         Returns
         -------
@@ -311,6 +315,8 @@ class StreamingEvaluation:
             a step off the stream's step (``method="savgol"``).  Naming the signal: a signal missing,
             non-numeric, infinite, too large, or of another length than ``t``.  After :meth:`flush`.
         """
+        if thresholds not in BANDS:
+            raise ValueError(f"thresholds must be one of {', '.join(map(repr, BANDS))}, got {thresholds!r}")
         if isinstance(t, CheckedBatch) and t.stream is self and t.samples == self._count:
             t, block, self._step = t.t, t.block, t.step  # checked against this very state: not read again
         else:
@@ -433,7 +439,7 @@ class StreamingEvaluation:
         return step
 
     # -- finalizing samples ----------------------------------------------------------------------------
-    def _advance(self, ready: int, at_end: bool, thresholds: bool = True) -> StreamChunk:
+    def _advance(self, ready: int, at_end: bool, thresholds: str = "both") -> StreamChunk:
         """Compute the samples ``final .. ready - 1`` from the buffer, then drop what is no longer needed."""
         first = self._final
         if ready <= first:
@@ -453,9 +459,9 @@ class StreamingEvaluation:
         self._t_final = float(t[-1])
         compiled = self.arr.compiled
         points = [values[p] for p in compiled.points]
-        if thresholds:
+        if thresholds != "none":
             residual, lower, upper, bglft, violation = judge(compiled, points, self._options["margin"],
-                                                             self._options["threshold"])
+                                                             self._options["threshold"], thresholds == "both")
             alarm = self._persistent(violation)
         else:
             residual, undecided = compiled.residual(points), np.full(t.size, np.nan)

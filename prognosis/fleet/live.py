@@ -74,9 +74,10 @@ class LiveAsset:
     def push(self, t: np.ndarray, signals: Mapping, checked: list | None = None) -> Final | None:
         """Feed a micro-batch (``checked``: what :meth:`check` returned for it); the samples that became final for
         every ARR (None if none did)."""
-        judged = self.alarm is None  # after the first alarm only the residuals matter: no thresholds
+        # the alarm's band alone until the first alarm; after it only the residuals matter: no thresholds
+        bands = "alarm" if self.alarm is None else "none"
         for m, evaluator in enumerate(self.evaluators):
-            chunk = evaluator.push(t if checked is None else checked[m], signals, thresholds=judged)
+            chunk = evaluator.push(t if checked is None else checked[m], signals, thresholds=bands)
             if len(chunk.t):
                 part = Final(chunk.t, -chunk.residual[:, None], chunk.alarm[:, None],
                              [np.stack(chunk.points, axis=1) if chunk.points else np.empty((len(chunk.t), 0))])

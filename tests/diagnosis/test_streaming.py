@@ -260,7 +260,7 @@ def test_a_push_without_thresholds_gives_the_residual_and_judges_nothing(rlc):
     for a, b in ((0, 90), (90, 150), (150, t.size)):
         part = {name: record[name][a:b] for name in ("V", "i", "v_C")}
         full = judged.push(t[a:b], part)
-        bare = unjudged.push(t[a:b], part, thresholds=(a != 90))
+        bare = unjudged.push(t[a:b], part, thresholds="none" if a == 90 else "both")
         assert np.array_equal(full.residual, bare.residual) and np.array_equal(full.t, bare.t)
         if a == 90:  # the stretch of the step: unjudged
             assert np.isnan(bare.lower).all() and np.isnan(bare.upper).all() and np.isnan(bare.bglft).all()
@@ -269,6 +269,26 @@ def test_a_push_without_thresholds_gives_the_residual_and_judges_nothing(rlc):
             assert np.array_equal(full.lower, bare.lower) and np.array_equal(full.violation, bare.violation)
     # the last stretch: the run of violations restarted after the unjudged one, so its first alarm comes later
     assert bare.violation[0] and full.alarm[0] and not bare.alarm[0]
+
+
+@pytest.mark.parametrize("threshold", ["interval", "bglft"])
+def test_the_alarm_band_alone_judges_as_both(rlc, threshold):
+    """Only the band the alarm is judged on: the same residual, band, violations and alarms, the other band NaN."""
+    arrs, record = rlc
+    both, alone = (StreamingEvaluation(arrs[0], persistence=2, threshold=threshold) for _ in range(2))
+    fired = False
+    for a in range(0, record.t.size, 37):
+        part = {name: record[name][a:a + 37] for name in ("V", "i", "v_C")}
+        full, bare = both.push(record.t[a:a + 37], part), alone.push(record.t[a:a + 37], part, thresholds="alarm")
+        assert np.array_equal(full.alarm, bare.alarm) and np.array_equal(full.violation, bare.violation)
+        interval = ("lower", "upper")
+        kept, dropped = (interval, ("bglft",)) if threshold == "interval" else (("bglft",), interval)
+        assert all(np.array_equal(getattr(full, k), getattr(bare, k)) for k in ("residual", *kept))
+        assert all(np.isnan(getattr(bare, k)).all() for k in dropped)
+        fired |= bool(full.alarm.any())
+    assert fired  # the resistance's step fires: alarms were compared, not only silence
+    with pytest.raises(ValueError, match="thresholds must be one of"):
+        alone.push(record.t[-1:] + 1.0, {name: record[name][-1:] for name in ("V", "i", "v_C")}, thresholds=True)
 
 
 def test_the_newest_half_window_waits_and_the_buffer_stays_bounded(rlc):
