@@ -16,6 +16,7 @@ Results are tidy tables (:class:`~prognosis.fleet.results.FleetResult`): alarms,
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
@@ -24,8 +25,9 @@ import numpy as np
 
 from diagnosis import RecordError, as_record, check_signals
 
-from ..hypotheses import LIFE_PRIOR, indistinguishable_groups, signature_candidates
-from ..isolation import DRIFT_AWAY_STEPS, EVIDENCE_RATIO, MIXTURE_FLOOR, PROCESS_NOISE, IsolatingMonitor, decide
+from ..hypotheses import indistinguishable_groups, signature_candidates
+from ..isolation import (DRIFT_AWAY_STEPS, FLEET_LAWS, FLEET_SETTINGS, MIXTURE_FLOOR, IsolationSettings, Priors,
+                         check_noise_std, decide, detection_options)
 from ..monitor import filter_stride
 from ..observation import observation_model
 from .. import seeds
@@ -40,8 +42,6 @@ from ..errors import PrognosisError
 
 __all__ = ["FleetMonitor", "BLOCK", "FLEET_LAWS"]
 
-#: The laws a fleet weighs by default: those with one rate, which the fleet filter carries per particle.
-FLEET_LAWS = ("linear", "exponential")
 BLOCK = 1000  # assets filtered together by run(): bounds the memory of the observations held
 PAD_STEPS = 64  # filter steps whose observations the block lays side by side at once
 STEP_ROWS = 256  # rows stepped at once: bounds a step's temporaries whatever the block
@@ -79,18 +79,16 @@ class FleetMonitor:
     noise_std : mapping
         Standard deviation of each ARR's residual on healthy data (by ARR name), the same for every
         asset (assets of one type; calibrate on one healthy record).
-    laws : sequence of str or mapping
-        Competing degradation laws (names of built-in ones, or ``{name: model}``).
-    candidates : sequence of str, optional
-        Only these candidates, instead of those of each asset's signature at its alarm.
-    dt, n_particles, inflation, life, rate, process_noise, discount, horizon, detection, min_ratio,
-    healthy_until, domains
+    settings : IsolationSettings, optional
+        The settings of :class:`~prognosis.isolation.IsolatingMonitor`, with one meaning in both
+        (default :data:`~prognosis.isolation.FLEET_SETTINGS`); ``**changes`` change single settings
+        of it.  The fleet's filter is the random-walk one (``method="sir"``), its laws carry one rate
+        (linear, exponential or a custom law with one gamma), and it weighs parameters only
+        (``sensors=False``, no ``pairs``); ``candidates`` are checked against each asset's signature.
+    detection, healthy_until, domains
         As :class:`~prognosis.isolation.IsolatingMonitor`.
-    rul_every : int
-        Predict the RUL every this many filter steps of an asset.
     report_every : int, optional
         Write the estimates (with quantiles) every this many steps (default ``rul_every``).
-    seed : int
 
     Examples
     --------
@@ -118,36 +116,35 @@ class FleetMonitor:
     """
 
     def __init__(self, arrs: Sequence, failures: Mapping[str, float], *, noise_std: Mapping[str, float],
-                 laws: Sequence[str] | Mapping = FLEET_LAWS, candidates: Sequence[str] | None = None,
-                 dt: float = 0.1, n_particles: int = 500, inflation: float = 4.0, life: tuple = LIFE_PRIOR,
-                 rate: tuple | None = None, process_noise: float = PROCESS_NOISE, discount: float = 0.98,
-                 rul_every: int = 10, report_every: int | None = None, horizon: float | None = None,
-                 detection: Mapping | None = None, min_ratio: float = EVIDENCE_RATIO,
-                 healthy_until: float | None = None, domains: Mapping[str, tuple] | None = None, seed: int = 0):
-        # one validation for both monitors: the settings are an IsolatingMonitor's
-        self.settings = IsolatingMonitor(arrs, failures, noise_std=noise_std, laws=laws, candidates=candidates,
-                                         dt=dt, n_particles=n_particles, inflation=inflation, life=life, rate=rate,
-                                         process_noise=process_noise, discount=discount, rul_every=rul_every,
-                                         horizon=horizon, detection=detection, min_ratio=min_ratio,
-                                         healthy_until=healthy_until, domains=domains, method="sir", seed=seed)
-        s = self.settings
-        for name, model in s.laws.items():  # the fleet filter carries one gamma per particle: a rate
+                 settings: IsolationSettings | None = None, detection: Mapping | None = None,
+                 healthy_until: float | None = None, domains: Mapping[str, tuple] | None = None,
+                 report_every: int | None = None, **changes):
+        self.settings = s = (settings or FLEET_SETTINGS).changed(**changes)
+        if s.method != "sir":
+            raise PrognosisError(f"method: the fleet's filter is the random-walk one, 'sir'; got {s.method!r}")
+        if s.sensors:
+            raise PrognosisError("sensors: the fleet weighs parameters only; give sensors=False (FLEET_SETTINGS)")
+        for name, model in s.law_models.items():  # the fleet filter carries one gamma per particle: a rate
             if (model is None and name == "power") or (model is not None and model.n_gamma != 1):
                 raise PrognosisError(f"laws: the fleet filter weighs laws with one rate; {name!r} has more gammas")
+        self.priors = Priors(arrs, failures, s, domains)
+        noise_std = check_noise_std(noise_std, arrs)
+        self.detection = dict(detection or {})
+        self.healthy_until = -math.inf if healthy_until is None else float(healthy_until)
         if report_every is None:
             report_every = s.rul_every
         if isinstance(report_every, bool) or int(report_every) != report_every or report_every < 1:
             raise PrognosisError(f"report_every must be a positive whole number of filter steps, got {report_every!r}")
         self.report_every = int(report_every)
         self.streams = AssetStreams(s.seed)
-        candidates = s.candidates if s.candidates is not None else list(s.failures)
-        self.hypotheses, self.never = s.hypotheses_for(candidates)
-        self.arrs = [a for a in s.arrs if any(c in a.parameters for c in candidates)]
+        candidates = list(s.candidates) if s.candidates is not None else list(self.priors.failures)
+        self.hypotheses, self.never = self.priors.hypotheses_for(candidates)
+        self.arrs = [a for a in arrs if any(c in a.parameters for c in candidates)]
         if not self.arrs:
             raise PrognosisError(f"no ARR is sensitive to any of the candidates {candidates}")
         self.groups = indistinguishable_groups(self.arrs, candidates)
-        self.noise = np.array([s.noise_std[a.name] for a in self.arrs])
-        self.options = [s.options_for(a) for a in self.arrs]
+        self.noise = np.array([noise_std[a.name] for a in self.arrs])
+        self.options = [detection_options(self.detection, arrs, a) for a in self.arrs]
         # one text per hypothesis, shared by every row of the tables (a name is built anew at each call)
         self._names = [h.name for h in self.hypotheses]
         # what a record must hold, checked before it is evaluated: every column read, the sensors not stuck
@@ -157,7 +154,7 @@ class FleetMonitor:
                                                                 for c in (o.get("antiderivatives") or {}).values())]))
         self.observations = [[observation_model(a, h.candidate) if h.candidate in a.parameters else None
                               for a in self.arrs] for h in self.hypotheses]
-        self.boxes = np.array([s.healthy_box(h, self.arrs) for h in self.hypotheses]).reshape(-1, 2)
+        self.boxes = np.array([self.priors.healthy_box(h, self.arrs) for h in self.hypotheses]).reshape(-1, 2)
         self.domains = np.array([h.domain for h in self.hypotheses], float).reshape(-1, 2)
         self.up = np.array([h.direction == "up" for h in self.hypotheses])
         self._filter = None  # the streaming filter (run() uses one per block)
@@ -222,7 +219,7 @@ class FleetMonitor:
         alarm = np.zeros(t.size, bool)
         for e in evaluations:
             alarm |= e.alarm
-        alarm &= t > self.settings.healthy_until
+        alarm &= t > self.healthy_until
         if not alarm.any():
             return None
         k = int(np.argmax(alarm))
@@ -247,12 +244,13 @@ class FleetMonitor:
         """
         s = self.settings
         allowed = (set(s.candidates) if s.candidates is not None
-                   else set(signature_candidates(self.arrs, s.failures, fired)))
+                   else set(signature_candidates(self.arrs, self.priors.failures, fired)))
         started, starts = [], []
         for index, h in enumerate(self.hypotheses):
             if h.candidate in allowed and h.name not in self.never:
                 started.append(index)
-                starts.append(s.start_interval(h, windows, self.arrs, len(windows[0].residual) - 1, self.noise))
+                alarm = len(windows[0].residual) - 1
+                starts.append(self.priors.start_interval(h, windows, self.arrs, alarm, self.noise))
         return started, starts
 
     def _filter_block(self, batch: list, result: FleetResult) -> None:
@@ -368,7 +366,7 @@ class FleetMonitor:
         """Detection on the new final samples, the start at the alarm, and the filter steps they make due."""
         first = live.count
         if live.alarm is None:
-            alarm = final.alarm.any(axis=1) & (final.t > self.settings.healthy_until)
+            alarm = final.alarm.any(axis=1) & (final.t > self.healthy_until)
             if alarm.any():
                 i = int(np.argmax(alarm))
                 fired = [a.name for a, on in zip(self.arrs, final.alarm[i]) if on]
@@ -520,13 +518,12 @@ class FleetMonitor:
     def _new_filter(self) -> FleetFilter:
         s = self.settings
         if self._laws is None:
-            self._laws = [s.law(h, 0.0) for h in self.hypotheses]
+            self._laws = [self.priors.law(h, 0.0) for h in self.hypotheses]
         return FleetFilter(self._laws, self.observations, noise_std=self.noise, n_particles=s.n_particles, dt=s.dt,
-                           inflation=s.inflation, discount=s.discount, streams=self.streams)
+                           inflation=s.likelihood_inflation, discount=s.discount, streams=self.streams)
 
     def _add_rows(self, pf: FleetFilter, assets: list) -> tuple[np.ndarray, np.ndarray]:
         """Start every asset's rows; returns the rows and the index (into ``assets``) of each row's asset."""
-        s = self.settings
         ids, hypotheses, lo, hi, sigma_v, owner = [], [], [], [], [], []
         rates = []
         for a, item in enumerate(assets):
@@ -535,11 +532,11 @@ class FleetMonitor:
                 hypotheses.append(h)
                 lo.append(start_lo)
                 hi.append(start_hi)
-                law = s.laws[self.hypotheses[h].law]
+                law = self.priors.laws[self.hypotheses[h].law]
                 sigma_v.append(noise if law is None else law.process_noise)
                 owner.append(a)
                 rng = self.streams.generator(item.asset, 0, RATES, lane=h)
-                rates.append(s.rate_particles(self.hypotheses[h], rng)[None, :, 0])
+                rates.append(self.priors.rate_particles(self.hypotheses[h], rng)[None, :, 0])
         rows = pf.add(ids, hypothesis=hypotheses, lo=lo, hi=hi, rates=np.stack(rates), process_noise=sigma_v)
         return rows, np.array(owner)
 
@@ -634,12 +631,12 @@ class FleetMonitor:
             theta, rate = pf.theta[rows[mine]], pf.gamma[rows[mine], 0]
             if has_closed_form(law):
                 times[mine] = crossing_times(law, theta, rate, np.full(theta.shape[0], hypothesis.failure),
-                                             np.full(theta.shape[0], hypothesis.direction == "up"), s.horizon)
+                                             np.full(theta.shape[0], hypothesis.direction == "up"), s.rul_horizon)
                 continue
             predictor = self._predictors.get(h)
             if predictor is None:  # one noise bank per hypothesis, shared by every asset
                 predictor = self._predictors[h] = RULPredictor(law, dt=s.dt, theta_fail=hypothesis.failure,
-                                                               direction=hypothesis.direction, horizon=s.horizon,
+                                                               direction=hypothesis.direction, horizon=s.rul_horizon,
                                                                seed=seeds.spawn(s.seed, seeds.PREDICTORS, int(h)))
             for i, row, asset, step in zip(np.arange(rows.size)[mine], rows[mine], ids[mine], steps[mine]):
                 gamma = np.moveaxis(pf.gamma[row:row + 1], 1, -1)

@@ -110,7 +110,7 @@ def test_the_monitor_is_built_once_per_spec_and_thread():
     again, built_again = monitor_for(spec(seed=11))
     assert built and not built_again and again is first
     assert first.signals == ["V", "i", "v_C"]
-    assert first.monitor.settings.laws == {"linear": None}  # no process_noise: the monitor's relative sigma_v
+    assert first.monitor.settings.law_models == {"linear": None}  # no process_noise: the monitor's relative sigma_v
 
 
 # ------------------------------------------------------------------------------------------------ shards

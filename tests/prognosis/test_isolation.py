@@ -230,7 +230,7 @@ def test_the_models_domains_decide_what_is_rejected():
     with pytest.raises(ValueError, match=r"failure value of 'R' \(-5\) lies outside its physical domain"):
         IsolatingMonitor(arrs, {"R": -5.0}, noise_std=noise, domains={"R": (0.0, np.inf)})
     monitor = IsolatingMonitor(arrs, {"R": 20.0}, noise_std=noise, domains={"R": (0.0, 50.0)})
-    assert monitor.domains == {"R": (0.0, 50.0)}
+    assert monitor.priors.domains == {"R": (0.0, 50.0)}
 
 
 @pytest.mark.slow  # simulates the torsion bar under its PI loop (tests/wear) and runs bgphm prognose

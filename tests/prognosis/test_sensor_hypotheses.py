@@ -87,11 +87,11 @@ def test_a_bias_has_rate_zero_and_a_drift_the_sign_of_the_offset_seen(arrs):
     monitor = IsolatingMonitor(arrs, {"b_Md": 0.45}, noise_std={a.name: 0.1 for a in arrs}, n_particles=50)
     bias, drift, _ = (Hypothesis.of_sensor("omega_Ld", law) for law in SENSOR_LAWS)
     rng = np.random.default_rng(1)
-    assert (monitor.rate_particles(bias, rng, offset=0.4) == 0).all()
-    down = monitor.rate_particles(drift, rng, offset=-0.4)[:, 0]
-    life = np.array(monitor.life) * monitor.dt
+    assert (monitor.priors.rate_particles(bias, rng, offset=0.4) == 0).all()
+    down = monitor.priors.rate_particles(drift, rng, offset=-0.4)[:, 0]
+    life = np.array(monitor.settings.life) * monitor.settings.dt
     assert (down < 0).all() and 0.4 / life[1] <= -down.max() and -down.min() <= 0.4 / life[0]
-    assert monitor.gamma_bounds(bias, 2, offset=0.4) == ([0.0, 1.0], [0.0, 1.0])
+    assert monitor.priors.gamma_bounds(bias, 2, offset=0.4) == ([0.0, 1.0], [0.0, 1.0])
 
 
 def test_the_observation_of_a_sensor_row_predicts_on_the_arrs_reading_it(arrs):
@@ -125,7 +125,7 @@ def test_an_unknown_sensor_candidate_is_refused_by_name(arrs):
                          candidates=["b_Md", "sensor speed"])
     monitor = IsolatingMonitor(arrs, {"b_Md": 0.45}, noise_std={a.name: 0.1 for a in arrs},
                                candidates=["b_Md", "sensor omega_m"])
-    assert [h.name for h in monitor.hypotheses_for(monitor.candidates)[0]][-3:] == [
+    assert [h.name for h in monitor.priors.hypotheses_for(list(monitor.settings.candidates))[0]][-3:] == [
         "sensor omega_m/bias", "sensor omega_m/drift", "sensor omega_m/gain"]
 
 

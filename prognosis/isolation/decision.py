@@ -1,0 +1,197 @@
+"""The decision from the evidence: which candidate and law, or why none is claimed.
+
+:func:`decide` ranks the hypotheses (candidate x law) by their evidence, the filter's estimate of
+log p(y_1..k): a candidate (and a law) is declared when its evidence beats every other by
+``min_ratio``; candidates with the same effect on every residual are reported together
+(:func:`~prognosis.hypotheses.indistinguishable_groups`).  :func:`held_back` says which pairs of
+parameters (two faults at once) the data do not demand.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..hypotheses import Hypothesis, JointHypothesis
+from .settings import EVIDENCE_RATIO
+
+__all__ = ["Decision", "decide", "finite_or_none", "held_back"]
+
+
+@dataclass(frozen=True)
+class Decision:
+    """What the evidence says at one time.
+
+    Attributes
+    ----------
+    candidate : str, list of str or None
+        The isolated parameter; a list when several are indistinguishable (``status``
+        ``"indistinguishable"``) or not yet told apart (``"undecided"``); None if every hypothesis
+        was rejected.
+    status : {"isolated", "indistinguishable", "undecided", "rejected"}
+        ``"isolated"`` only when the evidence singles out one candidate *and* no other fault of the
+        model (parameter or sensor) has its signature; otherwise ``"indistinguishable"``.
+    candidate_ratio : float
+        Evidence ratio of the reported candidate(s) over the best other one (inf when alone).
+    degradation : str or None
+        The law with the most evidence for the reported candidate(s).
+    degradation_decided : bool
+        Its ratio over the next law reaches the minimum ratio.
+    degradation_ratio : float
+    probabilities : dict
+        Posterior probability of each hypothesis (``"candidate/law"``), uniform prior.
+    same_signature : tuple of str
+        The faults outside the reported candidate(s), parameters and ``"sensor <signal>"``, with the
+        same fault signature over the ARRs: the evidence cannot have told them apart.
+    unexplained : dict
+        ARR name -> why it is unexplained: an ARR that fired after the signature was read, which no
+        candidate is sensitive to (another fault, or a sensor's); the decision is about the first fault.
+    reason : str
+        Why the status is not the evidence's alone: when the data contradict every law of every
+        candidate (or reject every hypothesis), no candidate is claimed; the status is
+        ``"undecided"`` (``"rejected"``) and ``candidate`` lists the faults of the model, parameters
+        and sensors, consistent with the ARRs that fired.
+    """
+
+    candidate: str | list | None
+    status: str
+    candidate_ratio: float
+    degradation: str | None
+    degradation_decided: bool
+    degradation_ratio: float
+    probabilities: dict
+    same_signature: tuple = ()
+    unexplained: dict = field(default_factory=dict)
+    reason: str = ""
+
+    def as_dict(self) -> dict:
+        return {"candidate": self.candidate, "status": self.status,
+                "candidate_ratio": finite_or_none(self.candidate_ratio),
+                "degradation": self.degradation, "degradation_decided": self.degradation_decided,
+                "degradation_ratio": finite_or_none(self.degradation_ratio), "probabilities": self.probabilities,
+                "same_signature": list(self.same_signature), "unexplained": dict(self.unexplained),
+                "reason": self.reason}
+
+
+def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: Sequence[Sequence[str]],
+           rejected: Mapping[str, str] = {}, min_ratio: float = EVIDENCE_RATIO,
+           signatures: Mapping[str, Sequence[str]] = {}) -> Decision:
+    """Rank hypotheses by evidence: the candidate, then the law, each declared beyond ``min_ratio``.
+
+    A candidate's evidence is the mean of its laws' (uniform priors over the candidates, then over each
+    one's laws; a rejected law has none).  The best candidate is
+    isolated when it beats every candidate outside its group of indistinguishable ones by
+    ``min_ratio`` and ``signatures`` (candidate -> the other faults with its fault signature,
+    :func:`~prognosis.hypotheses.same_signature`) names none; its group, or the faults sharing its
+    signature, make it ``"indistinguishable"``; otherwise every candidate within the ratio of the
+    best is reported, undecided.
+
+    Examples
+    --------
+    >>> hs = [Hypothesis(c, law, 2.0, 1.0) for c in ("a", "b", "c") for law in ("linear", "exponential")]
+    >>> log_z = np.array([0.0, -9.0, -1.0, -10.0, -20.0, -20.0])
+    >>> d = decide(hs, log_z, [["a", "b"], ["c"]])
+    >>> d.candidate, d.status, d.degradation, d.degradation_decided
+    (['a', 'b'], 'indistinguishable', 'linear', True)
+    >>> decide(hs, log_z, [["a"], ["b"], ["c"]]).status   # e^1 is not decisive
+    'undecided'
+    >>> d = decide(hs, log_z, [["a", "b"], ["c"]], signatures={"a": ["b", "k"], "b": ["a", "k"]})
+    >>> d.status, d.same_signature   # a fault without a failure value shares their signature
+    ('indistinguishable', ('k',))
+    """
+    log_z = np.array([-np.inf if h.name in rejected else float(v) for h, v in zip(hypotheses, log_evidence)])
+    laws_of = Counter(h.candidate for h in hypotheses)
+    # a uniform prior over the candidates, then over each one's laws: a pair with nine pairs of laws
+    # weighs no more than a parameter with three
+    probabilities = _softmax(log_z - np.log([laws_of[h.candidate] for h in hypotheses]))
+    named = {h.name: float(p) for h, p in zip(hypotheses, probabilities)}
+    if not np.isfinite(log_z).any():
+        return Decision(None, "rejected", math.nan, None, False, math.nan, named)
+    candidates = list(dict.fromkeys(h.candidate for h in hypotheses))
+    by_candidate = {c: _logmeanexp(log_z[[h.candidate == c for h in hypotheses]]) for c in candidates}
+    best = max(candidates, key=by_candidate.get)
+    group = next((list(g) for g in groups if best in g), [best])
+    members = [c for c in group if np.isfinite(by_candidate.get(c, -np.inf))]
+    others = [by_candidate[c] for c in candidates if c not in group]
+    margin = by_candidate[best] - max(others, default=-np.inf)
+    if margin >= math.log(min_ratio):
+        reported, status = members, ("isolated" if len(members) == 1 else "indistinguishable")
+    else:
+        close = [c for c in candidates if by_candidate[c] >= by_candidate[best] - math.log(min_ratio)]
+        reported = list(dict.fromkeys(c for c in close for g in groups if c in g for c in g
+                                      if np.isfinite(by_candidate.get(c, -np.inf)))) or close
+        status = "undecided"
+    laws = list(dict.fromkeys(h.law for h in hypotheses))
+    by_law = {law: _logsumexp(log_z[[h.law == law and h.candidate in reported for h in hypotheses]]) for law in laws}
+    ranked = sorted(laws, key=by_law.get, reverse=True)
+    law_margin = by_law[ranked[0]] - (by_law[ranked[1]] if len(ranked) > 1 else -np.inf)
+    twins = ()
+    if status != "undecided":
+        twins = tuple(dict.fromkeys(f for c in reported for f in signatures.get(c, ()) if f not in reported))
+        status = "indistinguishable" if twins else status
+    return Decision(reported[0] if len(reported) == 1 else reported, status, math.exp(min(margin, 700.0)),
+                    ranked[0], bool(law_margin >= math.log(min_ratio)), math.exp(min(law_margin, 700.0)), named,
+                    twins)
+
+
+def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[str, str] = {},
+              min_ratio: float = EVIDENCE_RATIO) -> dict:
+    """The joint hypotheses of a pair whose evidence (over its laws) does not beat each of its parameters'
+    alone by ``min_ratio`` (name -> why): one fault explains the data as well, and two are claimed only
+    when the data demand them.
+
+    A candidate's evidence is the mean over its laws (a rejected law: none); a parameter without a
+    single hypothesis (a second fault no fired ARR pointed to at the alarm) is not compared.
+
+    >>> a, b = Hypothesis("a", "power", 2.0, 1.0), Hypothesis("b", "power", 2.0, 1.0)
+    >>> hs = [a, b, JointHypothesis((a, b))]
+    >>> sorted(held_back(hs, np.array([0.0, -50.0, 2.0])))   # e^2 over a alone: not decisive
+    ['a/power + b/power']
+    >>> held_back(hs, np.array([0.0, -50.0, 9.0]))
+    {}
+    """
+    alone, pairs = {}, {}
+    for h, value in zip(hypotheses, log_evidence):  # a rejected one counts with no evidence
+        value = -np.inf if h.name in rejected else float(value)
+        (pairs if isinstance(h, JointHypothesis) else alone).setdefault(h.candidate, []).append(value)
+    why = {}  # pair candidate -> why it is held back
+    for candidate, values in pairs.items():
+        together = _logmeanexp(values)
+        rivals = {m: _logmeanexp(alone[m]) for m in candidate.split(" + ")
+                  if m in alone and np.isfinite(alone[m]).any()}
+        best = max(rivals, key=rivals.get, default=None)
+        if best is not None and together - rivals[best] < math.log(min_ratio):
+            why[candidate] = (f"{candidate} explain the residuals no better than {best} alone (evidence ratio "
+                              f"{math.exp(min(together - rivals[best], 700.0)):.3g} < {min_ratio:g})")
+    return {h.name: why[h.candidate] for h in hypotheses
+            if isinstance(h, JointHypothesis) and h.name not in rejected and h.candidate in why}
+
+
+def _softmax(log_z: np.ndarray) -> np.ndarray:
+    if not np.isfinite(log_z).any():
+        return np.zeros(log_z.shape)
+    p = np.exp(log_z - log_z.max())
+    return p / p.sum()
+
+
+def _logsumexp(values: np.ndarray) -> float:
+    values = np.asarray(values, float)
+    if not values.size or not np.isfinite(values).any():
+        return -np.inf
+    top = values.max()
+    return float(top + np.log(np.sum(np.exp(values - top))))
+
+
+def _logmeanexp(values) -> float:
+    """log of the mean of exp(values): a candidate's evidence under a uniform prior over its laws."""
+    values = np.asarray(values, float)
+    return _logsumexp(values) - math.log(values.size) if values.size else -np.inf
+
+
+def finite_or_none(value: float) -> float | None:
+    """``value`` as a float where it is finite, else None (JSON has no inf or NaN)."""
+    return float(value) if math.isfinite(value) else None

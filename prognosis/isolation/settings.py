@@ -1,0 +1,215 @@
+"""How a monitor weighs candidates and laws: one frozen settings object for the single asset and the fleet.
+
+:class:`IsolationSettings` holds every setting of isolation by estimation, checked once, with one
+name and one meaning: :class:`~prognosis.isolation.IsolatingMonitor` and
+:class:`~prognosis.fleet.FleetMonitor` both take it (the fleet from :data:`FLEET_SETTINGS`, its
+random-walk filter's).  What a monitor is told about the system (the ARRs, the failure values, the
+residuals' noise, the detection options, the healthy stretch, the physical domains) is not a setting:
+it goes to the monitor itself.
+
+>>> settings = IsolationSettings(laws=("linear",), n_particles=200)
+>>> settings.changed(method="sir").likelihood_inflation, settings.likelihood_inflation
+(4.0, 1.0)
+>>> IsolationSettings(pairs=True, method="sir")
+Traceback (most recent call last):
+...
+prognosis.errors.PrognosisError: pairs: two faults at once are weighed with method 'resample-move' and ...
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import numbers
+from collections.abc import Mapping
+from dataclasses import dataclass
+from types import MappingProxyType
+
+import numpy as np
+
+from ..errors import PrognosisError
+from ..hypotheses import LIFE_PRIOR
+from ..particle_filter import check_particles, check_positive
+from ..seeds import check_seed
+
+__all__ = ["ADEQUACY_LIMIT", "ADEQUACY_WINDOW", "CONFIRM_STEPS", "DRIFT_AWAY_STEPS", "EVIDENCE_RATIO",
+           "FLEET_LAWS", "FLEET_SETTINGS", "FREEZE_BELOW", "HORIZON_STEPS", "IsolationSettings", "LAWS", "METHODS",
+           "MIXTURE_FLOOR", "PROCESS_NOISE", "SPIKE"]
+
+METHODS = ("resample-move", "sir")
+#: the competing laws by default: the two of Jha et al. (2016) and the flexible power law, which holds the
+#: linear one and takes over where the data bend away from both
+LAWS = ("linear", "exponential", "power")
+
+EVIDENCE_RATIO = 100.0  # "decisive" on Jeffreys' scale: a hypothesis is declared beyond this ratio
+MIXTURE_FLOOR = 1e-3  # hypotheses less probable than this are left out of the RUL mixture
+PROCESS_NOISE = 0.1  # sigma_v per filter step, as a fraction of the candidate's resolution per sample
+HORIZON_STEPS = 2000  # RUL horizon cap in filter steps, unless given
+CONFIRM_STEPS = 20  # filter steps after the first alarm over which the fired ARRs are read
+ADEQUACY_WINDOW = 30  # filter steps of standardized innovations a law's fit is judged on
+#: mean standardized innovation over the window beyond which the law does not follow the residual: a
+#: fitting law stays within about 1 (clean or noisy torsion-bar wear), a law that lags drifts to tens
+ADEQUACY_LIMIT = 3.0
+#: standardized innovations are clipped at this many sd before the window's mean is taken: a drifting
+#: law still shows (each innovation beyond the limit counts in full up to here), one spike moves the
+#: mean by at most SPIKE / ADEQUACY_WINDOW
+SPIKE = 3 * ADEQUACY_LIMIT
+#: log evidence behind the best hypothesis beyond which a hypothesis' particles are no longer moved
+#: (its evidence still accumulates): 1e-8 of the best's probability, beyond any decision
+FREEZE_BELOW = 8 * math.log(10.0)
+DRIFT_AWAY_STEPS = 5  # consecutive filter steps beyond the healthy box, away from failure, that reject a hypothesis
+#: the laws a fleet weighs by default: its filter carries one rate per particle
+FLEET_LAWS = ("linear", "exponential")
+
+
+@dataclass(frozen=True)
+class IsolationSettings:
+    """The settings of isolation by estimation, checked when made (a :class:`~prognosis.errors.PrognosisError`
+    names the setting).
+
+    Parameters
+    ----------
+    laws : sequence of str or mapping
+        Competing degradation laws: names of built-in ones (default :data:`LAWS`: linear,
+        exponential and the power law of the time since onset, whose exponent is estimated), or
+        ``{name: model}`` (any model of :mod:`prognosis.degradation`, e.g. a
+        :class:`~prognosis.degradation.CustomDegradation`).
+    candidates : sequence of str, optional
+        Only these candidates (each parameter needs a failure value; a sensor is ``"sensor <signal>"``),
+        instead of those of the signature.
+    sensors : bool
+        Weigh the faults of the sensors whose signature holds the fired ARRs too (on by default), by
+        the laws :data:`~prognosis.hypotheses.SENSOR_LAWS`.
+    pairs : bool
+        Weigh two parameters degrading at once too (``method="resample-move"`` and no ``candidates``
+        only; off by default: :class:`~prognosis.isolation.IsolatingMonitor`).
+    method : {"resample-move", "sir"}
+        The filter (:class:`~prognosis.isolation.IsolatingMonitor`); a fleet's is ``"sir"``.
+    dt : float
+        Filter step (s), a multiple of the record's step.
+    n_particles : int
+        Particles per hypothesis.
+    inflation : float, optional
+        Multiplier of the residual noise covariance in the likelihood; default
+        :attr:`likelihood_inflation`: 4 with ``"sir"`` (Jha et al. (2016)), 1 with ``"resample-move"``.
+    life : (float, float)
+        Prior of the life from nominal to failure, in filter steps (log-uniform).
+    rate : (float, float), optional
+        A prior interval of the rate instead (uniform; the same for every hypothesis).
+    process_noise : float
+        ``"sir"`` only: sigma_v per step as a fraction of the candidate's resolution per sample (the
+        residual noise over the sensitivity of the residual to it at the alarm), in both monitors.
+    discount : float
+        ``"sir"`` only: kernel smoothing of the rate (:class:`~prognosis.particle_filter.KernelSmoothing`).
+    rul_every : int
+        Predict the RUL every this many filter steps.
+    horizon : float, optional
+        RUL horizon cap (s); default :attr:`rul_horizon`, :data:`HORIZON_STEPS` filter steps.
+    min_ratio : float
+        Evidence ratio before a candidate or a law is declared.
+    seed : int or numpy.random.SeedSequence
+    """
+
+    laws: tuple | Mapping = LAWS
+    candidates: tuple | None = None
+    sensors: bool = True
+    pairs: bool = False
+    method: str = "resample-move"
+    dt: float = 0.1
+    n_particles: int = 500
+    inflation: float | None = None
+    life: tuple = LIFE_PRIOR
+    rate: tuple | None = None
+    process_noise: float = PROCESS_NOISE
+    discount: float = 0.98
+    rul_every: int = 10
+    horizon: float | None = None
+    min_ratio: float = EVIDENCE_RATIO
+    seed: int | np.random.SeedSequence = 0
+
+    def __post_init__(self) -> None:
+        def keep(name: str, value) -> None:
+            object.__setattr__(self, name, value)
+
+        if self.method not in METHODS:
+            raise PrognosisError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        if isinstance(self.laws, str):
+            raise PrognosisError(f"laws: give a sequence of law names, e.g. ({self.laws!r},), not one string")
+        keep("laws", MappingProxyType(dict(self.laws)) if isinstance(self.laws, Mapping) else tuple(self.laws))
+        if not self.laws:
+            raise PrognosisError("laws: give at least one degradation law")
+        if self.candidates is not None:
+            if isinstance(self.candidates, str):
+                raise PrognosisError(f"candidates: give a sequence of names, e.g. ({self.candidates!r},)")
+            keep("candidates", tuple(self.candidates))
+        keep("sensors", bool(self.sensors))
+        keep("pairs", bool(self.pairs))
+        keep("dt", check_positive(self.dt, "dt"))
+        keep("n_particles", check_particles(self.n_particles))
+        if self.inflation is not None:
+            keep("inflation", check_positive(self.inflation, "inflation"))
+        keep("life", _interval(self.life, "life", positive=True))
+        if self.rate is not None:
+            keep("rate", _interval(self.rate, "rate"))
+        if not (_real(self.process_noise) and self.process_noise >= 0):
+            raise PrognosisError(f"process_noise must be a finite number >= 0, got {self.process_noise!r}")
+        if not (_real(self.discount) and 1 / 3 < self.discount <= 1):
+            raise PrognosisError(f"discount must be a number in (1/3, 1], got {self.discount!r}")
+        if isinstance(self.rul_every, bool) or int(self.rul_every) != self.rul_every or self.rul_every < 1:
+            raise PrognosisError(f"rul_every must be a positive whole number of filter steps, got {self.rul_every!r}")
+        keep("rul_every", int(self.rul_every))
+        if self.horizon is not None:
+            keep("horizon", check_positive(self.horizon, "horizon"))
+        if not (_real(self.min_ratio) and self.min_ratio >= 1):
+            raise PrognosisError(f"min_ratio must be a finite evidence ratio >= 1, got {self.min_ratio!r}")
+        keep("min_ratio", float(self.min_ratio))
+        keep("seed", check_seed(self.seed))
+        if self.pairs and (self.method != "resample-move" or self.candidates is not None):
+            raise PrognosisError("pairs: two faults at once are weighed with method 'resample-move' and without "
+                                 "candidates only")
+
+    @property
+    def law_models(self) -> dict:
+        """Law name -> the user's model, or None for a built-in law (made per hypothesis)."""
+        return dict(self.laws) if isinstance(self.laws, Mapping) else {name: None for name in self.laws}
+
+    @property
+    def likelihood_inflation(self) -> float:
+        """``inflation``, by default 4 with ``"sir"`` (the random walk's likelihood widened as in Jha et al.
+        (2016)) and 1 with ``"resample-move"`` (the noise as measured)."""
+        if self.inflation is not None:
+            return self.inflation
+        return 4.0 if self.method == "sir" else 1.0
+
+    @property
+    def rul_horizon(self) -> float:
+        """``horizon``, by default :data:`HORIZON_STEPS` filter steps."""
+        return HORIZON_STEPS * self.dt if self.horizon is None else self.horizon
+
+    def changed(self, **changes) -> "IsolationSettings":
+        """A copy with ``changes``, checked; an unknown name is refused with the known ones."""
+        names = [f.name for f in dataclasses.fields(self)]
+        unknown = [name for name in changes if name not in names]
+        if unknown:
+            raise PrognosisError(f"unknown setting {unknown[0]!r} (settings: {', '.join(names)})")
+        return dataclasses.replace(self, **changes) if changes else self
+
+
+def _real(value) -> bool:
+    return not isinstance(value, (bool, np.bool_)) and isinstance(value, numbers.Real) and math.isfinite(value)
+
+
+def _interval(value, name: str, positive: bool = False) -> tuple[float, float]:
+    """Two finite numbers ``lo < hi`` (both > 0 with ``positive``), as floats."""
+    try:
+        lo, hi = value
+    except (TypeError, ValueError):
+        raise PrognosisError(f"{name} must be two numbers (lo, hi), got {value!r}") from None
+    if not (_real(lo) and _real(hi) and lo < hi and (lo > 0 or not positive)):
+        need = "0 < lo < hi" if positive else "lo < hi"
+        raise PrognosisError(f"{name} must be two finite numbers with {need}, got {value!r}")
+    return float(lo), float(hi)
+
+
+#: a fleet's settings by default: its random-walk filter, the laws with one rate, parameters only
+FLEET_SETTINGS = IsolationSettings(laws=FLEET_LAWS, sensors=False, method="sir")
