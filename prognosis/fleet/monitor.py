@@ -25,7 +25,7 @@ import numpy as np
 
 from diagnosis import RecordError, as_record, check_signals
 
-from ..hypotheses import indistinguishable_groups, signature_candidates
+from ..hypotheses import indistinguishable_groups, same_signature, signature_candidates
 from ..isolation import (DRIFT_AWAY_STEPS, FLEET_LAWS, FLEET_SETTINGS, MIXTURE_FLOOR, IsolationSettings, Priors,
                          check_noise_std, decide, detection_options)
 from ..monitor import filter_stride
@@ -143,6 +143,8 @@ class FleetMonitor:
         if not self.arrs:
             raise PrognosisError(f"no ARR is sensitive to any of the candidates {candidates}")
         self.groups = indistinguishable_groups(self.arrs, candidates)
+        # isolable in the model: over every ARR given, as IsolatingMonitor reads it
+        self.signatures = {c: same_signature(list(arrs), c) for c in candidates}
         self.noise = np.array([noise_std[a.name] for a in self.arrs])
         self.options = [detection_options(self.detection, arrs, a) for a in self.arrs]
         # one text per hypothesis, shared by every row of the tables (a name is built anew at each call)
@@ -158,6 +160,7 @@ class FleetMonitor:
         self.domains = np.array([h.domain for h in self.hypotheses], float).reshape(-1, 2)
         self.up = np.array([h.direction == "up" for h in self.hypotheses])
         self._filter = None  # the streaming filter (run() uses one per block)
+        self._alone = None  # the status of a single hypothesis that stands
         self._laws = None
         self._live: dict = {}  # text of the asset id -> its stream (ids that print the same are one)
         self._predictors: dict = {}
@@ -647,8 +650,11 @@ class FleetMonitor:
 
     def _status(self, position, hypotheses, rejected, log_z, empty) -> list:
         """The decision's status per asset ("isolated" for a single hypothesis that stands)."""
-        if len(self.hypotheses) == 1:
-            return ["rejected" if e else "isolated" for e in empty]
+        if len(self.hypotheses) == 1:  # alone, it stands or it is rejected: one decision, made once
+            if self._alone is None:
+                self._alone = decide(self.hypotheses, np.zeros(1), self.groups, {}, self.settings.min_ratio,
+                                     self.signatures).status
+            return ["rejected" if e else self._alone for e in empty]
         names = {}
         out = []
         for a in range(log_z.shape[0]):
@@ -657,7 +663,8 @@ class FleetMonitor:
             rejected_names = {h.name: "rejected" for h, r in zip(hs, rejected[mine]) if r}
             key = (tuple(h.name for h in hs), tuple(sorted(rejected_names)))
             groups = names.setdefault(key, [g for g in self.groups if any(c in {h.candidate for h in hs} for c in g)])
-            out.append(decide(hs, log_z[a, :len(hs)], groups, rejected_names, self.settings.min_ratio).status)
+            out.append(decide(hs, log_z[a, :len(hs)], groups, rejected_names, self.settings.min_ratio,
+                              self.signatures).status)
         return out
 
 

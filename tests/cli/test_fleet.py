@@ -142,7 +142,7 @@ def test_a_serial_run_writes_the_tables_by_bucket_and_a_summary(reference):
         assets = set(pq.read_table(part).column("asset").to_pylist())
         assert {bucket_of(a) for a in assets} == {int(part.parent.name.split("=")[1])}
     rul = result.for_asset("c0").rul
-    assert np.all(np.diff(rul["t"]) > 0) and rul["status"][-1] == "isolated"
+    assert np.all(np.diff(rul["t"]) > 0) and rul["status"][-1] == "indistinguishable"  # L: R's signature
     assert abs(rul["t"][-1] + rul["p50"][-1] - 2.8) < 0.5  # R reaches 20 ohm at t = 2.8 s
 
 

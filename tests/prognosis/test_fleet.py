@@ -85,7 +85,8 @@ def test_rul_tracks_the_truth(circuit):
     late = rul["t"] > 1.0
     assert np.all(np.abs(rul["t"][late] + rul["p50"][late] - eol) < 0.1 * eol)
     assert np.all(rul["p5"] <= rul["p50"]) and np.all(rul["p50"] <= rul["p95"])
-    assert set(rul["status"]) == {"isolated"} and set(rul["hypothesis"]) == {"R/linear"}
+    # L has R's fault signature over the loop ARR: R is named, but not isolated (as IsolatingMonitor says)
+    assert set(rul["status"]) == {"indistinguishable"} and set(rul["hypothesis"]) == {"R/linear"}
 
 
 def test_laws_weighed_by_evidence(circuit):
