@@ -35,7 +35,7 @@ from bgphm.errors import EXIT_FAILURE, EXIT_USAGE, UsageError
 from bgphm.terminal import terminal_streams
 from bondgraph.errors import PHMError, SettingError
 from diagnosis import POOLED_RECORDS, DetectionSettings
-from prognosis import PrognosisSettings
+from prognosis import IsolationSettings
 
 __all__ = ["main"]
 
@@ -44,11 +44,12 @@ __all__ = ["main"]
 #: The module of each command (``bgphm.commands``), imported when the command runs: ``bgphm arr`` does not
 #: load the particle filters.
 COMMANDS = {name: f"bgphm.commands.{name}" for name in ("arr", "simulate", "detect", "prognose", "fleet", "demo")}
-DETECTION, PROGNOSIS = DetectionSettings(), PrognosisSettings()  # the library's defaults, shown in --help
+DETECTION, PROGNOSIS = DetectionSettings(), IsolationSettings()  # the library's defaults, shown in --help
 
 
 #: The options of the library's settings whose names differ from the settings' (``--`` + the name otherwise).
-OPTIONS = {"method": "--filter", "laws": "--degradation", "candidates": "--candidate", "failures": "--fail"}
+OPTIONS = {"method": "--filter", "laws": "--degradation", "candidates": "--candidate", "failures": "--fail",
+           "n_particles": "--particles"}
 
 
 def _option(setting: str) -> str:
@@ -143,8 +144,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--rate", type=float, nargs=2, metavar=("LO", "HI"),
                    help="uniform prior interval of the rate (default: the life from nominal to failure "
                         "log-uniform over 10 to 1e5 filter steps)")
-    p.add_argument("--particles", type=int, default=PROGNOSIS.particles,
-                   help=f"particles per hypothesis (default {PROGNOSIS.particles})")
+    p.add_argument("--particles", type=int, default=PROGNOSIS.n_particles,
+                   help=f"particles per hypothesis (default {PROGNOSIS.n_particles})")
     p.add_argument("--filter", choices=("resample-move", "sir"), default="resample-move",
                    help="resample-move (the default): the law's parameters weighed on the whole history, moved "
                         "by MCMC, with the residual noise measured on the healthy stretch; a law the data "
@@ -201,8 +202,8 @@ def _fleet_parser(sub, model_help: str) -> None:
     p.add_argument("--window", type=int, help="Savitzky-Golay window for derivatives (odd; default 11)")
     p.add_argument("--integrals", choices=("avoid", "keep"), default="avoid",
                    help="as for prognose: avoid (differentiate) or keep the integrals of measured signals")
-    p.add_argument("--particles", type=int, default=PROGNOSIS.particles,
-                   help=f"particles per hypothesis (default {PROGNOSIS.particles})")
+    p.add_argument("--particles", type=int, default=PROGNOSIS.n_particles,
+                   help=f"particles per hypothesis (default {PROGNOSIS.n_particles})")
     p.add_argument("--dt", type=float, help="filter step in s, a multiple of the records' (default: one "
                    "derivative window of samples)")
     p.add_argument("--rul-every", type=int, default=PROGNOSIS.rul_every,
@@ -286,7 +287,7 @@ def _check_options(args) -> None:
     if hasattr(args, "k"):  # detect, prognose, fleet
         detection_settings(args)
     if hasattr(args, "particles"):  # prognose, fleet
-        PrognosisSettings(particles=args.particles, rul_every=args.rul_every, horizon=args.horizon, dt=args.dt,
+        IsolationSettings(n_particles=args.particles, rul_every=args.rul_every, horizon=args.horizon, dt=args.dt,
                           seed=args.seed)
     elif getattr(args, "seed", 0) < 0:  # demo: a noise seed
         raise UsageError(f"--seed must be a whole number >= 0, got {args.seed}")

@@ -32,9 +32,8 @@ from .degradation import (CustomDegradation, ExponentialDegradation, LinearDegra
                           degradation_model)
 from .metrics import alpha_lambda, prognostic_horizon, relative_accuracy, relative_rmse, rmad
 from .monitor import HealthMonitor, MonitorResult
-from .isolation import IsolatingMonitor, IsolationResult
-from .pipeline import (MAX_PARTICLES, PrognosisSettings, check_candidate, check_failures, filter_step, prognose,
-                       rul_horizon)
+from .isolation import MAX_PARTICLES, IsolatingMonitor, IsolationResult, IsolationSettings
+from .pipeline import PrognosisSettings, check_candidate, check_failures, filter_step, prognose, rul_horizon
 from .observation import ObservationModel, observation_model
 from .likelihood import ResidualNoise
 from .particle_filter import ParticleFilter, StepDiagnostics, VarianceAdaptation
@@ -44,6 +43,7 @@ from .rul import RULDistribution, RULPredictor, predict_rul
 
 __all__ = [
     "CustomDegradation", "ExponentialDegradation", "HealthMonitor", "IsolatingMonitor", "IsolationResult",
+    "IsolationSettings",
     "LinearDegradation", "MAX_PARTICLES", "MonitorResult", "ObservationModel", "ParticleFilter", "PowerDegradation",
     "PrognosisError", "PrognosisSettings", "RULDistribution", "RULPredictor", "ResampleMoveFilter", "ResidualNoise",
     "StepDiagnostics", "VarianceAdaptation", "alpha_lambda", "check_candidate", "check_failures",

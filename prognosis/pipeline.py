@@ -11,13 +11,14 @@ A setting that does not fit the record raises a :class:`~bondgraph.errors.Settin
 >>> from bondgraph import simulate
 >>> from bondgraph.library import rlc_circuit
 >>> from diagnosis import add_noise, derive_arrs
+>>> from prognosis.isolation import IsolationSettings
 >>> bg = rlc_circuit()
 >>> t = np.linspace(0.0, 3.0, 3001)
 >>> run = simulate(bg, (0.0, 3.0), {"V": lambda t: 5 + np.sin(7 * t)}, t_eval=t,
 ...                parameters={"R": lambda t: 10.0 + 4.0 * max(0.0, t - 1.0)}).record()
 >>> record = add_noise(run, {"i": 1e-4}, seed=0)
->>> settings = PrognosisSettings(detection=DetectionSettings(calibrate=0.8), laws=("linear",),
-...                              particles=100, sensors=False)
+>>> settings = PrognosisSettings(detection=DetectionSettings(calibrate=0.8),
+...                              isolation=IsolationSettings(laws=("linear",), n_particles=100, sensors=False))
 >>> result = prognose(derive_arrs(bg), record, {"R": 20.0}, settings)
 >>> result.decision.candidate, result.settings["filter_step"]
 ('R', 0.011)
@@ -37,85 +38,41 @@ from diagnosis.derivatives import default_window
 from diagnosis.records import Record, as_record
 
 from .errors import PrognosisError
-from .isolation import HORIZON_STEPS, LAWS, METHODS, IsolatingMonitor, IsolationResult
+from .isolation import HORIZON_STEPS, LAWS, IsolatingMonitor, IsolationResult, IsolationSettings
 from .rul import check_horizon
 
-__all__ = ["MAX_PARTICLES", "PrognosisSettings", "check_candidate", "check_failures", "filter_step", "prognose",
+__all__ = ["PrognosisSettings", "check_candidate", "check_failures", "filter_step", "prognose",
            "rul_horizon"]
-
-#: Particles per hypothesis at most: the filter holds (hypotheses, particles) arrays at every step.
-MAX_PARTICLES = 100_000
-
 
 @dataclass(frozen=True)
 class PrognosisSettings:
-    """The settings of :func:`prognose`, checked once.
+    """The settings of :func:`prognose`: one settings object per stage, each checked when made.
 
     Parameters
     ----------
     detection : DetectionSettings
         The healthy stretch, margins and persistence (:mod:`diagnosis.calibration`).
-    laws : tuple of str
-        Competing degradation laws (default :data:`~prognosis.isolation.LAWS`).
-    candidates : tuple of str, optional
-        Only these candidates instead of those of the fault signature.
-    sensors, pairs : bool
-        Weigh the sensors' faults too (default); weigh two parameters wearing at once too (off).
-    particles : int
-        Particles per hypothesis, 2 to :data:`MAX_PARTICLES`.
-    method : {"resample-move", "sir"}
-        The filter (:class:`~prognosis.isolation.IsolatingMonitor`).
-    dt : float, optional
-        Filter step (s), a multiple of the record's step; default :func:`filter_step`.
-    rate : (float, float), optional
-        A uniform prior interval of the rate instead of the life prior.
-    rul_every : int
-        Filter steps between RUL predictions.
-    horizon : float, optional
-        RUL horizon cap (s); default :data:`~prognosis.isolation.HORIZON_STEPS` filter steps.
-    seed : int
+    isolation : IsolationSettings
+        How candidates and laws are weighed (:class:`~prognosis.isolation.IsolationSettings`, as
+        :class:`~prognosis.isolation.IsolatingMonitor` and :class:`~prognosis.fleet.FleetMonitor` take
+        them).  Left None, its ``dt`` is chosen from the record (:func:`filter_step`) and its
+        ``horizon`` is :data:`~prognosis.isolation.HORIZON_STEPS` filter steps, checked against the
+        memory the RUL predictors would hold (:func:`rul_horizon`).
 
-    >>> PrognosisSettings(particles=1)
+    >>> PrognosisSettings(isolation=IsolationSettings(n_particles=1))
     Traceback (most recent call last):
     ...
-    bondgraph.errors.SettingError: particles must be in [2, 100000], got 1
+    bondgraph.errors.SettingError: n_particles must be a whole number in [2, 100000], got 1
     """
 
     detection: DetectionSettings = field(default_factory=DetectionSettings)
-    laws: tuple = LAWS
-    candidates: tuple | None = None
-    sensors: bool = True
-    pairs: bool = False
-    particles: int = 500
-    method: str = "resample-move"
-    dt: float | None = None
-    rate: tuple | None = None
-    rul_every: int = 10
-    horizon: float | None = None
-    seed: int = 0
+    isolation: IsolationSettings = field(default_factory=IsolationSettings)
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.particles, (int, np.integer)) and 2 <= self.particles <= MAX_PARTICLES):
-            raise SettingError("particles", f"{{setting}} must be in [2, {MAX_PARTICLES}], got {self.particles!r}")
-        if not (isinstance(self.rul_every, (int, np.integer)) and self.rul_every >= 1):
-            raise SettingError("rul_every", f"{{setting}} must be at least 1 filter step, got {self.rul_every!r}")
-        for name in ("horizon", "dt"):
-            value = getattr(self, name)
-            if value is not None and not (math.isfinite(value) and value > 0):
-                raise SettingError(name, f"{{setting}} must be a positive number of seconds, got {value!r}")
-        if not (isinstance(self.seed, (int, np.integer)) and 0 <= self.seed < 2**63):
-            raise SettingError("seed", f"{{setting}} must be an integer in [0, 2**63), got {self.seed!r}")
-        if self.method not in METHODS:
-            raise SettingError("method", f"{{setting}} must be one of {', '.join(METHODS)}, got {self.method!r}")
-        if not self.laws:
-            raise SettingError("laws", "{setting}: give at least one degradation law")
-        if self.rate is not None and not (len(self.rate) == 2 and all(math.isfinite(v) for v in self.rate)
-                                          and self.rate[0] < self.rate[1]):
-            raise SettingError("rate", f"{{setting}} {' '.join(f'{v:g}' for v in self.rate)}: need two finite "
-                                       "numbers with lo < hi")
-        if self.pairs and (self.method != "resample-move" or self.candidates is not None):
-            raise SettingError("pairs", "{setting}: two faults at once are weighed with {setting:method} "
-                                        "resample-move and without {setting:candidates} only")
+        for name, kind in (("detection", DetectionSettings), ("isolation", IsolationSettings)):
+            if not isinstance(getattr(self, name), kind):
+                raise SettingError(name, f"{{setting}} must be a {kind.__name__}, got a "
+                                         f"{type(getattr(self, name)).__name__}")
 
 
 def filter_step(record: Record, window: int | None = None, dt: float | None = None) -> float:
@@ -234,22 +191,21 @@ def prognose(arrs: Sequence, record, failures: Mapping[str, float], settings: Pr
         ``filter_step``, ``horizon``, ``residual_noise_std``, ``margins``) beside the settings given.
     """
     settings = settings or PrognosisSettings()
+    chosen = settings.isolation
     arrs = list(arrs)
-    check_failures(failures, {p: a.values[p] for a in arrs for p in a.parameters}, domains, settings.laws)
+    check_failures(failures, {p: a.values[p] for a in arrs for p in a.parameters}, domains,
+                   list(chosen.law_models))
     record = as_record(record, list(dict.fromkeys(s for a in arrs for s in a.signals)))
     detection = settings.detection
     healthy = calibrate(arrs, record, detection)
-    dt = filter_step(record, detection.window, settings.dt)
-    horizon = rul_horizon(dt, settings.horizon, settings.particles, len(failures) * len(settings.laws))
-    monitor = IsolatingMonitor(arrs, failures, noise_std=healthy.noise_std, laws=list(settings.laws),
-                               candidates=None if settings.candidates is None else list(settings.candidates),
-                               sensors=settings.sensors, pairs=settings.pairs, dt=dt, n_particles=settings.particles,
-                               rate=settings.rate, rul_every=settings.rul_every, horizon=horizon,
-                               detection=healthy.options(detection), healthy_until=healthy.until, domains=domains,
-                               method=settings.method, seed=settings.seed)
+    dt = filter_step(record, detection.window, chosen.dt)
+    horizon = rul_horizon(dt, chosen.horizon, chosen.n_particles, len(failures) * len(chosen.laws))
+    monitor = IsolatingMonitor(arrs, failures, noise_std=healthy.noise_std,
+                               settings=chosen.changed(dt=dt, horizon=horizon), detection=healthy.options(detection),
+                               healthy_until=healthy.until, domains=domains)
     result = monitor.run(record, evaluations=healthy.evaluations, progress=progress)
     result.settings = {"failure_values": dict(failures), "calibration_end": healthy.until, "filter_step": dt,
-                       "horizon": horizon, "filter": settings.method, "particles_per_hypothesis": settings.particles,
+                       "horizon": horizon, "filter": chosen.method, "particles_per_hypothesis": chosen.n_particles,
                        "residual_noise_std": dict(healthy.noise_std), "margins": dict(healthy.margin),
-                       "seed": settings.seed}
+                       "seed": chosen.seed if isinstance(chosen.seed, int) else str(chosen.seed)}
     return result

@@ -9,7 +9,7 @@ import warnings
 from bgphm.errors import EXIT_OK
 from bgphm.files import csv_text, write_text
 from diagnosis.records import RecordWarning
-from prognosis import PrognosisSettings
+from prognosis import IsolationSettings, PrognosisSettings
 
 from ._inputs import (
     detection_settings,
@@ -37,11 +37,11 @@ def run(args, progress: Progress) -> int:
     detection = detection_settings(args)
     out = output_directory(args)
     spec, arrs, failures, candidates, laws = what_can_fail(args, progress)
-    settings = PrognosisSettings(detection=detection, laws=tuple(laws),
-                                 candidates=None if candidates is None else tuple(candidates), sensors=args.sensors,
-                                 pairs=args.pairs, particles=args.particles, method=args.filter, dt=args.dt,
-                                 rate=None if args.rate is None else tuple(args.rate), rul_every=args.rul_every,
-                                 horizon=args.horizon, seed=args.seed)
+    isolation = IsolationSettings(laws=tuple(laws), candidates=None if candidates is None else tuple(candidates),
+                                  sensors=args.sensors, pairs=args.pairs, n_particles=args.particles,
+                                  method=args.filter, dt=args.dt, rate=None if args.rate is None else tuple(args.rate),
+                                  rul_every=args.rul_every, horizon=args.horizon, seed=args.seed)
+    settings = PrognosisSettings(detection=detection, isolation=isolation)
     record = load_record(args.data, arrs, progress, args.resample)
     progress(f"calibrating, then the particle filter from the first alarm: {len(laws)} law(s) per candidate, "
              f"{args.particles} particles each")

@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from bondgraph.errors import SettingError
 from diagnosis import RecordError, as_record, check_signals
 
 from ..hypotheses import indistinguishable_groups, same_signature, signature_candidates
@@ -121,16 +122,20 @@ class FleetMonitor:
                  report_every: int | None = None, **changes):
         self.settings = s = (settings or FLEET_SETTINGS).changed(**changes)
         if s.method != "sir":
-            raise PrognosisError(f"method: the fleet's filter is the random-walk one, 'sir'; got {s.method!r}")
+            raise SettingError("method", f"{{setting}}: the fleet's filter is the random-walk one, 'sir'; "
+                                         f"got {s.method!r}")
         if s.sensors:
-            raise PrognosisError("sensors: the fleet weighs parameters only; give sensors=False (FLEET_SETTINGS)")
+            raise SettingError("sensors", "{setting}: the fleet weighs parameters only; give sensors=False "
+                                          "(as FLEET_SETTINGS)")
         for name, model in s.law_models.items():  # the fleet filter carries one gamma per particle: a rate
             if (model is None and name == "power") or (model is not None and model.n_gamma != 1):
-                raise PrognosisError(f"laws: the fleet filter weighs laws with one rate; {name!r} has more gammas")
+                raise SettingError("laws", f"{{setting}}: the fleet filter weighs laws with one rate; {name!r} has "
+                                           "more gammas")
         self.priors = Priors(arrs, failures, s, domains)
         noise_std = check_noise_std(noise_std, arrs)
         self.detection = dict(detection or {})
         self.healthy_until = -math.inf if healthy_until is None else float(healthy_until)
+        s.require_step("FleetMonitor")
         if report_every is None:
             report_every = s.rul_every
         if isinstance(report_every, bool) or int(report_every) != report_every or report_every < 1:

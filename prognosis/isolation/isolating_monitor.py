@@ -125,6 +125,7 @@ class IsolatingMonitor:
         self.noise_std = check_noise_std(noise_std, self.arrs)
         self.detection = dict(detection or {})
         self.healthy_until = -math.inf if healthy_until is None else float(healthy_until)
+        self.settings.require_step("IsolatingMonitor")
 
     # -- the pipeline ------------------------------------------------------------------------
     def run(self, record, *, evaluations: Sequence | None = None,

@@ -1,19 +1,20 @@
 """How a monitor weighs candidates and laws: one frozen settings object for the single asset and the fleet.
 
-:class:`IsolationSettings` holds every setting of isolation by estimation, checked once, with one
-name and one meaning: :class:`~prognosis.isolation.IsolatingMonitor` and
-:class:`~prognosis.fleet.FleetMonitor` both take it (the fleet from :data:`FLEET_SETTINGS`, its
-random-walk filter's).  What a monitor is told about the system (the ARRs, the failure values, the
-residuals' noise, the detection options, the healthy stretch, the physical domains) is not a setting:
-it goes to the monitor itself.
+:class:`IsolationSettings` holds every setting of isolation by estimation, checked once (a
+:class:`~bondgraph.errors.SettingError` names the setting), with one name and one meaning:
+:class:`~prognosis.isolation.IsolatingMonitor` and :class:`~prognosis.fleet.FleetMonitor` both take
+it (the fleet from :data:`FLEET_SETTINGS`, its random-walk filter's), and so does
+:class:`~prognosis.pipeline.PrognosisSettings`.  What a monitor is told about the system (the ARRs,
+the failure values, the residuals' noise, the detection options, the healthy stretch, the physical
+domains) is not a setting: it goes to the monitor itself.
 
 >>> settings = IsolationSettings(laws=("linear",), n_particles=200)
 >>> settings.changed(method="sir").likelihood_inflation, settings.likelihood_inflation
 (4.0, 1.0)
->>> IsolationSettings(pairs=True, method="sir")
+>>> IsolationSettings(n_particles=1)
 Traceback (most recent call last):
 ...
-prognosis.errors.PrognosisError: pairs: two faults at once are weighed with method 'resample-move' and ...
+bondgraph.errors.SettingError: n_particles must be a whole number in [2, 100000], got 1
 """
 
 from __future__ import annotations
@@ -27,12 +28,11 @@ from types import MappingProxyType
 
 import numpy as np
 
-from ..errors import PrognosisError
-from ..hypotheses import LIFE_PRIOR
-from ..particle_filter import check_particles, check_positive
-from ..seeds import check_seed
+from bondgraph.errors import SettingError
 
-__all__ = ["ADEQUACY_LIMIT", "ADEQUACY_WINDOW", "CONFIRM_STEPS", "DRIFT_AWAY_STEPS", "EVIDENCE_RATIO",
+from ..hypotheses import LIFE_PRIOR
+
+__all__ = ["MAX_PARTICLES", "ADEQUACY_LIMIT", "ADEQUACY_WINDOW", "CONFIRM_STEPS", "DRIFT_AWAY_STEPS", "EVIDENCE_RATIO",
            "FLEET_LAWS", "FLEET_SETTINGS", "FREEZE_BELOW", "HORIZON_STEPS", "IsolationSettings", "LAWS", "METHODS",
            "MIXTURE_FLOOR", "PROCESS_NOISE", "SPIKE"]
 
@@ -58,13 +58,15 @@ SPIKE = 3 * ADEQUACY_LIMIT
 #: (its evidence still accumulates): 1e-8 of the best's probability, beyond any decision
 FREEZE_BELOW = 8 * math.log(10.0)
 DRIFT_AWAY_STEPS = 5  # consecutive filter steps beyond the healthy box, away from failure, that reject a hypothesis
+#: Particles per hypothesis at most: a filter holds (hypotheses, particles) arrays at every step.
+MAX_PARTICLES = 100_000
 #: the laws a fleet weighs by default: its filter carries one rate per particle
 FLEET_LAWS = ("linear", "exponential")
 
 
 @dataclass(frozen=True)
 class IsolationSettings:
-    """The settings of isolation by estimation, checked when made (a :class:`~prognosis.errors.PrognosisError`
+    """The settings of isolation by estimation, checked when made (a :class:`~bondgraph.errors.SettingError`
     names the setting).
 
     Parameters
@@ -85,10 +87,11 @@ class IsolationSettings:
         only; off by default: :class:`~prognosis.isolation.IsolatingMonitor`).
     method : {"resample-move", "sir"}
         The filter (:class:`~prognosis.isolation.IsolatingMonitor`); a fleet's is ``"sir"``.
-    dt : float
-        Filter step (s), a multiple of the record's step.
+    dt : float, optional
+        Filter step (s), a multiple of the records' step.  A monitor needs it; :func:`prognosis.prognose`
+        chooses, when it is None, one derivative window of the record's samples.
     n_particles : int
-        Particles per hypothesis.
+        Particles per hypothesis, 2 to :data:`MAX_PARTICLES`.
     inflation : float, optional
         Multiplier of the residual noise covariance in the likelihood; default
         :attr:`likelihood_inflation`: 4 with ``"sir"`` (Jha et al. (2016)), 1 with ``"resample-move"``.
@@ -115,7 +118,7 @@ class IsolationSettings:
     sensors: bool = True
     pairs: bool = False
     method: str = "resample-move"
-    dt: float = 0.1
+    dt: float | None = None
     n_particles: int = 500
     inflation: float | None = None
     life: tuple = LIFE_PRIOR
@@ -132,41 +135,57 @@ class IsolationSettings:
             object.__setattr__(self, name, value)
 
         if self.method not in METHODS:
-            raise PrognosisError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+            raise SettingError("method", f"{{setting}} must be one of {', '.join(METHODS)}, got {self.method!r}")
         if isinstance(self.laws, str):
-            raise PrognosisError(f"laws: give a sequence of law names, e.g. ({self.laws!r},), not one string")
+            raise SettingError("laws", f"{{setting}}: give a sequence of law names, e.g. ({self.laws!r},), "
+                                       "not one string")
         keep("laws", MappingProxyType(dict(self.laws)) if isinstance(self.laws, Mapping) else tuple(self.laws))
         if not self.laws:
-            raise PrognosisError("laws: give at least one degradation law")
+            raise SettingError("laws", "{setting}: give at least one degradation law")
         if self.candidates is not None:
             if isinstance(self.candidates, str):
-                raise PrognosisError(f"candidates: give a sequence of names, e.g. ({self.candidates!r},)")
+                raise SettingError("candidates", f"{{setting}}: give a sequence of names, e.g. ({self.candidates!r},)")
             keep("candidates", tuple(self.candidates))
         keep("sensors", bool(self.sensors))
         keep("pairs", bool(self.pairs))
-        keep("dt", check_positive(self.dt, "dt"))
-        keep("n_particles", check_particles(self.n_particles))
-        if self.inflation is not None:
-            keep("inflation", check_positive(self.inflation, "inflation"))
+        for name, what in (("dt", "number of seconds"), ("horizon", "number of seconds"), ("inflation", "number")):
+            if getattr(self, name) is not None:  # None: chosen (see the parameters)
+                keep(name, _positive(getattr(self, name), name, what))
+        if isinstance(self.n_particles, (bool, np.bool_)) or not isinstance(self.n_particles, numbers.Integral) \
+                or not 2 <= self.n_particles <= MAX_PARTICLES:
+            raise SettingError("n_particles", f"{{setting}} must be a whole number in [2, {MAX_PARTICLES}], "
+                                              f"got {self.n_particles!r}")
+        keep("n_particles", int(self.n_particles))
         keep("life", _interval(self.life, "life", positive=True))
         if self.rate is not None:
             keep("rate", _interval(self.rate, "rate"))
         if not (_real(self.process_noise) and self.process_noise >= 0):
-            raise PrognosisError(f"process_noise must be a finite number >= 0, got {self.process_noise!r}")
+            raise SettingError("process_noise", f"{{setting}} must be a finite number >= 0, got {self.process_noise!r}")
         if not (_real(self.discount) and 1 / 3 < self.discount <= 1):
-            raise PrognosisError(f"discount must be a number in (1/3, 1], got {self.discount!r}")
-        if isinstance(self.rul_every, bool) or int(self.rul_every) != self.rul_every or self.rul_every < 1:
-            raise PrognosisError(f"rul_every must be a positive whole number of filter steps, got {self.rul_every!r}")
+            raise SettingError("discount", f"{{setting}} must be a number in (1/3, 1], got {self.discount!r}")
+        if isinstance(self.rul_every, (bool, np.bool_)) or not isinstance(self.rul_every, numbers.Integral) \
+                or self.rul_every < 1:
+            raise SettingError("rul_every", f"{{setting}} must be at least 1 filter step, got {self.rul_every!r}")
         keep("rul_every", int(self.rul_every))
-        if self.horizon is not None:
-            keep("horizon", check_positive(self.horizon, "horizon"))
         if not (_real(self.min_ratio) and self.min_ratio >= 1):
-            raise PrognosisError(f"min_ratio must be a finite evidence ratio >= 1, got {self.min_ratio!r}")
+            raise SettingError("min_ratio", f"{{setting}} must be a finite evidence ratio >= 1, got {self.min_ratio!r}")
         keep("min_ratio", float(self.min_ratio))
-        keep("seed", check_seed(self.seed))
+        if not isinstance(self.seed, np.random.SeedSequence) and (
+                isinstance(self.seed, (bool, np.bool_)) or not isinstance(self.seed, numbers.Integral)
+                or not 0 <= self.seed < 2**63):
+            raise SettingError("seed", f"{{setting}} must be an integer in [0, 2**63) or a numpy.random.SeedSequence, "
+                                       f"got {self.seed!r}")
+        if not isinstance(self.seed, np.random.SeedSequence):
+            keep("seed", int(self.seed))
         if self.pairs and (self.method != "resample-move" or self.candidates is not None):
-            raise PrognosisError("pairs: two faults at once are weighed with method 'resample-move' and without "
-                                 "candidates only")
+            raise SettingError("pairs", "{setting}: two faults at once are weighed with {setting:method} "
+                                        "resample-move and without {setting:candidates} only")
+
+    def require_step(self, who: str) -> None:
+        """A SettingError naming ``dt`` unless it is given: a monitor steps its filter by it."""
+        if self.dt is None:
+            raise SettingError("dt", f"{{setting}}: {who} needs the filter step (s), a multiple of the records' step; "
+                                     "prognosis.prognose chooses one derivative window of the record")
 
     @property
     def law_models(self) -> dict:
@@ -183,7 +202,7 @@ class IsolationSettings:
 
     @property
     def rul_horizon(self) -> float:
-        """``horizon``, by default :data:`HORIZON_STEPS` filter steps."""
+        """``horizon``, by default :data:`HORIZON_STEPS` filter steps (of a given ``dt``)."""
         return HORIZON_STEPS * self.dt if self.horizon is None else self.horizon
 
     def changed(self, **changes) -> "IsolationSettings":
@@ -191,7 +210,7 @@ class IsolationSettings:
         names = [f.name for f in dataclasses.fields(self)]
         unknown = [name for name in changes if name not in names]
         if unknown:
-            raise PrognosisError(f"unknown setting {unknown[0]!r} (settings: {', '.join(names)})")
+            raise SettingError(unknown[0], f"unknown setting {{setting}} (settings: {', '.join(names)})")
         return dataclasses.replace(self, **changes) if changes else self
 
 
@@ -199,15 +218,21 @@ def _real(value) -> bool:
     return not isinstance(value, (bool, np.bool_)) and isinstance(value, numbers.Real) and math.isfinite(value)
 
 
+def _positive(value, name: str, what: str) -> float:
+    if not (_real(value) and value > 0):
+        raise SettingError(name, f"{{setting}} must be a positive {what}, got {value!r}")
+    return float(value)
+
+
 def _interval(value, name: str, positive: bool = False) -> tuple[float, float]:
     """Two finite numbers ``lo < hi`` (both > 0 with ``positive``), as floats."""
     try:
         lo, hi = value
     except (TypeError, ValueError):
-        raise PrognosisError(f"{name} must be two numbers (lo, hi), got {value!r}") from None
+        raise SettingError(name, f"{{setting}} must be two numbers (lo, hi), got {value!r}") from None
     if not (_real(lo) and _real(hi) and lo < hi and (lo > 0 or not positive)):
         need = "0 < lo < hi" if positive else "lo < hi"
-        raise PrognosisError(f"{name} must be two finite numbers with {need}, got {value!r}")
+        raise SettingError(name, f"{{setting}} must be two finite numbers with {need}, got {value!r}")
     return float(lo), float(hi)
 
 

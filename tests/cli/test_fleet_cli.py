@@ -155,7 +155,7 @@ def test_an_existing_output_needs_force(capsys, records, tmp_path):
     ("--workers", "-1", "--workers must be at least 0"),
     ("--shard-size", "0", "--shard-size must be at least 1"),
     ("--calibrate-assets", "0", "--calibrate-assets must be at least 1"),
-    ("--particles", "1", "--particles must be in [2,"),
+    ("--particles", "1", "--particles must be a whole number in [2,"),
 ])
 def test_bad_counts(capsys, records, tmp_path, option, value, message):
     line = usage_error(capsys, "fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "0.2",

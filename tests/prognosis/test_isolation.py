@@ -206,17 +206,17 @@ def rlc_arrs():
     ({"noise_std": {"ARR_J1": 0.0, "ARR_J0": 1e-3}}, r"noise_std\['ARR_J1'\] must be a finite number > 0, got 0.0"),
     ({"noise_std": {"ARR_J1": np.nan, "ARR_J0": 1e-3}}, r"noise_std\['ARR_J1'\] must be a finite number > 0, got nan"),
     ({"noise_std": 1e-3}, r"noise_std: give the standard deviation of each ARR's residual by ARR name, got a float"),
-    ({"n_particles": 1}, r"n_particles must be a whole number >= 2, got 1"),
-    ({"dt": 0.0}, r"dt must be a finite number > 0, got 0.0"),
-    ({"dt": np.nan}, r"dt must be a finite number > 0, got nan"),
-    ({"horizon": -5.0}, r"horizon must be a finite number > 0, got -5.0"),
+    ({"n_particles": 1}, r"n_particles must be a whole number in \[2, 100000\], got 1"),
+    ({"dt": 0.0}, r"dt must be a positive number of seconds, got 0.0"),
+    ({"dt": np.nan}, r"dt must be a positive number of seconds, got nan"),
+    ({"horizon": -5.0}, r"horizon must be a positive number of seconds, got -5.0"),
     ({"method": "kalman"}, r"method must be one of resample-move, sir, got 'kalman'"),
 ])
 def test_isolating_monitor_refuses_bad_filter_settings_by_name(rlc_arrs, options, message):
     from prognosis.isolation import IsolatingMonitor
 
     arrs = rlc_arrs
-    settings = {"noise_std": {a.name: 1e-3 for a in arrs}, **options}
+    settings = {"noise_std": {a.name: 1e-3 for a in arrs}, "dt": 0.01, **options}
     with pytest.raises(ValueError, match=message):
         IsolatingMonitor(arrs, {"R": 20.0}, **settings)
 
@@ -229,7 +229,7 @@ def test_the_models_domains_decide_what_is_rejected():
     noise = {a.name: 1e-3 for a in arrs}
     with pytest.raises(ValueError, match=r"failure value of 'R' \(-5\) lies outside its physical domain"):
         IsolatingMonitor(arrs, {"R": -5.0}, noise_std=noise, domains={"R": (0.0, np.inf)})
-    monitor = IsolatingMonitor(arrs, {"R": 20.0}, noise_std=noise, domains={"R": (0.0, 50.0)})
+    monitor = IsolatingMonitor(arrs, {"R": 20.0}, noise_std=noise, domains={"R": (0.0, 50.0)}, dt=0.01)
     assert monitor.priors.domains == {"R": (0.0, 50.0)}
 
 

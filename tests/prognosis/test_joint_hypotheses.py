@@ -84,7 +84,7 @@ def test_a_pair_is_held_back_until_it_beats_each_of_its_parameters_alone():
 
 def test_the_pairs_of_a_first_candidate_are_with_every_other_parameter_that_adds(arrs):
     monitor = IsolatingMonitor(arrs, FACTS.failures, noise_std={a.name: 1.0 for a in arrs},
-                               method="resample-move", pairs=True)
+                               method="resample-move", pairs=True, dt=0.1)
     result = IsolationResult(0.5, fired=["ARR_1_e"], candidates=["R_a", "L_a"])
     pairs, groups = monitor.pairs_for(result)
     assert ("R_a", "c_p") in pairs and ("L_a", "c_p") in pairs and ("R_a", "L_a") in pairs
@@ -98,7 +98,7 @@ def test_the_pairs_of_a_first_candidate_are_with_every_other_parameter_that_adds
 
 def test_without_a_single_candidate_the_pairs_are_those_whose_arrs_hold_every_fired_one(arrs):
     monitor = IsolatingMonitor(arrs, FACTS.failures, noise_std={a.name: 1.0 for a in arrs},
-                               method="resample-move", pairs=True)
+                               method="resample-move", pairs=True, dt=0.1)
     pairs, _ = monitor.pairs_for(IsolationResult(0.5, fired=["ARR_1_e", "ARR_1_p"], candidates=[]))
     assert ("R_a", "c_p") in pairs or ("c_p", "R_a") in pairs
     seen = {a.name: set(a.parameters) for a in arrs}

@@ -11,7 +11,8 @@ from bondgraph import SettingError, simulate
 from bondgraph.io import to_json
 from bondgraph.library import rlc_circuit
 from diagnosis import DetectionSettings, Record, add_noise, as_record, derive_arrs, read_csv
-from prognosis import PrognosisSettings, check_candidate, check_failures, filter_step, prognose, rul_horizon
+from prognosis import (IsolationSettings, PrognosisSettings, check_candidate, check_failures, filter_step, prognose,
+                       rul_horizon)
 from prognosis.isolation import LAWS
 
 
@@ -37,8 +38,8 @@ def test_the_library_and_the_command_line_give_the_same_numbers(files, tmp_path)
                  "--degradation", "linear", "--particles", "100", "--no-sensors", "--seed", "3", "--out", str(out)])
     assert code == 0
     cli = json.loads((out / "prognosis.json").read_text())
-    settings = PrognosisSettings(detection=DetectionSettings(calibrate=0.8), laws=("linear",), particles=100,
-                                 sensors=False, seed=3)
+    settings = PrognosisSettings(detection=DetectionSettings(calibrate=0.8),
+                                 isolation=IsolationSettings(laws=("linear",), n_particles=100, sensors=False, seed=3))
     result = prognose(derive_arrs(bg), read_csv(data), {"R": 20.0}, settings, domains=bg.domains)
     python = json.loads(json.dumps(result.as_dict(), default=float))
     assert python["candidate"] == cli["candidate"] == "R" and python["status"] == cli["status"]
@@ -49,14 +50,14 @@ def test_the_library_and_the_command_line_give_the_same_numbers(files, tmp_path)
 
 
 @pytest.mark.parametrize("settings, setting", [
-    ({"particles": 1}, "particles"), ({"particles": 10**6}, "particles"), ({"rul_every": 0}, "rul_every"),
+    ({"n_particles": 1}, "n_particles"), ({"n_particles": 10**6}, "n_particles"), ({"rul_every": 0}, "rul_every"),
     ({"horizon": -1.0}, "horizon"), ({"dt": float("nan")}, "dt"), ({"seed": -1}, "seed"),
     ({"method": "kalman"}, "method"), ({"laws": ()}, "laws"), ({"rate": (2.0, 1.0)}, "rate"),
     ({"pairs": True, "method": "sir"}, "pairs"), ({"pairs": True, "candidates": ("R",)}, "pairs"),
 ])
 def test_bad_settings_are_refused_naming_the_setting(settings, setting):
     with pytest.raises(SettingError) as caught:
-        PrognosisSettings(**settings)
+        PrognosisSettings(isolation=IsolationSettings(**settings))
     assert caught.value.setting == setting and str(caught.value).startswith(setting)
 
 

@@ -10,6 +10,7 @@ import math
 import numpy as np
 import pytest
 
+from bondgraph.errors import SettingError
 from prognosis.degradation import LinearDegradation, PerAssetDegradation, PowerDegradation, degradation_model
 from prognosis.errors import PrognosisError
 from prognosis.resample_move import ResampleMoveFilter
@@ -107,5 +108,5 @@ def test_the_fleet_refuses_a_law_with_more_than_a_rate():
     from prognosis.fleet import FleetMonitor
 
     arrs = derive_arrs(rlc_circuit())
-    with pytest.raises(PrognosisError, match="'power' has more gammas"):
+    with pytest.raises(SettingError, match="'power' has more gammas"):
         FleetMonitor(arrs, {"R": 20.0}, noise_std={a.name: 1e-3 for a in arrs}, laws=("linear", "power"))

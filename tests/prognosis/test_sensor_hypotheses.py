@@ -84,7 +84,8 @@ def test_sensor_hypotheses_have_no_failure_value_and_any_sign():
 
 
 def test_a_bias_has_rate_zero_and_a_drift_the_sign_of_the_offset_seen(arrs):
-    monitor = IsolatingMonitor(arrs, {"b_Md": 0.45}, noise_std={a.name: 0.1 for a in arrs}, n_particles=50)
+    monitor = IsolatingMonitor(arrs, {"b_Md": 0.45}, noise_std={a.name: 0.1 for a in arrs}, n_particles=50,
+                               dt=0.1)
     bias, drift, _ = (Hypothesis.of_sensor("omega_Ld", law) for law in SENSOR_LAWS)
     rng = np.random.default_rng(1)
     assert (monitor.priors.rate_particles(bias, rng, offset=0.4) == 0).all()
@@ -121,9 +122,9 @@ def test_a_sensor_read_inside_an_integral_is_named_and_not_weighed():
 
 def test_an_unknown_sensor_candidate_is_refused_by_name(arrs):
     with pytest.raises(PrognosisError, match="candidate 'sensor speed' has no failure value and is no sensor"):
-        IsolatingMonitor(arrs, {"b_Md": 0.45}, noise_std={a.name: 0.1 for a in arrs},
+        IsolatingMonitor(arrs, {"b_Md": 0.45}, noise_std={a.name: 0.1 for a in arrs}, dt=0.1,
                          candidates=["b_Md", "sensor speed"])
-    monitor = IsolatingMonitor(arrs, {"b_Md": 0.45}, noise_std={a.name: 0.1 for a in arrs},
+    monitor = IsolatingMonitor(arrs, {"b_Md": 0.45}, noise_std={a.name: 0.1 for a in arrs}, dt=0.1,
                                candidates=["b_Md", "sensor omega_m"])
     assert [h.name for h in monitor.priors.hypotheses_for(list(monitor.settings.candidates))[0]][-3:] == [
         "sensor omega_m/bias", "sensor omega_m/drift", "sensor omega_m/gain"]
