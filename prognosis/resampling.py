@@ -43,6 +43,7 @@ Example
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 
 import numpy as np
@@ -52,7 +53,7 @@ from .errors import PrognosisError
 
 __all__ = [
     "SCHEMES", "effective_sample_size", "get_scheme", "multinomial", "normalize_log_weights", "residual",
-    "stratified", "systematic",
+    "stratified", "systematic", "systematic_indices",
 ]
 
 Scheme = Callable[[np.ndarray, np.random.Generator], np.ndarray]
@@ -136,7 +137,8 @@ def systematic(weights: ArrayLike, rng: np.random.Generator) -> np.ndarray:
     ``u_j = (j + U) / N`` for ``j = 0..N-1`` with a single ``U ~ U[0, 1)`` per
     row; particle ``i`` is chosen for every ``u_j`` in
     ``[C_{i-1}, C_i)``, ``C_i = w_0 + ... + w_i``.  The offspring count of
-    particle ``i`` is ``floor(N w_i)`` or ``ceil(N w_i)``.
+    particle ``i`` is ``floor(N w_i)`` or ``ceil(N w_i)``.  The indices are
+    :func:`systematic_indices`' (the fleet's filter calls it with its own uniforms).
 
     Parameters
     ----------
@@ -162,11 +164,43 @@ def systematic(weights: ArrayLike, rng: np.random.Generator) -> np.ndarray:
     >>> systematic(np.array([[0.5, 0.0, 0.5], [0.0, 0.0, 1.0]]), np.random.default_rng(1)).tolist()
     [[0, 2, 2], [2, 2, 2]]
     """
-    def draw(rng: np.random.Generator, shape: tuple[int, int]) -> np.ndarray:
-        rows, n = shape
-        return (np.arange(n) + rng.random((rows, 1))) / n
+    shape = np.shape(weights)
+    rows = _as_rows(weights)
+    u = np.random.default_rng(rng).random(rows.shape[0])
+    return systematic_indices(rows, np.ones(rows.shape[0]), u).reshape(shape)
 
-    return _resample(weights, rng, draw)
+
+def systematic_indices(weights: np.ndarray, total: np.ndarray, u: np.ndarray, flat: bool = False) -> np.ndarray:
+    """Systematic resampling of each row from its unnormalized ``weights`` (R, N), sums ``total`` and uniform ``u``.
+
+    Particle ``i`` gets ``ceil(N C_i - u) - ceil(N C_{i-1} - u)`` copies, ``C`` the normalized
+    cumulative weights: the number of points ``(j + u) / N`` in ``[C_{i-1}, C_i)``.  Returns the
+    ancestors' indices per row (R, N), or with ``flat`` their indices into the flattened (R * N) array.
+    A single row (a stream's tick) finds the same ancestors by binary search: point ``j`` descends
+    from the number of edges ``N C_i - u`` at or below ``j``, two calls where the counts take ten.
+
+    >>> systematic_indices(np.array([[1.0, 0.0, 1.0]]), np.array([2.0]), np.array([0.5])).tolist()
+    [[0, 2, 2]]
+    """
+    rows, n = weights.shape
+    edges = np.add.accumulate(weights, axis=1)  # cumsum's values, with fewer layers of calls
+    edges *= (n / total)[:, None]
+    edges -= u[:, None]
+    # the last particle with weight (and the weightless ones after it) ends at N: a u rounding N - u down
+    # to N - 1 would otherwise hand the last point to a particle without weight
+    if rows == 1:  # a stream's tick: point j's ancestor is the number of edges <= j (ceil(e) > j iff e > j)
+        edges[0, edges[0] >= edges[0, -1]] = n
+        ancestors = np.searchsorted(edges[0], _points(n), side="right")
+        return ancestors if flat else ancestors[None, :]
+    np.copyto(edges, n, where=edges >= edges[:, -1:])
+    np.ceil(edges, out=edges)
+    np.minimum(edges, n, out=edges)
+    np.maximum(edges, 0, out=edges)
+    counts = edges.astype(np.int64)
+    counts[:, 1:] -= counts[:, :-1].copy()
+    ancestors = np.repeat(np.arange(rows * n), counts.reshape(-1))
+    return ancestors if flat else ancestors.reshape(rows, n) - (n * np.arange(rows))[:, None]
+
 
 
 def stratified(weights: ArrayLike, rng: np.random.Generator) -> np.ndarray:
@@ -403,3 +437,11 @@ def get_scheme(name: str) -> Scheme:
     except (KeyError, TypeError):
         names = ", ".join(sorted(SCHEMES))
         raise PrognosisError(f"unknown resampling scheme {name!r}; choose one of: {names}") from None
+
+
+@functools.lru_cache(maxsize=8)
+def _points(n: int) -> np.ndarray:
+    """0, 1, ..., n - 1, read-only: the systematic points of a row, scaled by N and shifted by its uniform."""
+    points = np.arange(n, dtype=float)
+    points.flags.writeable = False
+    return points

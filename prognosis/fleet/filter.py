@@ -9,8 +9,8 @@ at their own alarm and run at their own pace.
 The step is the SIR filter of :class:`~prognosis.particle_filter.ParticleFilter` with the settings a
 fleet uses: kernel smoothing of the rate (:class:`~prognosis.particle_filter.KernelSmoothing`) and
 systematic resampling at every step (so the weights are equal between steps and the estimates are
-plain means).  Systematic resampling here counts offspring in O(N) per row (``ceil(N C_i - U) -
-ceil(N C_{i-1} - U)`` copies of particle ``i``) instead of merging sorted uniforms.
+plain means), by :func:`~prognosis.resampling.systematic_indices`, the one systematic resampler of
+the package, fed with each row's own uniform.
 
 Every random number of a row at a step comes from :class:`~prognosis.random_streams.AssetStreams` keyed by
 (seed, asset, step) with the hypothesis as lane, and no operation mixes rows (no BLAS product, no
@@ -27,8 +27,9 @@ from scipy.special import ndtr
 
 from ..degradation import ExponentialDegradation, LinearDegradation
 from ..random_streams import MOVES, STARTS
+from ..resampling import systematic_indices
 
-__all__ = ["QUANTILES", "ROW_STATE", "FleetFilter", "FleetStep", "law_step", "systematic_indices"]
+__all__ = ["QUANTILES", "ROW_STATE", "FleetFilter", "FleetStep", "law_step"]
 
 QUANTILES = (0.05, 0.5, 0.95)
 ROW_STATE = ("theta", "gamma", "hypothesis", "mean", "variance", "sigma_v", "log_evidence", "steps", "rejected",
@@ -306,45 +307,7 @@ def law_step(law, theta: np.ndarray, gamma: np.ndarray, dt: float) -> np.ndarray
     return np.array(law.step(theta, np.moveaxis(gamma, 1, -1), dt), float)
 
 
-def systematic_indices(weights: np.ndarray, total: np.ndarray, u: np.ndarray, flat: bool = False) -> np.ndarray:
-    """Systematic resampling of each row from its unnormalized ``weights`` (R, N), sums ``total`` and uniform ``u``.
-
-    Particle ``i`` gets ``ceil(N C_i - u) - ceil(N C_{i-1} - u)`` copies, ``C`` the normalized
-    cumulative weights: the number of points ``(j + u) / N`` in ``[C_{i-1}, C_i)``.  Returns the
-    ancestors' indices per row (R, N), or with ``flat`` their indices into the flattened (R * N) array.
-    A single row (a stream's tick) finds the same ancestors by binary search: point ``j`` descends
-    from the number of edges ``N C_i - u`` at or below ``j``, two calls where the counts take ten.
-
-    >>> systematic_indices(np.array([[1.0, 0.0, 1.0]]), np.array([2.0]), np.array([0.5])).tolist()
-    [[0, 2, 2]]
-    """
-    rows, n = weights.shape
-    edges = np.add.accumulate(weights, axis=1)  # cumsum's values, with fewer layers of calls
-    edges *= (n / total)[:, None]
-    edges -= u[:, None]
-    if rows == 1:  # a stream's tick: point j's ancestor is the number of edges <= j (ceil(e) > j iff e > j)
-        edges[0, -1] = n
-        ancestors = np.searchsorted(edges[0], _points(n), side="right")
-        return ancestors if flat else ancestors[None, :]
-    np.ceil(edges, out=edges)
-    edges[:, -1] = n
-    np.minimum(edges, n, out=edges)
-    np.maximum(edges, 0, out=edges)
-    counts = edges.astype(np.int64)
-    counts[:, 1:] -= counts[:, :-1].copy()
-    ancestors = np.repeat(np.arange(rows * n), counts.reshape(-1))
-    return ancestors if flat else ancestors.reshape(rows, n) - (n * np.arange(rows))[:, None]
-
-
 @functools.lru_cache(maxsize=8)
 def _ranks(n: int) -> list[int]:
     """The ranks of the :data:`QUANTILES` among ``n`` equally weighted particles."""
     return [int(np.ceil(q * n - 1e-9)) - 1 for q in QUANTILES]
-
-
-@functools.lru_cache(maxsize=8)
-def _points(n: int) -> np.ndarray:
-    """0, 1, ..., n - 1, read-only: the systematic points of a row, scaled by N and shifted by its uniform."""
-    points = np.arange(n, dtype=float)
-    points.flags.writeable = False
-    return points

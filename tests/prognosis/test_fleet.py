@@ -8,7 +8,7 @@ from bondgraph.library import rlc_circuit
 from diagnosis import derive_arrs
 from prognosis.degradation import ExponentialDegradation, LinearDegradation
 from prognosis.fleet import FleetFilter, FleetMonitor, FleetResult
-from prognosis.fleet.filter import systematic_indices
+from prognosis.resampling import systematic_indices
 from prognosis.fleet.rul import crossing_times, summarize
 from prognosis.rul import RULDistribution, RULPredictor
 from prognosis.random_streams import AssetStreams, asset_key
@@ -160,9 +160,12 @@ def test_single_row_search_gives_the_counts_ancestors():
     weights[:10] = 1.0  # equal weights with u = 0 put the edges on the points: ties decide
     u = rng.random(60)
     u[:5] = [0.0, 0.5, 1.0 - 1e-12, 1e-300, 0.25]
+    weights[20:30, -5:] = 0.0  # weightless particles at the end, and a u that rounds N - u down to N - 1
+    u[20:30] = np.nextafter(1.0, 0.0)
     together = systematic_indices(weights, weights.sum(axis=1), u)
     alone = np.array([systematic_indices(w[None], w.sum(keepdims=True), u[i:i + 1])[0] for i, w in enumerate(weights)])
     assert np.array_equal(alone, together)
+    assert (np.take_along_axis(weights, together, axis=1) > 0).all()  # no point lands on a weightless particle
 
 
 @pytest.mark.parametrize("law", [LinearDegradation(), ExponentialDegradation()])

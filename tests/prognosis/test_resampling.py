@@ -132,6 +132,21 @@ class Constant(np.random.Generator):
         return np.full(size, self.value)
 
 
+def test_systematic_is_the_inverse_cdf_at_evenly_spaced_points():
+    """The counting algorithm (shared with the fleet) picks particle i for every (j + U) / N in [C_{i-1}, C_i)."""
+    rng = np.random.default_rng(8)
+    for n in (1, 2, 7, 100, 513):
+        weights = rng.random((6, n)) ** 3
+        weights[1] = 1.0  # equal weights
+        weights[2, n // 2:] = 0.0  # a weightless tail
+        weights[2, 0] += 1e-3
+        seed = int(rng.integers(1 << 30))
+        u = np.random.default_rng(seed).random(6)  # systematic() draws one uniform per row, in order
+        cdf = np.cumsum(weights / weights.sum(axis=1, keepdims=True), axis=1)
+        expected = [np.minimum(np.searchsorted(c, (np.arange(n) + v) / n, side="right"), n - 1) for c, v in zip(cdf, u)]
+        assert np.array_equal(systematic(weights, np.random.default_rng(seed)), np.array(expected))
+
+
 def test_systematic_hand_case():
     # cumulative weights [0.1, 0.7, 1.0]; U = 0.5:
     # u = (0.5, 1.5, 2.5) / 3 = 0.167, 0.5, 0.833 -> particles 1, 1, 2
