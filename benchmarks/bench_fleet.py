@@ -341,12 +341,12 @@ def filter_speed(s: Setup, particles: int) -> dict:
                   process_noise=CASE.process_noise * every)
     y = np.full((FILTER_ROWS, 1), -evaluation.residual[k])
     points = [[np.full(FILTER_ROWS, p[k]) for p in evaluation.points]]
-    pf.step(rows, y, points)  # compiles nothing, but the first step pays page faults
+    pf.step(y, points, rows=rows)  # compiles nothing, but the first step pays page faults
     best = math.inf
     for _ in range(3):
         start = time.perf_counter()
         for _ in range(FILTER_STEPS):
-            pf.step(rows, y, points)
+            pf.step(y, points, rows=rows)
             pf.theta_mean(rows), pf.gamma_mean(rows)
         best = min(best, time.perf_counter() - start)
     return {"filter_particle_steps_per_s_per_core": FILTER_ROWS * particles * FILTER_STEPS / best,

@@ -20,35 +20,19 @@ reduction across rows), so a row's numbers are bitwise the same in any batch.
 from __future__ import annotations
 
 import functools
-from dataclasses import dataclass
-
 import numpy as np
 from scipy.special import ndtr
 
 from ..degradation import ExponentialDegradation, LinearDegradation
+from ..particle_filter import COLLAPSE_BELOW, StepDiagnostics
 from ..random_streams import MOVES, STARTS
 from ..resampling import systematic_indices
 
-__all__ = ["QUANTILES", "ROW_STATE", "FleetFilter", "FleetStep", "law_step"]
+__all__ = ["QUANTILES", "ROW_STATE", "FleetFilter", "law_step"]
 
 QUANTILES = (0.05, 0.5, 0.95)
 ROW_STATE = ("theta", "gamma", "hypothesis", "mean", "variance", "sigma_v", "log_evidence", "steps", "rejected",
              "away")  # what a row is: a checkpoint saves these
-
-
-@dataclass
-class FleetStep:
-    """What one step did to its rows: their weights after the update (unnormalized, ``total`` per row) and the
-    rows whose weights all vanished; :attr:`ess` from them, computed when asked (a report's, not every step's)."""
-
-    weights: np.ndarray
-    total: np.ndarray
-    degenerate: np.ndarray
-
-    @property
-    def ess(self) -> np.ndarray:
-        """The effective sample size of each row after the update."""
-        return self.total * self.total / (self.weights * self.weights).sum(axis=1)
 
 
 class FleetFilter:
@@ -75,7 +59,7 @@ class FleetFilter:
     >>> rows = pf.add(["a", "b"], hypothesis=[0, 0], lo=[0.0, 0.0], hi=[2.0, 2.0],
     ...               rates=np.full((2, 1, 200), 0.1), process_noise=[0.0, 0.0])
     >>> for k in range(1, 21):
-    ...     _ = pf.step(rows, np.full((2, 1), 0.1 * k), [[]])
+    ...     _ = pf.step(np.full((2, 1), 0.1 * k), [[]], rows=rows)
     >>> np.round(pf.theta_mean(rows), 1).tolist()
     [2.0, 2.0]
     """
@@ -162,13 +146,15 @@ class FleetFilter:
         self.capacity = size
 
     # -- one step ----------------------------------------------------------------------------
-    def step(self, rows: np.ndarray, y: np.ndarray, points) -> FleetStep:
-        """Predict, weigh by ``y`` (rows, M), resample and smooth the rows ``rows``.
+    def step(self, y: np.ndarray, points=(), rows: np.ndarray | None = None) -> StepDiagnostics:
+        """Predict, weigh by ``y`` (rows, M), resample and smooth the rows ``rows`` (default: every row in use).
 
-        ``points[m]``: the point values of ARR ``m``, a list of arrays (rows,).  A NaN in ``y``
-        leaves that ARR out of the row's likelihood; a row with no finite ``y`` is only moved.
+        The step of every particle filter of the package (:meth:`~prognosis.particle_filter.ParticleFilter.step`),
+        a row for an asset: ``points[m]``, the point values of ARR ``m``, is a list of arrays (rows,).
+        A NaN in ``y`` leaves that ARR out of the row's likelihood; a row with no finite ``y`` is only
+        moved.  Every row is resampled at every step.
         """
-        rows = np.asarray(rows, int)
+        rows = np.flatnonzero([a is not None for a in self.asset]) if rows is None else np.asarray(rows, int)
         at = _span(rows)
         n, y = self.n, np.asarray(y, float)
         draws = self._draws(rows, 1 + self.g)
@@ -206,7 +192,10 @@ class FleetFilter:
         self._smooth(at, gamma)
         self.gamma[at] = gamma
         self.steps[at] += 1
-        return FleetStep(weights, total, degenerate)
+        ess = total * total / (weights * weights).sum(axis=1)
+        every = np.ones(rows.size, bool)
+        return StepDiagnostics(updated=every if finite.all() else finite.any(axis=1), ess=ess, resampled=every,
+                               degenerate=degenerate, collapsed=ess < COLLAPSE_BELOW * n)
 
     def _draws(self, rows: np.ndarray, blocks: int) -> np.ndarray:
         """(rows, blocks N + 1) normals: theta's process noise, gamma's jitter, the resampling's uniform.

@@ -280,7 +280,7 @@ class FleetMonitor:
                 for start in range(0, live.size, STEP_ROWS):
                     index = live[start:start + STEP_ROWS]
                     mine, k = owner[index], j - first
-                    step = pf.step(rows[index], y[mine, k], [[p[mine, k] for p in m] for m in points])
+                    step = pf.step(y[mine, k], [[p[mine, k] for p in m] for m in points], rows=rows[index])
                     self._outputs(pf, rows[index], mine, ids[mine], np.full(index.size, j), t[mine, k], step,
                                   result, common=j)
         if self._keep_particles:
@@ -416,7 +416,7 @@ class FleetMonitor:
             times = np.array([item[0] for item in items])[owner]
             ids = np.array([live.asset for live in waiting], dtype=object)[owner]
             steps = pf.steps[rows].copy()
-            step = pf.step(rows, y, points)
+            step = pf.step(y, points, rows=rows)
             self._outputs(pf, rows, owner, ids, steps, times, step, result)
 
     def _tick(self, pf: FleetFilter, live: LiveAsset, t: float, y: np.ndarray, points: list, result: FleetResult
@@ -429,7 +429,7 @@ class FleetMonitor:
         y = y[None, :] if size == 1 else np.broadcast_to(y, (size, y.size))
         points = [list(p[:, None] if size == 1 else np.broadcast_to(p, (size, p.size)).T) for p in points]
         steps = pf.steps[rows].copy()
-        step = pf.step(rows, y, points)
+        step = pf.step(y, points, rows=rows)
         common = int(steps[0])  # one asset's rows were started together and step together: one step count
         if common % self.report_every == 0 or common % self.settings.rul_every == 0:
             self._outputs(pf, rows, np.zeros(size, int), np.full(size, live.asset, dtype=object), steps,

@@ -135,7 +135,7 @@ def test_rows_are_independent_of_their_batch_mates():
         rows = pf.add(assets, hypothesis=[0] * k, lo=[1.0] * k, hi=[2.0] * k,
                       rates=np.full((k, 1, 101), 0.1), process_noise=[0.01] * k)
         for step in range(5):
-            pf.step(rows, np.full((k, 1), 1.5 + 0.01 * step), [[np.ones(k)]])
+            pf.step(np.full((k, 1), 1.5 + 0.01 * step), [[np.ones(k)]], rows=rows)
         return pf.theta[rows], pf.gamma[rows]
     alone = run(["b"])
     batch = run(["a", "b", "c"])
