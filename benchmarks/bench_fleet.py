@@ -93,10 +93,10 @@ from diagnosis.records import add_noise, as_record  # noqa: E402
 from prognosis import HealthMonitor  # noqa: E402
 from prognosis.degradation import ExponentialDegradation  # noqa: E402
 from prognosis.fleet import FleetFilter  # noqa: E402
-from prognosis.fleet.monitor import BLOCK  # noqa: E402
+from prognosis.fleet.fleet_monitor import BLOCK  # noqa: E402
 from prognosis.hypotheses import Hypothesis, rate_prior  # noqa: E402
 from prognosis.metrics import mean_relative_accuracy, relative_accuracy  # noqa: E402
-from prognosis.monitor import filter_stride  # noqa: E402
+from prognosis.health_monitor import filter_stride  # noqa: E402
 from prognosis.observation import observation_model  # noqa: E402
 from prognosis.random_streams import AssetStreams  # noqa: E402
 

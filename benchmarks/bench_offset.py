@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from bgphm.demo import prepare_demo
+from bgphm.demo_cases import prepare_demo
 from bondgraph.io import load_model
 from diagnosis import derive_arrs
 from diagnosis.csv_reading import read_csv

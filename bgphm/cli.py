@@ -160,7 +160,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     _fleet_parser(sub, model_help)
 
-    from bgphm.demo import DEMOS
+    from bgphm.demo_cases import DEMOS
 
     listing = "\n".join(f"  {name:<13} {demo.description}" for name, demo in DEMOS.items())
     p = sub.add_parser("demo", help="run the whole chain on a built-in example and write every output",

@@ -45,7 +45,7 @@ if TYPE_CHECKING:  # annotations only: matplotlib stays optional
 
     from bondgraph.simulation import SimulationResult
     from diagnosis.detection import Evaluation
-    from prognosis.monitor import MonitorResult
+    from prognosis.health_monitor import MonitorResult
     from prognosis.rul import RULDistribution
 
 MATPLOTLIB_MISSING = "matplotlib is needed for plots: pip install 'bondgraph-phm[plot]'"
@@ -237,7 +237,7 @@ def plot_estimate(result: MonitorResult, parameter_name: str = "theta", truth: C
 
     Parameters
     ----------
-    result : prognosis.monitor.MonitorResult
+    result : prognosis.health_monitor.MonitorResult
     parameter_name : {"theta", "gamma"}
         Which estimate of the result: the parameter ``theta`` or its degradation rate ``gamma``.
     truth : callable of t or array_like, optional
@@ -273,7 +273,7 @@ def plot_rul(result: MonitorResult, eol: float | None = None, alpha: float = 0.1
 
     Parameters
     ----------
-    result : prognosis.monitor.MonitorResult
+    result : prognosis.health_monitor.MonitorResult
     eol : float, optional
         True end of life (same time unit as the result).
     alpha : float

@@ -44,7 +44,7 @@ PACKAGES = [
     ("prognosis.identification", "linear Gaussian models by EM, fault trend, posterior predictive", []),
     ("prognosis.lifecontrol", "energy-driven deterioration, Chebyshev bounds, Monte Carlo RUL, RUL control", []),
     ("prognosis.fleet", "many assets in one vectorized filter: streaming, checkpoints, closed-form RUL, tables",
-     ["prognosis.random_streams", "prognosis.fleet.rul"]),
+     ["prognosis.random_streams", "prognosis.fleet.closed_form_rul"]),
     ("bgphm", "command line, plots and long runs", ["bgphm.plotting", "bgphm.runs"]),
     ("bgphm.fleet", "fleets on Dask workers, from records to Parquet tables (guide: [docs/fleet.md](fleet.md))", []),
 ]
@@ -57,7 +57,7 @@ MODULE_ORDER = ["bondgraph.model", "bondgraph.structure", "bondgraph.causality",
                 "diagnosis.intervals.compiler", "prognosis.observation", "prognosis.degradation",
                 "prognosis.particle_filter", "prognosis.resample_move", "prognosis.likelihood", "prognosis.wander",
                 "prognosis.rul",
-                "prognosis.monitor", "prognosis.metrics", "prognosis.weighted", "prognosis.ranking", "bgphm.cli",
+                "prognosis.health_monitor", "prognosis.metrics", "prognosis.weighted", "prognosis.ranking", "bgphm.cli",
                 "bgphm.plotting", "bgphm.runs"]
 #: Names documented for a package that has no useful ``__all__``.
 EXPLICIT = {"bgphm": ["bgphm.cli.main"]}

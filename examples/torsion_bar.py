@@ -57,7 +57,7 @@ from diagnosis.records import add_noise, as_record
 from prognosis import ExponentialDegradation, HealthMonitor, LinearDegradation, VarianceAdaptation
 from prognosis.hypotheses import Hypothesis, rate_prior
 from prognosis.isolation import IsolatingMonitor
-from prognosis.monitor import MonitorResult
+from prognosis.health_monitor import MonitorResult
 from prognosis.particle_filter import KernelSmoothing
 
 DT_RECORD = 0.01  # s, sampling of the simulated sensors

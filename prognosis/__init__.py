@@ -31,7 +31,7 @@ from .errors import PrognosisError
 from .degradation import (CustomDegradation, ExponentialDegradation, LinearDegradation, PowerDegradation,
                           degradation_model)
 from .metrics import alpha_lambda, prognostic_horizon, relative_accuracy, relative_rmse, rmad
-from .monitor import HealthMonitor, MonitorResult
+from .health_monitor import HealthMonitor, MonitorResult
 from .isolation import MAX_PARTICLES, IsolatingMonitor, IsolationResult, IsolationSettings
 from .pipeline import PrognosisSettings, check_candidate, check_failures, filter_step, prognose, rul_horizon
 from .observation import ObservationModel, observation_model

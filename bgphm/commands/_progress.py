@@ -22,7 +22,7 @@ class Progress:
 
 
 def filter_progress(progress: Progress, every: float = 2.0):
-    """The ``progress`` callback of :meth:`~prognosis.monitor.HealthMonitor.run` for a command.
+    """The ``progress`` callback of :meth:`~prognosis.health_monitor.HealthMonitor.run` for a command.
 
     It prints a line at the first report, then at most every ``every`` seconds, and at the last step;
     None with ``--quiet``, so that the monitor makes no calls at all.

@@ -12,7 +12,7 @@
 
 from .checkpoint import read_checkpoint, write_checkpoint
 from .filter import FleetFilter
-from .monitor import FLEET_LAWS, FleetMonitor
+from .fleet_monitor import FLEET_LAWS, FleetMonitor
 from .results import FleetResult
 
 __all__ = ["FLEET_LAWS", "FleetFilter", "FleetMonitor", "FleetResult", "read_checkpoint", "write_checkpoint"]

@@ -33,7 +33,7 @@ False
 """
 
 from .em import EMResult, em_step, fit_em, initial_model
-from .model import IdentificationWarning, LinearGaussianModel
+from .linear_gaussian import IdentificationWarning, LinearGaussianModel
 from .online import OnlineEM, WindowIdentification
 from .predictive import PosteriorPrediction, SamplerWarning, WindowPosterior, sample_posterior, window_log_posterior
 from .smoother import SmootherResult, kalman_smoother, log_likelihood

@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike
 
 from .. import _linalg as linalg
 from .data import check_data
-from .model import IdentificationWarning, LinearGaussianModel, check_model_data
+from .linear_gaussian import IdentificationWarning, LinearGaussianModel, check_model_data
 from .smoother import SmootherResult, filter_arrays, smooth_arrays
 from ..errors import PrognosisError
 
@@ -90,7 +90,7 @@ def em_arrays_step(model: LinearGaussianModel, y: np.ndarray, u: np.ndarray, cro
     """One EM iteration on checked arrays: smooth with ``model``, then the M-step; returns (new model, smoothing).
 
     The inner step of :func:`em_step`, :func:`fit_em` and :class:`~prognosis.identification.OnlineEM`,
-    which check ``y`` and ``u`` once (:func:`~prognosis.identification.model.check_model_data`).
+    which check ``y`` and ``u`` once (:func:`~prognosis.identification.linear_gaussian.check_model_data`).
     """
     observed = ~np.isnan(y).any(axis=1)
     if cross_covariance and not observed.all():

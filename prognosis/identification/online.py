@@ -10,7 +10,7 @@ from numpy.typing import ArrayLike
 
 from .. import _linalg as linalg
 from .em import em_arrays_step, initial_model
-from .model import LinearGaussianModel
+from .linear_gaussian import LinearGaussianModel
 from .smoother import SmootherResult, smooth_arrays
 from ..errors import PrognosisError
 

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from .. import _linalg as linalg
-from .model import LinearGaussianModel, check_model_data
+from .linear_gaussian import LinearGaussianModel, check_model_data
 
 __all__ = [
     "STATIONARY_TOLERANCE", "SmootherResult", "filter_arrays", "kalman_smoother", "log_likelihood",

@@ -13,7 +13,7 @@ from numpy.typing import ArrayLike
 from scipy.stats import norm
 
 from .data import check_future_inputs
-from .model import LinearGaussianModel
+from .linear_gaussian import LinearGaussianModel
 from ..errors import PrognosisError
 
 __all__ = ["FeaturePrediction", "detect_trend", "fault_trend", "predict_feature"]

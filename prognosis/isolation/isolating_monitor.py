@@ -35,7 +35,7 @@ from ..hypotheses import (Hypothesis, HypothesisObservation, JointHypothesis, Jo
                           candidate_model, explaining, indistinguishable_groups, integral_increments, record_separation,
                           same_signature, sees, sensitivity, sensor_signal, signature_candidates)
 from ..likelihood import ResidualNoise, healthy_noise, integral_walk
-from ..monitor import filter_stride
+from ..health_monitor import filter_stride
 from ..particle_filter import KernelSmoothing, ParticleFilter
 from ..resample_move import ResampleMoveFilter
 from ..rul import RULDistribution, RULPredictor

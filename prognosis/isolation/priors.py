@@ -94,7 +94,7 @@ class Priors:
         """(lo, hi) of theta at the alarm and sigma_v, for one hypothesis.
 
         The uncertainty interval widened to the values of theta that explain the residual on the
-        samples that raised the alarm (as :class:`~prognosis.monitor.HealthMonitor` does with
+        samples that raised the alarm (as :class:`~prognosis.health_monitor.HealthMonitor` does with
         ``start="residual"``), inverting the observation equation of the ARR that resolves the
         candidate best there: the largest sensitivity ``|d y / d theta|`` over the residual's noise.
         """

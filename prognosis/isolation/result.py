@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import PrognosisError
-from ..monitor import MonitorResult
+from ..health_monitor import MonitorResult
 from .decision import Decision, decide, finite_or_none, held_back
 from .settings import EVIDENCE_RATIO
 
@@ -236,7 +236,7 @@ class IsolationResult:
     def monitor_result(self, hypothesis: str | None = None) -> MonitorResult:
         """The estimates of one hypothesis (default: the most probable at the end) with the mixture's RUL.
 
-        A :class:`~prognosis.monitor.MonitorResult`, so its metrics, frames and plots apply.
+        A :class:`~prognosis.health_monitor.MonitorResult`, so its metrics, frames and plots apply.
         """
         if hypothesis is None:
             probabilities = self.decision.probabilities

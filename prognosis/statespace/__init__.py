@@ -37,7 +37,7 @@ from .gaussian import FilterWarning, Innovation
 from .strong_tracking import StrongTracking
 from .ukf import UnscentedKalmanFilter
 from .lookahead import LookAhead, look_ahead, predict_ahead
-from .model import DiscreteModel, discretize
+from .discrete_model import DiscreteModel, discretize
 
 __all__ = [
     "BootstrapParticleFilter", "ConsistencyReport", "CubatureKalmanFilter", "DiscreteModel", "ExtendedKalmanFilter",

@@ -15,7 +15,7 @@ from bondgraph.io import load_model
 from diagnosis import derive_arrs
 from diagnosis.csv_reading import read_csv
 from prognosis.degradation import ExponentialDegradation
-from prognosis.monitor import HealthMonitor
+from prognosis.health_monitor import HealthMonitor
 
 THETA_TOLERANCE = 0.05  # relative error of the candidate's estimate at the last filter step
 RUL_TOLERANCE = 0.15  # relative error of the RUL median at the last prediction

@@ -113,7 +113,7 @@ def test_output_paths_are_checked_before_any_work(monkeypatch, tmp_path, capsys,
     monkeypatch.setattr(bondgraph.io, "load_model", no_work)
     for command in ("_inputs", "arr", "simulate", "detect"):  # each command module that loads a model
         monkeypatch.setattr(f"bgphm.commands.{command}.load_model", no_work)
-    monkeypatch.setattr("bgphm.demo.prepare_demo", no_work)
+    monkeypatch.setattr("bgphm.demo_cases.prepare_demo", no_work)
     (tmp_path / "d").mkdir()
     (tmp_path / "f.csv").write_text("t,x\n")
     argv = [a.format(dir=tmp_path / "d", file=tmp_path / "f.csv") for a in argv]

@@ -17,7 +17,7 @@ from bondgraph import simulate  # noqa: E402
 from bondgraph.library import rlc_circuit  # noqa: E402
 from diagnosis import derive_arrs  # noqa: E402
 from prognosis.degradation import LinearDegradation  # noqa: E402
-from prognosis.monitor import MonitorResult  # noqa: E402
+from prognosis.health_monitor import MonitorResult  # noqa: E402
 from prognosis.rul import RULPredictor  # noqa: E402
 
 MATPLOTLIB_MESSAGE = "matplotlib is needed for plots: pip install 'bondgraph-phm[plot]'"

@@ -9,7 +9,7 @@ from diagnosis import derive_arrs
 from prognosis.degradation import ExponentialDegradation, LinearDegradation
 from prognosis.fleet import FleetFilter, FleetMonitor, FleetResult
 from prognosis.resampling import systematic_indices
-from prognosis.fleet.rul import crossing_times, summarize
+from prognosis.fleet.closed_form_rul import crossing_times, summarize
 from prognosis.rul import RULDistribution, RULPredictor
 from prognosis.random_streams import AssetStreams, asset_key
 

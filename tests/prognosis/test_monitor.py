@@ -12,7 +12,7 @@ from diagnosis.records import add_noise, as_record
 from prognosis.degradation import ExponentialDegradation
 from prognosis.particle_filter import VarianceAdaptation
 from prognosis.errors import PrognosisError
-from prognosis.monitor import HealthMonitor
+from prognosis.health_monitor import HealthMonitor
 from tests.zoo.models.quarter_car import build as quarter_car
 from tests.scenarios import torsion_bar_b_md, torsion_bar_sensors
 

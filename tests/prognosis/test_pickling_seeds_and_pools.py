@@ -22,11 +22,11 @@ from diagnosis.records import add_noise, as_record
 from prognosis.degradation import ExponentialDegradation, LinearDegradation
 from prognosis.hypotheses import Hypothesis, HypothesisObservation
 from prognosis.isolation import IsolatingMonitor
-from prognosis.monitor import HealthMonitor
+from prognosis.health_monitor import HealthMonitor
 from prognosis.observation import observation_model
 from prognosis.particle_filter import KernelSmoothing, ParticleFilter, VarianceAdaptation
 from prognosis.rul import ParallelRUL, ParallelWarning, RULPredictor
-from prognosis.statespace.model import discretize
+from prognosis.statespace.discrete_model import discretize
 
 
 def r_drift(t):

@@ -227,7 +227,7 @@ def test_bad_filter_settings():
 
 
 def test_rul_percentiles_keep_their_columns_without_any_prediction():
-    from prognosis.monitor import MonitorResult
+    from prognosis.health_monitor import MonitorResult
 
     assert MonitorResult(detection_time=None).rul_percentiles((5, 50, 95)).shape == (0, 3)
     one = RULPredictor(LinearDegradation(), dt=0.1, theta_fail=2.0, seed=0).predict(

@@ -7,7 +7,7 @@ row of particles per hypothesis (a candidate with a law, from the failure values
 per asset).  From then on all started
 rows step together, each at its own filter step, on random streams keyed by (seed, asset, step)
 (:mod:`prognosis.random_streams`), so an asset's results are bitwise the same alone, in any batch and on
-any worker.  The RUL is predicted in closed form (:mod:`prognosis.fleet.rul`) and mixed over the
+any worker.  The RUL is predicted in closed form (:mod:`prognosis.fleet.closed_form_rul`) and mixed over the
 hypotheses by posterior probability.
 
 Results are tidy tables (:class:`~prognosis.fleet.results.FleetResult`): alarms, estimates every
@@ -29,7 +29,7 @@ from diagnosis import RecordError, as_record, check_signals
 from ..hypotheses import indistinguishable_groups, same_signature, signature_candidates
 from ..isolation import (DRIFT_AWAY_STEPS, FLEET_LAWS, FLEET_SETTINGS, MIXTURE_FLOOR, IsolationSettings, Priors,
                          check_noise_std, decide, detection_options)
-from ..monitor import filter_stride
+from ..health_monitor import filter_stride
 from ..observation import observation_model
 from .. import seeds
 from ..rul import RULPredictor
@@ -38,7 +38,7 @@ from .checkpoint import check_state, read_checkpoint, write_checkpoint
 from .filter import ROW_STATE, FleetFilter
 from .live import LiveAsset
 from .results import FleetResult
-from .rul import crossing_times, has_closed_form, summarize
+from .closed_form_rul import crossing_times, has_closed_form, summarize
 from ..errors import PrognosisError
 
 __all__ = ["FleetMonitor", "BLOCK", "FLEET_LAWS"]

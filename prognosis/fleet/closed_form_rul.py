@@ -2,7 +2,7 @@
 
 A fleet predicts the RUL of every particle with its rate held at its estimate (the random walk and
 the process noise are estimation devices of the filter, not models of the future: the ``named``
-setting of :class:`~prognosis.monitor.HealthMonitor`, ``prediction_walk=0``).  The path of a
+setting of :class:`~prognosis.health_monitor.HealthMonitor`, ``prediction_walk=0``).  The path of a
 particle is then deterministic and, for the built-in laws, its crossing of the failure value has a
 closed form:
 
