@@ -44,11 +44,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
-from scipy.integrate import cumulative_trapezoid
 
 from bgphm.plotting import band, pyplot, save_figure, write_figures
 from bgphm.runs import run_main
 from bondgraph import simulate
+from bondgraph.scenarios import ANTIDERIVATIVES, ENCODER_COUNT, TORSION_DT, drift, encoder_angles, rig_signals
 from bondgraph.library import (MASS_LOAD, OMEGA_M_REF, TORSION_BAR, U_MAX, torsion_bar, torsion_bar_controller,
                                torsion_bar_monitorable, with_suspended_load)
 from diagnosis import derive_arrs
@@ -60,14 +60,12 @@ from prognosis.isolation import IsolatingMonitor
 from prognosis.health_monitor import MonitorResult
 from prognosis.particle_filter import KernelSmoothing
 
-DT_RECORD = 0.01  # s, sampling of the simulated sensors
+DT_RECORD = TORSION_DT  # s, sampling of the simulated sensors
 DT_FILTER = 0.1  # s, Jha et al. (2016), section 6.3.3
 SPEED_NOISE = 0.01  # rad/s, Jha et al. (2016), section 6.3.1
 TORQUE_NOISE = 0.01  # N.m, sigma_w of Jha et al. (2016), section 6.3.3, on the measured motor torque
-ENCODER_COUNT = 2 * np.pi / 2000  # rad, 2000 counts per revolution
 MARGIN_SIGMAS = 3.0
 PERSISTENCE = 10  # consecutive samples (0.1 s)
-ANTIDERIVATIVES = {"omega_m": "theta_m", "omega_Ld": "theta_Ld"}
 NOISES = {
     # the paper's level: its sigma_w = 0.01 is noise on the residual, i.e. on the measured torque
     "paper": {"omega_m": SPEED_NOISE, "omega_Ld": SPEED_NOISE, "tau_m": TORQUE_NOISE},
@@ -104,11 +102,8 @@ class Case:
     other_failures: dict = field(default_factory=dict)  # what else the user declares can fail (preset auto)
 
     def truth(self, t):
-        """The true theta(t) the simulation uses."""
-        elapsed = np.maximum(np.asarray(t, float) - self.onset, 0.0)
-        value = self.theta_n * np.exp(self.gamma * elapsed) if self.law == "exponential" else \
-            self.theta_n + self.gamma * elapsed
-        return float(value) if np.ndim(value) == 0 else value
+        """The true theta(t) the simulation uses (:func:`bondgraph.scenarios.drift`)."""
+        return drift(self.theta_n, self.gamma, self.onset, self.law)(t)
 
     @property
     def eol(self) -> float:
@@ -248,21 +243,8 @@ def simulate_case(case: Case, t_end: float | None = None) -> Scenario:
              "saturation_time_s": float(runs[1].t[saturated[0]]) if saturated.size else None}
     traces = [{"t": r.t[::every], "U": r["U"][::every], "omega_Md": r["omega_m"][::every] / k_belt,
                "omega_Ld": r["omega_Ld"][::every]} for r in runs]
-    return Scenario(case, *traces, measured(runs[0], full, every), measured(runs[1], full, every), facts,
+    return Scenario(case, *traces, rig_signals(runs[0], full, every), rig_signals(runs[1], full, every), facts,
                     time.perf_counter() - start)
-
-
-def measured(result, bg, every: int = 1) -> dict:
-    """What a test rig measures, every ``every`` solver outputs: speeds, exact angles, torque k_m i.
-
-    The angles are exact here; :func:`encoder` quantizes them for each record with its own phase.
-    """
-    current = next(b.label for b in bg.bonds if b.key == ("1_e", "GY"))
-    columns = {"t": result.t, "omega_m": result["omega_m"], "omega_Ld": result["omega_Ld"],
-               "tau_m": TORSION_BAR["k_m"][0] * result.flows[current]}
-    for speed, angle in ANTIDERIVATIVES.items():
-        columns[angle] = cumulative_trapezoid(columns[speed], result.t, initial=0.0)
-    return {name: values[::every] for name, values in columns.items()}
 
 
 def encoder(record: dict, rng: np.random.Generator) -> dict:
@@ -270,14 +252,9 @@ def encoder(record: dict, rng: np.random.Generator) -> dict:
 
     An encoder counts edges from wherever its disk stands at power-up (it reads 0 there), so the
     grid of its edges has a random offset in every run: records of different seeds carry different
-    quantization errors.
+    quantization errors (:func:`bondgraph.scenarios.encoder_angles`).
     """
-    out = dict(record)
-    for angle in ANTIDERIVATIVES.values():
-        phase = rng.uniform(0.0, ENCODER_COUNT)
-        counts = np.round((record[angle] + phase) / ENCODER_COUNT) - np.round(phase / ENCODER_COUNT)
-        out[angle] = counts * ENCODER_COUNT
-    return out
+    return encoder_angles(record, {angle: rng.uniform(0.0, ENCODER_COUNT) for angle in ANTIDERIVATIVES.values()})
 
 
 # -- one run ---------------------------------------------------------------------------------------

@@ -8,14 +8,12 @@ samples, :func:`filter_step`), the RUL horizon and its memory bound; then
 A setting that does not fit the record raises a :class:`~bondgraph.errors.SettingError` naming it.
 
 >>> import numpy as np
->>> from bondgraph import simulate
 >>> from bondgraph.library import rlc_circuit
+>>> from bondgraph.scenarios import drift, rlc_record
 >>> from diagnosis import add_noise, derive_arrs
 >>> from prognosis.isolation import IsolationSettings
 >>> bg = rlc_circuit()
->>> t = np.linspace(0.0, 3.0, 3001)
->>> run = simulate(bg, (0.0, 3.0), {"V": lambda t: 5 + np.sin(7 * t)}, t_eval=t,
-...                parameters={"R": lambda t: 10.0 + 4.0 * max(0.0, t - 1.0)}).record()
+>>> run = rlc_record(np.linspace(0.0, 3.0, 3001), {"R": drift(10.0, 4.0, onset=1.0)})
 >>> record = add_noise(run, {"i": 1e-4}, seed=0)
 >>> settings = PrognosisSettings(detection=DetectionSettings(calibrate=0.8),
 ...                              isolation=IsolationSettings(laws=("linear",), n_particles=100, sensors=False))

@@ -1,9 +1,9 @@
-"""Scenarios the unit tests share, written with the public API (no test imports an example script).
+"""The estimators' scenarios the unit tests share, written with the public API (no test imports an example).
 
-* ``torsion_bar_b_md`` and ``torsion_bar_sensors``: the torsion bar of Jha et al. (2016) under its PI
-  speed loop, the motor-disk friction b_Md growing as b_Md,n exp(0.05 (t - 10)) from t = 10 s (section
-  6.3.2), and the record its sensors give (speeds, encoder angles at 2000 counts per revolution, the
-  motor torque k_m i);
+The case studies' truth laws and sensor records (the torsion bar's friction growing, its encoders,
+the RLC's drifting resistor) live in :mod:`bondgraph.scenarios`, shared with the examples and the
+benchmarks.  Here, the estimators' set-ups built on them:
+
 * ``ThreeTanks``: the three tanks of Du et al. as a discrete model with az2 as an extra state (eqs. 59,
   62), the az2 drift of eq. 61, and the Kalman filters (plain or strong tracking) tuned for it;
 * ``FrictionDriveRUL``: the Monte Carlo RUL of the friction drive of Rodriguez Obando et al. (2021)
@@ -18,59 +18,11 @@ from functools import lru_cache
 
 import numpy as np
 import sympy as sp
-from scipy.integrate import cumulative_trapezoid
 
-from bondgraph import simulate
-from bondgraph.library import THREE_TANK, TORSION_BAR, friction_drive, three_tank, torsion_bar, torsion_bar_controller
+from bondgraph.library import THREE_TANK, friction_drive, three_tank
 from prognosis.lifecontrol import chebyshev_intervals, energy_deterioration, monte_carlo_rul
 from prognosis.statespace import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter, StrongTracking,
                                   UnscentedKalmanFilter, discretize)
-
-# -- the torsion bar of Jha et al. (2016) -----------------------------------------------------------------
-
-TORSION_DT = 0.01  # s, sampling of the sensors
-ENCODER_COUNT = 2 * np.pi / 2000  # rad, 2000 counts per revolution
-ANTIDERIVATIVES = {"omega_m": "theta_m", "omega_Ld": "theta_Ld"}  # encoder angles of the speeds
-
-
-def b_md_truth(t):
-    """b_Md,n exp(0.05 (t - 10)) from t = 10 s (Jha et al. (2016), section 6.3.2); a float for a scalar t."""
-    value = TORSION_BAR["b_Md"][0] * np.exp(0.05 * np.maximum(np.asarray(t, float) - 10.0, 0.0))
-    return float(value) if np.ndim(value) == 0 else value
-
-
-def torsion_bar_sensors(result, bg, every: int = 1) -> dict:
-    """The record a test rig gives, every ``every`` solver outputs: speeds, encoder angles, torque k_m i."""
-    current = next(b.label for b in bg.bonds if b.key == ("1_e", "GY"))
-    columns = {"t": result.t, "omega_m": result["omega_m"], "omega_Ld": result["omega_Ld"],
-               "tau_m": TORSION_BAR["k_m"][0] * result.flows[current]}
-    for speed, angle in ANTIDERIVATIVES.items():
-        exact = cumulative_trapezoid(columns[speed], result.t, initial=0.0)
-        columns[angle] = np.round(exact / ENCODER_COUNT) * ENCODER_COUNT
-    return {name: values[::every] for name, values in columns.items()}
-
-
-def torsion_bar_b_md(t_end: float = 30.0, truth=b_md_truth) -> dict:
-    """Noise-free sensor record of the full torsion bar under PI control with b_Md following ``truth(t)``.
-
-    The solver output is taken every ``TORSION_DT / 10`` so that the encoder angles come from an accurate
-    integral of the speeds; the record is then sampled every ``TORSION_DT``.
-    """
-    full = torsion_bar()
-    equations = full.state_equations(full.assign_causality("integral"))
-    every = 10
-    t_eval = np.arange(0.0, t_end + TORSION_DT / (2 * every), TORSION_DT / every)
-    t_end = max(t_end, float(t_eval[-1]))  # the last point may overshoot by a rounding error
-    run = simulate(equations, (0.0, t_end), {"U": torsion_bar_controller()}, t_eval=t_eval,
-                   parameters={"b_Md": truth})
-    return torsion_bar_sensors(run, full, every)
-
-
-def b_md_linear(gamma: float, onset: float):
-    """b_Md,n + gamma (t - onset) from ``onset`` (the linear law of Jha et al. (2016), eq. 60, on b_Md)."""
-    nominal = TORSION_BAR["b_Md"][0]
-    return lambda t: nominal + gamma * max(0.0, float(t) - onset)
-
 
 # -- the three tanks of Du et al. ---------------------------------------------------------------------------
 

@@ -95,17 +95,13 @@ class FleetMonitor:
     --------
     Three RLC circuits, two of them with a resistance drifting up from different times:
 
-    >>> from bondgraph import simulate
     >>> from bondgraph.library import rlc_circuit
+    >>> from bondgraph.scenarios import drift, rlc_record
     >>> from diagnosis import derive_arrs
-    >>> bg = rlc_circuit()
     >>> t = np.linspace(0.0, 3.0, 3001)
-    >>> def record(onset):
-    ...     drift = (lambda t: 10.0 + 4.0 * max(0.0, t - onset)) if onset else None
-    ...     return simulate(bg, (0.0, 3.0), {"V": lambda t: 5 + np.sin(7 * t)}, t_eval=t,
-    ...                     parameters={"R": drift} if drift else {}).record()
-    >>> records = {"c1": record(0.5), "c2": record(None), "c3": record(1.0)}
-    >>> arr = derive_arrs(bg, complete=False, integrals="keep")[0]
+    >>> records = {"c1": rlc_record(t, {"R": drift(10.0, 4.0, onset=0.5)}), "c2": rlc_record(t),
+    ...            "c3": rlc_record(t, {"R": drift(10.0, 4.0, onset=1.0)})}
+    >>> arr = derive_arrs(rlc_circuit(), complete=False, integrals="keep")[0]
     >>> fleet = FleetMonitor([arr], {"R": 20.0}, laws=["linear"], noise_std={arr.name: 1e-3}, dt=0.01,
     ...                      n_particles=200, detection={"margin": 0.01})
     >>> result = fleet.run(records)

@@ -99,15 +99,11 @@ class IsolatingMonitor:
     The RLC circuit's resistance drifting up linearly from t = 0.5 s; the monitor is told only
     that R fails at 20 ohm and L at 2 H:
 
-    >>> from bondgraph import simulate
     >>> from bondgraph.library import rlc_circuit
+    >>> from bondgraph.scenarios import drift, rlc_record
     >>> from diagnosis import derive_arrs
-    >>> bg = rlc_circuit()
-    >>> t = np.linspace(0.0, 3.0, 3001)
-    >>> drift = lambda t: 10.0 + 4.0 * max(0.0, t - 0.5)
-    >>> record = simulate(bg, (0.0, 3.0), {"V": lambda t: 5 + np.sin(7 * t)}, t_eval=t,
-    ...                   parameters={"R": drift}).record()
-    >>> arrs = derive_arrs(bg)
+    >>> record = rlc_record(np.linspace(0.0, 3.0, 3001), {"R": drift(10.0, 4.0, onset=0.5)})
+    >>> arrs = derive_arrs(rlc_circuit())
     >>> monitor = IsolatingMonitor(arrs, {"R": 20.0, "L": 2.0}, noise_std={a.name: 1e-3 for a in arrs},
     ...                            dt=0.01, n_particles=100, detection={"margin": 0.01})
     >>> result = monitor.run(record)

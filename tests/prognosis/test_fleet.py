@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from bondgraph import simulate
+from bondgraph.scenarios import drift, rlc_record
 from bondgraph.library import rlc_circuit
 from diagnosis import derive_arrs
 from prognosis.degradation import ExponentialDegradation, LinearDegradation
@@ -21,11 +21,8 @@ ONSETS = {"c1": 0.3, "c2": None, "c3": 0.8, "c4": 0.5}
 def circuit():
     bg = rlc_circuit()
     arr = derive_arrs(bg, complete=False, integrals="keep")[0]
-    records = {}
-    for name, onset in ONSETS.items():
-        parameters = {"R": (lambda t, o=onset: 10.0 + 6.0 * max(0.0, t - o))} if onset is not None else {}
-        records[name] = simulate(bg, (0.0, 2.0), {"V": lambda t: 5 + np.sin(7 * t)}, t_eval=T,
-                                 parameters=parameters).record()
+    records = {name: rlc_record(T, {"R": drift(10.0, 6.0, onset)} if onset is not None else {})
+               for name, onset in ONSETS.items()}
     return arr, records
 
 

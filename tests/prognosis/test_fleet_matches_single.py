@@ -8,7 +8,7 @@ the other's 5-95 % band.
 import numpy as np
 import pytest
 
-from bondgraph import simulate
+from bondgraph.scenarios import drift, rlc_record
 from bondgraph.library import rlc_circuit
 from diagnosis import add_noise, derive_arrs
 from prognosis.fleet import FleetMonitor
@@ -24,9 +24,7 @@ def runs():
     arrs = derive_arrs(bg, complete=False, integrals="keep")[:1]  # the loop: R, L and both sensors fire it
     records = {}
     for seed, (name, onset) in enumerate(ONSETS.items()):
-        clean = simulate(bg, (0.0, 2.0), {"V": lambda t: 5 + np.sin(7 * t)}, t_eval=T,
-                         parameters={"R": lambda t, o=onset: 10.0 + 6.0 * max(0.0, t - o)}).record()
-        records[name] = add_noise(clean, {"i": 2e-4}, seed=seed + 1)
+        records[name] = add_noise(rlc_record(T, {"R": drift(10.0, 6.0, onset)}), {"i": 2e-4}, seed=seed + 1)
     settings = FLEET_SETTINGS.changed(dt=0.01, n_particles=500, rul_every=5, seed=3)
     told = dict(noise_std={arrs[0].name: 2e-3}, detection={"margin": 0.01, "persistence": 3}, settings=settings)
     fleet = FleetMonitor(arrs, {"R": 20.0}, **told).run(records)

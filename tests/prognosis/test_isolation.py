@@ -16,7 +16,7 @@ from prognosis.degradation import LinearDegradation
 from prognosis.hypotheses import Hypothesis, indistinguishable_groups, rate_prior, signature_candidates
 from prognosis.isolation import IsolatingMonitor, decide
 from prognosis.particle_filter import KernelSmoothing, ParticleFilter, VarianceAdaptation
-from tests.scenarios import b_md_linear, torsion_bar_b_md
+from bondgraph.scenarios import drift, torsion_bar_record
 
 
 @pytest.fixture(scope="module")
@@ -123,7 +123,7 @@ def _write_case(tmp_path, gamma, onset, seed):
     """model.json and data.csv of a linear b_Md degradation, the record ending at 90 % of the life."""
     b_n, fail = TORSION_BAR["b_Md"][0], 0.3
     eol = onset + (fail - b_n) / gamma
-    record = torsion_bar_b_md(t_end=onset + 0.9 * (eol - onset), truth=b_md_linear(gamma, onset))
+    record = torsion_bar_record(onset + 0.9 * (eol - onset), {"b_Md": drift(b_n, gamma, onset)})
     columns = {k: record[k] for k in ("t", "omega_m", "omega_Ld", "tau_m")}
     noisy = add_noise(as_record(columns), PAPER_NOISE, seed=seed)
     (tmp_path / "model.json").write_text(to_json(torsion_bar_monitorable()))

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bondgraph import PHMError, simulate
-from bondgraph.library import torsion_bar, torsion_bar_controller, torsion_bar_monitorable
+from bondgraph.library import TORSION_BAR, torsion_bar, torsion_bar_controller, torsion_bar_monitorable
 from diagnosis import derive_arrs
 from diagnosis.records import add_noise, as_record
 from prognosis.degradation import ExponentialDegradation
@@ -14,9 +14,8 @@ from prognosis.particle_filter import VarianceAdaptation
 from prognosis.errors import PrognosisError
 from prognosis.health_monitor import HealthMonitor
 from tests.zoo.models.quarter_car import build as quarter_car
-from tests.scenarios import torsion_bar_b_md, torsion_bar_sensors
+from bondgraph.scenarios import ANTIDERIVATIVES, drift, encoder_angles, rig_signals, torsion_bar_record
 
-ANTIDERIVATIVES = {"omega_m": "theta_m", "omega_Ld": "theta_Ld"}  # encoder angles
 
 
 def b_md_degrading(t):
@@ -26,7 +25,7 @@ def b_md_degrading(t):
 
 @pytest.fixture(scope="module")
 def scenario():
-    clean = torsion_bar_b_md(t_end=30.0)
+    clean = torsion_bar_record(30.0, {"b_Md": drift(TORSION_BAR["b_Md"][0], 0.05, 10.0, "exponential")})
     record = add_noise(as_record(clean), {"omega_m": 0.01, "omega_Ld": 0.01}, seed=5)
     arr = next(a for a in derive_arrs(torsion_bar_monitorable(), complete=False, integrals="keep")
                if a.junction == "1_1")
@@ -143,7 +142,7 @@ def test_a_record_without_degradation_starts_no_filter(scenario):
     bg = torsion_bar()
     t = np.arange(0.0, 20.0 + 1e-9, 0.01)
     nominal = simulate(bg, (0, 20), {"U": torsion_bar_controller()}, t_eval=t)
-    record = add_noise(as_record(torsion_bar_sensors(nominal, bg)), {"omega_m": 0.01, "omega_Ld": 0.01}, seed=6)
+    record = add_noise(as_record(encoder_angles(rig_signals(nominal, bg))), {"omega_m": 0.01, "omega_Ld": 0.01}, seed=6)
     result = monitor(arr).run(record)
     assert result.detection_time is None and result.t.size == 0 and not result.rul
 

@@ -22,7 +22,7 @@ from prognosis.hypotheses import integral_increments
 from prognosis.likelihood import ResidualNoise, integral_walk
 from prognosis.resample_move import ResampleMoveFilter
 from prognosis.wander import BLOCK, innovations, steady_state
-from tests.scenarios import TORSION_DT, torsion_bar_b_md
+from bondgraph.scenarios import TORSION_DT, torsion_bar_record
 
 
 def walk_covariance(steps: int, lam: float, p: float) -> np.ndarray:
@@ -135,7 +135,7 @@ def test_the_walk_read_from_a_torsion_bar_record_is_what_its_sensor_noise_integr
     sqrt(h Delta)`` per filter step Delta, times each ARR's gain on it (k_s in the load ARR); written
     without integrals (differentiated), they do not walk."""
     nominal = TORSION_BAR["b_Md"][0]
-    record = torsion_bar_b_md(t_end=40.0, truth=lambda t: nominal)
+    record = torsion_bar_record(40.0, {"b_Md": lambda t: nominal})
     sd, every = 0.002, 10
     columns = {k: record[k] for k in ("t", "omega_m", "omega_Ld", "tau_m")}
     noisy = add_noise(as_record(columns), {"omega_m": sd, "omega_Ld": sd}, seed=3)
