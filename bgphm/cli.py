@@ -32,8 +32,10 @@ from collections.abc import Sequence
 from bgphm.commands import Progress
 from bgphm.commands._inputs import detection_settings
 from bgphm.errors import EXIT_FAILURE, EXIT_USAGE, UsageError
+from bgphm.fleet.engine import WORKERS
 from bgphm.terminal import terminal_streams
 from bondgraph.errors import PHMError, SettingError
+from bondgraph.simulation import DEFAULT_T_END, OUTPUT_SAMPLES
 from diagnosis import POOLED_RECORDS, DetectionSettings
 from prognosis import IsolationSettings
 
@@ -87,8 +89,9 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("simulate", help="simulate the model and write its signals as CSV")
     p.add_argument("model", metavar="MODEL", help=model_help)
-    p.add_argument("--t-end", type=float, help="horizon in s (default: the model file's t_end, else 1)")
-    p.add_argument("--samples", type=int, default=501, help="output samples (default 501)")
+    p.add_argument("--t-end", type=float,
+                   help=f"horizon in s (default: the model file's t_end, else {DEFAULT_T_END:g})")
+    p.add_argument("--samples", type=int, default=OUTPUT_SAMPLES, help=f"output samples (default {OUTPUT_SAMPLES})")
     p.add_argument("--set", action="append", metavar="PARAM=VALUE", help="override a parameter (repeatable)")
     p.add_argument("--out", help="CSV file (default: stdout)")
     p.add_argument("--force", action="store_true", help="replace an existing --out file (never an input)")
@@ -224,7 +227,8 @@ def _fleet_parser(sub, model_help: str) -> None:
                    "an uninterrupted run")
     p.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786 "
                    "(default: a local cluster of --workers processes)")
-    p.add_argument("--workers", type=int, default=2, help="worker processes of the local cluster (default 2; 0 runs "
+    p.add_argument("--workers", type=int, default=WORKERS,
+                   help=f"worker processes of the local cluster (default {WORKERS}; 0 runs "
                    "every asset in this process, without Dask)")
     p.add_argument("--shard-size", type=int, metavar="N", help="assets per task (default: a quarter of each "
                    "worker's share, at most 1000); the results do not depend on it")

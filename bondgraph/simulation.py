@@ -56,7 +56,8 @@ from .model import BondGraph
 from .structure import T, signal_function
 
 __all__ = [
-    "FALLBACK_METHOD", "MAX_EVALUATIONS", "MAX_SAMPLES", "MIN_SPAN", "PACE_MARGIN", "PACE_START", "SPAN_RTOL",
+    "DEFAULT_T_END", "FALLBACK_METHOD", "MAX_EVALUATIONS", "MAX_SAMPLES", "MIN_SPAN", "OUTPUT_SAMPLES", "PACE_MARGIN",
+    "PACE_START", "SPAN_RTOL",
     "STALL_EVALUATIONS", "SimulationResult", "SimulationWarning", "check_sample_count", "simulate",
 ]
 
@@ -144,6 +145,8 @@ MIN_SPAN = 1e-12
 SPAN_RTOL = 1e-9
 #: The most output times (``t_eval``) of one simulation: each trajectory (one per state, bond effort,
 #: bond flow and signal) of that many samples takes 80 MB.
+#: a written simulation's samples by default (``bgphm simulate``), and its horizon (s) when the model has none
+OUTPUT_SAMPLES, DEFAULT_T_END = 501, 1.0
 MAX_SAMPLES = 10_000_000
 #: Evaluations of the model in a row at the same time (within 4 units in the last place) before the
 #: integration is declared stalled: a Jacobian estimate takes one per state and Newton iterations a
@@ -287,10 +290,11 @@ def _solve(guard: "_Guard", span, z0, t_eval, method: str, options: dict) -> obj
     return solution
 
 
-def check_sample_count(count: object, option: str = "t_eval") -> int:
+def check_sample_count(count: object, option: str = "t_eval", least: int = 1) -> int:
     """The number of output samples ``count`` as an int, or a SimulationError naming ``option``.
 
-    At least 1 and at most :data:`MAX_SAMPLES`; a caller that builds the time grid (a command line's
+    At least ``least`` (a written trajectory wants 3: a start, an end and a point between) and at
+    most :data:`MAX_SAMPLES`; a caller that builds the time grid (a command line's
     ``--samples``, say) checks the count first, so a typo does not allocate gigabytes.
 
     Examples
@@ -302,8 +306,8 @@ def check_sample_count(count: object, option: str = "t_eval") -> int:
     ...
     bondgraph.errors.SimulationError: --samples: 100000000 samples is more than the limit of 10000000 (MAX_SAMPLES)
     """
-    if isinstance(count, bool) or not isinstance(count, numbers.Real) or count != int(count) or count < 1:
-        raise SimulationError(f"{option}: the number of samples must be a whole number >= 1, got {count!r}")
+    if isinstance(count, bool) or not isinstance(count, numbers.Real) or count != int(count) or count < least:
+        raise SimulationError(f"{option}: the number of samples must be a whole number >= {least}, got {count!r}")
     if count > MAX_SAMPLES:
         raise SimulationError(f"{option}: {int(count)} samples is more than the limit of {MAX_SAMPLES} (MAX_SAMPLES)")
     return int(count)

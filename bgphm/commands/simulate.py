@@ -27,14 +27,12 @@ def run(args, progress: Progress) -> int:
     the CSV goes to stdout or ``args.out``.  Raises :class:`UsageError` for a bad ``--t-end``,
     ``--samples`` or ``--set``, or an input signal without a value.
     """
-    from bondgraph.simulation import MIN_SPAN, check_sample_count, simulate
+    from bondgraph.simulation import DEFAULT_T_END, MIN_SPAN, check_sample_count, simulate
 
     out = output_file(args)
-    if args.samples < 3:
-        raise UsageError(f"--samples must be at least 3, got {args.samples}")
-    check_sample_count(args.samples, "--samples")
+    check_sample_count(args.samples, "--samples", least=3)
     spec = load_model(args.model)
-    t_end = args.t_end if args.t_end is not None else (spec.t_end or 1.0)
+    t_end = args.t_end if args.t_end is not None else (spec.t_end or DEFAULT_T_END)
     if not (math.isfinite(t_end) and t_end >= MIN_SPAN):
         raise UsageError(f"--t-end must be a number of seconds of at least {MIN_SPAN:g}, got {t_end:g}")
     parameters = assignments(args.set, spec.model.parameters, "--set")

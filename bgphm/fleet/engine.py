@@ -32,10 +32,11 @@ from .sources import open_source
 from .spec import FleetSpec, monitor_for
 from .store import BUCKETS, write_shard
 
-__all__ = ["SERIAL", "Task", "default_shard_size", "local_cluster", "malloc_setting", "plan", "require_dask",
+__all__ = ["SERIAL", "WORKERS", "Task", "default_shard_size", "local_cluster", "malloc_setting", "plan", "require_dask",
            "run_fleet", "run_shard", "shard_assets"]
 
 SERIAL = "serial"  # the scheduler name of the in-process run (no Dask)
+WORKERS = 2  # worker processes of a local cluster by default (this machine's cores)
 MAX_SHARD = 1000  # assets per shard by default at most: FleetMonitor filters up to 1000 assets together
 CONNECT_TIMEOUT = "10s"  # to reach a remote scheduler
 WORKER_TIMEOUT = 60.0  # seconds to wait for a first worker on a remote scheduler
@@ -97,7 +98,7 @@ def run_shard(task: Task) -> dict:
             "built_monitor": new, "worker": f"{socket.gethostname()}:{os.getpid()}"}
 
 
-def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, workers: int = 2,
+def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, workers: int = WORKERS,
               shard_size: int | None = None, buckets: int = BUCKETS,
               progress: Callable[[int, int], None] | None = None, notes: dict | None = None,
               resume: bool = False, on_bad_record: str = "stop") -> dict:
