@@ -189,7 +189,7 @@ def systematic_indices(weights: np.ndarray, total: np.ndarray, u: np.ndarray, fl
     # the last particle with weight (and the weightless ones after it) ends at N: a u rounding N - u down
     # to N - 1 would otherwise hand the last point to a particle without weight
     if rows == 1:  # a stream's tick: point j's ancestor is the number of edges <= j (ceil(e) > j iff e > j)
-        edges[0, edges[0] >= edges[0, -1]] = n
+        edges[0, np.searchsorted(edges[0], edges[0, -1]):] = n  # the edges do not decrease: a binary search
         ancestors = np.searchsorted(edges[0], _points(n), side="right")
         return ancestors if flat else ancestors[None, :]
     np.copyto(edges, n, where=edges >= edges[:, -1:])

@@ -35,6 +35,33 @@ ROW_STATE = ("theta", "gamma", "hypothesis", "mean", "variance", "sigma_v", "log
              "away")  # what a row is: a checkpoint saves these
 
 
+class _RowsStep(StepDiagnostics):
+    """:class:`~prognosis.particle_filter.StepDiagnostics` of a fleet step, computed when asked: a stream
+    reports every few steps, and the ESS's array operations every step would be a tenth of its cost."""
+
+    def __init__(self, finite: np.ndarray, degenerate: np.ndarray, weights: np.ndarray, total: np.ndarray):
+        self.degenerate, self.innovation = degenerate, None
+        self._finite, self._weights, self._total, self._ess = finite, weights, total, None
+
+    @property
+    def updated(self) -> np.ndarray:
+        return self._finite.any(axis=1)
+
+    @property
+    def resampled(self) -> np.ndarray:
+        return np.ones(self._total.size, bool)  # every row, every step
+
+    @property
+    def ess(self) -> np.ndarray:
+        if self._ess is None:
+            self._ess = self._total * self._total / (self._weights * self._weights).sum(axis=1)
+        return self._ess
+
+    @property
+    def collapsed(self) -> np.ndarray:
+        return self.ess < COLLAPSE_BELOW * self._weights.shape[1]
+
+
 class FleetFilter:
     """Particle arrays of many rows, stepped together.
 
@@ -192,10 +219,7 @@ class FleetFilter:
         self._smooth(at, gamma)
         self.gamma[at] = gamma
         self.steps[at] += 1
-        ess = total * total / (weights * weights).sum(axis=1)
-        every = np.ones(rows.size, bool)
-        return StepDiagnostics(updated=every if finite.all() else finite.any(axis=1), ess=ess, resampled=every,
-                               degenerate=degenerate, collapsed=ess < COLLAPSE_BELOW * n)
+        return _RowsStep(finite, degenerate, weights, total)
 
     def _draws(self, rows: np.ndarray, blocks: int) -> np.ndarray:
         """(rows, blocks N + 1) normals: theta's process noise, gamma's jitter, the resampling's uniform.

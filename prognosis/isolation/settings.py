@@ -101,7 +101,8 @@ class IsolationSettings:
         A prior interval of the rate instead (uniform; the same for every hypothesis).
     process_noise : float
         ``"sir"`` only: sigma_v per step as a fraction of the candidate's resolution per sample (the
-        residual noise over the sensitivity of the residual to it at the alarm), in both monitors.
+        residual noise over the sensitivity of the residual to it at the alarm), in both monitors,
+        for the built-in laws; a law given as a model (``laws={name: model}``) keeps its own.
     discount : float
         ``"sir"`` only: kernel smoothing of the rate (:class:`~prognosis.particle_filter.KernelSmoothing`).
     rul_every : int
