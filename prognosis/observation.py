@@ -103,6 +103,14 @@ class ObservationModel:
             self._function = sp.lambdify([self.symbol, *compiled.points], numeric, modules="numpy", cse=True)
         return self._function
 
+    def points_used(self) -> list[int]:
+        """The positions, in the compiled ARR's point order, of the point values ``h`` reads (the others do
+        not change its value: a caller that keeps many samples may drop them)."""
+        compiled = self.arr.compiled
+        values = {sp.Symbol(p): v for p, v in self.arr.values.items() if p != self.candidate}
+        used = self.expression.xreplace(compiled.symbols).xreplace(values).free_symbols
+        return [i for i, point in enumerate(compiled.points) if point in used]
+
     def rate_function(self):
         """``x(*points)``, the factor of theta's rate (see ``rate_coefficient``), vectorized."""
         if self._rate_function is None:

@@ -157,6 +157,9 @@ class FleetMonitor:
                                                                 for c in (o.get("antiderivatives") or {}).values())]))
         self.observations = [[observation_model(a, h.candidate) if h.candidate in a.parameters else None
                               for a in self.arrs] for h in self.hypotheses]
+        # the point values a block keeps per ARR: those an observation reads (the torsion bar's b_Md reads 1 of 5)
+        self._kept = [sorted({i for models in self.observations if models[m] is not None
+                              for i in models[m].points_used()}) for m in range(len(self.arrs))]
         self.boxes = np.array([self.priors.healthy_box(h, self.arrs) for h in self.hypotheses]).reshape(-1, 2)
         self.domains = np.array([h.domain for h in self.hypotheses], float).reshape(-1, 2)
         self.up = np.array([h.direction == "up" for h in self.hypotheses])
@@ -237,8 +240,8 @@ class FleetMonitor:
             return None
         steps = np.arange(k, t.size, filter_stride(t, self.settings.dt))
         y = np.stack([-e.residual[steps] for e in evaluations], axis=1)
-        points = [np.stack([p[steps] for p in e.points], axis=1) if e.points else np.empty((steps.size, 0))
-                  for e in evaluations]
+        points = [np.stack([e.points[i][steps] for i in kept], axis=1) if kept else np.empty((steps.size, 0))
+                  for e, kept in zip(evaluations, self._kept)]
         return _Asset(asset, t[steps], y, points, started, starts)
 
     def _start(self, windows: list, fired: list) -> tuple[list, list]:
@@ -276,13 +279,26 @@ class FleetMonitor:
                 for start in range(0, live.size, STEP_ROWS):
                     index = live[start:start + STEP_ROWS]
                     mine, k = owner[index], j - first
-                    step = pf.step(y[mine, k], [[p[mine, k] for p in m] for m in points], rows=rows[index])
+                    step = pf.step(y[mine, k], self._all_points([[p[mine, k] for p in m] for m in points], index.size),
+                                   rows=rows[index])
                     self._outputs(pf, rows[index], mine, ids[mine], np.full(index.size, j), t[mine, k], step,
                                   result, common=j)
         if self._keep_particles:
             for a, item in enumerate(assets):
                 result.particles[str(item.asset)] = self._particles_of(pf, rows[owner == a])
         pf.remove(rows)
+
+    def _all_points(self, kept: list, size: int) -> list:
+        """Every ARR's point values for the filter from the ones a block keeps (per ARR, arrays (size,)): the
+        others, which no observation reads, as zeros."""
+        zeros = np.broadcast_to(0.0, (size,))
+        out = []
+        for m, values in enumerate(kept):
+            full = [zeros] * len(self.arrs[m].compiled.points)
+            for i, v in zip(self._kept[m], values):
+                full[i] = v
+            out.append(full)
+        return out
 
     def particles(self, asset) -> dict:
         """The particles of a streamed asset now: ``{hypothesis: {"theta": (N,), "gamma": (G, N)}}`` (copies)."""
