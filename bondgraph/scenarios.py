@@ -10,7 +10,9 @@ scenario is written once:
   the exact shaft angles and the motor torque ``k_m i``), :func:`encoder_angles` (the angles read
   by encoders of :data:`ENCODER_COUNT`, at a phase of their own) and :func:`torsion_bar_record`
   (both, simulated with a parameter following a truth law);
-* the RLC circuit under ``V = 5 + sin(7 t)``: :func:`rlc_record`.
+* the RLC circuit under ``V = 5 + sin(7 t)``: :func:`rlc_record`;
+* the three tanks of Du et al. (n.d.): :func:`three_tank_az2`, the outlet coefficient's drift of
+  their eq. (61).
 
 Examples
 --------
@@ -32,11 +34,11 @@ from collections.abc import Callable, Mapping
 import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
-from .library import TORSION_BAR, rlc_circuit, torsion_bar, torsion_bar_controller
+from .library import THREE_TANK, TORSION_BAR, rlc_circuit, torsion_bar, torsion_bar_controller
 from .simulation import simulate
 
 __all__ = ["ANTIDERIVATIVES", "ENCODER_COUNT", "TORSION_DT", "drift", "encoder_angles", "rig_signals", "rlc_record",
-           "torsion_bar_record"]
+           "three_tank_az2", "torsion_bar_record"]
 
 TORSION_DT = 0.01  # s, sampling of the torsion bar's sensors
 ENCODER_COUNT = 2 * np.pi / 2000  # rad, 2000 counts per revolution
@@ -121,3 +123,14 @@ def rlc_record(t: np.ndarray, parameters: Mapping[str, Callable] | None = None):
     t = np.asarray(t, float)
     return simulate(rlc_circuit(), (float(t[0]), float(t[-1])), {"V": lambda s: 5 + np.sin(7 * s)}, t_eval=t,
                     parameters=dict(parameters or {})).record()
+
+
+def three_tank_az2(steps: int, onset: int = 10, rate: float = 1e-4) -> np.ndarray:
+    """The three tanks' az2 over ``steps`` steps of 1 s by eq. (61) of Du et al. (n.d.): nominal for
+    ``k <= onset``, then ``az2_k = az2_{k-1} + rate (k - onset)``; entry ``k - 1`` is step ``k``.
+
+    >>> three_tank_az2(13)[-4:].round(6).tolist()
+    [0.6, 0.6001, 0.6003, 0.6006]
+    """
+    k = np.arange(1, steps + 1)
+    return THREE_TANK["az2"] + rate * np.cumsum(np.where(k > onset, k - onset, 0))

@@ -51,6 +51,7 @@ import numpy as np  # noqa: E402
 from bgphm.plotting import pyplot, save_figure, write_figures  # noqa: E402
 from bgphm.runs import over_seeds, progress_line, run_main  # noqa: E402
 from bondgraph.library import THREE_TANK, three_tank  # noqa: E402
+from bondgraph.scenarios import three_tank_az2  # noqa: E402
 from diagnosis import derive_arrs, noise_margin, signature_matrix  # noqa: E402
 from prognosis.ranking import format_ranking, rank_with_ties  # noqa: E402
 from prognosis.statespace import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter,  # noqa: E402
@@ -116,9 +117,9 @@ def model():
 
 
 def az2_drift(steps: int = STEPS) -> np.ndarray:
-    """Eq. (61): az2_k = 0.6 for k <= 10, az2_{k-1} + 1e-4 (k - 10) after; entry k - 1 is time k."""
-    k = np.arange(1, steps + 1)
-    return THREE_TANK["az2"] + RATE * np.cumsum(np.where(k > ONSET, k - ONSET, 0))
+    """Eq. (61): az2_k = 0.6 for k <= 10, az2_{k-1} + 1e-4 (k - 10) after
+    (:func:`bondgraph.scenarios.three_tank_az2`)."""
+    return three_tank_az2(steps, ONSET, RATE)
 
 
 @dataclass

@@ -20,6 +20,7 @@ import numpy as np
 import sympy as sp
 
 from bondgraph.library import THREE_TANK, friction_drive, three_tank
+from bondgraph.scenarios import three_tank_az2
 from prognosis.lifecontrol import chebyshev_intervals, energy_deterioration, monte_carlo_rul
 from prognosis.statespace import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter, StrongTracking,
                                   UnscentedKalmanFilter, discretize)
@@ -52,8 +53,7 @@ class ThreeTanks:
     @classmethod
     def az2_drift(cls, steps: int = STEPS) -> np.ndarray:
         """Eq. 61: az2_k = 0.6 for k <= 10, az2_{k-1} + 1e-4 (k - 10) after; entry k - 1 is time k."""
-        k = np.arange(1, steps + 1)
-        return THREE_TANK["az2"] + cls.RATE * np.cumsum(np.where(k > cls.ONSET, k - cls.ONSET, 0))
+        return three_tank_az2(steps, cls.ONSET, cls.RATE)
 
     @classmethod
     def simulate_tanks(cls, seed: int, drift: bool = True, steps: int = STEPS) -> tuple[np.ndarray, np.ndarray]:
