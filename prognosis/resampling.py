@@ -192,7 +192,12 @@ def systematic_indices(weights: np.ndarray, total: np.ndarray, u: np.ndarray, fl
         edges[0, np.searchsorted(edges[0], edges[0, -1]):] = n  # the edges do not decrease: a binary search
         ancestors = np.searchsorted(edges[0], _points(n), side="right")
         return ancestors if flat else ancestors[None, :]
-    np.copyto(edges, n, where=edges >= edges[:, -1:])
+    tail = np.flatnonzero(edges[:, -2] == edges[:, -1]) if n > 1 else np.empty(0, int)
+    edges[:, -1] = n
+    if tail.size:  # the rare rows whose last particles have no weight: their run of equal edges ends at N
+        part = edges[tail]
+        np.copyto(part, n, where=part >= part[:, -2:-1])
+        edges[tail] = part
     np.ceil(edges, out=edges)
     np.minimum(edges, n, out=edges)
     np.maximum(edges, 0, out=edges)
