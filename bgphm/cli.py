@@ -32,7 +32,6 @@ from collections.abc import Sequence
 from bgphm.commands import Progress
 from bgphm.commands._inputs import detection_settings
 from bgphm.errors import EXIT_FAILURE, EXIT_USAGE, UsageError
-from bgphm.fleet.engine import WORKERS
 from bgphm.terminal import terminal_streams
 from bondgraph.errors import PHMError, SettingError
 from bondgraph.simulation import DEFAULT_T_END, OUTPUT_SAMPLES
@@ -227,8 +226,10 @@ def _fleet_parser(sub, model_help: str) -> None:
                    "an uninterrupted run")
     p.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786 "
                    "(default: a local cluster of --workers processes)")
-    p.add_argument("--workers", type=int, default=WORKERS,
-                   help=f"worker processes of the local cluster (default {WORKERS}; 0 runs "
+    # None: run_fleet's own default (bgphm.fleet.engine.WORKERS), read when the command runs, so that the
+    # parser does not import the fleet engine for every command
+    p.add_argument("--workers", type=int,
+                   help="worker processes of the local cluster (default: bgphm.fleet.engine.WORKERS, 2; 0 runs "
                    "every asset in this process, without Dask)")
     p.add_argument("--shard-size", type=int, metavar="N", help="assets per task (default: a quarter of each "
                    "worker's share, at most 1000); the results do not depend on it")

@@ -29,10 +29,12 @@ def run(args, progress: Progress) -> int:
     ``summary.json`` under ``--out``.  Progress goes to stderr by assets done.
     """
     from bgphm.fleet import FleetSpec, model_reference, open_source, run_fleet
-    from bgphm.fleet.engine import require_dask
+    from bgphm.fleet.engine import WORKERS, require_dask
     from bgphm.fleet.sources import pyarrow_modules
 
     pyarrow_modules()  # the missing extra named before any work
+    if args.workers is None:
+        args.workers = WORKERS
     if args.scheduler is not None or args.workers > 0:
         require_dask()
     source = open_source(args.records)
