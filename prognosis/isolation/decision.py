@@ -139,10 +139,15 @@ def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: S
 
 
 def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[str, str] = {},
-              min_ratio: float = EVIDENCE_RATIO) -> dict:
-    """The joint hypotheses of a pair whose evidence (over its laws) does not beat each of its parameters'
-    alone by ``min_ratio`` (name -> why): one fault explains the data as well, and two are claimed only
-    when the data demand them.
+              min_ratio: float = EVIDENCE_RATIO, estimates: Mapping[str, Mapping[str, float]] = {},
+              healthy: Mapping[str, tuple] = {}) -> dict:
+    """The joint hypotheses two faults are not claimed for (name -> why): one fault explains the data as well.
+
+    Two reasons, each enough: the pair's evidence (over its laws) does not beat each of its
+    parameters' alone by ``min_ratio``; or one of its parameters' estimate (``estimates``: joint
+    hypothesis name -> parameter -> value) lies within that parameter's healthy values (``healthy``:
+    parameter -> (lo, hi), its uncertainty box), so it is no fault: the pair only uses a tolerance
+    to absorb what the single fault's law misses.
 
     A candidate's evidence is the mean over its laws (a rejected law: none); a parameter without a
     single hypothesis (a second fault no fired ARR pointed to at the alarm) is not compared.
@@ -153,6 +158,10 @@ def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[
     ['a/power + b/power']
     >>> held_back(hs, np.array([0.0, -50.0, 9.0]))
     {}
+    >>> why = held_back(hs, np.array([0.0, -50.0, 9.0]), estimates={"a/power + b/power": {"a": 1.5, "b": 1.02}},
+    ...                 healthy={"a": (0.95, 1.05), "b": (0.95, 1.05)})
+    >>> why["a/power + b/power"]
+    "b's estimate 1.02 lies within its healthy values [0.95, 1.05]: no second fault"
     """
     alone, pairs = {}, {}
     for h, value in zip(hypotheses, log_evidence):  # a rejected one counts with no evidence
@@ -167,8 +176,23 @@ def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[
         if best is not None and together - rivals[best] < math.log(min_ratio):
             why[candidate] = (f"{candidate} explain the residuals no better than {best} alone (evidence ratio "
                               f"{math.exp(min(together - rivals[best], 700.0)):.3g} < {min_ratio:g})")
-    return {h.name: why[h.candidate] for h in hypotheses
+    held = {h.name: why[h.candidate] for h in hypotheses
             if isinstance(h, JointHypothesis) and h.name not in rejected and h.candidate in why}
+    for h in hypotheses:
+        if isinstance(h, JointHypothesis) and h.name not in rejected and h.name not in held:
+            inside = _within_healthy(estimates.get(h.name, {}), healthy)
+            if inside:
+                held[h.name] = inside
+    return held
+
+
+def _within_healthy(estimates: Mapping[str, float], healthy: Mapping[str, tuple]) -> str:
+    """Why a pair is no two faults: its first parameter whose estimate lies within its healthy values ('' if none)."""
+    for name, value in estimates.items():
+        if name in healthy and healthy[name][0] <= value <= healthy[name][1]:
+            lo, hi = healthy[name]
+            return f"{name}'s estimate {value:.4g} lies within its healthy values [{lo:.4g}, {hi:.4g}]: no second fault"
+    return ""
 
 
 def _softmax(log_z: np.ndarray) -> np.ndarray:

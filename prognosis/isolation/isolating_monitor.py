@@ -311,6 +311,8 @@ class IsolatingMonitor:
         rows, rul_t, rul, decisions, ess, innovations = [], [], [], [], [], []
         predictors, away = {}, np.zeros(len(hypotheses), int)
         boxes = np.array([self.priors.healthy_box(h, arrs) for h in hypotheses])
+        result.healthy = {part.candidate: self.priors.healthy_box(part, arrs)
+                          for h in hypotheses if isinstance(h, JointHypothesis) for part in h.parts}
         for done, k in enumerate(steps, 1):
             y = np.array([-e.residual[k] for e in evaluations])
             points = [[p[k] for p in e.points] for e in evaluations]
@@ -336,7 +338,7 @@ class IsolatingMonitor:
                                                                np.ravel(estimate["theta_mean"]))
                 result.record_groups = groups
             if (done - 1) % self.settings.rul_every == 0:
-                decision = result.decide_at(pf.log_evidence, float(t[k]), groups)
+                decision = result.decide_at(pf.log_evidence, float(t[k]), groups, _part_estimates(hypotheses, estimate))
                 distribution, reason = self._mixture(pf, hypotheses, decision, predictors, models, key=done,
                                                      left_out={**collapsed_now, **result.inadequate})
                 rul.append(distribution)
@@ -355,10 +357,8 @@ class IsolatingMonitor:
             setattr(result, key, {"mean": mean, "rmad": rmad, "quantiles": quantiles})
         result.rul_t, result.rul, result.decisions = np.array(rul_t), rul, decisions
         result.ess = np.array(ess)
-        for row, h in enumerate(hypotheses):  # a joint hypothesis' estimate of each of its parameters
-            if isinstance(h, JointHypothesis):
-                result.parts[h.name] = {part.candidate: np.array([r[2]["components"][c]["theta_mean"][row]
-                                                                  for r in rows]) for c, part in enumerate(h.parts)}
+        for name, parts in _part_estimates(hypotheses, *(r[2] for r in rows)).items():
+            result.parts[name] = {c: np.array(v) for c, v in parts.items()}
 
     def _resample_move(self, hypotheses: list, starts: list, evaluations: list, arrs: list, stride: int):
         """The resample-move filter over the hypotheses' static parameters, its observation, and each row's
@@ -649,6 +649,17 @@ def _component(pf, row: int, c: int) -> tuple[np.ndarray, np.ndarray]:
         return pf.theta[row:row + 1], pf.gamma[row:row + 1]
     bank, start = pf.model.banks[c], pf.model.offsets[c]
     return pf.theta[row:row + 1, :, c], pf.gamma[row:row + 1, :, start:start + bank.n_gamma]
+
+
+def _part_estimates(hypotheses: Sequence, *estimates: Mapping) -> dict:
+    """Each joint hypothesis' mean estimate of each of its parameters, in the filter's ``estimates`` (one or
+    several steps): name -> parameter -> value (one estimate) or list (several)."""
+    values = {h.name: {part.candidate: [e["components"][c]["theta_mean"][row] for e in estimates]
+                       for c, part in enumerate(h.parts)}
+              for row, h in enumerate(hypotheses) if isinstance(h, JointHypothesis)}
+    if len(estimates) == 1:
+        return {name: {c: float(v[0]) for c, v in parts.items()} for name, parts in values.items()}
+    return values
 
 
 def _offset(start: tuple) -> float:

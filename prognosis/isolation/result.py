@@ -86,6 +86,9 @@ class IsolationResult:
         ``record_groups`` are ``groups`` merged with those pairs, the groups the final decision uses.
     parts : dict
         Joint hypothesis name -> parameter -> its mean estimate (K,) (``theta`` holds the first's).
+    healthy : dict
+        Parameter -> its healthy values (lo, hi), its uncertainty box about nominal: a pair one of whose
+        parameters is estimated there is no two faults (:func:`held_back`).
     settings : dict
         What produced the result, for its JSON (:func:`~prognosis.pipeline.prognose` fills it: the
         failure values, the calibration end, the filter step, the residual noise...).
@@ -120,6 +123,7 @@ class IsolationResult:
     on_record: dict = field(default_factory=dict)
     record_groups: list = field(default_factory=list)
     parts: dict = field(default_factory=dict)
+    healthy: dict = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
@@ -188,12 +192,15 @@ class IsolationResult:
         """The decision on all the data (None without an alarm or a candidate)."""
         if not self.t.size:
             return None
-        return self.decide_at(self.log_evidence[-1], float(self.t[-1]), self.record_groups or self.groups)
+        return self.decide_at(self.log_evidence[-1], float(self.t[-1]), self.record_groups or self.groups,
+                              {name: {c: float(v[-1]) for c, v in parts.items()} for name, parts in self.parts.items()})
 
-    def decide_at(self, log_evidence: np.ndarray, time: float, groups: Sequence) -> Decision:
+    def decide_at(self, log_evidence: np.ndarray, time: float, groups: Sequence,
+                  estimates: Mapping[str, Mapping[str, float]] = {}) -> Decision:
         """The decision at ``time`` on the hypotheses' evidence then (:func:`decide`, :meth:`revised`), the joint
-        hypotheses not more probable than their parts alone held back (:func:`held_back`)."""
-        held = held_back(self.hypotheses, log_evidence, self.rejected, self.min_ratio)
+        hypotheses not more probable than their parts alone, or with a part estimated within its healthy values
+        (``estimates``: joint hypothesis name -> parameter -> value then), held back (:func:`held_back`)."""
+        held = held_back(self.hypotheses, log_evidence, self.rejected, self.min_ratio, estimates, self.healthy)
         decision = decide(self.hypotheses, log_evidence, groups, {**self.rejected, **held}, self.min_ratio,
                           self.same_signature)
         return self.revised(decision, time, held)

@@ -82,6 +82,31 @@ def test_a_pair_is_held_back_until_it_beats_each_of_its_parameters_alone():
     assert held_back(hypotheses, np.array([0.0, -1.0, 0.5]), rejected={pair.name: ""}) == {}
 
 
+def test_a_pair_with_a_parameter_estimated_within_its_healthy_values_is_no_two_faults():
+    a, b = Hypothesis("a", "power", 2.0, 1.0), Hypothesis("b", "linear", 4.0, 2.0)
+    pair = JointHypothesis((a, b))
+    hypotheses, decisive = [a, b, pair], np.array([0.0, -50.0, 30.0])   # e^30 over a alone
+    healthy = {"a": (0.9, 1.1), "b": (1.9, 2.1)}
+    assert held_back(hypotheses, decisive, estimates={pair.name: {"a": 1.6, "b": 2.4}}, healthy=healthy) == {}
+    # b within its tolerance: the pair only uses it to absorb a misfit of a's law
+    why = held_back(hypotheses, decisive, estimates={pair.name: {"a": 1.6, "b": 2.05}}, healthy=healthy)
+    assert set(why) == {pair.name} and why[pair.name].startswith("b's estimate 2.05 lies within")
+    # on either side of the box, and at its edges
+    for value in (1.9, 2.1):
+        assert pair.name in held_back(hypotheses, decisive, estimates={pair.name: {"a": 1.6, "b": value}},
+                                      healthy=healthy)
+    assert held_back(hypotheses, decisive, estimates={pair.name: {"a": 1.6, "b": 1.85}}, healthy=healthy) == {}
+    # a parameter without a box of healthy values (or no estimate) is not judged by it
+    inside = {pair.name: {"a": 1.6, "b": 2.05}}
+    assert held_back(hypotheses, decisive, estimates=inside, healthy={"a": (0.9, 1.1)}) == {}
+    # the decision of a result uses the estimates at that time
+    result = IsolationResult(1.0, candidates=["a", "b"], groups=[["a"], ["b"]], hypotheses=hypotheses,
+                             healthy=healthy)
+    assert result.decide_at(decisive, 2.0, [["a"], ["b"]], {pair.name: {"a": 1.6, "b": 2.4}}).candidate == "a + b"
+    decision = result.decide_at(decisive, 2.0, [["a"], ["b"]], {pair.name: {"a": 1.6, "b": 2.0}})
+    assert decision.candidate == "a" and decision.probabilities[pair.name] == 0.0
+
+
 def test_the_pairs_of_a_first_candidate_are_with_every_other_parameter_that_adds(arrs):
     monitor = IsolatingMonitor(arrs, FACTS.failures, noise_std={a.name: 1.0 for a in arrs},
                                method="resample-move", pairs=True, dt=0.1)

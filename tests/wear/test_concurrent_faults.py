@@ -47,3 +47,15 @@ def test_two_parameters_wearing_at_once_are_named_together_and_the_first_failure
         first, brushes = PAIR.eol - p["t"], 2.0 - p["t"]
         assert p["rul_p5"] <= first <= p["rul_p95"], p
         assert abs(p["rul_median"] - first) < abs(p["rul_median"] - brushes), p
+
+
+@pytest.mark.slow  # 300 s of the pipe's physics and bgphm prognose with pairs: about 20 s of CPU
+def test_a_single_wear_weighed_with_pairs_is_not_called_two_faults():
+    # the pipe's strainer clogging alone, the noisy flow meter's derivative in the residual: a pair of
+    # it with the pipe's inertance beat it on evidence, the inertance kept within its tolerance
+    single = Scenario("pipe_tank", "R_f", "linear", "noisy")
+    answer = run(single, seed=20261127, particles=60, rul_every=80, method="resample-move", pairs=True)
+    assert answer["exit"] == 0, answer.get("error")
+    assert answer["candidate"] == "R_f" and " + " not in score(single, answer)["top"], answer["candidate"]
+    held = [name for name, e in answer["evidence"].items() if " + " in name and e["probability"] > 0]
+    assert not held, held
