@@ -468,6 +468,70 @@ class ResampleMoveFilter:
             ys, predicted = ys[..., None], predicted[..., None] if predicted.ndim == 3 else predicted
         return ys[:, None] - predicted
 
+    def forecast_miss(self, z: np.ndarray, log_weights: np.ndarray, made: int, start: int,
+                      excess: np.ndarray | None = None) -> np.ndarray:
+        """How far the residuals' mean over the steps ``start`` to now falls from what particles ``z`` (A, N, D)
+        with ``log_weights`` (A, N), the cloud after step ``made``, forecast for it: (A, M), in sd.
+
+        The forecast of the window's mean gap is the cloud's weighted mean.  Its variance: the cloud's
+        spread of that mean; the noise's over the window, times the largest information excess (the
+        gaps' persistence); the walk of an integral's offset since step ``made``; and what a lag of
+        theta by one filter step changes (the record does not time a change finer than its step, see
+        the RUL).  A law that fits keeps the miss within a few sd however far ahead; one that
+        cannot bend as the data do (a power law through a wear that saturates) misses by more and
+        more.  Unlike the one-step innovations, the cloud is not refitted to the data it is judged on.
+
+        Examples
+        --------
+        A level growing by 0.1 a step that stops growing at step 35: the linear law's cloud after 30
+        steps forecasts steps 50-60 well on the straight line, and misses them by far on the bent one.
+
+        >>> from prognosis.degradation import LinearDegradation
+        >>> def miss(bend):
+        ...     f = ResampleMoveFilter(LinearDegradation(), lambda theta, points: theta, noise=0.05, dt=1.0,
+        ...                            n_particles=300, seed=0)
+        ...     f.initialize((0.0, 2.0), gamma_bounds=(0.0, 1.0), assets=1)
+        ...     rng = np.random.default_rng(2)
+        ...     for k in range(60):
+        ...         f.step(1.0 + 0.1 * min(k, bend) + rng.normal(0, 0.05))
+        ...         if k == 29:
+        ...             cloud = f.z.copy(), f.log_weights.copy()
+        ...     return abs(float(f.forecast_miss(*cloud, made=29, start=50)[0, 0]))
+        >>> miss(bend=60) < 4.0, miss(bend=35) > 4.0
+        (True, True)
+        """
+        stop = len(self.history)
+        if not 0 <= made < start < stop:
+            raise PrognosisError(f"a forecast made at step {made} is judged on the steps {start} to {stop} after it")
+        mean_gap, path = self._mean_gaps(z, start, stop)
+        lagged, _ = self._mean_gaps(z, start, stop, lag=1)
+        weights = normalize_log_weights(log_weights)[0]
+        with np.errstate(invalid="ignore", over="ignore"):
+            finite = np.isfinite(mean_gap) & np.isfinite(lagged)
+            mean_gap, lagged = np.where(finite, mean_gap, 0.0), np.where(finite, lagged, 0.0)
+            w = weights[..., None] * finite
+            w = w / np.maximum(w.sum(axis=1, keepdims=True), 1e-300)
+            forecast = np.sum(w * mean_gap, axis=1)  # (A, M)
+            spread = np.sum(w * np.square(mean_gap - forecast[:, None, :]), axis=1)
+            lag = np.sum(w * np.square(lagged - mean_gap), axis=1)
+            variance = np.diagonal(self.noise.covariance_at(self._noise_theta(path)), axis1=-2, axis2=-1)
+            noise = np.sum(w * np.nanmean(variance, axis=2), axis=1) / (stop - start)
+            noise = noise * np.max(self.excess if excess is None else excess, axis=1, keepdims=True)
+            walk = 0.0 if self.noise.walk is None else self.noise.walk * ((start + stop) / 2 - made)
+            return forecast / np.sqrt(spread + noise + walk + lag)
+
+    def _mean_gaps(self, z: np.ndarray, start: int, stop: int, lag: int = 0) -> tuple[np.ndarray, np.ndarray]:
+        """Each particle's mean gap ``y - h(theta)`` (A, N, M) over the steps ``start..stop``, theta's path lagged
+        by ``lag`` steps, and that path (A, N, K)."""
+        gamma, theta = self.prior.gamma(z), self.prior.theta(z, self.components)
+        rates = getattr(self.observation, "rates", False)
+        path = trajectory(self.model, theta, gamma, start - lag, stop - lag + rates, self.dt)
+        rate = np.diff(path, axis=2) / self.dt if rates else None
+        path = path[:, :, :stop - start]
+        gaps = self._history_gaps(path, rate, start, stop)  # (A, N, K, M)
+        with np.errstate(invalid="ignore"):
+            return np.nanmean(gaps, axis=2), path
+
     # -- pieces ----------------------------------------------------------------------------------
     def _observe(self, theta: np.ndarray, points, z: np.ndarray) -> np.ndarray:
         """What particles ``theta`` with working coordinates ``z`` predict; their rate too, when it matters."""

@@ -16,8 +16,8 @@ from .isolating_monitor import IsolatingMonitor, detection_options
 from .priors import Priors, check_noise_std
 from .result import RUL_KEYS, IsolationResult
 from .settings import (ADEQUACY_LIMIT, ADEQUACY_WINDOW, CONFIRM_STEPS, DRIFT_AWAY_STEPS, EVIDENCE_RATIO, FLEET_LAWS,
-                       FLEET_SETTINGS, FREEZE_BELOW, HORIZON_STEPS, LAWS, MAX_PARTICLES, METHODS, MIXTURE_FLOOR,
-                       PROCESS_NOISE, SPIKE, IsolationSettings)
+                       FLEET_SETTINGS, FORECAST_LIMIT, FREEZE_BELOW, HORIZON_STEPS, LAWS, MAX_PARTICLES, METHODS,
+                       MIXTURE_FLOOR, PROCESS_NOISE, SPIKE, IsolationSettings)
 
 __all__ = [
     # the monitor, its settings and its result
@@ -28,6 +28,6 @@ __all__ = [
     "Priors", "check_noise_std",
     # constants of the method
     "ADEQUACY_LIMIT", "ADEQUACY_WINDOW", "CONFIRM_STEPS", "DRIFT_AWAY_STEPS", "EVIDENCE_RATIO", "FLEET_LAWS",
-    "FREEZE_BELOW", "HORIZON_STEPS", "LAWS", "MAX_PARTICLES", "METHODS", "MIXTURE_FLOOR", "PROCESS_NOISE", "RUL_KEYS",
-    "SPIKE",
+    "FORECAST_LIMIT", "FREEZE_BELOW", "HORIZON_STEPS", "LAWS", "MAX_PARTICLES", "METHODS", "MIXTURE_FLOOR",
+    "PROCESS_NOISE", "RUL_KEYS", "SPIKE",
 ]

@@ -42,8 +42,8 @@ from ..rul import RULDistribution, RULPredictor
 from .decision import Decision
 from .priors import Priors, check_noise_std
 from .result import IsolationResult
-from .settings import (ADEQUACY_LIMIT, ADEQUACY_WINDOW, CONFIRM_STEPS, DRIFT_AWAY_STEPS, FREEZE_BELOW, MIXTURE_FLOOR,
-                       SPIKE, IsolationSettings)
+from .settings import (ADEQUACY_LIMIT, ADEQUACY_WINDOW, CONFIRM_STEPS, DRIFT_AWAY_STEPS, FORECAST_LIMIT, FREEZE_BELOW,
+                       MIXTURE_FLOOR, SPIKE, IsolationSettings)
 
 __all__ = ["IsolatingMonitor", "detection_options"]
 
@@ -310,6 +310,7 @@ class IsolatingMonitor:
         every = -(-len(steps) // 100)
         rows, rul_t, rul, decisions, ess, innovations = [], [], [], [], [], []
         predictors, away = {}, np.zeros(len(hypotheses), int)
+        forecasts = []  # (step, time, particles, log-weights) of the cloud at each RUL report
         boxes = np.array([self.priors.healthy_box(h, arrs) for h in hypotheses])
         result.healthy = {part.candidate: self.priors.healthy_box(part, arrs)
                           for h in hypotheses if isinstance(h, JointHypothesis) for part in h.parts}
@@ -338,6 +339,9 @@ class IsolatingMonitor:
                                                                np.ravel(estimate["theta_mean"]))
                 result.record_groups = groups
             if (done - 1) % self.settings.rul_every == 0:
+                if self.settings.method != "sir":  # the clouds' forecasts, checked later on what came
+                    self._check_forecasts(result, hypotheses, arrs, pf, forecasts, done, float(t[k]))
+                    forecasts.append((done, float(t[k]), pf.z.copy(), pf.log_weights.copy(), pf.excess.copy()))
                 decision = result.decide_at(pf.log_evidence, float(t[k]), groups, _part_estimates(hypotheses, estimate))
                 distribution, reason = self._mixture(pf, hypotheses, decision, predictors, models, key=done,
                                                      left_out={**collapsed_now, **result.inadequate})
@@ -589,6 +593,34 @@ class IsolatingMonitor:
                     f"at t = {time:g} s the {h.law} law leaves the residual of {arrs[worst].name} "
                     f"{'above' if mean > 0 else 'below'} its prediction by {abs(mean):.2g} sd on average over "
                     f"{ADEQUACY_WINDOW} filter steps: the data contradict the law")
+
+    def _check_forecasts(self, result: IsolationResult, hypotheses: list, arrs: list, pf, forecasts: list,
+                         done: int, time: float) -> None:
+        """Flag the hypotheses whose cloud, as it was when the filter had seen half the steps since the alarm,
+        misses the residuals' mean over the last ADEQUACY_WINDOW steps by more than FORECAST_LIMIT sd.
+
+        The one-step innovations judge a cloud refitted to every step; a flexible law bent through
+        the whole history passes them while it cannot say where the wear goes (a power law through a
+        wear that saturates).  A RUL is a forecast, so each law is judged on one: as far ahead as
+        it had seen.
+        """
+        start = done - ADEQUACY_WINDOW
+        origins = [i for i, f in enumerate(forecasts) if f[0] <= done // 2 and f[0] <= start]
+        if not origins:
+            return
+        del forecasts[:origins[-1]]  # later checks start from later clouds
+        made, when, z, log_weights, excess = forecasts[0]
+        with np.errstate(invalid="ignore"):
+            miss = pf.forecast_miss(z, log_weights, made - 1, start, excess)
+        for row, h in enumerate(hypotheses):
+            if h.name in result.inadequate or h.name in result.rejected or not np.isfinite(miss[row]).any():
+                continue
+            worst = int(np.nanargmax(np.abs(miss[row])))
+            if abs(miss[row, worst]) > FORECAST_LIMIT:
+                result.inadequate[h.name] = (
+                    f"at t = {time:g} s the {h.law} law's forecast made at t = {when:g} s misses the residual of "
+                    f"{arrs[worst].name} over the last {ADEQUACY_WINDOW} filter steps by {abs(miss[row, worst]):.2g} "
+                    f"sd: the data contradict the law's forecast")
 
     def _mixture(self, pf: ParticleFilter, hypotheses: list, decision: Decision, predictors: dict, models: tuple,
                  key: int, left_out: Mapping = {}) -> tuple[RULDistribution, str | None]:
