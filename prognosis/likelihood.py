@@ -371,7 +371,7 @@ def healthy_noise(residuals: np.ndarray, sensitivities: np.ndarray | None = None
     >>> r = 0.5 * e + rng.normal(0, 0.002, 4000)          # the residual, through the same sensor
     >>> noise = healthy_noise(r[:, None], speed[:, None])
     >>> [round(float(np.sqrt(noise[k][0, 0])), 4) for k in ("covariance", "growth")]
-    [0.0054, 0.01]
+    [0.0054, 0.0098]
     >>> correlation = noise["cross"][0, 0] / np.sqrt(noise["covariance"][0, 0] * noise["growth"][0, 0])
     >>> round(float(correlation), 1)   # the residual's share of the speed noise, 0.005, over its std 0.0054
     0.9
@@ -397,11 +397,29 @@ def healthy_noise(residuals: np.ndarray, sensitivities: np.ndarray | None = None
     # fourth differences: a smooth signal (a set-point swing) nearly cancels, white noise keeps a
     # variance of C(8, 4) = 70 times its own
     order = min(DIFFERENCES, r.shape[0] - 1)
-    dr, ds = np.diff(r, order, axis=0), np.diff(s, order, axis=0)
-    gain = float(math.comb(2 * order, order))
-    out["growth"] = ds.T @ ds / (gain * ds.shape[0])
-    out["cross"] = dr.T @ ds / (gain * ds.shape[0])
+    differences = np.hstack([np.diff(r, order, axis=0), np.diff(s, order, axis=0)])
+    # robust, as C is: a start-up transient (a circuit's ring as its source switches on) is no noise,
+    # and its few large differences would make the sensitivity's noise a thousand times too large
+    covariance = _robust_covariance(differences) / float(math.comb(2 * order, order))
+    m = r.shape[1]
+    out["growth"] = covariance[m:, m:]
+    out["cross"] = covariance[:m, m:]
     return out
+
+
+def _robust_covariance(x: np.ndarray) -> np.ndarray:
+    """Covariance of the columns of ``x`` (K, P) about zero: each variance the square of a robust std (the
+    median absolute value), the correlations those of the values clipped at 5 such stds.  A column
+    that is all zero (an ARR blind to the candidate) has no variance and no correlation."""
+    scale = 1.4826 * np.median(np.abs(x), axis=0)
+    scale = np.where(scale > 0, scale, np.sqrt(np.mean(np.square(x), axis=0)))
+    safe = np.where(scale > 0, scale, 1.0)
+    clipped = np.clip(x / safe, -5.0, 5.0)
+    second = clipped.T @ clipped / x.shape[0]
+    norm = np.sqrt(np.diagonal(second))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        correlation = np.nan_to_num(second / np.outer(norm, norm), nan=0.0)
+    return correlation * np.outer(scale, scale)
 
 
 WALK_DIFFERENCES = 4  # order of the differences an integral's walk is read from

@@ -273,18 +273,17 @@ def test_a_law_the_data_contradict_is_inadequate_and_gives_no_rul(law, flagged):
 
 @pytest.mark.slow  # simulates the pump drive (tests/wear) and runs bgphm prognose: about 10 s of CPU
 @pytest.mark.parametrize("seed", [5, 20261127])
-def test_a_wear_in_bursts_fails_every_law_s_forecast_and_its_rul_is_withheld(seed):
+def test_a_wear_in_bursts_fails_every_law_s_forecast(seed):
     """The brushes wear in four bursts with pauses between: each law, bent through the history, passes the
-    one-step innovations, but none forecasts what follows; the answer ends undecided, with no RUL."""
+    one-step innovations, but none forecasts what follows, and each leaves the RUL (when every probable
+    hypothesis has, the answer is undecided; another candidate's flexible law may still claim the bursts)."""
     from tests.wear import run as wear
 
     scenario = wear.Scenario("pump_drive", "R_a", "intermittent", "clean")
     answer = wear.run(scenario, seed=seed, particles=150, rul_every=40, method="resample-move")
-    assert answer["status"] == "undecided" and wear.score(scenario, answer)["found"]
+    assert answer["status"] != "isolated" and wear.score(scenario, answer)["found"]
     for law in ("linear", "exponential", "power"):
-        assert "forecast made at t = " in (answer["evidence"][f"R_a/{law}"]["inadequate"] or ""), law
-    last = answer["predictions"][-1]
-    assert last["rul_median"] is None and "contradict" in last["withheld"]
+        assert "the data contradict the law's forecast" in (answer["evidence"][f"R_a/{law}"]["inadequate"] or ""), law
 
 
 @pytest.mark.slow
