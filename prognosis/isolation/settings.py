@@ -56,7 +56,7 @@ ADEQUACY_LIMIT = 3.0
 SPIKE = 3 * ADEQUACY_LIMIT
 #: sd beyond which a law's forecast, made when the filter had seen half the steps since the alarm, misses
 #: the residuals' mean over the last ADEQUACY_WINDOW steps: the law cannot extrapolate what it fitted.  Above
-#: the true laws' misses: within 4 on the wear scenarios, up to 5.4 on the RLC circuit (bands too narrow there)
+#: the true laws' misses: within 4 on the wear scenarios, up to 4.4 on the RLC circuit over 10 seeds
 FORECAST_LIMIT = 6.0
 #: log evidence behind the best hypothesis beyond which a hypothesis' particles are no longer moved
 #: (its evidence still accumulates): 1e-8 of the best's probability, beyond any decision

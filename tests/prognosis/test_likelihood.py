@@ -51,6 +51,22 @@ def test_healthy_noise_reads_sensor_noise_through_a_swinging_signal():
     assert np.sqrt(noise["covariance"][0, 0]) == pytest.approx(np.hypot(0.006, 0.01), rel=0.1)
 
 
+def test_a_start_up_ring_in_the_healthy_stretch_is_no_sensor_noise():
+    """An RLC circuit switched on rings at 100 rad/s for a tenth of a second: at a filter step of 11 ms its
+    fourth differences are far beyond the sensor's noise.  Read as noise, they made the current's noise a
+    thousand times too large; the robust reading keeps the sensor's."""
+    rng = np.random.default_rng(11)
+    t = np.arange(73) * 0.011                                          # a 0.8 s stretch at the filter step
+    sensor = rng.normal(0.0, 1e-4, t.size)
+    current = 0.5 * np.exp(-t / 0.02) * np.sin(100 * t) + 0.02 * np.sin(7 * t) + sensor   # i peaks at V / sqrt(L / C)
+    residual = -10.0 * sensor + rng.normal(0.0, 2.5e-3, t.size)
+    noise = healthy_noise(residual[:, None], -current[:, None])
+    assert np.sqrt(noise["growth"][0, 0]) == pytest.approx(1e-4, rel=0.5)
+    # the plain mean square of the same differences: the ring dominates it, 40 times the sensor's noise
+    d = np.diff(-current, 4)
+    assert np.sqrt(np.mean(d**2) / 70) > 20 * 1e-4
+
+
 def test_bad_noise_is_named():
     with pytest.raises(PrognosisError, match="positive diagonal"):
         ResidualNoise([[0.0]])
