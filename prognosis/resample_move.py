@@ -429,18 +429,23 @@ class ResampleMoveFilter:
     def _paths(self, z: np.ndarray, view=None):
         """theta's path (A, N, K) under particles ``z`` and its rate (or None), CHUNK steps at a time,
         with the steps ``start, stop`` of the history they cover (of the rows of ``view``)."""
-        model, observation, prior = ((self.model, self.observation, self.prior) if view is None
-                                     else (view[1], view[2], view[4]))
-        gamma = prior.gamma(z)
-        theta = prior.theta(z, self.components)
         steps = len(self.history)
-        rates = getattr(observation, "rates", False)  # theta's rate only where an ARR sees it (a differentiated one)
         for start in range(0, steps, CHUNK):
             stop = min(start + CHUNK, steps)
-            # the whole chunk at once (in closed form where the law has one), its rate from the step after each
-            path = trajectory(model, theta, gamma, start, stop + rates, self.dt)
-            rate = np.diff(path, axis=2) / self.dt if rates else None
-            yield path[:, :, :stop - start], rate, start, stop
+            yield (*self._path(z, start, stop, view), start, stop)
+
+    def _path(self, z: np.ndarray, start: int, stop: int, view=None,
+              lag: int = 0) -> tuple[np.ndarray, np.ndarray | None]:
+        """theta's path (A, N, K) under particles ``z`` over the steps ``start..stop`` (of the rows of ``view``),
+        lagged by ``lag`` steps, and its rate (None where no ARR sees it, as only a differentiated one does)."""
+        model, observation, prior = ((self.model, self.observation, self.prior) if view is None
+                                     else (view[1], view[2], view[4]))
+        rates = getattr(observation, "rates", False)
+        # the whole stretch at once (in closed form where the law has one), its rate from the step after each
+        path = trajectory(model, prior.theta(z, self.components), prior.gamma(z), start - lag, stop - lag + rates,
+                          self.dt)
+        rate = np.diff(path, axis=2) / self.dt if rates else None
+        return path[:, :, :stop - start], rate
 
     def _history_terms(self, path: np.ndarray, rate: np.ndarray, start: int, stop: int,
                        level: np.ndarray | None, view=None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -523,11 +528,7 @@ class ResampleMoveFilter:
     def _mean_gaps(self, z: np.ndarray, start: int, stop: int, lag: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """Each particle's mean gap ``y - h(theta)`` (A, N, M) over the steps ``start..stop``, theta's path lagged
         by ``lag`` steps, and that path (A, N, K)."""
-        gamma, theta = self.prior.gamma(z), self.prior.theta(z, self.components)
-        rates = getattr(self.observation, "rates", False)
-        path = trajectory(self.model, theta, gamma, start - lag, stop - lag + rates, self.dt)
-        rate = np.diff(path, axis=2) / self.dt if rates else None
-        path = path[:, :, :stop - start]
+        path, rate = self._path(z, start, stop, lag=lag)
         gaps = self._history_gaps(path, rate, start, stop)  # (A, N, K, M)
         with np.errstate(invalid="ignore"):
             return np.nanmean(gaps, axis=2), path
