@@ -361,8 +361,9 @@ class IsolatingMonitor:
             setattr(result, key, {"mean": mean, "rmad": rmad, "quantiles": quantiles})
         result.rul_t, result.rul, result.decisions = np.array(rul_t), rul, decisions
         result.ess = np.array(ess)
-        for name, parts in _part_estimates(hypotheses, *(r[2] for r in rows)).items():
-            result.parts[name] = {c: np.array(v) for c, v in parts.items()}
+        steps = [_part_estimates(hypotheses, r[2]) for r in rows]
+        result.parts = {name: {c: np.array([step[name][c] for step in steps]) for c in parts}
+                        for name, parts in (steps[0].items() if steps else ())}
 
     def _resample_move(self, hypotheses: list, starts: list, evaluations: list, arrs: list, stride: int):
         """The resample-move filter over the hypotheses' static parameters, its observation, and each row's
@@ -683,15 +684,12 @@ def _component(pf, row: int, c: int) -> tuple[np.ndarray, np.ndarray]:
     return pf.theta[row:row + 1, :, c], pf.gamma[row:row + 1, :, start:start + bank.n_gamma]
 
 
-def _part_estimates(hypotheses: Sequence, *estimates: Mapping) -> dict:
-    """Each joint hypothesis' mean estimate of each of its parameters, in the filter's ``estimates`` (one or
-    several steps): name -> parameter -> value (one estimate) or list (several)."""
-    values = {h.name: {part.candidate: [e["components"][c]["theta_mean"][row] for e in estimates]
-                       for c, part in enumerate(h.parts)}
-              for row, h in enumerate(hypotheses) if isinstance(h, JointHypothesis)}
-    if len(estimates) == 1:
-        return {name: {c: float(v[0]) for c, v in parts.items()} for name, parts in values.items()}
-    return values
+def _part_estimates(hypotheses: Sequence, estimate: Mapping) -> dict:
+    """Each joint hypothesis' mean estimate of each of its parameters in the filter's ``estimate``:
+    name -> parameter -> value."""
+    components = estimate.get("components", ())
+    return {h.name: {part.candidate: float(components[c]["theta_mean"][row]) for c, part in enumerate(h.parts)}
+            for row, h in enumerate(hypotheses) if isinstance(h, JointHypothesis)}
 
 
 def _offset(start: tuple) -> float:
