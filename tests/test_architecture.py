@@ -194,3 +194,12 @@ def test_readme_layout_gives_each_package_one_line_of_description(entry):
     name = entry.rpartition("/")[2]
     line = next(line for line in text.splitlines() if re.match(rf"\s*{re.escape(name)}/\s", line))
     assert len(line.split("#", 1)[1].strip()) > 10
+
+
+def test_the_lazy_core_package_declares_what_it_loads():
+    """``bondgraph`` loads its public names on first use: each one declared resolves, and none is left out."""
+    import bondgraph
+
+    assert set(bondgraph.__all__) == set(bondgraph._MODULE_OF)
+    for name in bondgraph.__all__:
+        assert getattr(bondgraph, name).__module__.startswith("bondgraph."), name
