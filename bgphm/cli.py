@@ -27,25 +27,29 @@ import argparse
 import importlib
 import sys
 import warnings
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 
 from bgphm.commands import Progress
-from bgphm.commands._inputs import detection_settings
 from bgphm.errors import EXIT_FAILURE, EXIT_USAGE, UsageError
 from bgphm.terminal import terminal_streams
 from bondgraph.errors import PHMError, SettingError
-from bondgraph.simulation import DEFAULT_T_END, OUTPUT_SAMPLES
-from diagnosis import POOLED_RECORDS, DetectionSettings
-from prognosis import IsolationSettings
 
 __all__ = ["main"]
 
+# Only light modules above: the library (sympy, scipy, networkx) is imported by the command that runs, and
+# its defaults by the parser of that command alone, so that ``bgphm --help`` answers at once.
 
-
-#: The module of each command (``bgphm.commands``), imported when the command runs: ``bgphm arr`` does not
-#: load the particle filters.
-COMMANDS = {name: f"bgphm.commands.{name}" for name in ("arr", "simulate", "detect", "prognose", "fleet", "demo")}
-DETECTION, PROGNOSIS = DetectionSettings(), IsolationSettings()  # the library's defaults, shown in --help
+#: Each command's help line; its module (``bgphm.commands.NAME``) is imported when it runs: ``bgphm arr``
+#: does not load the particle filters.
+COMMANDS = {
+    "arr": "ARR report: elements, drawing, ARRs, fault signatures",
+    "simulate": "simulate the model and write its signals as CSV",
+    "detect": "residuals, robust thresholds and alarms on recorded data",
+    "prognose": "estimate a degrading parameter and predict the RUL from recorded data",
+    "fleet": "monitor a fleet: records of many assets to Parquet tables of alarms, estimates and RULs, on Dask "
+             "workers",
+    "demo": "run the whole chain on a built-in example and write every output",
+}
 
 
 #: The options of the library's settings whose names differ from the settings' (``--`` + the name otherwise).
@@ -66,28 +70,70 @@ class _Parser(argparse.ArgumentParser):
         self.exit(EXIT_USAGE, f"bgphm: error: {_one_line(message)} (see {self.prog} --help)\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The ``bgphm`` argument parser: ``--quiet``, ``--debug`` and the commands arr, simulate, detect, prognose, fleet,
-    demo.
+def build_parser(commands: Collection[str] | None = None) -> argparse.ArgumentParser:
+    """The ``bgphm`` argument parser: ``--quiet``, ``--debug``, ``--version`` and the commands arr, simulate, detect,
+    prognose, fleet, demo.
 
-    Each command's parser sets ``run`` to its ``cmd_*`` function, which :func:`main` calls.
+    ``commands`` are those whose options are built (the others are listed with their help line); :func:`main`
+    builds the one on the line alone, or none for ``bgphm --help``: a command's defaults are the library's, and
+    reading them imports it.  ``None`` builds every command's.  ``--quiet`` and ``--debug`` are taken anywhere
+    on the line.
+
+    >>> build_parser(["arr"]).parse_args(["arr", "rlc", "--quiet"]).quiet
+    True
     """
     parser = _Parser(prog="bgphm", description="Bond-graph modelling, robust fault diagnosis and "
                                      "prognosis: ARR reports, simulation, detection and RUL prediction.")
-    parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
-    parser.add_argument("--debug", action="store_true", help="show the traceback of an unexpected error")
+    _global_options(parser, default=False)
+    parser.add_argument("--version", action=_Version, help="print the version and exit")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    model_help = "JSON (node-link) or Python model file, or a built-in example (dc-motor, rlc, three-tank, torsion-bar)"
+    for name, helptext in COMMANDS.items():
+        extra = {"formatter_class": argparse.RawDescriptionHelpFormatter} if name == "demo" else {}
+        p = sub.add_parser(name, help=helptext, description=helptext, **extra)
+        _global_options(p, default=argparse.SUPPRESS)  # given after the command, it overrides; absent, it does not
+        if commands is None or name in commands:
+            OPTIONS_OF[name](p)
+    return parser
 
-    p = sub.add_parser("arr", help="ARR report: elements, drawing, ARRs, fault signatures")
-    p.add_argument("model", metavar="MODEL", help=model_help)
+
+def _global_options(parser: argparse.ArgumentParser, default) -> None:
+    parser.add_argument("--quiet", action="store_true", default=default, help="no progress on stderr")
+    parser.add_argument("--debug", action="store_true", default=default,
+                        help="show the traceback of an unexpected error")
+
+
+class _Version(argparse.Action):
+    """``--version``: the installed distribution's version, read only when asked."""
+
+    def __init__(self, option_strings, dest, **kwargs):
+        super().__init__(option_strings, dest, nargs=0, default=argparse.SUPPRESS, **kwargs)
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            number = version("bondgraph-phm")
+        except PackageNotFoundError:  # run from a source tree that was never installed
+            number = "unknown (not installed)"
+        print(f"bgphm (bondgraph-phm) {number}")  # on stdout, as argparse's own version action does
+        parser.exit(0)
+
+
+MODEL_HELP = "JSON (node-link) or Python model file, or a built-in example (dc-motor, rlc, three-tank, torsion-bar)"
+
+
+def _arr_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("model", metavar="MODEL", help=MODEL_HELP)
     p.add_argument("--format", choices=("md", "html", "tex"), default="md", help="report format (default md)")
     p.add_argument("--out", help="output file (default: stdout)")
     p.add_argument("--force", action="store_true", help="replace an existing --out file (never an input)")
 
-    p = sub.add_parser("simulate", help="simulate the model and write its signals as CSV")
-    p.add_argument("model", metavar="MODEL", help=model_help)
+
+def _simulate_options(p: argparse.ArgumentParser) -> None:
+    from bondgraph.simulation import DEFAULT_T_END, OUTPUT_SAMPLES
+
+    p.add_argument("model", metavar="MODEL", help=MODEL_HELP)
     p.add_argument("--t-end", type=float,
                    help=f"horizon in s (default: the model file's t_end, else {DEFAULT_T_END:g})")
     p.add_argument("--samples", type=int, default=OUTPUT_SAMPLES, help=f"output samples (default {OUTPUT_SAMPLES})")
@@ -95,39 +141,53 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="CSV file (default: stdout)")
     p.add_argument("--force", action="store_true", help="replace an existing --out file (never an input)")
 
-    for name, helptext in (("detect", "residuals, robust thresholds and alarms on recorded data"),
-                           ("prognose", "estimate a degrading parameter and predict the RUL from recorded data")):
-        p = sub.add_parser(name, help=helptext)
-        p.add_argument("model", metavar="MODEL", help=model_help)
-        p.add_argument("data", metavar="DATA.csv", help="CSV with a column t and one per signal")
-        p.add_argument("--arr", help="use only this ARR (default: all; for prognose the first sensitive one)")
-        p.add_argument("--margin", type=float, help="noise margin added to the thresholds (default: calibrated)")
-        p.add_argument("--calibrate", type=float, metavar="T",
-                       help="calibrate the margin on t <= T, assumed fault-free (default: the first 20 %%)")
-        p.add_argument("--k", type=float, default=DETECTION.k,
-                       help=f"margin = k robust std of the residual (default {DETECTION.k:g})")
-        p.add_argument("--persistence", type=int, default=DETECTION.persistence,
-                       help=f"consecutive violations for an alarm (default {DETECTION.persistence}; detect: at least "
-                            "half the derivative window)")
-        if name == "detect":
-            p.add_argument("--window", type=int, help="Savitzky-Golay window for derivatives (odd; default: "
-                                                      "chosen per ARR from the record)")
-            p.add_argument("--integrals", choices=("auto", "avoid", "keep"), default="auto",
-                           help="auto: per ARR, the form that detects the smallest changes on the record "
-                                "(default); avoid: differentiate an ARR that would integrate measured signals; "
-                                "keep: keep the integrals")
-        else:
-            p.add_argument("--window", type=int, help="Savitzky-Golay window for derivatives (odd; default 11)")
-            p.add_argument("--integrals", choices=("avoid", "keep"), default="avoid",
-                           help="avoid: differentiate an ARR that would integrate measured signals (default); keep: "
-                                "keep the integrals (better on long records sampled fast, where a second "
-                                "derivative of the noise is larger than the integral's random walk)")
-        p.add_argument("--resample", action="store_true",
-                       help="put a record with uneven steps on a uniform grid of its median step (linear "
-                            "interpolation within runs of data, never across a gap)")
-        p.add_argument("--out", help="output directory (new or empty, unless --force)")
-        p.add_argument("--force", action="store_true",
-                       help="write into a non-empty --out directory, replacing files of the same names")
+
+def _detect_options(p: argparse.ArgumentParser) -> None:
+    _record_options(p, "detect")
+
+
+def _record_options(p: argparse.ArgumentParser, command: str) -> None:
+    """The options detect and prognose share: the model, the record and the detection settings."""
+    from diagnosis import DetectionSettings
+
+    DETECTION = DetectionSettings()  # the library's defaults, shown in the help
+    p.add_argument("model", metavar="MODEL", help=MODEL_HELP)
+    p.add_argument("data", metavar="DATA.csv", help="CSV with a column t and one per signal")
+    p.add_argument("--arr", help="use only this ARR (default: all; for prognose the first sensitive one)")
+    p.add_argument("--margin", type=float, help="noise margin added to the thresholds (default: calibrated)")
+    p.add_argument("--calibrate", type=float, metavar="T",
+                   help="calibrate the margin on t <= T, assumed fault-free (default: the first 20 %%)")
+    p.add_argument("--k", type=float, default=DETECTION.k,
+                   help=f"margin = k robust std of the residual (default {DETECTION.k:g})")
+    p.add_argument("--persistence", type=int, default=DETECTION.persistence,
+                   help=f"consecutive violations for an alarm (default {DETECTION.persistence}; detect: at least "
+                        "half the derivative window)")
+    if command == "detect":
+        p.add_argument("--window", type=int, help="Savitzky-Golay window for derivatives (odd; default: "
+                                                  "chosen per ARR from the record)")
+        p.add_argument("--integrals", choices=("auto", "avoid", "keep"), default="auto",
+                       help="auto: per ARR, the form that detects the smallest changes on the record "
+                            "(default); avoid: differentiate an ARR that would integrate measured signals; "
+                            "keep: keep the integrals")
+    else:
+        p.add_argument("--window", type=int, help="Savitzky-Golay window for derivatives (odd; default 11)")
+        p.add_argument("--integrals", choices=("avoid", "keep"), default="avoid",
+                       help="avoid: differentiate an ARR that would integrate measured signals (default); keep: "
+                            "keep the integrals (better on long records sampled fast, where a second "
+                            "derivative of the noise is larger than the integral's random walk)")
+    p.add_argument("--resample", action="store_true",
+                   help="put a record with uneven steps on a uniform grid of its median step (linear "
+                        "interpolation within runs of data, never across a gap)")
+    p.add_argument("--out", help="output directory (new or empty, unless --force)")
+    p.add_argument("--force", action="store_true",
+                   help="write into a non-empty --out directory, replacing files of the same names")
+
+
+def _prognose_options(p: argparse.ArgumentParser) -> None:
+    from prognosis import IsolationSettings
+
+    PROGNOSIS = IsolationSettings()  # the library's defaults, shown in the help
+    _record_options(p, "prognose")
     p.add_argument("--fail", action="append", required=True, metavar="PARAM=VALUE",
                    help="failure value of a parameter that can fail (repeatable); the candidates are those whose "
                         "signature matches the ARRs that fired")
@@ -160,14 +220,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--horizon", type=float, help="RUL horizon cap in s (default 2000 filter steps)")
     p.add_argument("--seed", type=int, default=PROGNOSIS.seed, help=f"random seed (default {PROGNOSIS.seed})")
 
-    _fleet_parser(sub, model_help)
 
+
+def _demo_options(p: argparse.ArgumentParser) -> None:
     from bgphm.demo_cases import DEMOS
 
     listing = "\n".join(f"  {name:<13} {demo.description}" for name, demo in DEMOS.items())
-    p = sub.add_parser("demo", help="run the whole chain on a built-in example and write every output",
-                       formatter_class=argparse.RawDescriptionHelpFormatter,
-                       description="Simulate an example with a degrading parameter, write the model, the record and "
+    p.description = ("Simulate an example with a degrading parameter, write the model, the record and "
                        "truth.json,\nthen run arr, detect and prognose on those files (each command is printed so "
                        f"it can be\nrerun by hand with the same results).\n\ndemos:\n{listing}")
     p.add_argument("name", nargs="?", default="dc-motor", metavar="NAME",
@@ -177,13 +236,14 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true",
                    help="write into a non-empty --out directory, replacing files of the same names")
     p.add_argument("--seed", type=int, default=0, help="noise seed (default 0)")
-    return parser
 
 
-def _fleet_parser(sub, model_help: str) -> None:
-    p = sub.add_parser("fleet", help="monitor a fleet: records of many assets to Parquet tables of alarms, "
-                       "estimates and RULs, on Dask workers")
-    p.add_argument("model", metavar="MODEL", help=model_help)
+def _fleet_options(p: argparse.ArgumentParser) -> None:
+    from diagnosis import POOLED_RECORDS, DetectionSettings
+    from prognosis import IsolationSettings
+
+    DETECTION, PROGNOSIS = DetectionSettings(), IsolationSettings()  # the library's defaults, shown in the help
+    p.add_argument("model", metavar="MODEL", help=MODEL_HELP)
     p.add_argument("records", metavar="RECORDS", help="a directory of CSV files, one per asset (the asset id is the "
                    "file name), or a Parquet file with a column 'asset' (its rows sorted by t or not)")
     p.add_argument("--fail", action="append", required=True, metavar="PARAM=VALUE",
@@ -236,6 +296,11 @@ def _fleet_parser(sub, model_help: str) -> None:
     p.set_defaults(margin=None, direction=None)
 
 
+#: Each command's options.
+OPTIONS_OF = {"arr": _arr_options, "simulate": _simulate_options, "detect": _detect_options,
+              "prognose": _prognose_options, "fleet": _fleet_options, "demo": _demo_options}
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``bgphm`` console script; returns the exit code.
 
@@ -258,8 +323,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     2
     """
     with terminal_streams():  # a file name's escape sequence is shown, never obeyed (argparse's messages too)
-        args = build_parser().parse_args(argv)  # exits with 2 on bad usage
+        argv = sys.argv[1:] if argv is None else list(argv)
+        args = build_parser(_command_in(argv)).parse_args(argv)  # exits with 2 on bad usage
         return _run(args, Progress(args.quiet))
+
+
+def _command_in(argv: Sequence[str]) -> list[str]:
+    """The command named on the line, if any: the first word that is not an option (the global options take no
+    value)."""
+    word = next((w for w in argv if not w.startswith("-")), None)
+    return [word] if word in COMMANDS else []
 
 
 def _run(args, progress: Progress) -> int:
@@ -269,7 +342,7 @@ def _run(args, progress: Progress) -> int:
             warnings.simplefilter("default")  # each distinct warning once, as one line without a source path
             warnings.showwarning = _warning_line
             _check_options(args)
-            return importlib.import_module(COMMANDS[args.command]).run(args, progress)
+            return importlib.import_module(f"bgphm.commands.{args.command}").run(args, progress)
     except SettingError as exc:  # a setting that does not fit the input: named as the option that gave it
         print(f"bgphm: error: {_one_line(exc.naming(_option))}", file=sys.stderr)
         return EXIT_USAGE
@@ -290,8 +363,12 @@ def _check_options(args) -> None:
     """The options checked before any file is read: the library's settings (an error names the option, see
     :func:`_run`) and the fleet engine's sizes (a UsageError)."""
     if hasattr(args, "k"):  # detect, prognose, fleet
+        from bgphm.commands._inputs import detection_settings
+
         detection_settings(args)
     if hasattr(args, "particles"):  # prognose, fleet
+        from prognosis import IsolationSettings
+
         IsolationSettings(n_particles=args.particles, rul_every=args.rul_every, horizon=args.horizon, dt=args.dt,
                           seed=args.seed)
     elif getattr(args, "seed", 0) < 0:  # demo: a noise seed
