@@ -5,7 +5,8 @@ Three rules keep a user's files safe:
 * an output may never be, nor contain, an input file (:func:`check_output`), even with ``--force``;
 * an existing output file, or a non-empty output directory, is replaced only with ``--force``;
 * every file is written whole or not at all (:func:`write_text`, :func:`write_with`): into a
-  temporary file beside it, then renamed over it, so an interrupted run leaves no half-written file.
+  temporary file beside it, then renamed over it, so an interrupted run leaves no half-written file; it
+  gets the mode a plain ``open`` would give (0644 under umask 022), for colleagues and servers to read.
 
 Each check runs when a command starts, before it reads a record or derives an ARR, and names the
 option at fault in a :class:`~bgphm.errors.UsageError` (exit code 2).
@@ -143,11 +144,27 @@ def write_with(path: str | os.PathLike, write: Callable[[Path], object]) -> Path
     os.close(handle)
     try:
         write(Path(temporary))
+        os.chmod(temporary, 0o666 & ~_umask())  # mkstemp's file is private (0600); the output is as open() makes it
         os.replace(temporary, path)
     except BaseException:  # an interrupt included: leave no partial file behind
         Path(temporary).unlink(missing_ok=True)
         raise
     return path
+
+
+def _umask() -> int:
+    """The process' umask, read without changing it where Linux shows it (``/proc/self/status``): setting it to
+    read it would race with threads creating files meanwhile."""
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            for line in status:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except OSError:
+        pass
+    mask = os.umask(0o022)  # elsewhere: set and restore at once
+    os.umask(mask)
+    return mask
 
 
 def write_text(path: str | os.PathLike, text: str) -> Path:
