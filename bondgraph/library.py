@@ -11,7 +11,8 @@
 ========================  =====================================================
 
 Each builder returns a :class:`~bondgraph.model.BondGraph`; :func:`example`
-returns a model with the inputs and horizon of its demonstration run.  Every physical parameter of
+returns a model with the inputs and horizon of its demonstration run.  Every element declares its unit
+(:mod:`bondgraph.dimensions` checks them).  Every physical parameter of
 these models is positive: the C, I, R parameters by default, the two-port moduli (motor constant,
 belt ratio, radii) and the law constants declared so (:mod:`bondgraph.domains`).
 """
@@ -25,8 +26,8 @@ from .control import PIController
 from .model import BondGraph
 
 __all__ = [
-    "MASS_LOAD", "MU_UNCERTAINTY", "OMEGA_M_REF", "THREE_TANK", "TORSION_BAR", "U_MAX", "Example", "dc_motor",
-    "example", "friction_drive", "mass_spring_chain", "rlc_circuit", "three_tank", "torsion_bar",
+    "MASS_LOAD", "MU_UNCERTAINTY", "OMEGA_M_REF", "THREE_TANK", "TORSION_BAR", "TORSION_BAR_UNITS", "U_MAX", "Example",
+    "dc_motor", "example", "friction_drive", "mass_spring_chain", "rlc_circuit", "three_tank", "torsion_bar",
     "torsion_bar_controller", "torsion_bar_monitorable", "torsion_bar_with_load", "with_suspended_load",
 ]
 
@@ -37,14 +38,14 @@ def rlc_circuit(R: float = 10.0, L: float = 0.1, C: float = 1e-3) -> BondGraph:
     ``Se:V -> 1 (R, I:L, Df:i) -> 0 (C, De:v_C)``.
     """
     bg = BondGraph(name="series RLC circuit")
-    bg.add("V", "Se", signal="V")
+    bg.add("V", "Se", signal="V", unit="V")
     bg.add("J1", "1")
-    bg.add("R", "R", value=R, uncertainty=(-0.05, 0.05))
-    bg.add("L", "I", value=L, uncertainty=(-0.05, 0.05))
+    bg.add("R", "R", value=R, uncertainty=(-0.05, 0.05), unit="Ohm")
+    bg.add("L", "I", value=L, uncertainty=(-0.05, 0.05), unit="H")
     bg.add("J0", "0")
-    bg.add("C", "C", value=C, uncertainty=(-0.1, 0.1))
-    bg.add("i", "Df")
-    bg.add("v_C", "De")
+    bg.add("C", "C", value=C, uncertainty=(-0.1, 0.1), unit="F")
+    bg.add("i", "Df", unit="A")
+    bg.add("v_C", "De", unit="V")
     for tail, head in [("V", "J1"), ("J1", "R"), ("J1", "L"), ("J1", "J0"), ("J0", "C"), ("J1", "i"), ("J0", "v_C")]:
         bg.bond(tail, head)
     return bg
@@ -57,16 +58,16 @@ def dc_motor(R_a: float = 1.23, L_a: float = 1.34e-3, k_m: float = 3.89e-2, J: f
     ``Se:U -> 1_e (R:R_a, I:L_a, Df:i) -> GY:k_m -> 1_m (I:J, R:b, Df:omega)``.
     """
     bg = BondGraph(name="DC motor")
-    bg.add("U", "Se")
+    bg.add("U", "Se", unit="V")
     bg.add("1_e", "1")
-    bg.add("R_a", "R", value=R_a, uncertainty=(-0.05, 0.05))
-    bg.add("L_a", "I", value=L_a, uncertainty=(-0.05, 0.05))
-    bg.add("GY", "GY", param="k_m", value=k_m, uncertainty=(-0.02, 0.02), domain="positive")
+    bg.add("R_a", "R", value=R_a, uncertainty=(-0.05, 0.05), unit="Ohm")
+    bg.add("L_a", "I", value=L_a, uncertainty=(-0.05, 0.05), unit="H")
+    bg.add("GY", "GY", param="k_m", value=k_m, uncertainty=(-0.02, 0.02), domain="positive", unit="N*m/A")
     bg.add("1_m", "1")
-    bg.add("J", "I", value=J, uncertainty=(-0.1, 0.1))
-    bg.add("b", "R", value=b, uncertainty=(0.0, 0.2))
-    bg.add("i", "Df")
-    bg.add("omega", "Df")
+    bg.add("J", "I", value=J, uncertainty=(-0.1, 0.1), unit="kg*m^2")
+    bg.add("b", "R", value=b, uncertainty=(0.0, 0.2), unit="N*m*s/rad")
+    bg.add("i", "Df", unit="A")
+    bg.add("omega", "Df", unit="rad/s")
     for tail, head in [("U", "1_e"), ("1_e", "R_a"), ("1_e", "L_a"), ("1_e", "GY"), ("GY", "1_m"),
                        ("1_m", "J"), ("1_m", "b"), ("1_e", "i"), ("1_m", "omega")]:
         bg.bond(tail, head)
@@ -89,6 +90,10 @@ TORSION_BAR = {
     "L_a": (1.34e-3, None),
     "R_a": (1.23, None),
 }
+#: The unit of each torsion-bar parameter (a rotational bond carries a torque in N*m and a speed in rad/s).
+TORSION_BAR_UNITS = {"J_m": "kg*m^2", "f_m": "N*m*s/rad", "J_Md": "kg*m^2", "b_Md": "N*m*s/rad", "J_Ld": "kg*m^2",
+                     "b_Ld": "N*m*s/rad", "k_s": "N*m/rad", "b_s": "N*m*s/rad", "k_m": "N*m/A", "k_belt": "1",
+                     "L_a": "H", "R_a": "Ohm"}
 OMEGA_M_REF = 112.5  # rad/s, motor speed set-point (omega_Md = 30 rad/s)
 U_MAX = 12.0  # V, actuator saturation
 
@@ -98,14 +103,14 @@ def _mechanical_part(bg: BondGraph, values: dict) -> None:
 
     def element(name, kind, **extra):
         value, uncertainty = values[name]
-        bg.add(name, kind, value=value, uncertainty=uncertainty, **extra)
+        bg.add(name, kind, value=value, uncertainty=uncertainty, unit=TORSION_BAR_UNITS[name], **extra)
 
     bg.add("1_1", "1")
     element("J_m", "I")
     element("f_m", "R")
-    bg.add("omega_m", "Df")
+    bg.add("omega_m", "Df", unit="rad/s")
     value, _ = values["k_belt"]
-    bg.add("TF", "TF", param="k_belt", value=value, modulus="1/k_belt", domain="positive")
+    bg.add("TF", "TF", param="k_belt", value=value, modulus="1/k_belt", domain="positive", unit="1")
     bg.add("1_Md", "1")
     element("J_Md", "I")
     element("b_Md", "R")
@@ -116,7 +121,7 @@ def _mechanical_part(bg: BondGraph, values: dict) -> None:
     bg.add("1_2", "1")
     element("J_Ld", "I")
     element("b_Ld", "R")
-    bg.add("omega_Ld", "Df")
+    bg.add("omega_Ld", "Df", unit="rad/s")
     for tail, head in [("1_1", "J_m"), ("1_1", "f_m"), ("1_1", "TF"), ("TF", "1_Md"), ("1_Md", "J_Md"),
                        ("1_Md", "b_Md"), ("1_Md", "0_s"), ("0_s", "1_s"), ("1_s", "k_s"), ("1_s", "b_s"),
                        ("0_s", "1_2"), ("1_2", "J_Ld"), ("1_2", "b_Ld"), ("1_1", "omega_m"), ("1_2", "omega_Ld")]:
@@ -136,11 +141,11 @@ def torsion_bar(**overrides: float) -> BondGraph:
     """
     values = _values(overrides)
     bg = BondGraph(name="torsion bar")
-    bg.add("U", "MSe")
+    bg.add("U", "MSe", unit="V")
     bg.add("1_e", "1")
-    bg.add("R_a", "R", value=values["R_a"][0])
-    bg.add("L_a", "I", value=values["L_a"][0])
-    bg.add("GY", "GY", param="k_m", value=values["k_m"][0], domain="positive")
+    bg.add("R_a", "R", value=values["R_a"][0], unit="Ohm")
+    bg.add("L_a", "I", value=values["L_a"][0], unit="H")
+    bg.add("GY", "GY", param="k_m", value=values["k_m"][0], domain="positive", unit="N*m/A")
     for tail, head in [("U", "1_e"), ("1_e", "R_a"), ("1_e", "L_a"), ("1_e", "GY")]:
         bg.bond(tail, head)
     _mechanical_part(bg, values)
@@ -152,7 +157,7 @@ def torsion_bar_monitorable(**overrides: float) -> BondGraph:
     """Jha et al. (2016), Fig. 7: the monitorable mechanical part, driven by the motor torque ``tau_m``."""
     values = _values(overrides)
     bg = BondGraph(name="torsion bar (monitorable part)")
-    bg.add("tau_m", "MSe")
+    bg.add("tau_m", "MSe", unit="N*m")
     _mechanical_part(bg, values)
     bg.bond("tau_m", "1_1")
     return bg
@@ -190,6 +195,7 @@ def with_suspended_load(bg: BondGraph, M: float = MASS_LOAD["M"], mu: float = MA
     node["params"] = {"M": M, "mu": mu, "g": MASS_LOAD["g"], "r_Md": r_Md}
     node["uncertainties"] = {"mu": MU_UNCERTAINTY}  # Table VI
     node["domains"] = {"M": "positive", "mu": "positive", "g": "positive", "r_Md": "positive"}
+    node["units"] = {"M": "kg", "mu": "1", "g": "m/s^2", "r_Md": "m"}
     bg.validate()
     return bg
 
@@ -225,17 +231,18 @@ def three_tank(az1: float = 0.5, az2: float = 0.6, az3: float = 0.5, A_s: float 
     area_box = box if area_uncertainty is None else (-area_uncertainty, area_uncertainty)
     constants = {"S_n": THREE_TANK["S_n"], "g": THREE_TANK["g"]}
     bg = BondGraph(name="three-tank DTS200")
-    bg.add("Q1", "Sf")
-    bg.add("Q2", "Sf")
+    bg.add("Q1", "Sf", unit="m^3/s")
+    bg.add("Q2", "Sf", unit="m^3/s")
     for tank in ("1", "2", "3"):
         bg.add(f"0_{tank}", "0")
-        bg.add(f"A_{tank}", "C", value=A_s, uncertainty=area_box)
-        bg.add(f"h{tank}", "De")
+        bg.add(f"A_{tank}", "C", value=A_s, uncertainty=area_box, unit="m^2")
+        bg.add(f"h{tank}", "De", unit="m")
         bg.bond(f"0_{tank}", f"A_{tank}")
         bg.bond(f"0_{tank}", f"h{tank}")
     for valve, value in (("az1", az1), ("az2", az2), ("az3", az3)):
         bg.add(valve, "R", value=value, uncertainty=box, params=constants,
-               domains={"S_n": "positive", "g": "positive"}, law=f"f - {valve}*S_n*sign(e)*sqrt(2*g*Abs(e))")
+               domains={"S_n": "positive", "g": "positive"}, law=f"f - {valve}*S_n*sign(e)*sqrt(2*g*Abs(e))",
+               unit="1", units={"S_n": "m^2", "g": "m/s^2"})
     bg.add("1_13", "1")
     bg.add("1_32", "1")
     for tail, head in [("Q1", "0_1"), ("Q2", "0_2"), ("0_1", "1_13"), ("1_13", "az1"), ("1_13", "0_3"),
@@ -259,19 +266,19 @@ def friction_drive(J1: float = 9.9225e-4, B1: float = 6.36e-3, r1: float = 0.031
     (-B2*omega2 + alpha*r2*(omega1*r1 - omega2*r2))/J2
     """
     bg = BondGraph(name="friction drive")
-    bg.add("T_m", "MSe")
+    bg.add("T_m", "MSe", unit="N*m")
     bg.add("1_1", "1")
-    bg.add("J1", "I", value=J1)
-    bg.add("B1", "R", value=B1)
-    bg.add("TF_1", "TF", param="r1", value=r1, domain="positive")
+    bg.add("J1", "I", value=J1, unit="kg*m^2")
+    bg.add("B1", "R", value=B1, unit="N*m*s/rad")
+    bg.add("TF_1", "TF", param="r1", value=r1, domain="positive", unit="m")
     bg.add("0_c", "0")
-    bg.add("alpha", "R", value=alpha)
-    bg.add("TF_2", "TF", param="r2", value=r2, modulus="1/r2", domain="positive")
+    bg.add("alpha", "R", value=alpha, unit="N*s/m")
+    bg.add("TF_2", "TF", param="r2", value=r2, modulus="1/r2", domain="positive", unit="m")
     bg.add("1_2", "1")
-    bg.add("J2", "I", value=J2)
-    bg.add("B2", "R", value=B2)
-    bg.add("omega1", "Df")
-    bg.add("omega2", "Df")
+    bg.add("J2", "I", value=J2, unit="kg*m^2")
+    bg.add("B2", "R", value=B2, unit="N*m*s/rad")
+    bg.add("omega1", "Df", unit="rad/s")
+    bg.add("omega2", "Df", unit="rad/s")
     for tail, head in [("T_m", "1_1"), ("1_1", "J1"), ("1_1", "B1"), ("1_1", "TF_1"), ("TF_1", "0_c"),
                        ("0_c", "alpha"), ("0_c", "TF_2"), ("TF_2", "1_2"), ("1_2", "J2"), ("1_2", "B2"),
                        ("1_1", "omega1"), ("1_2", "omega2")]:
@@ -286,15 +293,15 @@ def mass_spring_chain(n: int, mass: float = 1.0, stiffness: float = 100.0, dampi
     the last spring is tied to the wall.  2n states.
     """
     bg = BondGraph(name=f"{n}-stage mass-spring-damper chain")
-    bg.add("F", "Se")
+    bg.add("F", "Se", unit="N")
     previous = "F"
     for i in range(1, n + 1):
         bg.add(f"1_{i}", "1")
-        bg.add(f"m{i}", "I", value=mass, uncertainty=(-0.05, 0.05))
-        bg.add(f"b{i}", "R", value=damping, uncertainty=(0.0, 0.2))
-        bg.add(f"v{i}", "Df")
+        bg.add(f"m{i}", "I", value=mass, uncertainty=(-0.05, 0.05), unit="kg")
+        bg.add(f"b{i}", "R", value=damping, uncertainty=(0.0, 0.2), unit="N*s/m")
+        bg.add(f"v{i}", "Df", unit="m/s")
         bg.add(f"0_{i}", "0")
-        bg.add(f"c{i}", "C", value=1.0 / stiffness, uncertainty=(-0.1, 0.1))
+        bg.add(f"c{i}", "C", value=1.0 / stiffness, uncertainty=(-0.1, 0.1), unit="m/N")
         bg.bond(previous, f"1_{i}")
         for tail, head in [(f"1_{i}", f"m{i}"), (f"1_{i}", f"b{i}"), (f"1_{i}", f"v{i}"),
                            (f"1_{i}", f"0_{i}"), (f"0_{i}", f"c{i}")]:

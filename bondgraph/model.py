@@ -63,6 +63,8 @@ from .names import check_name, check_node_id
 from .structure import (BOND_ATTRIBUTES, NODE_ATTRIBUTES, PORT_SYMBOLS, RESERVED_NAMES, Bond, Element, Structure,
                         signal_function)
 from .validation import check_model, parameter_domains
+from .dimensions import ModelUnits, check_units
+from .units import parse_unit
 
 __all__ = ["MISSPELLING", "BondGraph"]
 
@@ -180,7 +182,8 @@ class BondGraph:
         for bond in bonds:
             at[bond.tail].append(bond)
             at[bond.head].append(bond)
-        return Structure(elements, bonds, parameters, at, parameter_domains(elements, parameters))
+        return Structure(elements, bonds, parameters, at, parameter_domains(elements, parameters),
+                         check_units(elements, bonds))
 
     @property
     def elements(self) -> dict[Hashable, Element]:
@@ -210,6 +213,16 @@ class BondGraph:
         {'R_a': (0.0, inf), 'L_a': (0.0, inf), 'k_m': (0.0, inf), 'J': (0.0, inf), 'b': (0.0, inf)}
         """
         return self.structure().domains
+
+    @property
+    def units(self) -> ModelUnits:
+        """The units of every parameter, signal and bond, declared or found (:mod:`bondgraph.dimensions`).
+
+        >>> from bondgraph.library import rlc_circuit
+        >>> rlc_circuit().units.text("L"), rlc_circuit().units.text("v_C")
+        ('H', 'V')
+        """
+        return self.structure().units
 
     @property
     def uncertainties(self) -> dict[str, tuple[float, float]]:
@@ -314,8 +327,32 @@ def _read_element(name: Hashable, data: Mapping, *, strict: bool = False) -> Ele
         _check_box(where, f"constant {constant!r}", constant_domains[constant], number,
                    constant_uncertainties.get(constant),
                    hint="" if constant in declared else "set its domain in 'domains' if another sign is meant")
+    unit, units = _read_units(where, kind, data, constants, signal)
     return Element(name, kind, param, value, uncertainty, law, modulus, signal, constants, constant_uncertainties,
-                   domain, constant_domains)
+                   domain, constant_domains, unit, units)
+
+
+def _read_units(where: str, kind: str, data: Mapping, constants: Mapping, signal: str | None) -> tuple:
+    """``unit`` (the parameter's, or the source's or detector's signal's) and ``units`` (law constants, and a
+    modulated two-port's signal), parsed (:mod:`bondgraph.units`)."""
+    unit = data.get("unit")
+    if unit is not None:
+        if kind in el.JUNCTIONS:
+            raise ModelError(f"{where}: a junction has no unit (its bonds take theirs from the elements around it)")
+        unit = parse_unit(unit, where=where)
+    others = data.get("units")
+    if others is None:  # the common case, kept cheap: structure() reads every element on every call
+        return unit, {}
+    if not isinstance(others, Mapping):
+        raise ModelError(f"{where}: 'units' must map law constants (or a modulated two-port's signal) to units, "
+                         f"got {others!r}")
+    allowed = set(constants) | ({signal} if kind in el.MODULATED_TWO_PORTS else set())
+    for key in others:
+        if key not in allowed:
+            what = f"one of {sorted(allowed)}" if allowed else "nothing here (give the element's own unit in 'unit')"
+            raise ModelError(f"{where}: 'units' names {key!r}, which is not a law constant or a modulating signal of "
+                             f"this element; it may name {what}")
+    return unit, {key: parse_unit(text, where=f"{where} {key!r}") for key, text in others.items()}
 
 
 def _check_stiffness_alone(where: str, kind: str, data: Mapping) -> None:

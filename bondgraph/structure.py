@@ -22,6 +22,7 @@ from typing import Protocol
 import sympy as sp
 
 from . import elements as el
+from .units import Unit
 
 __all__ = [
     "BOND_ATTRIBUTES", "NODE_ATTRIBUTES", "PORT_SYMBOLS", "RESERVED_NAMES", "T", "Bond", "BondGraphLike",
@@ -36,7 +37,7 @@ PORT_SYMBOLS = {name: sp.Symbol(name) for name in ("e", "f", "q", "p")}
 RESERVED_NAMES = frozenset(PORT_SYMBOLS) | {"t"}
 #: The node attributes of the model contract (docs/model.md), what ``BondGraph.add`` and a JSON node accept.
 NODE_ATTRIBUTES = frozenset({"kind", "param", "value", "stiffness", "uncertainty", "law", "modulus", "signal",
-                             "params", "uncertainties", "domain", "domains", "label", "description"})
+                             "params", "uncertainties", "domain", "domains", "unit", "units", "label", "description"})
 #: The bond attributes of the model contract, what ``BondGraph.bond`` and a JSON link accept.
 BOND_ATTRIBUTES = frozenset({"label", "description"})
 
@@ -83,6 +84,8 @@ class Element:
     constant_uncertainties: Mapping[str, tuple[float, float]] = field(default_factory=dict)
     domain: str = "real"
     constant_domains: Mapping[str, str] = field(default_factory=dict)
+    unit: Unit | None = None                                   # of the parameter, or of a source's or detector's signal
+    units: Mapping[str, Unit] = field(default_factory=dict)   # of the law constants, a modulated two-port's signal
 
     @property
     def uncertainties(self) -> dict[str, tuple[float, float]]:
@@ -156,7 +159,8 @@ class Structure:
     """A validated snapshot of a bond graph, taken once per analysis.
 
     ``at[node]`` lists the bonds (power and signal) touching ``node``; ``domains`` holds the open
-    interval ``(lo, hi)`` each parameter of ``parameters`` must stay in (:mod:`bondgraph.domains`).
+    interval ``(lo, hi)`` each parameter of ``parameters`` must stay in (:mod:`bondgraph.domains`);
+    ``units`` the units of the parameters, signals and bonds (:mod:`bondgraph.dimensions`).
     """
 
     elements: dict
@@ -164,6 +168,7 @@ class Structure:
     parameters: dict
     at: dict
     domains: dict = field(default_factory=dict)
+    units: object = None  # the bondgraph.dimensions.ModelUnits of the model (that module reads this one)
 
     @property
     def inputs(self) -> list[str]:

@@ -35,7 +35,8 @@ OUTPUT = ROOT / "docs" / "api.md"
 #: (package, title, extra modules documented in full: every public name they define, or their __all__).
 PACKAGES = [
     ("bondgraph", "model, causality, equations, simulation",
-     ["bondgraph.library", "bondgraph.io", "bondgraph.drawing", "bondgraph.names", "bondgraph.domains"]),
+     ["bondgraph.library", "bondgraph.io", "bondgraph.drawing", "bondgraph.names", "bondgraph.domains",
+      "bondgraph.units", "bondgraph.dimensions"]),
     ("diagnosis", "ARRs, intervals, thresholds, signatures, detection", ["diagnosis.records"]),
     ("diagnosis.intervals", "outward-rounded interval arithmetic and the sympy-to-interval compiler", []),
     ("prognosis", "degradation laws, observation model, particle filter, RUL, metrics, health monitoring",
