@@ -23,7 +23,7 @@ Example
 from __future__ import annotations
 
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING, Any
@@ -34,7 +34,7 @@ from bgphm.files import write_with
 from bondgraph.optional import import_optional
 
 __all__ = [
-    "MATPLOTLIB_MISSING", "band", "plot_estimate", "plot_evaluation", "plot_rul", "plot_rul_distribution",
+    "MATPLOTLIB_MISSING", "axis_label", "band", "plot_estimate", "plot_evaluation", "plot_rul", "plot_rul_distribution",
     "plot_simulation", "pyplot", "save_figure", "write_figures",
 ]
 
@@ -149,8 +149,17 @@ def band(ax: Axes, x: Any, lower: Any, upper: Any, **kwargs) -> PolyCollection:
     return ax.fill_between(x, lower, upper, **kwargs)
 
 
+def axis_label(name: str, unit: str | None = None) -> str:
+    """An axis label: the quantity's name and, when known, its unit in parentheses.
+
+    >>> axis_label("b", "N*m*s/rad"), axis_label("RUL", "s"), axis_label("theta")
+    ('b (N*m*s/rad)', 'RUL (s)', 'theta')
+    """
+    return f"{name} ({unit})" if unit else name
+
+
 def plot_evaluation(evaluation: Evaluation, ax: Axes | None = None, *, bglft: bool = False,
-                    title: str | None = None) -> Axes:
+                    title: str | None = None, unit: str | None = None) -> Axes:
     """Residual of one ARR with its robust threshold band and the alarm.
 
     Draws ``-r_n`` against time, the interval band ``[B_lo - m, B_hi + m]`` (``m`` the noise
@@ -165,6 +174,8 @@ def plot_evaluation(evaluation: Evaluation, ax: Axes | None = None, *, bglft: bo
         Also shade the BG-LFT band.
     title : str, optional
         Default: the ARR's name.  Plain text: a ``$`` in it is shown, not read as mathtext.
+    unit : str, optional
+        The residual's unit (:meth:`diagnosis.ARR.unit`), on the vertical axis.
 
     Returns
     -------
@@ -178,8 +189,9 @@ def plot_evaluation(evaluation: Evaluation, ax: Axes | None = None, *, bglft: bo
         band(ax, e.t, -e.bglft - e.margin, e.bglft + e.margin, color="tab:grey", alpha=0.2,
              label="BG-LFT threshold")
     if e.detection_time is not None:
-        ax.axvline(e.detection_time, color="k", ls=":", label=f"alarm at t = {e.detection_time:g}")
-    ax.set(xlabel="t", ylabel=r"$-r_n$")
+        ax.axvline(e.detection_time, color="k", ls=":", label=f"alarm at t = {e.detection_time:g} s")
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel(r"$-r_n$" + (f" ({unit})" if unit else ""))  # a unit text holds no "$" (bondgraph.units)
     # names come from the model and the record: shown as they are, never parsed as mathtext
     ax.set_title(e.name if title is None else title, parse_math=False)
     ax.legend(fontsize=8)
@@ -187,7 +199,7 @@ def plot_evaluation(evaluation: Evaluation, ax: Axes | None = None, *, bglft: bo
 
 
 def plot_simulation(result: SimulationResult, signals: Sequence[str] | None = None,
-                    axes: Sequence[Axes] | Axes | None = None) -> Figure:
+                    axes: Sequence[Axes] | Axes | None = None, units: Mapping[str, str] | None = None) -> Figure:
     """Trajectories of a simulation, one subplot per signal, sharing the time axis.
 
     Parameters
@@ -198,6 +210,8 @@ def plot_simulation(result: SimulationResult, signals: Sequence[str] | None = No
         the result (inputs and measured outputs, in the result's order).
     axes : Axes or sequence of Axes, optional
         One per signal; default: a new figure.
+    units : mapping of str to str, optional
+        Each signal's unit, on its axis (:attr:`bondgraph.model.BondGraph.units`).
 
     Returns
     -------
@@ -216,8 +230,8 @@ def plot_simulation(result: SimulationResult, signals: Sequence[str] | None = No
             raise ValueError(f"{len(names)} signals need {len(names)} axes, got {len(axes)}")
     for ax, name in zip(axes, names):
         ax.plot(result.t, result[name], lw=1)
-        ax.set_ylabel(name, parse_math=False)  # a name, not mathtext
-    axes[-1].set_xlabel("t")
+        ax.set_ylabel(axis_label(name, (units or {}).get(name)), parse_math=False)  # a name, not mathtext
+    axes[-1].set_xlabel("t (s)")
     return axes[0].figure
 
 
@@ -232,7 +246,8 @@ def _truth_values(truth: Callable | Any, t: np.ndarray) -> np.ndarray:
 
 
 def plot_estimate(result: MonitorResult, parameter_name: str = "theta", truth: Callable | Any = None,
-                  ax: Axes | None = None) -> Axes:
+                  ax: Axes | None = None, *, label: str | None = None, unit: str | None = None,
+                  failure: float | None = None) -> Axes:
     """Particle-filter estimate of a degrading parameter (or of its rate) over time.
 
     Parameters
@@ -243,6 +258,10 @@ def plot_estimate(result: MonitorResult, parameter_name: str = "theta", truth: C
     truth : callable of t or array_like, optional
         The true values, drawn dashed.
     ax : matplotlib.axes.Axes, optional
+    label, unit : str, optional
+        The parameter's name (default ``parameter_name``) and unit, on the vertical axis.
+    failure : float, optional
+        The failure value, drawn as a horizontal line.
 
     Returns
     -------
@@ -258,7 +277,11 @@ def plot_estimate(result: MonitorResult, parameter_name: str = "theta", truth: C
     ax.plot(t, estimate.get("mean", np.full(t.shape, np.nan)), color="C0", label="estimate (mean)")
     if truth is not None:
         ax.plot(t, _truth_values(truth, t), "k--", label="true")
-    ax.set(xlabel="t", ylabel=parameter_name)
+    if failure is not None:
+        ax.axhline(failure, color="tab:red", ls="-.", lw=1, label=f"failure value {failure:.4g}" +
+                   (f" {unit}" if unit else ""))
+    ax.set_xlabel("t (s)")
+    ax.set_ylabel(axis_label(label or parameter_name, unit), parse_math=False)
     ax.legend(fontsize=8)
     return ax
 
@@ -268,8 +291,9 @@ def plot_rul(result: MonitorResult, eol: float | None = None, alpha: float = 0.1
 
     Draws the median (solid) and the mean over the particles that fail within the horizon
     (dashed) with the 5-95 % band; percentiles beyond the horizon (censored particles) are
-    drawn at the horizon.  With ``eol``, also the true RUL ``eol - t`` and the alpha cone
-    ``[(1 - alpha), (1 + alpha)] (eol - t)`` of the alpha-lambda metric.
+    drawn at the horizon, marked there, with the horizon dotted.  With ``eol``, also the true
+    RUL ``eol - t`` and the alpha cone ``[(1 - alpha), (1 + alpha)] (eol - t)`` of the
+    alpha-lambda metric.
 
     Parameters
     ----------
@@ -293,11 +317,19 @@ def plot_rul(result: MonitorResult, eol: float | None = None, alpha: float = 0.1
         ax.plot(t, true, "k--", label="true RUL")
     if len(result.rul):
         horizon = np.array([p.horizon for p in result.rul], float)
-        q = np.minimum(result.rul_percentiles((5, 50, 95)), horizon[:, None])
+        percentiles = result.rul_percentiles((5, 50, 95))
+        q = np.minimum(percentiles, horizon[:, None])
         band(ax, t, q[:, 0], q[:, 2], color="C0", label="5-95 %")
         ax.plot(t, q[:, 1], color="C0", label="median")
         ax.plot(t, result.rul_mean, color="C1", ls="--", label="mean")
-    ax.set(xlabel="t", ylabel="RUL")
+        cut = percentiles > horizon[:, None]
+        if cut.any():  # beyond the horizon a percentile is unknown, not equal to it: say so on the plot
+            ax.plot(t, horizon, color="tab:grey", ls=":", lw=1, label="horizon")
+            for column, (level, marker) in enumerate(((5, "v"), (50, "o"), (95, "^"))):
+                if cut[:, column].any():
+                    ax.plot(t[cut[:, column]], horizon[cut[:, column]], marker, ls="none", color="tab:grey", ms=4,
+                            label=f"{level} % beyond the horizon")
+    ax.set(xlabel="t (s)", ylabel="RUL (s)")
     ax.legend(fontsize=8)
     return ax
 
@@ -330,8 +362,8 @@ def plot_rul_distribution(prediction: RULDistribution, ax: Axes | None = None, b
     ax.hist(samples[finite], bins=bins, weights=mass[finite], color="C0", alpha=0.7, label="predicted RUL")
     mean = float(prediction.mean[0])
     if np.isfinite(mean):
-        ax.axvline(mean, color="C1", ls="--", label=f"mean {mean:.4g}")
-    ax.set(xlabel="RUL", ylabel="probability mass",
-           title=f"RUL distribution: {censored:.1%} censored (beyond the horizon {prediction.horizon:g})")
+        ax.axvline(mean, color="C1", ls="--", label=f"mean {mean:.4g} s")
+    ax.set(xlabel="RUL (s)", ylabel="probability mass",
+           title=f"RUL distribution: {censored:.1%} censored (beyond the horizon, {prediction.horizon:g} s)")
     ax.legend(fontsize=8)
     return ax

@@ -38,7 +38,7 @@ import sympy as sp
 
 from . import elements as el
 from .errors import ModelError
-from .structure import PORT_SYMBOLS, Bond, Element
+from .structure import PORT_SYMBOLS, Bond, Element, signal_function
 from .units import DIMENSIONLESS, SECOND, Unit, UnitError, dimension_of
 
 __all__ = ["ModelUnits", "check_units"]
@@ -63,6 +63,13 @@ class ModelUnits:
     efforts: dict = field(default_factory=dict)
     flows: dict = field(default_factory=dict)
     declared: bool = False
+
+    def symbols(self) -> dict[sp.Basic, Unit]:
+        """The units by sympy name, for :func:`~bondgraph.units.dimension_of`: each parameter's symbol and each
+        signal's function ``name(t)``."""
+        found: dict[sp.Basic, Unit] = {sp.Symbol(p): u for p, u in self.parameters.items()}
+        found.update({signal_function(s): u for s, u in self.signals.items()})
+        return found
 
     def text(self, name: str, default: str = "") -> str:
         """The unit of a parameter or signal as text, ``default`` when unknown."""
@@ -116,20 +123,25 @@ class _Solver:
             self.parent[rx], self.offset[rx] = ry, oy * ratio / ox
         return True
 
-    def origin(self, x) -> str | None:
-        """The element that gave ``x`` its unit: the one nearest to it along the ties that tied a unit to ONE."""
-        seen, frontier = {x}, [x]
-        while frontier:
+    def origin(self, x) -> list[str]:
+        """The elements through which ``x`` got its unit, nearest last: the shortest chain of ties from ``x`` to
+        ONE, its junctions left out (they only pass units on); empty if ``x`` has no unit."""
+        came_from = {x: None}
+        frontier = [x]
+        while frontier and self.ONE not in came_from:
             following = []
             for node in frontier:
                 for other, who in self.ties.get(node, ()):
-                    if other == self.ONE:
-                        return who
-                    if other not in seen:
-                        seen.add(other)
+                    if other not in came_from:
+                        came_from[other] = (node, who)
                         following.append(other)
             frontier = following
-        return None
+        chain, node = [], self.ONE
+        while came_from.get(node) is not None:
+            node, who = came_from[node]
+            if not who.startswith(("0 ", "1 ")) and who not in chain:
+                chain.append(who)
+        return chain
 
 
 def check_units(elements: Mapping[Hashable, Element], bonds: Iterable[Bond]) -> ModelUnits:
@@ -253,7 +265,7 @@ def _named_units(elements, at, efforts, flows) -> tuple[dict, dict]:
             continue
         if element.kind in el.MODULATED_TWO_PORTS and element.signal in element.units:
             signals.setdefault(element.signal, element.units[element.signal])
-        if element.param is None:
+        if element.param is None or element.value is None:  # a modulus without its parameter has none
             continue
         unit = element.unit if element.unit is not None else _found(element, at[name], efforts, flows)
         if unit is not None:
@@ -289,8 +301,10 @@ def _conflict(element: Element, x, y, solver: _Solver) -> str:
 
 def _carried(unknown, solver: _Solver) -> str:
     side, (tail, head) = unknown
-    unit, origin = solver.known(unknown), solver.origin(unknown)
+    unit, chain = solver.known(unknown), solver.origin(unknown)
     what = f"the {'effort' if side == 'e' else 'flow'} of bond {tail!r} -> {head!r}"
     if unit is None:
         return f"{what} is tied to another unit by its neighbours"
-    return f"{what} is {unit}" + (f" (from {origin})" if origin else "")
+    # the source of the unit, and the elements it passed through: any of them may be the one at fault
+    through = f" through {', '.join(chain[1:])}" if len(chain) > 1 else ""
+    return f"{what} is {unit}" + (f" (from {chain[0]}{through})" if chain else "")

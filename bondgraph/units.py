@@ -37,7 +37,7 @@ import sympy as sp
 
 from .errors import ModelError
 
-__all__ = ["ATOMS", "BASE", "DIMENSIONLESS", "SECOND", "Unit", "UnitError", "dimension_of", "parse_unit"]
+__all__ = ["ATOMS", "BASE", "DIMENSIONLESS", "SECOND", "TIME", "Unit", "UnitError", "dimension_of", "parse_unit"]
 
 #: The SI base dimensions, in the order of :attr:`Unit.dimension`.
 BASE = ("m", "kg", "s", "A", "K", "mol", "cd")
@@ -144,6 +144,8 @@ def _power_text(symbol: str, power: Fraction) -> str:
 DIMENSIONLESS = Unit()
 #: The second, the unit of time: the factor between a flow and a displacement, an effort and a momentum.
 SECOND = Unit.of({"s": 1})
+#: The time symbol of the model contract (``bondgraph.structure.T``), in seconds.
+TIME = sp.Symbol("t")
 
 _TOKEN = re.compile(r"\s*(?:(?P<number>\d+(?:\.\d+)?)|(?P<name>[A-Za-zΩµμ]+)|(?P<op>\*\*|[*./^()\-+]))")
 
@@ -264,9 +266,11 @@ class UnitError(ModelError):
 def dimension_of(expression: sp.Basic, units: Mapping[sp.Basic, Unit]) -> Unit:
     """The unit of a sympy expression whose symbols (and signal functions ``name(t)``) have ``units``.
 
-    Sums need terms of one dimension; the functions (``exp``, ``log``, ``sin``, ``tanh``, ...) need a pure
-    number; ``Abs``, ``Min`` and ``Max`` keep their argument's unit, ``sign`` gives a pure number.  Raises
-    :class:`KeyError` for a name without a unit and :class:`UnitError` for units that do not combine.
+    The time symbol ``t`` is in seconds; a derivative ``d/dt`` divides by it and an integral over ``t``
+    multiplies by it.  Sums need terms of one dimension; the functions (``exp``, ``log``, ``sin``,
+    ``tanh``, ...) need a pure number; ``Abs``, ``Min`` and ``Max`` keep their argument's unit, ``sign``
+    gives a pure number.  Raises :class:`KeyError` for a name without a unit and :class:`UnitError` for
+    units that do not combine.
 
     >>> e, f, k = sp.symbols("e f k")
     >>> units = {e: parse_unit("Pa"), f: parse_unit("m^3/s"), k: parse_unit("Pa*s^2/m^6")}
@@ -279,6 +283,8 @@ def dimension_of(expression: sp.Basic, units: Mapping[sp.Basic, Unit]) -> Unit:
     """
     if expression in units:
         return units[expression]
+    if expression == TIME:
+        return SECOND
     if expression.is_Number or expression.is_NumberSymbol:
         return DIMENSIONLESS
     if isinstance(expression, sp.Symbol):
@@ -288,7 +294,7 @@ def dimension_of(expression: sp.Basic, units: Mapping[sp.Basic, Unit]) -> Unit:
         if any(not terms[0].same_dimension(u) for u in terms[1:]):
             shown = " and ".join(dict.fromkeys(str(u) for u in terms))
             raise UnitError(f"the terms of {expression} have units {shown}")
-        return terms[0]
+        return min(terms, key=lambda u: len(str(u)))  # one dimension: shown in its simplest spelling (N*m/s)
     if isinstance(expression, sp.Mul):
         result = DIMENSIONLESS
         for factor in expression.args:
@@ -301,6 +307,16 @@ def dimension_of(expression: sp.Basic, units: Mapping[sp.Basic, Unit]) -> Unit:
         _pure(base, units)
         _pure(power, units)
         return DIMENSIONLESS
+    if isinstance(expression, sp.Derivative):  # d^n x / dt^n: x's unit over the variables' (time: s)
+        result = dimension_of(expression.expr, units)
+        for variable, count in expression.variable_count:
+            result = result / dimension_of(variable, units) ** int(count)
+        return result
+    if isinstance(expression, sp.Integral):    # the integral over t: the integrand's unit times s
+        result = dimension_of(expression.function, units)
+        for limits in expression.limits:
+            result = result * dimension_of(limits[0], units)
+        return result
     if isinstance(expression, sp.Abs):
         return dimension_of(expression.args[0], units)
     if isinstance(expression, sp.sign):

@@ -21,7 +21,9 @@ from sympy.core.function import AppliedUndef
 from bondgraph import elements as el
 from bondgraph.calculus import time_derivative
 from bondgraph.equations import constitutive_law
+from bondgraph.dimensions import ModelUnits
 from bondgraph.errors import PHMWarning
+from bondgraph.units import Unit, UnitError, dimension_of
 from bondgraph.structure import Structure, T
 
 from .deltas import delta, delta_parameter, latex
@@ -143,6 +145,23 @@ class ARR:
     def integrals(self) -> list[str]:
         """The integrals from the start of the record the relation needs, as text (each drifts with its noise)."""
         return sorted(str(i.function) for i in self.nominal.atoms(sp.Integral))
+
+    def unit(self, units: ModelUnits) -> Unit | None:
+        """The unit of the residual ``r_n`` given the model's units (:attr:`bondgraph.model.BondGraph.units`), or
+        None when a name in it has none.
+
+        A junction's balance is in its bonds' effort (1-junction) or flow (0-junction) unit; a differentiated
+        form is in that unit per second.
+
+        >>> from bondgraph.library import dc_motor
+        >>> from diagnosis import derive_arrs
+        >>> [str(arr.unit(dc_motor().units)) for arr in derive_arrs(dc_motor())]
+        ['V', 'N*m']
+        """
+        try:
+            return dimension_of(self.nominal, units.symbols())
+        except (KeyError, UnitError):
+            return None
 
     def __str__(self) -> str:
         return f"{self.name}: r_n = {self.nominal}\n  Psi_2 = {self.uncertain}"

@@ -12,7 +12,8 @@ from bgphm.files import check_output, input_files, write_text
 
 from ._progress import Progress
 
-__all__ = ["emit", "finite_or_none", "fmt", "json_value", "output_directory", "output_file", "write_plots"]
+__all__ = ["emit", "estimate_labels", "finite_or_none", "fmt", "json_value", "output_directory", "output_file",
+           "units_of", "write_plots"]
 
 
 def output_file(args) -> Path | None:
@@ -53,7 +54,28 @@ def json_value(value):
     raise TypeError(f"not JSON serializable: {type(value).__name__}")
 
 
-def write_plots(kind: str, out: Path, payload, progress: Progress) -> list[Path]:
+def units_of(model, arrs) -> dict:
+    """The units a command's JSON states: time, each signal and parameter of the model, each residual (empty
+    texts where the model declares none)."""
+    units = model.units
+    return {"t": "s", "signals": {s: units.text(s) for s in [*model.inputs, *model.outputs]},
+            "parameters": {p: units.text(p) for p in model.parameters},
+            "residuals": {arr.name: str(arr.unit(units) or "") for arr in arrs}}
+
+
+def estimate_labels(summary: dict, failures: dict, units) -> dict:
+    """What the prognosis plots name: the residuals' units, and the reported candidate, its unit and failure
+    value (none for a pair or a sensor)."""
+    labels = {"units": summary["units"]["residuals"]}
+    candidate = summary.get("candidate")
+    if isinstance(candidate, str) and candidate in failures:
+        labels.update(parameter=candidate, unit=units.text(candidate) or None, failure=failures[candidate])
+    return labels
+
+
+def write_plots(kind: str, out: Path, payload, progress: Progress, labels: dict | None = None) -> list[Path]:
+    """The PNG plots of a command.  ``labels`` holds what the axes name: ``units`` (ARR name -> the residual's
+    unit) and, for prognosis, ``parameter``, ``unit`` and ``failure`` of the reported candidate."""
     try:
         import matplotlib
 
@@ -65,26 +87,25 @@ def write_plots(kind: str, out: Path, payload, progress: Progress) -> list[Path]
         progress("matplotlib is not installed: no plots (pip install 'bondgraph-phm[plot]')")
         return []
 
+    labels = labels or {}
+    units = labels.get("units", {})
     paths = []
-    if kind == "detection":
-        for e in payload:
-            fig, ax = plt.subplots(figsize=(8, 3.5))
-            plotting.plot_evaluation(e, ax=ax, title=e.name)
-            paths.append(plotting.save_figure(fig, out / f"residual_{e.name}.png"))
-    else:
-        evaluation, result = payload
+    evaluations = payload if kind == "detection" else payload[:1]
+    for e in evaluations:
         fig, ax = plt.subplots(figsize=(8, 3.5))
-        plotting.plot_evaluation(evaluation, ax=ax, title=evaluation.name)
-        paths.append(plotting.save_figure(fig, out / f"residual_{evaluation.name}.png"))
-        if result is not None and result.t.size:
-            fig, ax = plt.subplots(figsize=(8, 3.5))
-            plotting.plot_estimate(result, ax=ax)
-            paths.append(plotting.save_figure(fig, out / "estimate.png"))
-            fig, ax = plt.subplots(figsize=(8, 3.5))
-            plotting.plot_rul(result, ax=ax)
-            paths.append(plotting.save_figure(fig, out / "rul.png"))
-            if result.rul:
-                fig, ax = plt.subplots(figsize=(6, 3.5))
-                plotting.plot_rul_distribution(result.rul[-1], ax=ax)
-                paths.append(plotting.save_figure(fig, out / "rul_distribution.png"))
+        plotting.plot_evaluation(e, ax=ax, title=e.name, unit=units.get(e.name))
+        paths.append(plotting.save_figure(fig, out / f"residual_{e.name}.png"))
+    result = None if kind == "detection" else payload[1]
+    if result is not None and result.t.size:
+        fig, ax = plt.subplots(figsize=(8, 3.5))
+        plotting.plot_estimate(result, ax=ax, label=labels.get("parameter"), unit=labels.get("unit"),
+                               failure=labels.get("failure"))
+        paths.append(plotting.save_figure(fig, out / "estimate.png"))
+        fig, ax = plt.subplots(figsize=(8, 3.5))
+        plotting.plot_rul(result, ax=ax)
+        paths.append(plotting.save_figure(fig, out / "rul.png"))
+        if result.rul:
+            fig, ax = plt.subplots(figsize=(6, 3.5))
+            plotting.plot_rul_distribution(result.rul[-1], ax=ax)
+            paths.append(plotting.save_figure(fig, out / "rul_distribution.png"))
     return paths

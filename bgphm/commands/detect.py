@@ -17,7 +17,7 @@ from ._inputs import (
     load_arrs,
     load_record,
 )
-from ._outputs import json_value, output_directory, write_plots
+from ._outputs import json_value, output_directory, units_of, write_plots
 from ._progress import Progress
 
 __all__ = ["detectable_line", "evaluation_summary", "run"]
@@ -47,6 +47,7 @@ def run(args, progress: Progress) -> int:
     summary = {"model": spec.model.name, "data": str(args.data), "samples": len(record),
                "arrs": {e.name: evaluation_summary(e) for e in evaluations}, **result.as_dict()}
     summary["alarming_arrs"] = [e.name for e in evaluations if e.detection_time is not None]
+    summary["units"] = units_of(spec.model, arrs)
     for e in evaluations:
         when = "no alarm" if e.detection_time is None else f"alarm at t = {e.detection_time:g} s"
         form = result.forms[e.name]
@@ -68,7 +69,8 @@ def run(args, progress: Progress) -> int:
             columns.update({f"{e.name}.residual": e.residual, f"{e.name}.lower": -(e.upper + e.margin),
                             f"{e.name}.upper": -(e.lower - e.margin), f"{e.name}.alarm": e.alarm.astype(float)})
         write_text(out / "residuals.csv", csv_text(columns))
-        written = [out / "detection.json", out / "residuals.csv"] + write_plots("detection", out, evaluations, progress)
+        written = [out / "detection.json", out / "residuals.csv"]
+        written += write_plots("detection", out, evaluations, progress, {"units": summary["units"]["residuals"]})
         for path in written:
             print(f"wrote {path}")
     return EXIT_OK

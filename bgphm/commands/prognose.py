@@ -16,7 +16,7 @@ from ._inputs import (
     load_record,
     what_can_fail,
 )
-from ._outputs import fmt, json_value, output_directory, write_plots
+from ._outputs import estimate_labels, fmt, json_value, output_directory, units_of, write_plots
 from ._progress import Progress, filter_progress
 
 __all__ = ["estimate_columns", "first_reasons", "prognosis_line", "run"]
@@ -52,6 +52,7 @@ def run(args, progress: Progress) -> int:
     for w in caught:
         progress(f"warning: {w.message}")
     summary = result.as_dict()
+    summary["units"] = units_of(spec.model, arrs)
     for name, margin in summary["margins"].items():
         progress(f"{name}: margin {margin:.3g}, residual noise {summary['residual_noise_std'][name]:.3g} (t <= "
                  f"{summary['calibration_end']:g} s), filter step {summary['filter_step']:g} s")
@@ -73,7 +74,8 @@ def run(args, progress: Progress) -> int:
             written += [out / "estimates.csv", out / "rul.csv"]
         primary = next((e for e in result.evaluations if e.name in result.fired), result.evaluations[0])
         best = result.monitor_result() if result.t.size else None
-        written += write_plots("prognosis", out, (primary, best), progress)
+        written += write_plots("prognosis", out, (primary, best), progress,
+                               estimate_labels(summary, failures, spec.model.units))
         for path in written:
             print(f"wrote {path}")
     return EXIT_OK

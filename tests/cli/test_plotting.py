@@ -176,7 +176,8 @@ def test_estimate_plot_mean_band_and_truth(monitored):
 def test_rul_plot_band_clipped_at_the_horizon_and_alpha_cone(monitored):
     ax = plotting.plot_rul(monitored, eol=12.0, alpha=0.2)
     t = monitored.rul_t
-    assert len(ax.collections) == 2 and len(ax.lines) == 3  # cone, 5-95 %; true RUL, median, mean
+    assert len(ax.collections) == 2  # cone, 5-95 %
+    assert [line.get_label() for line in ax.lines[:4]] == ["true RUL", "median", "mean", "horizon"]
     _, lower, upper = _band_curves(ax.collections[0], t.size)
     assert np.allclose(lower, 0.8 * (12.0 - t)) and np.allclose(upper, 1.2 * (12.0 - t))
     q = monitored.rul_percentiles((5, 95))
@@ -185,8 +186,27 @@ def test_rul_plot_band_clipped_at_the_horizon_and_alpha_cone(monitored):
     assert np.allclose(lower, q[:, 0]) and np.allclose(upper, np.minimum(q[:, 1], 20.0))
     assert np.allclose(ax.lines[1].get_ydata(), monitored.rul_median)
     assert np.allclose(ax.lines[2].get_ydata(), monitored.rul_mean)
+    # the percentiles cut at the horizon are marked there, each at the predictions where it is censored
+    horizon = np.array([p.horizon for p in monitored.rul])
+    marked = {line.get_label(): line.get_xdata() for line in ax.lines[4:]}
+    assert np.array_equal(marked["95 % beyond the horizon"], t[q[:, 1] > horizon])
+    assert ax.get_xlabel() == "t (s)" and ax.get_ylabel() == "RUL (s)"
     bare = plotting.plot_rul(monitored)
-    assert len(bare.collections) == 1 and len(bare.lines) == 2
+    assert len(bare.collections) == 1 and [line.get_label() for line in bare.lines[:2]] == ["median", "mean"]
+
+
+def test_axes_name_the_quantities_and_their_units(monitored, simulation, faulty):
+    ax = plotting.plot_estimate(monitored, label="b", unit="N*m*s/rad", failure=2.5)
+    assert ax.get_ylabel() == "b (N*m*s/rad)" and ax.get_xlabel() == "t (s)"
+    failure = [line for line in ax.lines if line.get_label().startswith("failure value")]
+    assert len(failure) == 1 and np.allclose(failure[0].get_ydata(), 2.5)
+    assert failure[0].get_label() == "failure value 2.5 N*m*s/rad"
+    ax = plotting.plot_evaluation(faulty, unit="N*m")
+    assert ax.get_ylabel() == "$-r_n$ (N*m)" and ax.get_xlabel() == "t (s)"
+    fig = plotting.plot_simulation(simulation, ["v_C"], units={"v_C": "V"})
+    assert fig.axes[0].get_ylabel() == "v_C (V)" and fig.axes[0].get_xlabel() == "t (s)"
+    title = plotting.plot_rul_distribution(monitored.rul[0]).get_title()
+    assert title.endswith(f"{monitored.rul[0].horizon:g} s)")
 
 
 def test_rul_distribution_reports_the_censored_fraction(monitored):

@@ -96,3 +96,16 @@ def test_every_file_of_a_command_is_readable_by_others_under_umask_022(tmp_path,
     assert len(written) >= 4
     assert {p.name: oct(stat.S_IMODE(p.stat().st_mode)) for p in written} == \
         {p.name: oct(0o644) for p in written}
+
+
+def test_detect_states_the_units_of_signals_parameters_and_residuals(tmp_path):
+    """The electrical balance of the motor is in volts, the mechanical one in newton-metres."""
+    import json
+
+    record = tmp_path / "run.csv"
+    assert main(["--quiet", "simulate", "dc-motor", "--t-end", "2", "--samples", "401", "--out", str(record)]) == 0
+    assert main(["--quiet", "detect", "dc-motor", str(record), "--out", str(tmp_path / "detect")]) == 0
+    units = json.loads((tmp_path / "detect" / "detection.json").read_text())["units"]
+    assert units["t"] == "s" and units["signals"] == {"U": "V", "i": "A", "omega": "rad/s"}
+    assert units["parameters"]["b"] == "N*m*s/rad" and units["parameters"]["J"] == "kg*m^2"
+    assert units["residuals"] == {"ARR_1_e": "V", "ARR_1_m": "N*m"}
