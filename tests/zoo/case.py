@@ -9,6 +9,10 @@ checked against something the library did not produce.
 Names: every input symbol in ``rhs``/``outputs`` is named after the model's source signal, every
 parameter symbol after the model's parameter (a C element's ``value`` is its compliance unless a
 ``law`` says otherwise), every key of ``outputs`` after a sensor's signal.
+
+Units: every element of ``build()`` but the junctions declares its coherent SI unit (``unit``, and
+``units`` for law constants and a modulating signal, docs/model.md "Units"), so that the model passes the
+dimensional check and every parameter, signal and bond has a unit (``tests/zoo/test_units.py``).
 """
 
 from __future__ import annotations

@@ -13,17 +13,18 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="averaged buck converter")
-    bg.add("V_in", "Se")
+    bg.add("V_in", "Se", unit="V")
     # MTF: e1 = (1/d) e2, i.e. the switch-node voltage is d V_in; f2 = f1/d, i.e. i_in = d i_L
-    bg.add("S", "MTF", signal="d", modulus="1/d")
+    # the modulus is the duty cycle alone, a pure number: S has no parameter, so no `unit`
+    bg.add("S", "MTF", signal="d", modulus="1/d", units={"d": "1"})
     bg.add("1_L", "1")
-    bg.add("L", "I", value=100e-6, uncertainty=(-0.05, 0.05))
-    bg.add("R_L", "R", value=0.05, uncertainty=(0.0, 0.2))
-    bg.add("i_L", "Df")
+    bg.add("L", "I", value=100e-6, uncertainty=(-0.05, 0.05), unit="H")
+    bg.add("R_L", "R", value=0.05, uncertainty=(0.0, 0.2), unit="Ohm")
+    bg.add("i_L", "Df", unit="A")
     bg.add("0_o", "0")
-    bg.add("C", "C", value=470e-6, uncertainty=(-0.1, 0.1))
-    bg.add("R_o", "R", value=5.0, uncertainty=(-0.02, 0.02))
-    bg.add("v_o", "De")
+    bg.add("C", "C", value=470e-6, uncertainty=(-0.1, 0.1), unit="F")
+    bg.add("R_o", "R", value=5.0, uncertainty=(-0.02, 0.02), unit="Ohm")
+    bg.add("v_o", "De", unit="V")
     for tail, head in [("V_in", "S"), ("S", "1_L"), ("1_L", "L"), ("1_L", "R_L"), ("1_L", "i_L"), ("1_L", "0_o"),
                        ("0_o", "C"), ("0_o", "R_o"), ("0_o", "v_o")]:
         bg.bond(tail, head)

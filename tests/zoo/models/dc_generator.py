@@ -14,18 +14,18 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="DC generator with resistive load")
-    bg.add("tau_d", "MSe")                                       # prime-mover torque
+    bg.add("tau_d", "MSe", unit="N*m")                           # prime-mover torque
     bg.add("1_m", "1")
-    bg.add("J", "I", value=0.01, uncertainty=(-0.05, 0.05))
-    bg.add("b", "R", value=5e-3, uncertainty=(0.0, 0.3))       # bearing friction wears up
-    bg.add("omega", "Df")
-    bg.add("G", "GY", param="K_e", value=1.0, uncertainty=(-0.02, 0.02), domain="positive")
+    bg.add("J", "I", value=0.01, uncertainty=(-0.05, 0.05), unit="kg*m^2")
+    bg.add("b", "R", value=5e-3, uncertainty=(0.0, 0.3), unit="N*m*s/rad")  # bearing friction wears up
+    bg.add("omega", "Df", unit="rad/s")
+    bg.add("G", "GY", param="K_e", value=1.0, uncertainty=(-0.02, 0.02), domain="positive", unit="V*s/rad")
     bg.add("1_a", "1")
-    bg.add("R_a", "R", value=1.0, uncertainty=(-0.05, 0.1))
-    bg.add("L_a", "I", value=50e-3, uncertainty=(-0.05, 0.05))
+    bg.add("R_a", "R", value=1.0, uncertainty=(-0.05, 0.1), unit="Ohm")
+    bg.add("L_a", "I", value=50e-3, uncertainty=(-0.05, 0.05), unit="H")
     bg.add("0_L", "0")
-    bg.add("R_Ld", "R", value=20.0, uncertainty=(-0.02, 0.02))
-    bg.add("v_L", "De")
+    bg.add("R_Ld", "R", value=20.0, uncertainty=(-0.02, 0.02), unit="Ohm")
+    bg.add("v_L", "De", unit="V")
     for tail, head in [("tau_d", "1_m"), ("1_m", "J"), ("1_m", "b"), ("1_m", "omega"), ("1_m", "G"), ("G", "1_a"),
                        ("1_a", "R_a"), ("1_a", "L_a"), ("1_a", "0_L"), ("0_L", "R_Ld"), ("0_L", "v_L")]:
         bg.bond(tail, head)

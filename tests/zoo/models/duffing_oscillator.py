@@ -14,13 +14,14 @@ M, B, K, K3 = 1.0, 0.8, 100.0, 1.0e5   # kg, N s/m, N/m, N/m^3
 
 def build() -> BondGraph:
     bg = BondGraph(name="Duffing oscillator")
-    bg.add("F", "Se")
+    bg.add("F", "Se", unit="N")
     bg.add("1_m", "1")
-    bg.add("m", "I", value=M, uncertainty=(-0.02, 0.02))
-    bg.add("b", "R", value=B, uncertainty=(0.0, 0.3))
+    bg.add("m", "I", value=M, uncertainty=(-0.02, 0.02), unit="kg")
+    bg.add("b", "R", value=B, uncertainty=(0.0, 0.3), unit="N*s/m")
     bg.add("k", "C", value=K, law="e - k*q - k_3*q**3", params={"k_3": K3},
-           uncertainties={"k_3": (-0.1, 0.1)}, domains={"k_3": "positive"}, uncertainty=(-0.05, 0.05))
-    bg.add("v", "Df")
+           uncertainties={"k_3": (-0.1, 0.1)}, domains={"k_3": "positive"}, uncertainty=(-0.05, 0.05),
+           unit="N/m", units={"k_3": "N/m^3"})
+    bg.add("v", "Df", unit="m/s")
     for tail, head in [("F", "1_m"), ("1_m", "m"), ("1_m", "b"), ("1_m", "k"), ("1_m", "v")]:
         bg.bond(tail, head)
     return bg

@@ -15,12 +15,12 @@ K_P = 0.05                           # N m s, controller gain (not a model param
 
 def build() -> BondGraph:
     bg = BondGraph(name="flywheel speed loop")
-    bg.add("T_m", "MSe")                                   # torque command of the speed controller
+    bg.add("T_m", "MSe", unit="N*m")                       # torque command of the speed controller
     bg.add("1_f", "1")
-    bg.add("J_f", "I", value=J_F, uncertainty=(-0.02, 0.02))
-    bg.add("c_a", "R", value=C_A, law="e - c_a*f*Abs(f)", uncertainty=(-0.1, 0.1))   # windage
-    bg.add("b_f", "R", value=B_F, uncertainty=(0.0, 0.3))                             # bearings
-    bg.add("omega", "Df")
+    bg.add("J_f", "I", value=J_F, uncertainty=(-0.02, 0.02), unit="kg*m^2")
+    bg.add("c_a", "R", value=C_A, law="e - c_a*f*Abs(f)", uncertainty=(-0.1, 0.1), unit="N*m*s^2/rad^2")  # windage
+    bg.add("b_f", "R", value=B_F, uncertainty=(0.0, 0.3), unit="N*m*s/rad")           # bearings
+    bg.add("omega", "Df", unit="rad/s")
     for tail, head in [("T_m", "1_f"), ("1_f", "J_f"), ("1_f", "c_a"), ("1_f", "b_f"), ("1_f", "omega")]:
         bg.bond(tail, head)
     return bg

@@ -16,15 +16,16 @@ R_A, R_V = 1.0e9, 1.0e11          # Pa s/m^3: accumulator restrictor, load valve
 
 def build() -> BondGraph:
     bg = BondGraph(name="gas accumulator")
-    bg.add("Q_p", "MSf")                                    # pump flow (displacement x speed command)
+    bg.add("Q_p", "MSf", unit="m^3/s")                      # pump flow (displacement x speed command)
     bg.add("0_s", "0")
-    bg.add("R_v", "R", value=R_V, uncertainty=(-0.1, 0.1))
-    bg.add("p_s", "De")                                     # supply-line pressure
+    bg.add("R_v", "R", value=R_V, uncertainty=(-0.1, 0.1), unit="Pa*s/m^3")
+    bg.add("p_s", "De", unit="Pa")                          # supply-line pressure
     bg.add("1_a", "1")
-    bg.add("R_a", "R", value=R_A, uncertainty=(-0.1, 0.1))
-    bg.add("Q_a", "Df")                                     # flow into the accumulator
+    bg.add("R_a", "R", value=R_A, uncertainty=(-0.1, 0.1), unit="Pa*s/m^3")
+    bg.add("Q_a", "Df", unit="m^3/s")                       # flow into the accumulator
     bg.add("V_a", "C", value=V_A, law="e - p_0*q/(V_a - q)", params={"p_0": P_0},
-           uncertainties={"p_0": (-0.05, 0.05)}, domains={"p_0": "positive"}, uncertainty=(-0.05, 0.05))
+           uncertainties={"p_0": (-0.05, 0.05)}, domains={"p_0": "positive"}, uncertainty=(-0.05, 0.05),
+           unit="m^3", units={"p_0": "Pa"})
     for tail, head in [("Q_p", "0_s"), ("0_s", "R_v"), ("0_s", "p_s"), ("0_s", "1_a"), ("1_a", "R_a"),
                        ("1_a", "Q_a"), ("1_a", "V_a")]:
         bg.bond(tail, head)

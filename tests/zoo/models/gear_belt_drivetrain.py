@@ -16,22 +16,23 @@ J_M, B_M, N_G, J_I, B_I, R_B, K_B, J_LOAD, B_LOAD = 2e-4, 1e-4, 5.0, 1e-3, 5e-4,
 
 def build() -> BondGraph:
     bg = BondGraph(name="gear and belt drivetrain")
-    bg.add("T_m", "MSe")                                   # motor torque from the current loop
+    bg.add("T_m", "MSe", unit="N*m")                       # motor torque from the current loop
     bg.add("1_m", "1")
-    bg.add("J_m", "I", value=J_M, uncertainty=(-0.02, 0.02))
-    bg.add("b_m", "R", value=B_M, uncertainty=(0.0, 0.3))
-    bg.add("omega_m", "Df")
-    bg.add("gear", "TF", param="n_g", value=N_G, modulus="1/n_g", domain="positive")   # omega_i = omega_m / n_g
+    bg.add("J_m", "I", value=J_M, uncertainty=(-0.02, 0.02), unit="kg*m^2")
+    bg.add("b_m", "R", value=B_M, uncertainty=(0.0, 0.3), unit="N*m*s/rad")
+    bg.add("omega_m", "Df", unit="rad/s")
+    bg.add("gear", "TF", param="n_g", value=N_G, modulus="1/n_g", domain="positive",
+           unit="1")  # omega_i = omega_m / n_g
     bg.add("1_i", "1")
-    bg.add("J_i", "I", value=J_I, uncertainty=(-0.05, 0.05))
-    bg.add("b_i", "R", value=B_I, uncertainty=(0.0, 0.3))
-    bg.add("belt", "TF", param="r_b", value=R_B, domain="positive")   # pulley ratio: omega_p = r_b omega_i
+    bg.add("J_i", "I", value=J_I, uncertainty=(-0.05, 0.05), unit="kg*m^2")
+    bg.add("b_i", "R", value=B_I, uncertainty=(0.0, 0.3), unit="N*m*s/rad")
+    bg.add("belt", "TF", param="r_b", value=R_B, domain="positive", unit="1")  # pulley ratio: omega_p = r_b omega_i
     bg.add("0_b", "0")
-    bg.add("c_b", "C", value=1 / K_B, uncertainty=(-0.1, 0.1))        # belt compliance (rad/N m at the load)
+    bg.add("c_b", "C", value=1 / K_B, uncertainty=(-0.1, 0.1), unit="rad/(N*m)")  # belt compliance at the load
     bg.add("1_L", "1")
-    bg.add("J_L", "I", value=J_LOAD, uncertainty=(-0.05, 0.05))
-    bg.add("b_L", "R", value=B_LOAD, uncertainty=(0.0, 0.3))
-    bg.add("omega_L", "Df")
+    bg.add("J_L", "I", value=J_LOAD, uncertainty=(-0.05, 0.05), unit="kg*m^2")
+    bg.add("b_L", "R", value=B_LOAD, uncertainty=(0.0, 0.3), unit="N*m*s/rad")
+    bg.add("omega_L", "Df", unit="rad/s")
     for tail, head in [("T_m", "1_m"), ("1_m", "J_m"), ("1_m", "b_m"), ("1_m", "omega_m"), ("1_m", "gear"),
                        ("gear", "1_i"), ("1_i", "J_i"), ("1_i", "b_i"), ("1_i", "belt"), ("belt", "0_b"),
                        ("0_b", "c_b"), ("0_b", "1_L"), ("1_L", "J_L"), ("1_L", "b_L"), ("1_L", "omega_L")]:

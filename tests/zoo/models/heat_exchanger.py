@@ -16,22 +16,22 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="two-node heat exchanger")
-    bg.add("T_hi", "MSe")                                     # hot inlet temperature
+    bg.add("T_hi", "MSe", unit="K")                           # hot inlet temperature
     bg.add("1_h", "1")
-    bg.add("R_h", "R", value=1 / 418.6, uncertainty=(-0.05, 0.05))      # 1/(m_dot_h c_p)
+    bg.add("R_h", "R", value=1 / 418.6, uncertainty=(-0.05, 0.05), unit="K/W")  # 1/(m_dot_h c_p)
     bg.add("0_h", "0")
-    bg.add("C_h", "C", value=2093.0, uncertainty=(-0.05, 0.05))
-    bg.add("T_h", "De")
+    bg.add("C_h", "C", value=2093.0, uncertainty=(-0.05, 0.05), unit="J/K")
+    bg.add("T_h", "De", unit="K")
     bg.add("1_w", "1")
-    bg.add("R_w", "R", value=2.0e-3, uncertainty=(0.0, 0.15))        # fouling only raises it
-    bg.add("q_w", "Df")
+    bg.add("R_w", "R", value=2.0e-3, uncertainty=(0.0, 0.15), unit="K/W")  # fouling only raises it
+    bg.add("q_w", "Df", unit="W")
     bg.add("0_c", "0")
-    bg.add("C_c", "C", value=2093.0, uncertainty=(-0.05, 0.05))
-    bg.add("T_c", "De")
-    bg.add("T_ci", "Se")                                      # cold inlet temperature
+    bg.add("C_c", "C", value=2093.0, uncertainty=(-0.05, 0.05), unit="J/K")
+    bg.add("T_c", "De", unit="K")
+    bg.add("T_ci", "Se", unit="K")                            # cold inlet temperature
     bg.add("1_c", "1")
-    bg.add("R_c", "R", value=1 / 627.9, uncertainty=(-0.05, 0.05))
-    bg.add("q_c", "Df")
+    bg.add("R_c", "R", value=1 / 627.9, uncertainty=(-0.05, 0.05), unit="K/W")
+    bg.add("q_c", "Df", unit="W")
     for tail, head in [("T_hi", "1_h"), ("1_h", "R_h"), ("1_h", "0_h"), ("0_h", "C_h"), ("0_h", "T_h"),
                        ("0_h", "1_w"), ("1_w", "R_w"), ("1_w", "q_w"), ("1_w", "0_c"), ("0_c", "C_c"),
                        ("0_c", "T_c"), ("T_ci", "1_c"), ("1_c", "R_c"), ("1_c", "q_c"), ("1_c", "0_c")]:

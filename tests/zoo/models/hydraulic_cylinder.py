@@ -17,17 +17,17 @@ M_P, B_P, K_L = 50.0, 2000.0, 1.0e5
 
 def build() -> BondGraph:
     bg = BondGraph(name="hydraulic cylinder")
-    bg.add("Q_p", "MSf")                                   # servo-pump flow command
+    bg.add("Q_p", "MSf", unit="m^3/s")                     # servo-pump flow command
     bg.add("0_c", "0")
-    bg.add("C_h", "C", value=C_H, uncertainty=(-0.1, 0.1))
-    bg.add("R_l", "R", value=R_L, uncertainty=(-0.2, 0.0))
-    bg.add("p_c", "De")
-    bg.add("piston", "TF", param="A_p", value=A_P, modulus="1/A_p", domain="positive")   # p = F / A_p
+    bg.add("C_h", "C", value=C_H, uncertainty=(-0.1, 0.1), unit="m^3/Pa")
+    bg.add("R_l", "R", value=R_L, uncertainty=(-0.2, 0.0), unit="Pa*s/m^3")
+    bg.add("p_c", "De", unit="Pa")
+    bg.add("piston", "TF", param="A_p", value=A_P, modulus="1/A_p", domain="positive", unit="m^2")  # p = F / A_p
     bg.add("1_p", "1")
-    bg.add("m_p", "I", value=M_P, uncertainty=(-0.02, 0.02))
-    bg.add("b_p", "R", value=B_P, uncertainty=(0.0, 0.2))
-    bg.add("k_L", "C", value=K_L, law="e - k_L*q", uncertainty=(-0.05, 0.05))
-    bg.add("v_p", "Df")
+    bg.add("m_p", "I", value=M_P, uncertainty=(-0.02, 0.02), unit="kg")
+    bg.add("b_p", "R", value=B_P, uncertainty=(0.0, 0.2), unit="N*s/m")
+    bg.add("k_L", "C", value=K_L, law="e - k_L*q", uncertainty=(-0.05, 0.05), unit="N/m")
+    bg.add("v_p", "Df", unit="m/s")
     for tail, head in [("Q_p", "0_c"), ("0_c", "C_h"), ("0_c", "R_l"), ("0_c", "p_c"), ("0_c", "piston"),
                        ("piston", "1_p"), ("1_p", "m_p"), ("1_p", "b_p"), ("1_p", "k_L"), ("1_p", "v_p")]:
         bg.bond(tail, head)

@@ -20,13 +20,14 @@ SP_0 = P_0 + A_O * P_0**0.5 / K_C
 
 def build() -> BondGraph:
     bg = BondGraph(name="level loop")
-    bg.add("Q_p", "MSf")                                    # pump flow, set by the level controller
+    bg.add("Q_p", "MSf", unit="m^3/s")                      # pump flow, set by the level controller
     bg.add("0_t", "0")
-    bg.add("C_t", "C", value=C_T, uncertainty=(-0.02, 0.02))
-    bg.add("p_t", "De")                                     # bottom-pressure level transmitter
+    bg.add("C_t", "C", value=C_T, uncertainty=(-0.02, 0.02), unit="m^3/Pa")
+    bg.add("p_t", "De", unit="Pa")                          # bottom-pressure level transmitter
     bg.add("1_o", "1")
-    bg.add("a_o", "R", value=A_O, law="f - a_o*sign(e)*sqrt(Abs(e))", uncertainty=(-0.05, 0.05))
-    bg.add("Q_o", "Df")                                     # outflow meter
+    bg.add("a_o", "R", value=A_O, law="f - a_o*sign(e)*sqrt(Abs(e))", uncertainty=(-0.05, 0.05),
+           unit="m^3/(s*Pa^(1/2))")
+    bg.add("Q_o", "Df", unit="m^3/s")                       # outflow meter
     for tail, head in [("Q_p", "0_t"), ("0_t", "C_t"), ("0_t", "p_t"), ("0_t", "1_o"), ("1_o", "a_o"),
                        ("1_o", "Q_o")]:
         bg.bond(tail, head)

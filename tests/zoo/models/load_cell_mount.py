@@ -14,15 +14,15 @@ M, B_M, K, B_D = 2.0, 5.0, 5.0e3, 200.0   # kg, N s/m, N/m, N s/m
 
 def build() -> BondGraph:
     bg = BondGraph(name="mass on a Maxwell mount")
-    bg.add("F", "Se")                                     # actuator force on the mass
+    bg.add("F", "Se", unit="N")                           # actuator force on the mass
     bg.add("1_m", "1")
-    bg.add("m", "I", value=M, uncertainty=(-0.02, 0.02))
-    bg.add("b_m", "R", value=B_M, uncertainty=(0.0, 0.3))  # guide friction
+    bg.add("m", "I", value=M, uncertainty=(-0.02, 0.02), unit="kg")
+    bg.add("b_m", "R", value=B_M, uncertainty=(0.0, 0.3), unit="N*s/m")  # guide friction
     bg.add("0_k", "0")
-    bg.add("C_k", "C", value=1 / K, uncertainty=(-0.05, 0.05))
-    bg.add("F_k", "De")                                   # load cell: the spring force
+    bg.add("C_k", "C", value=1 / K, uncertainty=(-0.05, 0.05), unit="m/N")
+    bg.add("F_k", "De", unit="N")                         # load cell: the spring force
     bg.add("1_d", "1")
-    bg.add("b_d", "R", value=B_D, uncertainty=(-0.1, 0.1))
+    bg.add("b_d", "R", value=B_D, uncertainty=(-0.1, 0.1), unit="N*s/m")
     for tail, head in [("F", "1_m"), ("1_m", "m"), ("1_m", "b_m"), ("1_m", "0_k"), ("0_k", "C_k"),
                        ("0_k", "F_k"), ("0_k", "1_d"), ("1_d", "b_d")]:
         bg.bond(tail, head)

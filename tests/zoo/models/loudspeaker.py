@@ -15,19 +15,20 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="loudspeaker")
-    bg.add("u", "MSe")
+    bg.add("u", "MSe", unit="V")
     bg.add("1_e", "1")
-    bg.add("R_e", "R", value=3.3, uncertainty=(-0.05, 0.1))        # voice coil heats up: mostly up
-    bg.add("L_e", "I", value=0.9e-3, uncertainty=(-0.05, 0.05))
-    bg.add("i", "Df")
+    bg.add("R_e", "R", value=3.3, uncertainty=(-0.05, 0.1), unit="Ohm")  # voice coil heats up: mostly up
+    bg.add("L_e", "I", value=0.9e-3, uncertainty=(-0.05, 0.05), unit="H")
+    bg.add("i", "Df", unit="A")
     # GY: e1 = Bl f2 (back emf), e2 = Bl f1 (Lorentz force)
-    bg.add("M", "GY", param="Bl", value=7.0, uncertainty=(-0.03, 0.03), domain="positive")
+    bg.add("M", "GY", param="Bl", value=7.0, uncertainty=(-0.03, 0.03), domain="positive", unit="T*m")
     bg.add("1_m", "1")
-    bg.add("M_ms", "I", value=0.015, uncertainty=(-0.03, 0.03))
-    bg.add("R_ms", "R", value=1.2, uncertainty=(-0.1, 0.1))
+    bg.add("M_ms", "I", value=0.015, uncertainty=(-0.03, 0.03), unit="kg")
+    bg.add("R_ms", "R", value=1.2, uncertainty=(-0.1, 0.1), unit="N*s/m")
     bg.add("K_ms", "C", value=1250.0, uncertainty=(-0.05, 0.05), law="e - K_ms*q - k_3*q**3",
-           params={"k_3": 1.0e7}, uncertainties={"k_3": (-0.1, 0.1)}, domains={"k_3": "positive"})
-    bg.add("v_c", "Df")
+           params={"k_3": 1.0e7}, uncertainties={"k_3": (-0.1, 0.1)}, domains={"k_3": "positive"},
+           unit="N/m", units={"k_3": "N/m^3"})
+    bg.add("v_c", "Df", unit="m/s")
     for tail, head in [("u", "1_e"), ("1_e", "R_e"), ("1_e", "L_e"), ("1_e", "i"), ("1_e", "M"), ("M", "1_m"),
                        ("1_m", "M_ms"), ("1_m", "R_ms"), ("1_m", "K_ms"), ("1_m", "v_c")]:
         bg.bond(tail, head)

@@ -16,17 +16,19 @@ ORIFICE = "f - {a}*sign(e)*sqrt(Abs(e))"
 
 def build() -> BondGraph:
     bg = BondGraph(name="orifice tanks")
-    bg.add("q_in", "Sf")                                   # pump inflow, m³/s
+    bg.add("q_in", "Sf", unit="m^3/s")                     # pump inflow, m³/s
     bg.add("0_1", "0")
-    bg.add("T1", "C", param="A1", value=A_1, uncertainty=(-0.02, 0.02))    # upper tank area
-    bg.add("h1", "De")
+    bg.add("T1", "C", param="A1", value=A_1, uncertainty=(-0.02, 0.02), unit="m^2")  # upper tank area
+    bg.add("h1", "De", unit="m")
     bg.add("1_12", "1")
-    bg.add("O12", "R", param="a12", value=A_12, uncertainty=(-0.1, 0.1), law=ORIFICE.format(a="a12"))
+    bg.add("O12", "R", param="a12", value=A_12, uncertainty=(-0.1, 0.1), law=ORIFICE.format(a="a12"),
+           unit="m^(5/2)/s")
     bg.add("0_2", "0")
-    bg.add("T2", "C", param="A2", value=A_2, uncertainty=(-0.02, 0.02))    # lower tank area
-    bg.add("h2", "De")
+    bg.add("T2", "C", param="A2", value=A_2, uncertainty=(-0.02, 0.02), unit="m^2")  # lower tank area
+    bg.add("h2", "De", unit="m")
     bg.add("1_out", "1")
-    bg.add("O_out", "R", param="a_out", value=A_OUT, uncertainty=(-0.1, 0.1), law=ORIFICE.format(a="a_out"))
+    bg.add("O_out", "R", param="a_out", value=A_OUT, uncertainty=(-0.1, 0.1), law=ORIFICE.format(a="a_out"),
+           unit="m^(5/2)/s")
     for tail, head in [("q_in", "0_1"), ("0_1", "T1"), ("0_1", "h1"), ("0_1", "1_12"), ("1_12", "O12"),
                        ("1_12", "0_2"), ("0_2", "T2"), ("0_2", "h2"), ("0_2", "1_out"), ("1_out", "O_out")]:
         bg.bond(tail, head)

@@ -13,18 +13,18 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="pi filter")
-    bg.add("V_in", "Se")
+    bg.add("V_in", "Se", unit="V")
     bg.add("1_s", "1")
-    bg.add("R_s", "R", value=0.5, uncertainty=(-0.05, 0.05))
+    bg.add("R_s", "R", value=0.5, uncertainty=(-0.05, 0.05), unit="Ohm")
     bg.add("0_1", "0")
-    bg.add("C_1", "C", value=220e-6, uncertainty=(-0.1, 0.1))
+    bg.add("C_1", "C", value=220e-6, uncertainty=(-0.1, 0.1), unit="F")
     bg.add("1_L", "1")
-    bg.add("L_f", "I", value=100e-6, uncertainty=(-0.05, 0.05))
-    bg.add("R_w", "R", value=0.05, uncertainty=(0.0, 0.2))
+    bg.add("L_f", "I", value=100e-6, uncertainty=(-0.05, 0.05), unit="H")
+    bg.add("R_w", "R", value=0.05, uncertainty=(0.0, 0.2), unit="Ohm")
     bg.add("0_2", "0")
-    bg.add("C_2", "C", value=220e-6, uncertainty=(-0.1, 0.1))
-    bg.add("R_o", "R", value=8.0, uncertainty=(-0.02, 0.02))
-    bg.add("v_o", "De")
+    bg.add("C_2", "C", value=220e-6, uncertainty=(-0.1, 0.1), unit="F")
+    bg.add("R_o", "R", value=8.0, uncertainty=(-0.02, 0.02), unit="Ohm")
+    bg.add("v_o", "De", unit="V")
     for tail, head in [("V_in", "1_s"), ("1_s", "R_s"), ("1_s", "0_1"), ("0_1", "C_1"), ("0_1", "1_L"),
                        ("1_L", "L_f"), ("1_L", "R_w"), ("1_L", "0_2"), ("0_2", "C_2"), ("0_2", "R_o"),
                        ("0_2", "v_o")]:

@@ -15,19 +15,19 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="piezo stack actuator")
-    bg.add("v_a", "MSe")                                        # amplifier voltage
+    bg.add("v_a", "MSe", unit="V")                              # amplifier voltage
     bg.add("1_s", "1")
-    bg.add("R_s", "R", value=20.0, uncertainty=(-0.05, 0.05))
+    bg.add("R_s", "R", value=20.0, uncertainty=(-0.05, 0.05), unit="Ohm")
     bg.add("0_p", "0")
-    bg.add("C_p", "C", value=2e-6, uncertainty=(-0.1, 0.1))
-    bg.add("v_p", "De")
+    bg.add("C_p", "C", value=2e-6, uncertainty=(-0.1, 0.1), unit="F")
+    bg.add("v_p", "De", unit="V")
     # TF: e1 = e2 / n_p (stack voltage = force / n_p), f2 = f1 / n_p (velocity = coupling current / n_p)
-    bg.add("X", "TF", param="n_p", value=2.0, modulus="1/n_p", uncertainty=(-0.05, 0.05), domain="positive")
+    bg.add("X", "TF", param="n_p", value=2.0, modulus="1/n_p", uncertainty=(-0.05, 0.05), domain="positive", unit="N/V")
     bg.add("1_m", "1")
-    bg.add("m", "I", value=0.05, uncertainty=(-0.02, 0.02))
-    bg.add("k_p", "C", value=2e7, uncertainty=(-0.05, 0.05), law="e - k_p*q")   # a stiffness (N/m)
-    bg.add("c_p", "R", value=100.0, uncertainty=(-0.2, 0.2))
-    bg.add("v_m", "Df")
+    bg.add("m", "I", value=0.05, uncertainty=(-0.02, 0.02), unit="kg")
+    bg.add("k_p", "C", value=2e7, uncertainty=(-0.05, 0.05), law="e - k_p*q", unit="N/m")  # a stiffness (N/m)
+    bg.add("c_p", "R", value=100.0, uncertainty=(-0.2, 0.2), unit="N*s/m")
+    bg.add("v_m", "Df", unit="m/s")
     for tail, head in [("v_a", "1_s"), ("1_s", "R_s"), ("1_s", "0_p"), ("0_p", "C_p"), ("0_p", "v_p"), ("0_p", "X"),
                        ("X", "1_m"), ("1_m", "m"), ("1_m", "k_p"), ("1_m", "c_p"), ("1_m", "v_m")]:
         bg.bond(tail, head)

@@ -16,15 +16,15 @@ C_T = 0.005 / (1000.0 * 9.81)    # m^3/Pa
 
 def build() -> BondGraph:
     bg = BondGraph(name="pipe feeding a tank")
-    bg.add("P_s", "Se")                                     # supply pressure (gauge)
+    bg.add("P_s", "Se", unit="Pa")                          # supply pressure (gauge)
     bg.add("1_p", "1")
-    bg.add("L_f", "I", value=L_F, uncertainty=(-0.05, 0.05))
-    bg.add("R_f", "R", value=R_F, uncertainty=(-0.1, 0.1))
-    bg.add("Q", "Df")                                       # flow meter in the pipe
+    bg.add("L_f", "I", value=L_F, uncertainty=(-0.05, 0.05), unit="kg/m^4")
+    bg.add("R_f", "R", value=R_F, uncertainty=(-0.1, 0.1), unit="Pa*s/m^3")
+    bg.add("Q", "Df", unit="m^3/s")                         # flow meter in the pipe
     bg.add("0_t", "0")
-    bg.add("C_t", "C", value=C_T, uncertainty=(-0.02, 0.02))
-    bg.add("R_o", "R", value=R_O, uncertainty=(-0.1, 0.1))
-    bg.add("p_t", "De")
+    bg.add("C_t", "C", value=C_T, uncertainty=(-0.02, 0.02), unit="m^3/Pa")
+    bg.add("R_o", "R", value=R_O, uncertainty=(-0.1, 0.1), unit="Pa*s/m^3")
+    bg.add("p_t", "De", unit="Pa")
     for tail, head in [("P_s", "1_p"), ("1_p", "L_f"), ("1_p", "R_f"), ("1_p", "Q"), ("1_p", "0_t"),
                        ("0_t", "C_t"), ("0_t", "R_o"), ("0_t", "p_t")]:
         bg.bond(tail, head)

@@ -19,19 +19,19 @@ C_SEC2 = 3.1e-9           # kg/Pa, the second section's and the 0.2 l chamber's
 
 def build() -> BondGraph:
     bg = BondGraph(name="pneumatic line")
-    bg.add("p_in", "MSe")                                  # valve-controlled inlet pressure
+    bg.add("p_in", "MSe", unit="Pa")                       # valve-controlled inlet pressure
     bg.add("1_1", "1")
-    bg.add("R_1", "R", value=R_SEC, uncertainty=(-0.1, 0.1))
-    bg.add("I_1", "I", value=I_SEC, uncertainty=(-0.05, 0.05))
+    bg.add("R_1", "R", value=R_SEC, uncertainty=(-0.1, 0.1), unit="Pa*s/kg")
+    bg.add("I_1", "I", value=I_SEC, uncertainty=(-0.05, 0.05), unit="1/m")
     bg.add("0_1", "0")
-    bg.add("C_1", "C", value=C_SEC1, uncertainty=(-0.05, 0.05))
-    bg.add("p_1", "De")                                    # mid-line pressure tap
+    bg.add("C_1", "C", value=C_SEC1, uncertainty=(-0.05, 0.05), unit="kg/Pa")
+    bg.add("p_1", "De", unit="Pa")                         # mid-line pressure tap
     bg.add("1_2", "1")
-    bg.add("R_2", "R", value=R_SEC, uncertainty=(-0.1, 0.1))
-    bg.add("I_2", "I", value=I_SEC, uncertainty=(-0.05, 0.05))
+    bg.add("R_2", "R", value=R_SEC, uncertainty=(-0.1, 0.1), unit="Pa*s/kg")
+    bg.add("I_2", "I", value=I_SEC, uncertainty=(-0.05, 0.05), unit="1/m")
     bg.add("0_2", "0")
-    bg.add("C_2", "C", value=C_SEC2, uncertainty=(-0.05, 0.05))
-    bg.add("p_2", "De")                                    # chamber pressure
+    bg.add("C_2", "C", value=C_SEC2, uncertainty=(-0.05, 0.05), unit="kg/Pa")
+    bg.add("p_2", "De", unit="Pa")                         # chamber pressure
     for tail, head in [("p_in", "1_1"), ("1_1", "R_1"), ("1_1", "I_1"), ("1_1", "0_1"), ("0_1", "C_1"),
                        ("0_1", "p_1"), ("0_1", "1_2"), ("1_2", "R_2"), ("1_2", "I_2"), ("1_2", "0_2"),
                        ("0_2", "C_2"), ("0_2", "p_2")]:

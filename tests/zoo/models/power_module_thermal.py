@@ -14,20 +14,20 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="power module on heatsink")
-    bg.add("P", "MSf")                                       # loss power injected at the junction
+    bg.add("P", "MSf", unit="W")                             # loss power injected at the junction
     bg.add("0_j", "0")
-    bg.add("C_j", "C", value=5.0, uncertainty=(-0.1, 0.1))
+    bg.add("C_j", "C", value=5.0, uncertainty=(-0.1, 0.1), unit="J/K")
     bg.add("1_jc", "1")
-    bg.add("R_jc", "R", value=0.3, uncertainty=(-0.05, 0.05))
+    bg.add("R_jc", "R", value=0.3, uncertainty=(-0.05, 0.05), unit="K/W")
     bg.add("0_c", "0")
-    bg.add("C_c", "C", value=50.0, uncertainty=(-0.1, 0.1))
-    bg.add("T_c", "De")
+    bg.add("C_c", "C", value=50.0, uncertainty=(-0.1, 0.1), unit="J/K")
+    bg.add("T_c", "De", unit="K")
     bg.add("1_ch", "1")
-    bg.add("R_ch", "R", value=0.1, uncertainty=(0.0, 0.2))   # grease dries out: only up
+    bg.add("R_ch", "R", value=0.1, uncertainty=(0.0, 0.2), unit="K/W")  # grease dries out: only up
     bg.add("0_h", "0")
-    bg.add("C_h", "C", value=500.0, uncertainty=(-0.05, 0.05))
-    bg.add("R_ha", "R", value=0.5, uncertainty=(-0.05, 0.1))
-    bg.add("T_h", "De")
+    bg.add("C_h", "C", value=500.0, uncertainty=(-0.05, 0.05), unit="J/K")
+    bg.add("R_ha", "R", value=0.5, uncertainty=(-0.05, 0.1), unit="K/W")
+    bg.add("T_h", "De", unit="K")
     for tail, head in [("P", "0_j"), ("0_j", "C_j"), ("0_j", "1_jc"), ("1_jc", "R_jc"), ("1_jc", "0_c"),
                        ("0_c", "C_c"), ("0_c", "T_c"), ("0_c", "1_ch"), ("1_ch", "R_ch"), ("1_ch", "0_h"),
                        ("0_h", "C_h"), ("0_h", "R_ha"), ("0_h", "T_h")]:

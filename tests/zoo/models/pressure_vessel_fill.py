@@ -18,14 +18,14 @@ R_LK = 2.0e9                     # Pa s/kg, leak
 
 def build() -> BondGraph:
     bg = BondGraph(name="pressure vessel filling")
-    bg.add("p_l", "MSe")                                    # line pressure after the regulator
+    bg.add("p_l", "MSe", unit="Pa")                         # line pressure after the regulator
     bg.add("1_o", "1")
-    bg.add("a_o", "R", value=A_O, law="f - a_o*sign(e)*sqrt(Abs(e))", uncertainty=(-0.05, 0.05))
-    bg.add("m_dot", "Df")                                   # thermal mass-flow meter
+    bg.add("a_o", "R", value=A_O, law="f - a_o*sign(e)*sqrt(Abs(e))", uncertainty=(-0.05, 0.05), unit="kg/(s*Pa^(1/2))")
+    bg.add("m_dot", "Df", unit="kg/s")                      # thermal mass-flow meter
     bg.add("0_v", "0")
-    bg.add("C_v", "C", value=C_V, uncertainty=(-0.02, 0.02))
-    bg.add("R_lk", "R", value=R_LK, uncertainty=(-0.3, 0.0))    # a leak only grows: R only falls
-    bg.add("p_v", "De")
+    bg.add("C_v", "C", value=C_V, uncertainty=(-0.02, 0.02), unit="kg/Pa")
+    bg.add("R_lk", "R", value=R_LK, uncertainty=(-0.3, 0.0), unit="Pa*s/kg")  # a leak only grows: R only falls
+    bg.add("p_v", "De", unit="Pa")
     for tail, head in [("p_l", "1_o"), ("1_o", "a_o"), ("1_o", "m_dot"), ("1_o", "0_v"), ("0_v", "C_v"),
                        ("0_v", "R_lk"), ("0_v", "p_v")]:
         bg.bond(tail, head)

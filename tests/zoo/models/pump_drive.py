@@ -15,20 +15,20 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="pump drive")
-    bg.add("u", "MSe")
+    bg.add("u", "MSe", unit="V")
     bg.add("1_e", "1")
-    bg.add("R_a", "R", value=0.5, uncertainty=(-0.05, 0.1))
-    bg.add("L_a", "I", value=2e-3, uncertainty=(-0.05, 0.05))
-    bg.add("i", "Df")
-    bg.add("K", "GY", param="k_m", value=0.05, uncertainty=(-0.02, 0.02), domain="positive")
+    bg.add("R_a", "R", value=0.5, uncertainty=(-0.05, 0.1), unit="Ohm")
+    bg.add("L_a", "I", value=2e-3, uncertainty=(-0.05, 0.05), unit="H")
+    bg.add("i", "Df", unit="A")
+    bg.add("K", "GY", param="k_m", value=0.05, uncertainty=(-0.02, 0.02), domain="positive", unit="N*m/A")
     bg.add("1_m", "1")
-    bg.add("J", "I", value=2e-4, uncertainty=(-0.05, 0.05))
-    bg.add("b_m", "R", value=1e-4, uncertainty=(0.0, 0.3))
+    bg.add("J", "I", value=2e-4, uncertainty=(-0.05, 0.05), unit="kg*m^2")
+    bg.add("b_m", "R", value=1e-4, uncertainty=(0.0, 0.3), unit="N*m*s/rad")
     # TF: e1 = r_g e2 (motor torque = r_g pump torque), f2 = r_g f1 (pump speed = r_g motor speed)
-    bg.add("gear", "TF", param="r_g", value=0.5, domain="positive")
+    bg.add("gear", "TF", param="r_g", value=0.5, domain="positive", unit="1")
     bg.add("1_p", "1")
-    bg.add("c_p", "R", value=2.2e-5, uncertainty=(-0.05, 0.05), law="e - c_p*f*Abs(f)")
-    bg.add("omega_p", "Df")
+    bg.add("c_p", "R", value=2.2e-5, uncertainty=(-0.05, 0.05), law="e - c_p*f*Abs(f)", unit="N*m*s^2/rad^2")
+    bg.add("omega_p", "Df", unit="rad/s")
     for tail, head in [("u", "1_e"), ("1_e", "R_a"), ("1_e", "L_a"), ("1_e", "i"), ("1_e", "K"), ("K", "1_m"),
                        ("1_m", "J"), ("1_m", "b_m"), ("1_m", "gear"), ("gear", "1_p"), ("1_p", "c_p"),
                        ("1_p", "omega_p")]:

@@ -14,19 +14,19 @@ M_S, M_U, K_S, K_T, C_S = 300.0, 40.0, 2.0e4, 2.0e5, 1500.0
 
 def build() -> BondGraph:
     bg = BondGraph(name="quarter car")
-    bg.add("v_r", "Sf")                                   # road vertical velocity
+    bg.add("v_r", "Sf", unit="m/s")                       # road vertical velocity
     bg.add("0_t", "0")
-    bg.add("C_t", "C", value=1 / K_T, uncertainty=(-0.05, 0.05))   # tyre compliance
+    bg.add("C_t", "C", value=1 / K_T, uncertainty=(-0.05, 0.05), unit="m/N")  # tyre compliance
     bg.add("1_u", "1")
-    bg.add("m_u", "I", value=M_U, uncertainty=(-0.02, 0.02))
-    bg.add("v_u", "Df")
+    bg.add("m_u", "I", value=M_U, uncertainty=(-0.02, 0.02), unit="kg")
+    bg.add("v_u", "Df", unit="m/s")
     bg.add("0_s", "0")
     bg.add("1_d", "1")
-    bg.add("C_s", "C", value=1 / K_S, uncertainty=(-0.05, 0.05))   # suspension compliance
-    bg.add("c_s", "R", value=C_S, uncertainty=(-0.1, 0.1))
+    bg.add("C_s", "C", value=1 / K_S, uncertainty=(-0.05, 0.05), unit="m/N")  # suspension compliance
+    bg.add("c_s", "R", value=C_S, uncertainty=(-0.1, 0.1), unit="N*s/m")
     bg.add("1_s", "1")
-    bg.add("m_s", "I", value=M_S, uncertainty=(-0.02, 0.02))
-    bg.add("v_s", "Df")
+    bg.add("m_s", "I", value=M_S, uncertainty=(-0.02, 0.02), unit="kg")
+    bg.add("v_s", "Df", unit="m/s")
     for tail, head in [("v_r", "0_t"), ("0_t", "C_t"), ("0_t", "1_u"), ("1_u", "m_u"), ("1_u", "v_u"),
                        ("1_u", "0_s"), ("0_s", "1_d"), ("1_d", "C_s"), ("1_d", "c_s"), ("0_s", "1_s"),
                        ("1_s", "m_s"), ("1_s", "v_s")]:

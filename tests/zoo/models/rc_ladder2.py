@@ -14,17 +14,17 @@ R1, C1, R2, C2 = 1.0e3, 100e-6, 2.2e3, 47e-6
 
 def build() -> BondGraph:
     bg = BondGraph(name="two-section RC ladder")
-    bg.add("V_s", "Se")
+    bg.add("V_s", "Se", unit="V")
     bg.add("1_1", "1")
-    bg.add("R_1", "R", value=R1, uncertainty=(-0.05, 0.05))
+    bg.add("R_1", "R", value=R1, uncertainty=(-0.05, 0.05), unit="Ohm")
     bg.add("0_1", "0")
-    bg.add("C_1", "C", value=C1, uncertainty=(-0.1, 0.1))
-    bg.add("v_1", "De")
+    bg.add("C_1", "C", value=C1, uncertainty=(-0.1, 0.1), unit="F")
+    bg.add("v_1", "De", unit="V")
     bg.add("1_2", "1")
-    bg.add("R_2", "R", value=R2, uncertainty=(-0.05, 0.05))
+    bg.add("R_2", "R", value=R2, uncertainty=(-0.05, 0.05), unit="Ohm")
     bg.add("0_2", "0")
-    bg.add("C_2", "C", value=C2, uncertainty=(-0.1, 0.1))
-    bg.add("v_2", "De")
+    bg.add("C_2", "C", value=C2, uncertainty=(-0.1, 0.1), unit="F")
+    bg.add("v_2", "De", unit="V")
     for tail, head in [("V_s", "1_1"), ("1_1", "R_1"), ("1_1", "0_1"), ("0_1", "C_1"), ("0_1", "v_1"),
                        ("0_1", "1_2"), ("1_2", "R_2"), ("1_2", "0_2"), ("0_2", "C_2"), ("0_2", "v_2")]:
         bg.bond(tail, head)

@@ -16,22 +16,22 @@ L_SEC, C_SEC, R_SEC, R_LOAD = 1e-3, 10e-6, 2.0, 10.0
 
 def build() -> BondGraph:
     bg = BondGraph(name="three-section RLC ladder")
-    bg.add("V", "Se")
+    bg.add("V", "Se", unit="V")
     bonds = []
     previous = "V"
     for k in (1, 2, 3):
         bg.add(f"1_{k}", "1")
-        bg.add(f"R_{k}", "R", value=R_SEC, uncertainty=(-0.05, 0.05))
-        bg.add(f"L_{k}", "I", value=L_SEC, uncertainty=(-0.03, 0.03))
+        bg.add(f"R_{k}", "R", value=R_SEC, uncertainty=(-0.05, 0.05), unit="Ohm")
+        bg.add(f"L_{k}", "I", value=L_SEC, uncertainty=(-0.03, 0.03), unit="H")
         bg.add(f"0_{k}", "0")
-        bg.add(f"C_{k}", "C", value=C_SEC, uncertainty=(-0.1, 0.1))
+        bg.add(f"C_{k}", "C", value=C_SEC, uncertainty=(-0.1, 0.1), unit="F")
         bonds += [(previous, f"1_{k}"), (f"1_{k}", f"R_{k}"), (f"1_{k}", f"L_{k}"), (f"1_{k}", f"0_{k}"),
                   (f"0_{k}", f"C_{k}")]
         previous = f"0_{k}"
-    bg.add("R_L", "R", value=R_LOAD, uncertainty=(-0.02, 0.02))
-    bg.add("i_1", "Df")
-    bg.add("v_2", "De")
-    bg.add("v_3", "De")
+    bg.add("R_L", "R", value=R_LOAD, uncertainty=(-0.02, 0.02), unit="Ohm")
+    bg.add("i_1", "Df", unit="A")
+    bg.add("v_2", "De", unit="V")
+    bg.add("v_3", "De", unit="V")
     bonds += [("0_3", "R_L"), ("1_1", "i_1"), ("0_2", "v_2"), ("0_3", "v_3")]
     for tail, head in bonds:
         bg.bond(tail, head)

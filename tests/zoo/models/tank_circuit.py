@@ -13,15 +13,15 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="parallel tank circuit")
-    bg.add("i_s", "MSf")
+    bg.add("i_s", "MSf", unit="A")
     bg.add("0_t", "0")
-    bg.add("C", "C", value=10e-6, uncertainty=(-0.05, 0.05))
-    bg.add("R_p", "R", value=1.0e3, uncertainty=(-0.05, 0.05))
-    bg.add("v", "De")
+    bg.add("C", "C", value=10e-6, uncertainty=(-0.05, 0.05), unit="F")
+    bg.add("R_p", "R", value=1.0e3, uncertainty=(-0.05, 0.05), unit="Ohm")
+    bg.add("v", "De", unit="V")
     bg.add("1_L", "1")
-    bg.add("L", "I", value=10e-3, uncertainty=(-0.05, 0.05))
-    bg.add("R_L", "R", value=1.0, uncertainty=(0.0, 0.3))
-    bg.add("i_L", "Df")
+    bg.add("L", "I", value=10e-3, uncertainty=(-0.05, 0.05), unit="H")
+    bg.add("R_L", "R", value=1.0, uncertainty=(0.0, 0.3), unit="Ohm")
+    bg.add("i_L", "Df", unit="A")
     for tail, head in [("i_s", "0_t"), ("0_t", "C"), ("0_t", "R_p"), ("0_t", "v"), ("0_t", "1_L"),
                        ("1_L", "L"), ("1_L", "R_L"), ("1_L", "i_L")]:
         bg.bond(tail, head)

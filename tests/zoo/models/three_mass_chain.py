@@ -16,19 +16,19 @@ B12, B23, B3 = 20.0, 15.0, 10.0       # N s/m
 
 def build() -> BondGraph:
     bg = BondGraph(name="three-mass chain")
-    bg.add("F", "Se")                                            # shaker force on mass 1
+    bg.add("F", "Se", unit="N")                                  # shaker force on mass 1
     for i, m in ((1, M1), (2, M2), (3, M3)):
         bg.add(f"1_{i}", "1")
-        bg.add(f"m{i}", "I", value=m, uncertainty=(-0.02, 0.02))
-    bg.add("v1", "Df")
-    bg.add("v3", "Df")
+        bg.add(f"m{i}", "I", value=m, uncertainty=(-0.02, 0.02), unit="kg")
+    bg.add("v1", "Df", unit="m/s")
+    bg.add("v3", "Df", unit="m/s")
     for pair, k, b in (("12", K12, B12), ("23", K23, B23)):
         bg.add(f"0_{pair}", "0")
         bg.add(f"1_{pair}", "1")
-        bg.add(f"c{pair}", "C", value=1 / k, uncertainty=(-0.05, 0.05))   # compliance
-        bg.add(f"b{pair}", "R", value=b, uncertainty=(0.0, 0.2))
-    bg.add("k3", "C", value=K3, law="e - k3*q", uncertainty=(-0.05, 0.05))  # frame spring as a stiffness
-    bg.add("b3", "R", value=B3, uncertainty=(0.0, 0.2))
+        bg.add(f"c{pair}", "C", value=1 / k, uncertainty=(-0.05, 0.05), unit="m/N")  # compliance
+        bg.add(f"b{pair}", "R", value=b, uncertainty=(0.0, 0.2), unit="N*s/m")
+    bg.add("k3", "C", value=K3, law="e - k3*q", uncertainty=(-0.05, 0.05), unit="N/m")  # frame spring as a stiffness
+    bg.add("b3", "R", value=B3, uncertainty=(0.0, 0.2), unit="N*s/m")
     for tail, head in [("F", "1_1"), ("1_1", "m1"), ("1_1", "v1"), ("1_1", "0_12"), ("0_12", "1_12"),
                        ("1_12", "c12"), ("1_12", "b12"), ("0_12", "1_2"), ("1_2", "m2"), ("1_2", "0_23"),
                        ("0_23", "1_23"), ("1_23", "c23"), ("1_23", "b23"), ("0_23", "1_3"), ("1_3", "m3"),

@@ -16,22 +16,22 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="electronic throttle")
-    bg.add("u", "MSe")                                     # H-bridge voltage (averaged PWM)
+    bg.add("u", "MSe", unit="V")                           # H-bridge voltage (averaged PWM)
     bg.add("1_e", "1")
-    bg.add("R_a", "R", value=1.6, uncertainty=(-0.05, 0.1))
-    bg.add("L_a", "I", value=2.5e-3, uncertainty=(-0.05, 0.05))
-    bg.add("i", "Df")
-    bg.add("K", "GY", param="k_m", value=0.0183, uncertainty=(-0.03, 0.03), domain="positive")
+    bg.add("R_a", "R", value=1.6, uncertainty=(-0.05, 0.1), unit="Ohm")
+    bg.add("L_a", "I", value=2.5e-3, uncertainty=(-0.05, 0.05), unit="H")
+    bg.add("i", "Df", unit="A")
+    bg.add("K", "GY", param="k_m", value=0.0183, uncertainty=(-0.03, 0.03), domain="positive", unit="N*m/A")
     bg.add("1_m", "1")
-    bg.add("J_m", "I", value=4e-6, uncertainty=(-0.05, 0.05))
+    bg.add("J_m", "I", value=4e-6, uncertainty=(-0.05, 0.05), unit="kg*m^2")
     # TF: e1 = r_g e2 (motor torque = plate torque / 20), f2 = r_g f1 (plate speed = motor speed / 20)
-    bg.add("gear", "TF", param="r_g", value=0.05, domain="positive")
+    bg.add("gear", "TF", param="r_g", value=0.05, domain="positive", unit="1")
     bg.add("1_t", "1")
-    bg.add("J_t", "I", value=2e-4, uncertainty=(-0.05, 0.05))
-    bg.add("b_t", "R", value=4e-3, uncertainty=(0.0, 0.3))       # friction grows with deposits
+    bg.add("J_t", "I", value=2e-4, uncertainty=(-0.05, 0.05), unit="kg*m^2")
+    bg.add("b_t", "R", value=4e-3, uncertainty=(0.0, 0.3), unit="N*m*s/rad")  # friction grows with deposits
     bg.add("0_sp", "0")
-    bg.add("k_sp", "C", value=0.4, uncertainty=(-0.05, 0.05), law="e - k_sp*q")   # stiffness (N m/rad)
-    bg.add("tau_sp", "De")
+    bg.add("k_sp", "C", value=0.4, uncertainty=(-0.05, 0.05), law="e - k_sp*q", unit="N*m/rad")  # stiffness (N m/rad)
+    bg.add("tau_sp", "De", unit="N*m")
     for tail, head in [("u", "1_e"), ("1_e", "R_a"), ("1_e", "L_a"), ("1_e", "i"), ("1_e", "K"), ("K", "1_m"),
                        ("1_m", "J_m"), ("1_m", "gear"), ("gear", "1_t"), ("1_t", "J_t"), ("1_t", "b_t"),
                        ("1_t", "0_sp"), ("0_sp", "k_sp"), ("0_sp", "tau_sp")]:

@@ -15,18 +15,18 @@ J_DRIVE, J_LOAD, B_DRIVE, B_LOAD, K_S = 0.02, 0.05, 2e-3, 1e-2, 400.0
 
 def build() -> BondGraph:
     bg = BondGraph(name="two-inertia shaft with torque transducer")
-    bg.add("T_d", "MSe")                                   # drive motor torque
-    bg.add("T_L", "MSe")                                   # load (brake) torque, against the motion
+    bg.add("T_d", "MSe", unit="N*m")                       # drive motor torque
+    bg.add("T_L", "MSe", unit="N*m")                       # load (brake) torque, against the motion
     bg.add("1_1", "1")
-    bg.add("J_1", "I", value=J_DRIVE, uncertainty=(-0.02, 0.02))
-    bg.add("b_1", "R", value=B_DRIVE, uncertainty=(0.0, 0.3))
+    bg.add("J_1", "I", value=J_DRIVE, uncertainty=(-0.02, 0.02), unit="kg*m^2")
+    bg.add("b_1", "R", value=B_DRIVE, uncertainty=(0.0, 0.3), unit="N*m*s/rad")
     bg.add("0_s", "0")
-    bg.add("k_s", "C", value=K_S, law="e - k_s*q", uncertainty=(-0.05, 0.05))   # shaft stiffness
-    bg.add("T_s", "De")
+    bg.add("k_s", "C", value=K_S, law="e - k_s*q", uncertainty=(-0.05, 0.05), unit="N*m/rad")  # shaft stiffness
+    bg.add("T_s", "De", unit="N*m")
     bg.add("1_2", "1")
-    bg.add("J_2", "I", value=J_LOAD, uncertainty=(-0.02, 0.02))
-    bg.add("b_2", "R", value=B_LOAD, uncertainty=(0.0, 0.3))
-    bg.add("omega_2", "Df")
+    bg.add("J_2", "I", value=J_LOAD, uncertainty=(-0.02, 0.02), unit="kg*m^2")
+    bg.add("b_2", "R", value=B_LOAD, uncertainty=(0.0, 0.3), unit="N*m*s/rad")
+    bg.add("omega_2", "Df", unit="rad/s")
     # the brake's bond points into the load shaft: its torque T_L drives it, so a brake is T_L < 0
     for tail, head in [("T_d", "1_1"), ("1_1", "J_1"), ("1_1", "b_1"), ("1_1", "0_s"), ("0_s", "k_s"),
                        ("0_s", "T_s"), ("0_s", "1_2"), ("1_2", "J_2"), ("1_2", "b_2"), ("1_2", "omega_2"),

@@ -13,19 +13,19 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="transformer with load")
-    bg.add("V_1", "Se")
+    bg.add("V_1", "Se", unit="V")
     bg.add("1_p", "1")
-    bg.add("R_1", "R", value=2.0, uncertainty=(-0.05, 0.05))
-    bg.add("L_1", "I", value=20e-3, uncertainty=(-0.05, 0.05))
-    bg.add("i_1", "Df")
+    bg.add("R_1", "R", value=2.0, uncertainty=(-0.05, 0.05), unit="Ohm")
+    bg.add("L_1", "I", value=20e-3, uncertainty=(-0.05, 0.05), unit="H")
+    bg.add("i_1", "Df", unit="A")
     # TF: e1 = n e2 (primary voltage = n secondary voltage), f2 = n f1 (secondary current = n primary)
-    bg.add("T", "TF", param="n", value=10.0, uncertainty=(-0.01, 0.01), domain="positive")
+    bg.add("T", "TF", param="n", value=10.0, uncertainty=(-0.01, 0.01), domain="positive", unit="1")
     bg.add("1_s", "1")
-    bg.add("R_2", "R", value=0.05, uncertainty=(0.0, 0.2))
+    bg.add("R_2", "R", value=0.05, uncertainty=(0.0, 0.2), unit="Ohm")
     bg.add("0_o", "0")
-    bg.add("C_o", "C", value=1000e-6, uncertainty=(-0.1, 0.1))
-    bg.add("R_L", "R", value=2.0, uncertainty=(-0.03, 0.03))
-    bg.add("v_2", "De")
+    bg.add("C_o", "C", value=1000e-6, uncertainty=(-0.1, 0.1), unit="F")
+    bg.add("R_L", "R", value=2.0, uncertainty=(-0.03, 0.03), unit="Ohm")
+    bg.add("v_2", "De", unit="V")
     for tail, head in [("V_1", "1_p"), ("1_p", "R_1"), ("1_p", "L_1"), ("1_p", "i_1"), ("1_p", "T"),
                        ("T", "1_s"), ("1_s", "R_2"), ("1_s", "0_o"), ("0_o", "C_o"), ("0_o", "R_L"),
                        ("0_o", "v_2")]:

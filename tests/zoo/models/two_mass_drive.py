@@ -14,18 +14,18 @@ M1, M2, B1, B2, K_C, K2 = 2.4, 1.8, 3.0, 4.0, 800.0, 450.0
 
 def build() -> BondGraph:
     bg = BondGraph(name="two-mass rectilinear plant")
-    bg.add("F", "MSe")                                     # voice-coil force, from the amplifier command
+    bg.add("F", "MSe", unit="N")                           # voice-coil force, from the amplifier command
     bg.add("1_1", "1")
-    bg.add("m1", "I", value=M1, uncertainty=(-0.02, 0.02))
-    bg.add("b1", "R", value=B1, uncertainty=(0.0, 0.3))
-    bg.add("v1", "Df")
+    bg.add("m1", "I", value=M1, uncertainty=(-0.02, 0.02), unit="kg")
+    bg.add("b1", "R", value=B1, uncertainty=(0.0, 0.3), unit="N*s/m")
+    bg.add("v1", "Df", unit="m/s")
     bg.add("0_c", "0")
-    bg.add("c_c", "C", value=1 / K_C, uncertainty=(-0.05, 0.05))
-    bg.add("F_c", "De")
+    bg.add("c_c", "C", value=1 / K_C, uncertainty=(-0.05, 0.05), unit="m/N")
+    bg.add("F_c", "De", unit="N")
     bg.add("1_2", "1")
-    bg.add("m2", "I", value=M2, uncertainty=(-0.02, 0.02))
-    bg.add("b2", "R", value=B2, uncertainty=(0.0, 0.3))
-    bg.add("k2", "C", value=K2, law="e - k2*q", uncertainty=(-0.05, 0.05))
+    bg.add("m2", "I", value=M2, uncertainty=(-0.02, 0.02), unit="kg")
+    bg.add("b2", "R", value=B2, uncertainty=(0.0, 0.3), unit="N*s/m")
+    bg.add("k2", "C", value=K2, law="e - k2*q", uncertainty=(-0.05, 0.05), unit="N/m")
     for tail, head in [("F", "1_1"), ("1_1", "m1"), ("1_1", "b1"), ("1_1", "v1"), ("1_1", "0_c"),
                        ("0_c", "c_c"), ("0_c", "F_c"), ("0_c", "1_2"), ("1_2", "m2"), ("1_2", "b2"),
                        ("1_2", "k2")]:

@@ -22,16 +22,18 @@ P1_0 = P2_0 + (Q_0 / A_1) ** 2
 
 def build() -> BondGraph:
     bg = BondGraph(name="two-tank cascade")
-    bg.add("Q_in", "Sf")                                   # pump flow into tank 1
+    bg.add("Q_in", "Sf", unit="m^3/s")                     # pump flow into tank 1
     bg.add("0_1", "0")
-    bg.add("C_t1", "C", value=C_T1, uncertainty=(-0.02, 0.02))
-    bg.add("p_1", "De")
+    bg.add("C_t1", "C", value=C_T1, uncertainty=(-0.02, 0.02), unit="m^3/Pa")
+    bg.add("p_1", "De", unit="Pa")
     bg.add("1_12", "1")
-    bg.add("a_1", "R", value=A_1, law="f - a_1*sign(e)*sqrt(Abs(e))", uncertainty=(-0.05, 0.05))
+    bg.add("a_1", "R", value=A_1, law="f - a_1*sign(e)*sqrt(Abs(e))", uncertainty=(-0.05, 0.05),
+           unit="m^3/(s*Pa^(1/2))")
     bg.add("0_2", "0")
-    bg.add("C_t2", "C", value=C_T2, uncertainty=(-0.02, 0.02))
-    bg.add("p_2", "De")
-    bg.add("a_2", "R", value=A_2, law="f - a_2*sign(e)*sqrt(Abs(e))", uncertainty=(-0.05, 0.05))
+    bg.add("C_t2", "C", value=C_T2, uncertainty=(-0.02, 0.02), unit="m^3/Pa")
+    bg.add("p_2", "De", unit="Pa")
+    bg.add("a_2", "R", value=A_2, law="f - a_2*sign(e)*sqrt(Abs(e))", uncertainty=(-0.05, 0.05),
+           unit="m^3/(s*Pa^(1/2))")
     for tail, head in [("Q_in", "0_1"), ("0_1", "C_t1"), ("0_1", "p_1"), ("0_1", "1_12"), ("1_12", "a_1"),
                        ("1_12", "0_2"), ("0_2", "C_t2"), ("0_2", "p_2"), ("0_2", "a_2")]:
         bg.bond(tail, head)

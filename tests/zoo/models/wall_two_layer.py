@@ -15,20 +15,20 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="two-layer wall")
-    bg.add("T_i", "MSe")              # indoor air temperature (heating schedule)
+    bg.add("T_i", "MSe", unit="K")    # indoor air temperature (heating schedule)
     bg.add("1_i", "1")
-    bg.add("R_i", "R", value=0.273, uncertainty=(-0.05, 0.05))       # inner film + half brick
-    bg.add("q_i", "Df")
+    bg.add("R_i", "R", value=0.273, uncertainty=(-0.05, 0.05), unit="K/W")  # inner film + half brick
+    bg.add("q_i", "Df", unit="W")
     bg.add("0_b", "0")
-    bg.add("C_b", "C", value=3.2e5, uncertainty=(-0.05, 0.05))       # brick
-    bg.add("T_b", "De")
+    bg.add("C_b", "C", value=3.2e5, uncertainty=(-0.05, 0.05), unit="J/K")  # brick
+    bg.add("T_b", "De", unit="K")
     bg.add("1_m", "1")
-    bg.add("R_m", "R", value=1.393, uncertainty=(-0.1, 0.1))         # half brick + half insulation
+    bg.add("R_m", "R", value=1.393, uncertainty=(-0.1, 0.1), unit="K/W")  # half brick + half insulation
     bg.add("0_n", "0")
-    bg.add("C_n", "C", value=4.0e4, uncertainty=(-0.1, 0.1))         # insulation + render
+    bg.add("C_n", "C", value=4.0e4, uncertainty=(-0.1, 0.1), unit="J/K")  # insulation + render
     bg.add("1_o", "1")
-    bg.add("R_o", "R", value=1.29, uncertainty=(-0.1, 0.1))          # half insulation + outer film
-    bg.add("T_o", "Se")                                    # outdoor air temperature
+    bg.add("R_o", "R", value=1.29, uncertainty=(-0.1, 0.1), unit="K/W")  # half insulation + outer film
+    bg.add("T_o", "Se", unit="K")                          # outdoor air temperature
     # heat through R_o flows from outside in: its effort is T_o - T_n
     for tail, head in [("T_i", "1_i"), ("1_i", "R_i"), ("1_i", "q_i"), ("1_i", "0_b"), ("0_b", "C_b"),
                        ("0_b", "T_b"), ("0_b", "1_m"), ("1_m", "R_m"), ("1_m", "0_n"), ("0_n", "C_n"),

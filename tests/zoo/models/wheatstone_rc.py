@@ -14,22 +14,22 @@ from tests.zoo.case import ZooCase
 
 def build() -> BondGraph:
     bg = BondGraph(name="RC bridge")
-    bg.add("V_s", "Se")
+    bg.add("V_s", "Se", unit="V")
     bg.add("0_A", "0")
     bg.add("1_AB", "1")
-    bg.add("R_1", "R", value=1.0e3, uncertainty=(-0.02, 0.02))
+    bg.add("R_1", "R", value=1.0e3, uncertainty=(-0.02, 0.02), unit="Ohm")
     bg.add("1_AC", "1")
-    bg.add("R_2", "R", value=2.2e3, uncertainty=(-0.02, 0.02))
+    bg.add("R_2", "R", value=2.2e3, uncertainty=(-0.02, 0.02), unit="Ohm")
     bg.add("0_B", "0")
-    bg.add("C_3", "C", value=1e-6, uncertainty=(-0.1, 0.1))
+    bg.add("C_3", "C", value=1e-6, uncertainty=(-0.1, 0.1), unit="F")
     bg.add("0_C", "0")
-    bg.add("C_4", "C", value=2.2e-6, uncertainty=(-0.1, 0.1))
-    bg.add("R_4", "R", value=3.3e3, uncertainty=(-0.02, 0.02))
+    bg.add("C_4", "C", value=2.2e-6, uncertainty=(-0.1, 0.1), unit="F")
+    bg.add("R_4", "R", value=3.3e3, uncertainty=(-0.02, 0.02), unit="Ohm")
     bg.add("1_BC", "1")
-    bg.add("R_5", "R", value=4.7e3, uncertainty=(-0.02, 0.02))
-    bg.add("v_B", "De")
-    bg.add("v_C", "De")
-    bg.add("i_5", "Df")
+    bg.add("R_5", "R", value=4.7e3, uncertainty=(-0.02, 0.02), unit="Ohm")
+    bg.add("v_B", "De", unit="V")
+    bg.add("v_C", "De", unit="V")
+    bg.add("i_5", "Df", unit="A")
     for tail, head in [("V_s", "0_A"), ("0_A", "1_AB"), ("1_AB", "R_1"), ("1_AB", "0_B"), ("0_A", "1_AC"),
                        ("1_AC", "R_2"), ("1_AC", "0_C"), ("0_B", "C_3"), ("0_C", "C_4"), ("0_C", "R_4"),
                        ("0_B", "1_BC"), ("1_BC", "R_5"), ("1_BC", "0_C"), ("0_B", "v_B"), ("0_C", "v_C"),

@@ -14,19 +14,20 @@ J_D, B_D, R_D, K_R, M_C, B_C = 0.5, 0.05, 0.1, 2.0e5, 200.0, 50.0
 
 def build() -> BondGraph:
     bg = BondGraph(name="winch and cart")
-    bg.add("T_m", "MSe")
+    bg.add("T_m", "MSe", unit="N*m")
     bg.add("1_d", "1")
-    bg.add("J_d", "I", value=J_D, uncertainty=(-0.02, 0.02))
-    bg.add("b_d", "R", value=B_D, uncertainty=(0.0, 0.3))
-    bg.add("omega_d", "Df")
-    bg.add("drum", "TF", param="r_d", value=R_D, uncertainty=(-0.01, 0.01), domain="positive")  # v = r_d omega
+    bg.add("J_d", "I", value=J_D, uncertainty=(-0.02, 0.02), unit="kg*m^2")
+    bg.add("b_d", "R", value=B_D, uncertainty=(0.0, 0.3), unit="N*m*s/rad")
+    bg.add("omega_d", "Df", unit="rad/s")
+    bg.add("drum", "TF", param="r_d", value=R_D, uncertainty=(-0.01, 0.01), domain="positive",
+           unit="m")  # v = r_d omega
     bg.add("0_r", "0")
-    bg.add("c_r", "C", value=1 / K_R, uncertainty=(-0.1, 0.1))     # rope compliance
-    bg.add("F_r", "De")                                             # rope tension (load pin)
+    bg.add("c_r", "C", value=1 / K_R, uncertainty=(-0.1, 0.1), unit="m/N")  # rope compliance
+    bg.add("F_r", "De", unit="N")                                   # rope tension (load pin)
     bg.add("1_c", "1")
-    bg.add("m_c", "I", value=M_C, uncertainty=(-0.05, 0.05))
-    bg.add("b_c", "R", value=B_C, uncertainty=(0.0, 0.3))
-    bg.add("v_c", "Df")
+    bg.add("m_c", "I", value=M_C, uncertainty=(-0.05, 0.05), unit="kg")
+    bg.add("b_c", "R", value=B_C, uncertainty=(0.0, 0.3), unit="N*s/m")
+    bg.add("v_c", "Df", unit="m/s")
     for tail, head in [("T_m", "1_d"), ("1_d", "J_d"), ("1_d", "b_d"), ("1_d", "omega_d"), ("1_d", "drum"),
                        ("drum", "0_r"), ("0_r", "c_r"), ("0_r", "F_r"), ("0_r", "1_c"), ("1_c", "m_c"),
                        ("1_c", "b_c"), ("1_c", "v_c")]:
