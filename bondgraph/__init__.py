@@ -17,11 +17,12 @@ from .structure import Bond, Element, signal_function
 from .simulation import SimulationResult, simulate
 from .drawing import to_svg, to_tikz
 from .io import load_model, to_json
+from .scenarios import Degradation, parse_degradation
 
 __all__ = [
-    "AlgebraicLoopError", "Bond", "BondGraph", "CausalIssue", "Causality", "CausalityError", "Element",
-    "EquationError", "LawError", "ModelEquation", "ModelError", "PHMError", "PHMWarning", "PIController",
-    "SettingError", "SimulationError", "SimulationResult", "StateEquations", "assign_causality", "causal_equations",
-    "labelled_equations", "load_model", "model_equations", "signal_function", "simulate", "state_equations",
-    "to_json", "to_svg", "to_tikz",
+    "AlgebraicLoopError", "Bond", "BondGraph", "CausalIssue", "Causality", "CausalityError", "Degradation", "Element",
+    "EquationError", "LawError", "ModelEquation", "ModelError", "PHMError", "PHMWarning",
+    "PIController", "SettingError", "SimulationError", "SimulationResult", "StateEquations",
+    "assign_causality", "causal_equations", "labelled_equations", "load_model", "model_equations",
+    "parse_degradation", "signal_function", "simulate", "state_equations", "to_json", "to_svg", "to_tikz",
 ]
