@@ -16,13 +16,14 @@ from .model import BondGraph
 from .structure import Bond, Element, signal_function
 from .simulation import SimulationResult, simulate
 from .drawing import to_svg, to_tikz
+from .inputs import InputExpression, TabulatedInput
 from .io import load_model, to_json
 from .scenarios import Degradation, parse_degradation
 
 __all__ = [
     "AlgebraicLoopError", "Bond", "BondGraph", "CausalIssue", "Causality", "CausalityError", "Degradation", "Element",
-    "EquationError", "LawError", "ModelEquation", "ModelError", "PHMError", "PHMWarning",
-    "PIController", "SettingError", "SimulationError", "SimulationResult", "StateEquations",
+    "EquationError", "InputExpression", "LawError", "ModelEquation", "ModelError", "PHMError", "PHMWarning",
+    "PIController", "SettingError", "SimulationError", "SimulationResult", "StateEquations", "TabulatedInput",
     "assign_causality", "causal_equations", "labelled_equations", "load_model", "model_equations",
     "parse_degradation", "signal_function", "simulate", "state_equations", "to_json", "to_svg", "to_tikz",
 ]
