@@ -19,10 +19,10 @@ from ._inputs import (
 from ._outputs import emit, output_file
 from ._progress import Progress
 
-__all__ = ["degradations", "input_signals", "run", "sensor_faults", "sensor_noise"]
+__all__ = ["run"]
 
 #: The options of the sensor faults, their kind (:class:`diagnosis.records.SensorFault`) and what VALUE is.
-SENSOR_OPTIONS = (("bias", "VALUE"), ("drift", "RATE"), ("gain", "FACTOR"))
+_SENSOR_OPTIONS = (("bias", "VALUE"), ("drift", "RATE"), ("gain", "FACTOR"))
 
 
 def run(args, progress: Progress) -> int:
@@ -43,15 +43,15 @@ def run(args, progress: Progress) -> int:
     if not (math.isfinite(t_end) and t_end >= MIN_SPAN):
         raise UsageError(f"--t-end must be a number of seconds of at least {MIN_SPAN:g}, got {t_end:g}")
     parameters = assignments(args.set, spec.model.parameters, "--set")
-    degraded = degradations(args.degrade, spec, t_end, parameters)
-    inputs = {**spec.inputs, **input_signals(args.inputs, args.input, spec)}
+    degraded = _degradations(args.degrade, spec, t_end, parameters)
+    inputs = {**spec.inputs, **_input_signals(args.inputs, args.input, spec)}
     missing = [s for s in spec.model.inputs if s not in inputs and not has_value(spec.model, s)]
     if missing:
         raise UsageError(f"{spec.source}: no value for the input signal(s) {missing}; give them in the model file "
                          "('inputs' in a Python file, graph.inputs in JSON), with --input or with --inputs")
     signals = [*spec.model.inputs, *spec.model.outputs]
-    faults = sensor_faults(args, signals)
-    noise = sensor_noise(args.noise, signals)
+    faults = _sensor_faults(args, signals)
+    noise = _sensor_noise(args.noise, signals)
     progress(f"simulating {spec.model.name!r} over [0, {t_end:g}] s"
              + "".join(f"; {name} {law}" for name, law in degraded.items()))
     parameters.update({name: law.truth(spec.model.parameters[name]) for name, law in degraded.items()})
@@ -72,7 +72,7 @@ def run(args, progress: Progress) -> int:
     return EXIT_OK
 
 
-def degradations(items: Sequence[str] | None, spec: ModelSpec, t_end: float, fixed: dict) -> dict:
+def _degradations(items: Sequence[str] | None, spec: ModelSpec, t_end: float, fixed: dict) -> dict:
     """``--degrade PARAM=LAW:RATE@ONSET`` items as {parameter: Degradation}, each checked against the model: a
     parameter it has, not also given by ``--set`` (``fixed``) nor twice, a law that keeps it in its physical
     domain up to ``t_end``."""
@@ -99,7 +99,7 @@ def degradations(items: Sequence[str] | None, spec: ModelSpec, t_end: float, fix
     return out
 
 
-def input_signals(path: str | None, items: Sequence[str] | None, spec: ModelSpec) -> dict:
+def _input_signals(path: str | None, items: Sequence[str] | None, spec: ModelSpec) -> dict:
     """The inputs ``--inputs FILE.csv`` and ``--input SIGNAL=EXPR`` give, as {signal: callable of t}; an input
     given by both, twice, or that is not an input of the model is an error naming it."""
     from bondgraph.inputs import InputExpression
@@ -145,13 +145,13 @@ def _check_input(name: str, spec: ModelSpec, where: str) -> None:
                          f"{', '.join(spec.model.inputs) or 'none'})")
 
 
-def sensor_faults(args, signals: Sequence[str]) -> list:
+def _sensor_faults(args, signals: Sequence[str]) -> list:
     """``--gain``, ``--bias`` and ``--drift`` items ``SIGNAL=VALUE@ONSET`` as :class:`diagnosis.records.SensorFault`
     (one of each kind per signal, an onset 0 when it is left out)."""
     from diagnosis.records import SensorFault
 
     faults = []
-    for kind, value in SENSOR_OPTIONS:
+    for kind, value in _SENSOR_OPTIONS:
         option = f"--{kind}"
         seen: set = set()
         for item in getattr(args, kind) or ():
@@ -164,7 +164,7 @@ def sensor_faults(args, signals: Sequence[str]) -> list:
     return faults
 
 
-def sensor_noise(items: Sequence[str] | None, signals: Sequence[str]) -> dict:
+def _sensor_noise(items: Sequence[str] | None, signals: Sequence[str]) -> dict:
     """``--noise SIGNAL=STD`` items as {signal: standard deviation}, each a finite number >= 0, once a signal."""
     noise = {}
     for item in items or ():

@@ -212,11 +212,13 @@ def test_the_inputs_file_is_never_overwritten(tmp_path, capsys):
     (["--input", "U=1/t"], "--input U: 1/t is not finite at t = 0"),
     (["--input", "U=12", "--input", "U=6"], "--input 'U=6': U is given twice"),
     (["--seed", "-1", "--noise", "omega=1"], "--seed must be a whole number >= 0, got -1"),
+    (["--degrade", "b=exp:\x1b[2J@1"], "--degrade b=exp:\\x1b[2J@1: the rate '\\x1b[2J' is not a number"),
 ])
 def test_a_bad_option_exits_2_with_one_line_naming_it(capsys, options, message):
     code, out, err = run(capsys, "simulate", "dc-motor", "--t-end", "4", *options)
     assert code == 2 and out == ""
     assert message in err and err.count("\n") == 1 and err.startswith("bgphm: error: ")
+    assert "\x1b" not in err                                           # the user's text is shown, never obeyed
 
 
 @pytest.mark.parametrize("table, message", [
