@@ -3,7 +3,10 @@
 ::
 
     bgphm arr MODEL [--format md|html|tex] [--out FILE]
-    bgphm simulate MODEL [--t-end T] [--samples N] [--set PARAM=VALUE ...] [--out CSV]
+    bgphm simulate MODEL [--t-end T] [--samples N] [--set PARAM=VALUE ...] [--degrade PARAM=LAW:RATE@ONSET ...]
+                   [--noise SIGNAL=STD ...] [--bias SIGNAL=VALUE@ONSET ...] [--drift SIGNAL=RATE@ONSET ...]
+                   [--gain SIGNAL=FACTOR@ONSET ...] [--input SIGNAL=EXPR ...] [--inputs FILE.csv] [--seed N]
+                   [--out CSV]
     bgphm detect MODEL DATA.csv [--margin M | --calibrate T] [--persistence N] [--out DIR]
     bgphm prognose MODEL DATA.csv --fail PARAM=VALUE [--fail ...] [--candidate P] [--degradation LAW] [--out DIR]
     bgphm fleet MODEL RECORDS --fail PARAM=VALUE [--fail ...] --calibrate T --out DIR [--scheduler ADDRESS]
@@ -15,6 +18,13 @@ MODEL is a JSON file (networkx node-link form), a Python file defining ``model``
 name (see :func:`bondgraph.io.load_model`).  DATA.csv has a header row with a time column ``t`` and one
 column per signal the ARRs use (see :func:`diagnosis.csv_reading.read_csv`).  RECORDS is a directory of
 such CSV files, one per asset, or a Parquet file with an ``asset`` column (``docs/fleet.md``).
+
+``simulate`` injects faults: a parameter's degradation law from an onset (``--degrade b=exp:0.8@1``, read
+by :func:`bondgraph.scenarios.parse_degradation`), a sensor's bias, drift and gain from an onset
+(:class:`diagnosis.records.SensorFault`) and its Gaussian noise (:func:`diagnosis.records.add_noise`, the
+same draws for the same ``--seed``); its inputs may be expressions of ``t`` (``--input U='12*step(t - 0.5)'``,
+:class:`bondgraph.inputs.InputExpression`, never evaluated) or samples from a CSV file (``--inputs``,
+:class:`bondgraph.inputs.TabulatedInput`).
 
 Exit codes: 0 success, 2 bad usage or bad input (one line on stderr naming the file, line, column,
 node or parameter), 1 anything else (an interrupted run included).  Progress goes to stderr;
@@ -138,6 +148,27 @@ def _simulate_options(p: argparse.ArgumentParser) -> None:
                    help=f"horizon in s (default: the model file's t_end, else {DEFAULT_T_END:g})")
     p.add_argument("--samples", type=int, default=OUTPUT_SAMPLES, help=f"output samples (default {OUTPUT_SAMPLES})")
     p.add_argument("--set", action="append", metavar="PARAM=VALUE", help="override a parameter (repeatable)")
+    p.add_argument("--degrade", action="append", metavar="PARAM=LAW:RATE@ONSET",
+                   help="a parameter degrading from ONSET s on, tau = t - ONSET (repeatable): lin:RATE is nominal + "
+                        "RATE tau, exp:RATE nominal exp(RATE tau), pow:RATE^EXPONENT nominal + RATE tau^EXPONENT, "
+                        "step:SIZE nominal + SIZE; without @ONSET from 0 (e.g. b=exp:0.05@10)")
+    p.add_argument("--noise", action="append", metavar="SIGNAL=STD",
+                   help="Gaussian noise of standard deviation STD on a signal's reading (repeatable; --seed)")
+    p.add_argument("--bias", action="append", metavar="SIGNAL=VALUE@ONSET",
+                   help="the sensor of SIGNAL reads VALUE too much from ONSET s on (repeatable; without @ONSET from 0)")
+    p.add_argument("--drift", action="append", metavar="SIGNAL=RATE@ONSET",
+                   help="the sensor of SIGNAL reads RATE (t - ONSET) too much from ONSET s on (repeatable)")
+    p.add_argument("--gain", action="append", metavar="SIGNAL=FACTOR@ONSET",
+                   help="the sensor of SIGNAL reads FACTOR times the signal from ONSET s on (repeatable); a sensor's "
+                        "gain acts first, then its bias and drift, then its noise")
+    p.add_argument("--input", action="append", metavar="SIGNAL=EXPR",
+                   help="an input signal as an expression of t (repeatable), parsed, never evaluated: numbers, + - * "
+                        "/ **, pi, sign, Abs, sqrt, exp, log, sin, cos, tanh, Min, Max and step (0 before 0, 1 from 0 "
+                        "on), e.g. U='12*step(t - 0.5)'")
+    p.add_argument("--inputs", metavar="FILE.csv",
+                   help="input signals from a CSV file: a column t and one column per input, linear between the "
+                        "samples and held at the first and last value outside them")
+    p.add_argument("--seed", type=int, default=0, help="seed of the --noise draws (default 0)")
     p.add_argument("--out", help="CSV file (default: stdout)")
     p.add_argument("--force", action="store_true", help="replace an existing --out file (never an input)")
 

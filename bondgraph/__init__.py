@@ -22,8 +22,10 @@ if TYPE_CHECKING:  # what the lazy names below resolve to, for type checkers and
                             model_equations, state_equations)
     from .errors import (CausalityError, EquationError, LawError, ModelError, PHMError, PHMWarning, SettingError,
                          SimulationError)
+    from .inputs import InputExpression, TabulatedInput
     from .io import load_model, to_json
     from .model import BondGraph
+    from .scenarios import Degradation, parse_degradation
     from .simulation import SimulationResult, simulate
     from .structure import Bond, Element, signal_function
 
@@ -36,19 +38,21 @@ _HOMES = {
                   "model_equations", "state_equations"),
     "errors": ("CausalityError", "EquationError", "LawError", "ModelError", "PHMError", "PHMWarning", "SettingError",
                "SimulationError"),
+    "inputs": ("InputExpression", "TabulatedInput"),
     "io": ("load_model", "to_json"),
     "model": ("BondGraph",),
+    "scenarios": ("Degradation", "parse_degradation"),
     "simulation": ("SimulationResult", "simulate"),
     "structure": ("Bond", "Element", "signal_function"),
 }
 _MODULE_OF = {name: module for module, names in _HOMES.items() for name in names}
 
 __all__ = [  # the keys of _MODULE_OF, written out for readers and tools that do not run the module
-    "AlgebraicLoopError", "Bond", "BondGraph", "CausalIssue", "Causality", "CausalityError", "Element",
-    "EquationError", "LawError", "ModelEquation", "ModelError", "PHMError", "PHMWarning", "PIController",
-    "SettingError", "SimulationError", "SimulationResult", "StateEquations", "assign_causality", "causal_equations",
-    "labelled_equations", "load_model", "model_equations", "signal_function", "simulate", "state_equations",
-    "to_json", "to_svg", "to_tikz",
+    "AlgebraicLoopError", "Bond", "BondGraph", "CausalIssue", "Causality", "CausalityError", "Degradation", "Element",
+    "EquationError", "InputExpression", "LawError", "ModelEquation", "ModelError", "PHMError", "PHMWarning",
+    "PIController", "SettingError", "SimulationError", "SimulationResult", "StateEquations", "TabulatedInput",
+    "assign_causality", "causal_equations", "labelled_equations", "load_model", "model_equations",
+    "parse_degradation", "signal_function", "simulate", "state_equations", "to_json", "to_svg", "to_tikz",
 ]
 
 

@@ -5,16 +5,20 @@
 * a JSON file (``*.json``) in networkx node-link form: ``nodes`` with an ``id`` and the node attributes
   of the model contract (``kind``, ``value``, ``uncertainty``, ``law``, ...), ``links`` (or ``edges``)
   with ``source`` and ``target`` (the power direction) and an optional ``label``, and ``graph`` with
-  an optional ``name`` and the run settings ``inputs`` (signal -> number), ``t_end`` and ``x0``;
+  an optional ``name`` and the run settings ``inputs`` (signal -> a number, or the text of an expression
+  of the time ``t`` such as ``"12*step(t - 0.5)"``: :class:`~bondgraph.inputs.InputExpression`),
+  ``t_end`` and ``x0``;
 * a Python file (``*.py``) that defines ``model`` (a :class:`~bondgraph.model.BondGraph` or a function
-  returning one), or exactly one bond graph or one such function, and optionally ``inputs``,
-  ``t_end`` and ``x0``; ``file.py:name`` picks the object ``name``;
+  returning one), or exactly one bond graph or one such function, and optionally ``inputs`` (a
+  string among them is an expression of ``t``, as in JSON), ``t_end`` and ``x0``; ``file.py:name``
+  picks the object ``name``;
 * the name of a built-in example (:func:`bondgraph.library.example`): ``rlc``, ``dc-motor``,
   ``torsion-bar``, ``three-tank``.
 
-A JSON file is data: laws and moduli are strings parsed by :func:`bondgraph.laws.parse_expression`
-(arithmetic, known names and a few functions, never ``eval``), numbers must be finite JSON numbers, and
-every error names the file and the node, link or field at fault.  Node ids, labels and names follow
+A JSON file is data: laws, moduli and input expressions are strings parsed by
+:func:`bondgraph.laws.parse_expression` (arithmetic, known names and a few functions, never ``eval``),
+numbers must be finite JSON numbers, and every error names the file and the node, link, field or
+input at fault.  Node ids, labels and names follow
 :mod:`bondgraph.names`.  Before anything is built, a file larger than :data:`MAX_FILE_BYTES` or a model
 with more than :data:`MAX_NODES` nodes or :data:`MAX_LINKS` links is refused.  A Python file is code and
 runs as such: load only files you trust.
@@ -33,6 +37,10 @@ Example
 ({'R': 10.0, 'L': 0.1}, {'V': 1.0}, 0.1)
 >>> model_from_json(to_json(spec.model, inputs=spec.inputs)).model.parameters == spec.model.parameters
 True
+>>> text = text.replace('"V": 1.0', '"V": "step(t - 0.05)"')        # an input as an expression of t
+>>> spec = model_from_json(text)
+>>> spec.inputs, spec.inputs["V"](0.1), json.loads(to_json(spec.model, inputs=spec.inputs))["graph"]["inputs"]
+({'V': InputExpression('step(t - 0.05)')}, 1.0, {'V': 'step(t - 0.05)'})
 """
 
 from __future__ import annotations
@@ -48,6 +56,7 @@ import networkx as nx
 import sympy as sp
 
 from .errors import ModelError
+from .inputs import InputExpression
 from .model import BondGraph
 from .names import check_node_id
 from .structure import BOND_ATTRIBUTES, NODE_ATTRIBUTES, require_model
@@ -84,7 +93,8 @@ class ModelSpec:
     ----------
     model : BondGraph
     inputs : dict
-        Input signal -> constant value or callable ``u(t)`` (used by ``bgphm simulate``).
+        Input signal -> constant value or callable ``u(t)`` (used by ``bgphm simulate``); an input a
+        model file gives as text is an :class:`~bondgraph.inputs.InputExpression`.
     t_end : float or None
         Default simulation horizon.
     x0 : dict
@@ -197,7 +207,7 @@ def model_from_json(text: str, *, where: str = "JSON model") -> ModelSpec:
         model = BondGraph(graph)
     except ModelError as exc:  # keep the kind (LawError for a law) and add the file
         raise type(exc)(f"{where}: {exc}") from None
-    inputs = _numbers(settings.get("inputs", {}), f"{where}: graph.inputs")
+    inputs = _input_values(settings.get("inputs", {}), f"{where}: graph.inputs")
     x0 = _numbers(settings.get("x0", {}), f"{where}: graph.x0")
     return _spec(model, inputs, settings.get("t_end"), x0, where, "graph.")
 
@@ -206,7 +216,9 @@ def to_json(bg: BondGraph, *, inputs: Mapping | None = None, t_end: float | None
             indent: int | None = 1) -> str:
     """The node-link JSON of a bond graph that :func:`model_from_json` reads back.
 
-    Laws and moduli are written as strings; only constant ``inputs`` can be stored.
+    Laws and moduli are written as strings.  An input is stored as a number, or as the text of an
+    expression of ``t`` (an :class:`~bondgraph.inputs.InputExpression`, or a string, which is parsed
+    first); any other function of time (a Python function, a table, a controller) cannot be stored.
 
     Examples
     --------
@@ -218,15 +230,18 @@ def to_json(bg: BondGraph, *, inputs: Mapping | None = None, t_end: float | None
     >>> back = model_from_json(text)
     >>> back.model.parameters == rlc_circuit().parameters, back.inputs, back.t_end
     (True, {'V': 1.0}, 0.5)
+    >>> json.loads(to_json(rlc_circuit(), inputs={"V": "5 + sin(7*t)"}))["graph"]["inputs"]
+    {'V': '5 + sin(7*t)'}
     """
     require_model(bg, "to_json")
     graph_settings: dict = {"name": bg.name}
-    for key, value in (("inputs", inputs), ("x0", x0)):
-        if value:
-            bad = [k for k, v in value.items() if callable(v)]
-            if bad:
-                raise ModelError(f"to_json: {key} {bad} are functions; only numbers can be stored in JSON")
-            graph_settings[key] = {str(k): float(v) for k, v in value.items()}
+    if inputs:
+        graph_settings["inputs"] = {str(k): _stored_input(k, v) for k, v in inputs.items()}
+    if x0:
+        bad = [k for k, v in x0.items() if callable(v)]
+        if bad:
+            raise ModelError(f"to_json: x0 {bad} are functions; only numbers can be stored in JSON")
+        graph_settings["x0"] = {str(k): float(v) for k, v in x0.items()}
     if t_end is not None:
         graph_settings["t_end"] = float(t_end)
     nodes = []
@@ -351,6 +366,35 @@ def _numbers(value, where: str) -> dict:
     return {str(k): _number(v, f"{where}[{k!r}]") for k, v in value.items()}
 
 
+def _input_values(value, where: str) -> dict:
+    """``graph.inputs``: signal -> a number or an expression of ``t`` (an error names the file and the input)."""
+    if not isinstance(value, dict):
+        raise ModelFileError(f"{where}: expected an object of input signal -> number or expression of t, got "
+                             f"{type(value).__name__}")
+    out = {}
+    for name, given in value.items():
+        at = f"{where}[{name!r}]"
+        if isinstance(given, str):
+            out[str(name)] = InputExpression(given, where=at)  # a LawError naming the file and the input
+        elif isinstance(given, bool) or not isinstance(given, (int, float)):
+            raise ModelFileError(f"{at}: expected a number or the text of an expression of t, got {given!r}")
+        else:
+            out[str(name)] = _number(given, at)
+    return out
+
+
+def _stored_input(name, value):
+    """An input as :func:`to_json` writes it: a number or an expression's text."""
+    if isinstance(value, str):
+        value = InputExpression(value, where=f"to_json: inputs[{name!r}]")
+    if isinstance(value, InputExpression):
+        return value.text
+    if callable(value) or hasattr(value, "derivative"):
+        raise ModelError(f"to_json: inputs[{name!r}] is a {type(value).__name__}; only a number or an expression "
+                         "of t (bondgraph.inputs.InputExpression) can be stored in JSON")
+    return float(value)
+
+
 def _pair(value, where: str) -> tuple[float, float]:
     if not isinstance(value, list) or len(value) != 2:
         raise ModelFileError(f"{where}: expected [lo, hi], got {value!r}")
@@ -393,6 +437,9 @@ def _from_python(path: Path, attribute: str | None) -> ModelSpec:
     inputs = namespace.get("inputs", {})
     if not isinstance(inputs, Mapping):
         raise ModelFileError(f"{path}: 'inputs' must be a dict of input signal -> value or function")
+    # a text is an expression of t, as in a JSON file
+    inputs = {k: InputExpression(v, where=f"{path}: inputs[{k!r}]") if isinstance(v, str) else v
+              for k, v in inputs.items()}
     return _spec(candidate, inputs, namespace.get("t_end"), namespace.get("x0", {}), str(path), "")
 
 

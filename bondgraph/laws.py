@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import ast
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import sympy as sp
 
@@ -46,7 +46,8 @@ _BINARY = {
 }
 
 
-def parse_expression(text: str, names: Mapping[str, sp.Basic], *, where: str = "law") -> sp.Expr:
+def parse_expression(text: str, names: Mapping[str, sp.Basic], *, where: str = "law",
+                     functions: Mapping[str, Callable] | None = None) -> sp.Expr:
     """Parse an arithmetic expression string into sympy without ``eval``.
 
     Parameters
@@ -57,6 +58,9 @@ def parse_expression(text: str, names: Mapping[str, sp.Basic], *, where: str = "
         The only identifiers allowed, mapped to the sympy objects they stand for.
     where : str
         What the expression belongs to, used in error messages.
+    functions : mapping, optional
+        Functions allowed beside :data:`FUNCTIONS`: name -> a function of sympy arguments returning a
+        sympy expression (an input signal's ``step``, say: :mod:`bondgraph.inputs`).
 
     Examples
     --------
@@ -73,8 +77,9 @@ def parse_expression(text: str, names: Mapping[str, sp.Basic], *, where: str = "
         tree = ast.parse(text.strip(), mode="eval")
     except SyntaxError as exc:
         raise LawError(f"{where}: not a valid expression: {text!r} ({exc.msg})") from None
+    allowed = {**FUNCTIONS, **(functions or {})}
     try:
-        expression = _build(tree.body, names, where)
+        expression = _build(tree.body, names, where, allowed)
     except RecursionError:
         raise LawError(f"{where}: expression nested too deeply") from None
     check_finite(expression, where=where)
@@ -101,7 +106,7 @@ def check_finite(expression: sp.Basic, *, where: str) -> None:
         raise LawError(f"{where}: {expression} is infinite or undefined (a division by zero, log(0)?)")
 
 
-def _build(node: ast.AST, names: Mapping[str, sp.Basic], where: str) -> sp.Expr:
+def _build(node: ast.AST, names: Mapping[str, sp.Basic], where: str, functions: Mapping[str, Callable]) -> sp.Expr:
     if isinstance(node, ast.Constant):
         value = node.value
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -114,21 +119,21 @@ def _build(node: ast.AST, names: Mapping[str, sp.Basic], where: str) -> sp.Expr:
             return names[node.id]
         if node.id in CONSTANTS:
             return CONSTANTS[node.id]
-        if node.id in FUNCTIONS:
+        if node.id in functions:
             raise LawError(f"{where}: function {node.id!r} used without a call")
         allowed = ", ".join(sorted(names)) or "none"
         raise LawError(f"{where}: unknown name {node.id!r} (allowed: {allowed})")
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
-        operand = _build(node.operand, names, where)
+        operand = _build(node.operand, names, where, functions)
         return -operand if isinstance(node.op, ast.USub) else operand
     if isinstance(node, ast.BinOp) and type(node.op) in _BINARY:
-        left, right = _build(node.left, names, where), _build(node.right, names, where)
+        left, right = _build(node.left, names, where, functions), _build(node.right, names, where, functions)
         if isinstance(node.op, ast.Div) and right.is_zero:  # sympy would give zoo, which no analysis can use
             raise LawError(f"{where}: division by zero in {ast.unparse(node)!r}")
         return _BINARY[type(node.op)](left, right)
     if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Pow):
-        base = _build(node.left, names, where)
-        exponent = _build(node.right, names, where)
+        base = _build(node.left, names, where, functions)
+        exponent = _build(node.right, names, where, functions)
         # Guard against 9**9**9 or ((9**99)**99)**99 that sympy would expand exactly.
         if exponent.is_Number and abs(float(exponent)) > MAX_EXPONENT:
             raise LawError(f"{where}: exponent {exponent} exceeds {MAX_EXPONENT} in absolute value")
@@ -136,16 +141,16 @@ def _build(node: ast.AST, names: Mapping[str, sp.Basic], where: str) -> sp.Expr:
             raise LawError(f"{where}: the power {ast.unparse(node)} is too large a number")
         return base**exponent
     if isinstance(node, ast.Call):
-        if not isinstance(node.func, ast.Name) or node.func.id not in FUNCTIONS:
+        if not isinstance(node.func, ast.Name) or node.func.id not in functions:
             name = node.func.id if isinstance(node.func, ast.Name) else ast.unparse(node.func)
-            raise LawError(f"{where}: call to {name!r} not allowed (allowed: {', '.join(FUNCTIONS)})")
+            raise LawError(f"{where}: call to {name!r} not allowed (allowed: {', '.join(functions)})")
         if node.keywords:
             raise LawError(f"{where}: keyword arguments not allowed in {node.func.id}()")
-        args = [_build(arg, names, where) for arg in node.args]
+        args = [_build(arg, names, where, functions) for arg in node.args]
         if not args:
             raise LawError(f"{where}: {node.func.id}() needs an argument")
         try:
-            return FUNCTIONS[node.func.id](*args)
+            return functions[node.func.id](*args)
         except (TypeError, ValueError) as exc:
             raise LawError(f"{where}: {ast.unparse(node)}: {exc}") from None
     raise LawError(f"{where}: {type(node).__name__} not allowed in {ast.unparse(node)!r}")

@@ -17,7 +17,8 @@ from .monitoring import Detection, consistent_faults, detect
 from .elimination import structural_arrs, unreached
 from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, compile_interval
 from .csv_reading import read_csv
-from .records import Record, RecordError, RecordWarning, add_noise, as_record, check_signals
+from .records import (Record, RecordError, RecordWarning, SensorFault, add_noise, add_sensor_faults, as_record,
+                      check_signals)
 from .uniform_grid import resample
 from .signatures import SignatureMatrix, signature_matrix
 from .streaming import StreamChunk, StreamingEvaluation
@@ -26,9 +27,9 @@ from .structural import StructuralLimitError, StructuralModel, structural_model
 __all__ = [
     "ARR", "ARRError", "ARRWarning", "Calibration", "Detectability", "Detection", "DetectionSettings", "Evaluation",
     "Interval", "IntervalArray", "IntervalWarning", "POOLED_RECORDS", "Record", "RecordError", "RecordWarning",
-    "SignatureMatrix", "StreamChunk", "StreamingEvaluation", "StructuralLimitError", "StructuralModel", "add_noise",
-    "affine_range", "as_record", "calibrate", "calibration_end", "check_signals", "compile_interval",
-    "consistent_faults", "delta", "derive_arrs", "detect", "detectability", "evaluable", "evaluate", "noise_margin",
-    "pooled_calibration", "read_csv", "resample", "robust_std", "signature_matrix", "structural_arrs",
+    "SensorFault", "SignatureMatrix", "StreamChunk", "StreamingEvaluation", "StructuralLimitError", "StructuralModel",
+    "add_noise", "add_sensor_faults", "affine_range", "as_record", "calibrate", "calibration_end", "check_signals",
+    "compile_interval", "consistent_faults", "delta", "derive_arrs", "detect", "detectability", "evaluable", "evaluate",
+    "noise_margin", "pooled_calibration", "read_csv", "resample", "robust_std", "signature_matrix", "structural_arrs",
     "structural_model", "unreached",
 ]

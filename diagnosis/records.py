@@ -4,9 +4,10 @@ A residual of a bond-graph model reads measured and input signals ``x(t)``.  :fu
 a user's record (a mapping or a pandas DataFrame with a time column ``t``) into clean float arrays
 (:class:`Record`): ``t`` finite and strictly increasing with at least 3 samples, the columns finite
 numbers of one length, NaN marking a gap (missing data, never a value).  :func:`gaps` lists the gaps,
-:func:`check_signals` refuses a column with no value or a stuck sensor, and :func:`add_noise` makes a
-noisy copy for tests and demos.  Reading records from CSV files is :mod:`diagnosis.csv_reading`;
-derivatives and integrals of a record's signals are :mod:`diagnosis.derivatives`.
+:func:`check_signals` refuses a column with no value or a stuck sensor, and :func:`add_noise` and
+:func:`add_sensor_faults` make a copy whose sensors are noisy or faulty (a bias, a drift, a wrong gain from
+an onset: :class:`SensorFault`), for tests, demos and ``bgphm simulate``.  Reading records from CSV files
+is :mod:`diagnosis.csv_reading`; derivatives and integrals of a record's signals are :mod:`diagnosis.derivatives`.
 
 >>> import numpy as np
 >>> record = as_record({"t": np.linspace(0.0, 2.0, 201), "x": np.zeros(201)}, name="demo")
@@ -26,9 +27,9 @@ from bondgraph.errors import PHMError, PHMWarning
 
 
 __all__ = [
-    "MAX_MAGNITUDE", "Record", "RecordError", "RecordWarning", "TIME", "UNIFORM_RTOL", "add_noise", "as_record",
-    "check_magnitude", "check_no_inf", "check_signals", "float_column", "gaps", "has_column", "runs",
-    "step_deviation",
+    "MAX_MAGNITUDE", "Record", "RecordError", "RecordWarning", "SENSOR_FAULTS", "SensorFault", "TIME", "UNIFORM_RTOL",
+    "add_noise", "add_sensor_faults", "as_record", "check_magnitude", "check_no_inf", "check_signals", "float_column",
+    "gaps", "has_column", "runs", "step_deviation",
 ]
 
 
@@ -391,3 +392,99 @@ def _checked_std(value: object, signal: str) -> float:
     if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value) or value < 0:
         raise RecordError(f"noise std of signal {signal!r} must be a finite number >= 0, got {value!r}")
     return float(value)
+
+
+#: The faults of a sensor :class:`SensorFault` describes.
+SENSOR_FAULTS = ("bias", "drift", "gain")
+
+
+@dataclass(frozen=True)
+class SensorFault:
+    """A fault of the sensor of ``signal`` from ``onset`` (s) on.  For the true value ``x`` it reads
+
+    * ``"bias"``: ``x + size`` (an offset in the signal's unit: a zero shift, a slipped code disc);
+    * ``"drift"``: ``x + size (t - onset)`` (an offset growing by ``size`` a second: an ageing transducer);
+    * ``"gain"``: ``size x`` (a wrong gain: 1.05 reads 5 % high, 0 a dead sensor that reads 0);
+
+    and ``x`` before the onset.  :func:`add_sensor_faults` applies faults to a record.
+
+    Raises
+    ------
+    RecordError
+        For an unknown kind or a size or onset that is not a finite number, naming the signal.
+
+    Examples
+    --------
+    >>> fault = SensorFault("omega", "drift", 0.5, onset=2.0)
+    >>> fault.reading(np.array([0.0, 2.0, 4.0]), np.array([100.0, 100.0, 100.0])).tolist()
+    [100.0, 100.0, 101.0]
+    """
+
+    signal: str
+    kind: str
+    size: float
+    onset: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.kind not in SENSOR_FAULTS:
+            raise RecordError(f"sensor {self.signal!r}: unknown fault {self.kind!r} (expected one of "
+                              f"{', '.join(SENSOR_FAULTS)})")
+        for what in ("size", "onset"):
+            value = getattr(self, what)
+            if isinstance(value, bool) or not isinstance(value, numbers.Real) or not np.isfinite(value):
+                raise RecordError(f"sensor {self.signal!r}: the {what} of its {self.kind} must be a finite number, "
+                                  f"got {value!r}")
+
+    def reading(self, t: np.ndarray, x: np.ndarray) -> np.ndarray:
+        """What the faulty sensor reads at the times ``t`` of the true values ``x`` (a new array)."""
+        t, x = np.asarray(t, float), np.asarray(x, float)
+        after = t >= self.onset
+        if self.kind == "gain":
+            return np.where(after, self.size * x, x)
+        offset = self.size if self.kind == "bias" else self.size * (t - self.onset)
+        return np.where(after, x + offset, x)
+
+
+def add_sensor_faults(record: Record, faults: Iterable[SensorFault]) -> Record:
+    """A copy of the record whose sensors read through the given faults (:class:`SensorFault`).
+
+    Several faults of one sensor add up: its gains act on the true value first, then its biases and
+    drifts add their offsets, so that a bias of 2 and a gain of 1.1 read ``1.1 x + 2``.  Noise comes
+    after, from :func:`add_noise`: ``add_noise(add_sensor_faults(record, faults), std, seed)`` is a
+    sensor that reads ``gain x + offsets + noise``, its noise the same draws as without the faults.
+
+    Parameters
+    ----------
+    record : Record
+        The true signals (any mapping :func:`as_record` takes).
+    faults : iterable of SensorFault
+
+    Returns
+    -------
+    Record
+        A new record; the given one is untouched.  Gaps stay NaN.
+
+    Raises
+    ------
+    RecordError
+        For a fault of a signal the record does not hold, naming it and the record's signals.
+
+    Examples
+    --------
+    >>> record = as_record({"t": [0.0, 1.0, 2.0, 3.0], "x": [10.0, 10.0, 10.0, 10.0]})
+    >>> faulty = add_sensor_faults(record, [SensorFault("x", "bias", 2.0, onset=1.0),
+    ...                                     SensorFault("x", "gain", 1.1, onset=2.0)])
+    >>> faulty["x"].tolist()
+    [10.0, 12.0, 13.0, 13.0]
+    """
+    if not isinstance(record, Record):
+        record = as_record(record)
+    faults = list(faults)
+    unknown = [f.signal for f in faults if f.signal not in record.columns]
+    if unknown:
+        raise RecordError(f"{record.name}: no signal(s) {unknown} for a sensor fault; signals: {list(record.columns)}")
+    columns = {signal: x.copy() for signal, x in record.columns.items()}
+    # the gains scale the true value; the offsets then add to the scaled reading
+    for fault in sorted(faults, key=lambda f: f.kind != "gain"):
+        columns[fault.signal] = fault.reading(record.t, columns[fault.signal])
+    return Record(t=record.t.copy(), columns=columns, name=record.name)

@@ -20,7 +20,8 @@ def output_file(args) -> Path | None:
     """``--out`` of a command writing one file, checked before any work; None for stdout."""
     if args.out in (None, "-"):
         return None
-    return check_output(args.out, kind="file", inputs=input_files(args.model), force=args.force)
+    return check_output(args.out, kind="file", inputs=input_files(args.model, getattr(args, "inputs", None)),
+                        force=args.force)
 
 
 def output_directory(args) -> Path | None:
