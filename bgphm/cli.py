@@ -169,6 +169,8 @@ def _simulate_options(p: argparse.ArgumentParser) -> None:
                    help="input signals from a CSV file: a column t and one column per input, linear between the "
                         "samples and held at the first and last value outside them")
     p.add_argument("--seed", type=int, default=0, help="seed of the --noise draws (default 0)")
+    p.add_argument("--report", metavar="FILE.html", help="also write an offline page of the run: each signal of the "
+                   "record over time, the faults injected, the parameters and units, the settings")
     p.add_argument("--out", help="CSV file (default: stdout)")
     p.add_argument("--force", action="store_true", help="replace an existing --out file (never an input)")
 
@@ -250,6 +252,9 @@ def _prognose_options(p: argparse.ArgumentParser) -> None:
                    help=f"predict the RUL every N filter steps (default {PROGNOSIS.rul_every})")
     p.add_argument("--horizon", type=float, help="RUL horizon cap in s (default 2000 filter steps)")
     p.add_argument("--seed", type=int, default=PROGNOSIS.seed, help=f"random seed (default {PROGNOSIS.seed})")
+    p.add_argument("--truth", metavar="FILE.json", help="the true end of life (and degradation) of the record, as "
+                   "bgphm demo writes truth.json: the predictions are scored against it (relative accuracy, the "
+                   "bands' coverage) in prognosis.json and on stdout, and drawn on the plots and the report")
 
 
 

@@ -46,7 +46,7 @@ from .weighted import last_axis, median_along_last, moved_weights, weights_like
 
 __all__ = [
     "MetricWarning", "alpha_lambda", "convergence", "cumulative_relative_accuracy", "mean_relative_accuracy",
-    "mean_rmad", "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad",
+    "mean_rmad", "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad", "scores_against_truth",
 ]
 
 
@@ -373,3 +373,62 @@ def convergence(times: ArrayLike, metric_values: ArrayLike, t_start: ArrayLike |
     return np.hypot(x_c - start, y_c)[()]
 
 
+
+
+def scores_against_truth(times: ArrayLike, percentiles: ArrayLike, rul_mean: ArrayLike, eol: float,
+                         alpha: float = 0.2) -> dict:
+    """How the RUL predictions of one run compare with a known end of life: what ``--truth`` reports.
+
+    Parameters
+    ----------
+    times : array_like, shape (K,)
+        Prediction times (s); NaN rows of ``percentiles`` (withheld predictions) are left out.
+    percentiles : array_like, shape (K, 5)
+        The 5th, 25th, 50th, 75th and 95th percentiles of each predicted RUL (``inf`` beyond the horizon).
+    rul_mean : array_like, shape (K,)
+        The mean RUL of each prediction.
+    eol : float
+        The true end of life (s).
+    alpha : float
+        Half-width of the accuracy cone, relative to the true RUL: a median within ``alpha`` of it passes.
+
+    Returns
+    -------
+    dict
+        ``predictions`` (made before the end of life), ``true_rul`` and per prediction ``relative_accuracy``
+        (eq. 42, of the mean) and ``within_alpha`` (the median); over them ``mean_relative_accuracy`` and
+        ``worst_relative_accuracy``, ``coverage_90`` and ``coverage_50`` (the share of predictions whose
+        5-95 % and 25-75 % bands hold the true RUL, the bands' claims), ``within_alpha_share`` and the
+        ``prognostic_horizon`` (s) of the alpha criterion.  NaN (no prediction) becomes None.
+
+    Examples
+    --------
+    >>> q = np.array([[8.0, 9.0, 10.0, 11.0, 12.0], [3.0, 3.5, 4.0, 4.4, 5.0]])
+    >>> s = scores_against_truth([0.0, 6.0], q, [10.0, 4.0], eol=10.5)
+    >>> s["true_rul"], s["coverage_90"], s["coverage_50"], s["within_alpha"]
+    ([10.5, 4.5], 1.0, 0.5, [True, True])
+    >>> round(s["mean_relative_accuracy"], 4), s["prognostic_horizon"]
+    (0.9206, 10.5)
+    """
+    t = np.asarray(times, dtype=float)
+    q = np.asarray(percentiles, dtype=float).reshape(t.size, 5)
+    mean = np.asarray(rul_mean, dtype=float).reshape(t.size)
+    true = float(eol) - t
+    kept = (true > 0) & np.isfinite(q[:, 2])  # before the end of life, and a prediction made (not withheld)
+    t, q, mean, true = t[kept], q[kept], mean[kept], true[kept]
+    ra = relative_accuracy(true, mean) if t.size else np.empty(0)
+    within = np.abs(q[:, 2] - true) <= alpha * true
+    scores = {"predictions": int(t.size), "alpha": alpha, "true_rul": true.tolist(),
+              "relative_accuracy": np.atleast_1d(ra).tolist(), "within_alpha": within.tolist()}
+    if not t.size:
+        return {**scores, **dict.fromkeys(("mean_relative_accuracy", "worst_relative_accuracy", "coverage_90",
+                                            "coverage_50", "within_alpha_share", "prognostic_horizon"))}
+
+    def finite(value) -> float | None:
+        return float(value) if np.isfinite(value) else None
+
+    return {**scores, "mean_relative_accuracy": finite(np.mean(ra)), "worst_relative_accuracy": finite(np.min(ra)),
+            "coverage_90": float(np.mean((q[:, 0] <= true) & (true <= q[:, 4]))),
+            "coverage_50": float(np.mean((q[:, 1] <= true) & (true <= q[:, 3]))),
+            "within_alpha_share": float(np.mean(within)),
+            "prognostic_horizon": finite(prognostic_horizon(t, within, eol))}

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import warnings
 from collections.abc import Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -17,8 +18,9 @@ from diagnosis.records import Record, RecordError, RecordWarning, gaps
 from ._progress import Progress
 
 __all__ = [
-    "assignments", "candidates_of", "csv_header", "detection_settings", "failures_of", "has_value", "laws_of",
-    "load_arrs", "load_record", "named_arr", "what_can_fail",
+    "MAX_TRUTH_BYTES", "TRUTH_FIELDS", "assignments", "candidates_of", "check_truth", "csv_header",
+    "detection_settings", "failures_of", "has_value", "laws_of", "load_arrs", "load_record", "named_arr",
+    "read_fleet_truth", "read_truth", "truth_values", "what_can_fail",
 ]
 
 
@@ -166,3 +168,80 @@ def assignments(items: Sequence[str] | None, parameters: dict, option: str) -> d
 
 def has_value(model, signal: str) -> bool:
     return any(e.signal == signal and e.value is not None for e in model.elements.values())
+
+
+#: The largest ``--truth`` file read (a fleet's holds one entry per asset).
+MAX_TRUTH_BYTES = 64 * 2**20
+#: The fields of a truth entry and what each must be (``eol`` alone is required; null: no end of life).
+TRUTH_FIELDS = {"eol": "the true end of life in s (a number, or null for an asset that does not fail)",
+                "candidate": "the degrading parameter", "degradation": "its law", "nominal": "its nominal value",
+                "rate": "the law's rate", "onset": "the onset in s", "exponent": "a power law's exponent",
+                "failure_value": "the failure value"}
+
+
+def read_truth(path: str, *, option: str = "--truth") -> dict:
+    """A ``--truth`` JSON file (what ``bgphm demo`` writes as ``truth.json``): an object with ``eol``, the true end
+    of life in s, and optionally the degradation (``candidate``, ``degradation``, ``nominal``, ``rate``,
+    ``onset``, ``exponent``) that draws the parameter's true values.  Raises :class:`UsageError` naming the file
+    and the field."""
+    return check_truth(_json_file(path, option), f"{option} {path}")
+
+
+def read_fleet_truth(path: str, *, option: str = "--truth") -> dict:
+    """A fleet's ``--truth`` JSON file: an object mapping each asset id to its truth entry (as :func:`read_truth`
+    reads one); an asset left out has no truth given."""
+    data = _json_file(path, option)
+    if not isinstance(data, dict):
+        raise UsageError(f"{option} {path}: expected a JSON object mapping asset ids to truth entries")
+    return {str(asset): check_truth(entry, f"{option} {path}: asset {asset!r}") for asset, entry in data.items()}
+
+
+def _json_file(path: str, option: str):
+    import json
+
+    file = Path(path)
+    if not file.is_file():
+        raise UsageError(f"{option} {path}: no such file")
+    if file.stat().st_size > MAX_TRUTH_BYTES:
+        raise UsageError(f"{option} {path}: larger than {MAX_TRUTH_BYTES // 2**20} MiB")
+    try:
+        return json.loads(file.read_text(encoding="utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise UsageError(f"{option} {path}: not JSON ({exc})") from None
+
+
+def check_truth(entry, where: str) -> dict:
+    """One truth entry checked: known fields, a finite (or null) ``eol``, finite numbers, a known law."""
+    from bondgraph.scenarios import DEGRADATION_LAWS
+
+    if not isinstance(entry, dict):
+        raise UsageError(f"{where}: expected a JSON object with 'eol' (the true end of life in s)")
+    unknown = sorted(set(entry) - set(TRUTH_FIELDS) - {"noise_std", "seed"})
+    if unknown:
+        raise UsageError(f"{where}: unknown field {unknown[0]!r} (fields: {', '.join(TRUTH_FIELDS)})")
+    if "eol" not in entry:
+        raise UsageError(f"{where}: no 'eol' ({TRUTH_FIELDS['eol']})")
+    for key in ("eol", "nominal", "rate", "onset", "exponent", "failure_value"):
+        value = entry.get(key)
+        if value is None:
+            continue
+        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+            raise UsageError(f"{where}: {key!r} must be a finite number ({TRUTH_FIELDS[key]}), got {value!r}")
+    if entry.get("degradation") is not None and entry["degradation"] not in DEGRADATION_LAWS:
+        raise UsageError(f"{where}: 'degradation' {entry['degradation']!r} is not one of "
+                         f"{', '.join(DEGRADATION_LAWS)}")
+    if entry.get("candidate") is not None and not isinstance(entry["candidate"], str):
+        raise UsageError(f"{where}: 'candidate' must be a parameter's name, got {entry['candidate']!r}")
+    return dict(entry)
+
+
+def truth_values(truth: dict, candidate):
+    """The parameter's true values over time (a callable of t), when the truth says how ``candidate`` degrades;
+    else None."""
+    from bondgraph.scenarios import drift
+
+    needed = ("candidate", "degradation", "nominal", "rate")
+    if any(truth.get(k) is None for k in needed) or truth["candidate"] != candidate:
+        return None
+    return drift(truth["nominal"], truth["rate"], truth.get("onset") or 0.0, truth["degradation"],
+                 truth.get("exponent") or 1.0)

@@ -13,7 +13,7 @@ from bgphm.files import check_output, input_files, write_text
 from ._progress import Progress
 
 __all__ = ["emit", "estimate_labels", "finite_or_none", "fmt", "json_value", "output_directory", "output_file",
-           "units_of", "write_plots"]
+           "units_of", "vars_of", "write_plots", "write_report"]
 
 
 def output_file(args) -> Path | None:
@@ -74,6 +74,16 @@ def estimate_labels(summary: dict, failures: dict, units) -> dict:
     return labels
 
 
+def vars_of(args) -> dict:
+    """The command line's options as settings for a report (what the run was asked)."""
+    return {key: value for key, value in sorted(vars(args).items()) if key not in ("quiet", "debug")}
+
+
+def write_report(out: Path, page) -> Path:
+    """``report.html`` in ``out``, written whole (:class:`bgphm.run_report.Page`)."""
+    return write_text(out / "report.html", page.html())
+
+
 def write_plots(kind: str, out: Path, payload, progress: Progress, labels: dict | None = None) -> list[Path]:
     """The PNG plots of a command.  ``labels`` holds what the axes name: ``units`` (ARR name -> the residual's
     unit) and, for prognosis, ``parameter``, ``unit`` and ``failure`` of the reported candidate."""
@@ -100,10 +110,10 @@ def write_plots(kind: str, out: Path, payload, progress: Progress, labels: dict 
     if result is not None and result.t.size:
         fig, ax = plt.subplots(figsize=(8, 3.5))
         plotting.plot_estimate(result, ax=ax, label=labels.get("parameter"), unit=labels.get("unit"),
-                               failure=labels.get("failure"))
+                               failure=labels.get("failure"), truth=labels.get("truth"))
         paths.append(plotting.save_figure(fig, out / "estimate.png"))
         fig, ax = plt.subplots(figsize=(8, 3.5))
-        plotting.plot_rul(result, ax=ax)
+        plotting.plot_rul(result, ax=ax, eol=labels.get("eol"))
         paths.append(plotting.save_figure(fig, out / "rul.png"))
         if result.rul:
             fig, ax = plt.subplots(figsize=(6, 3.5))

@@ -17,7 +17,7 @@ from ._inputs import (
     load_arrs,
     load_record,
 )
-from ._outputs import json_value, output_directory, units_of, write_plots
+from ._outputs import json_value, output_directory, units_of, vars_of, write_plots, write_report
 from ._progress import Progress
 
 __all__ = ["detectable_line", "evaluation_summary", "run"]
@@ -71,6 +71,10 @@ def run(args, progress: Progress) -> int:
         write_text(out / "residuals.csv", csv_text(columns))
         written = [out / "detection.json", out / "residuals.csv"]
         written += write_plots("detection", out, evaluations, progress, {"units": summary["units"]["residuals"]})
+        from bgphm.run_report import detection_page
+
+        written.append(write_report(out, detection_page(spec.model, result.arrs or arrs, result, args.data,
+                                                        units=summary["units"], settings=vars_of(args))))
         for path in written:
             print(f"wrote {path}")
     return EXIT_OK

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import sys
 import warnings
 
@@ -14,12 +15,23 @@ from prognosis import IsolationSettings, PrognosisSettings
 from ._inputs import (
     detection_settings,
     load_record,
+    read_truth,
+    truth_values,
     what_can_fail,
 )
-from ._outputs import estimate_labels, fmt, json_value, output_directory, units_of, write_plots
+from ._outputs import (
+    estimate_labels,
+    fmt,
+    json_value,
+    output_directory,
+    units_of,
+    vars_of,
+    write_plots,
+    write_report,
+)
 from ._progress import Progress, filter_progress
 
-__all__ = ["estimate_columns", "first_reasons", "prognosis_line", "run"]
+__all__ = ["estimate_columns", "first_reasons", "prognosis_line", "run", "truth_line", "truth_scores"]
 
 
 def run(args, progress: Progress) -> int:
@@ -36,6 +48,7 @@ def run(args, progress: Progress) -> int:
 
     detection = detection_settings(args)
     out = output_directory(args)
+    truth = read_truth(args.truth) if args.truth is not None else None
     spec, arrs, failures, candidates, laws = what_can_fail(args, progress)
     isolation = IsolationSettings(laws=tuple(laws), candidates=None if candidates is None else tuple(candidates),
                                   sensors=args.sensors, pairs=args.pairs, n_particles=args.particles,
@@ -63,6 +76,10 @@ def run(args, progress: Progress) -> int:
         print(f"bgphm: warning: every wear hypothesis was rejected, only sensors' faults are left: "
               f"{'; '.join(first_reasons(result))}", file=sys.stderr)
     print(prognosis_line(result, summary))
+    if truth is not None:
+        truth["scores"] = truth_scores(summary, truth)
+        summary["truth"] = truth
+        print(truth_line(truth))
     if out is not None:
         write_text(out / "prognosis.json", json.dumps(summary, indent=2, default=json_value))
         written = [out / "prognosis.json"]
@@ -74,11 +91,42 @@ def run(args, progress: Progress) -> int:
             written += [out / "estimates.csv", out / "rul.csv"]
         primary = next((e for e in result.evaluations if e.name in result.fired), result.evaluations[0])
         best = result.monitor_result() if result.t.size else None
-        written += write_plots("prognosis", out, (primary, best), progress,
-                               estimate_labels(summary, failures, spec.model.units))
+        from bgphm.run_report import prognosis_page
+
+        labels = estimate_labels(summary, failures, spec.model.units)
+        if truth is not None:
+            labels.update(eol=truth.get("eol"), truth=truth_values(truth, summary.get("candidate")))
+        written += write_plots("prognosis", out, (primary, best), progress, labels)
+        written.append(write_report(out, prognosis_page(
+            spec.model, arrs, result, summary, args.data, units=summary["units"], settings=vars_of(args),
+            failures=failures, truth=truth, truth_theta=labels.get("truth"))))
         for path in written:
             print(f"wrote {path}")
     return EXIT_OK
+
+
+def truth_scores(summary: dict, truth: dict) -> dict:
+    """The predictions scored against ``truth["eol"]`` (:func:`prognosis.scores_against_truth`)."""
+    from prognosis import scores_against_truth
+
+    if truth.get("eol") is None:
+        return {"predictions": 0}
+    rows = summary["predictions"]
+    keys = ("rul_p5", "rul_p25", "rul_median", "rul_p75", "rul_p95")
+    percentiles = [[math.inf if p[k] is None and p["rul_median"] is not None else
+                    (math.nan if p[k] is None else p[k]) for k in keys] for p in rows]
+    means = [math.nan if p["rul_mean"] is None else p["rul_mean"] for p in rows]
+    return scores_against_truth([p["t"] for p in rows], percentiles, means, truth["eol"])
+
+
+def truth_line(truth: dict) -> str:
+    scores = truth["scores"]
+    if not scores.get("predictions"):
+        return f"truth: end of life {fmt(truth.get('eol'))} s; no RUL prediction before it to score"
+    return (f"truth: end of life {fmt(truth['eol'])} s; over {scores['predictions']} predictions mean RA "
+            f"{fmt(scores['mean_relative_accuracy'])} (worst {fmt(scores['worst_relative_accuracy'])}), the 5-95 % "
+            f"band holds the truth at {scores['coverage_90']:.0%}, the 25-75 % at {scores['coverage_50']:.0%}, the "
+            f"median within {scores['alpha']:.0%} at {scores['within_alpha_share']:.0%}")
 
 
 def prognosis_line(result, summary: dict) -> str:

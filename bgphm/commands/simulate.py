@@ -8,7 +8,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from bgphm.errors import EXIT_OK, UsageError
-from bgphm.files import csv_text
+from bgphm.files import check_output, csv_text, input_files, write_text
 from bondgraph.errors import PHMError
 from bondgraph.io import ModelSpec, load_model
 
@@ -16,7 +16,7 @@ from ._inputs import (
     assignments,
     has_value,
 )
-from ._outputs import emit, output_file
+from ._outputs import emit, output_file, units_of, vars_of
 from ._progress import Progress
 
 __all__ = ["run"]
@@ -37,6 +37,10 @@ def run(args, progress: Progress) -> int:
     from diagnosis.records import add_noise, add_sensor_faults, as_record
 
     out = output_file(args)
+    report = (check_output(args.report, kind="file", inputs=input_files(args.model, args.inputs), force=args.force,
+                           option="--report") if args.report else None)
+    if report is not None and out is not None and report.resolve() == out.resolve():
+        raise UsageError(f"--report {args.report} is the --out file too; give two names")
     check_sample_count(args.samples, "--samples", least=3)
     spec = load_model(args.model)
     t_end = args.t_end if args.t_end is not None else (spec.t_end or DEFAULT_T_END)
@@ -69,6 +73,15 @@ def run(args, progress: Progress) -> int:
             record = add_noise(record, noise, seed=args.seed)
         columns = {"t": record.t, **record.columns}
     emit(csv_text(columns), out)
+    if report is not None:
+        from bgphm.run_report import simulation_page
+
+        injected = [f"{name}: {law}" for name, law in degraded.items()]
+        injected += [f"sensor {f.signal}: {f.kind} {f.size:g} from {f.onset:g} s" for f in faults]
+        injected += [f"sensor {s}: noise std {v:g} (seed {args.seed})" for s, v in noise.items()]
+        page = simulation_page(spec.model, columns, units=units_of(spec.model, []), settings=vars_of(args),
+                               faults=injected)
+        print(f"wrote {write_text(report, page.html())}")
     return EXIT_OK
 
 
