@@ -125,8 +125,9 @@ def truth_line(truth: dict) -> str:
         return f"truth: end of life {fmt(truth.get('eol'))} s; no RUL prediction before it to score"
     return (f"truth: end of life {fmt(truth['eol'])} s; over {scores['predictions']} predictions mean RA "
             f"{fmt(scores['mean_relative_accuracy'])} (worst {fmt(scores['worst_relative_accuracy'])}), the 5-95 % "
-            f"band holds the truth at {scores['coverage_90']:.0%}, the 25-75 % at {scores['coverage_50']:.0%}, the "
-            f"median within {scores['alpha']:.0%} at {scores['within_alpha_share']:.0%}")
+            f"band holds the truth at {100 * scores['coverage_90']:.0f} %, the 25-75 % at "
+            f"{100 * scores['coverage_50']:.0f} %, the median within {100 * scores['alpha']:.0f} % at "
+            f"{100 * scores['within_alpha_share']:.0f} %")
 
 
 def prognosis_line(result, summary: dict) -> str:
