@@ -384,7 +384,8 @@ def scores_against_truth(times: ArrayLike, percentiles: ArrayLike, rul_mean: Arr
     times : array_like, shape (K,)
         Prediction times (s); NaN rows of ``percentiles`` (withheld predictions) are left out.
     percentiles : array_like, shape (K, 5)
-        The 5th, 25th, 50th, 75th and 95th percentiles of each predicted RUL (``inf`` beyond the horizon).
+        The 5th, 25th, 50th, 75th and 95th percentiles of each predicted RUL (``inf`` beyond the horizon; NaN
+        quartiles when they are not known: ``coverage_50`` is then None).
     rul_mean : array_like, shape (K,)
         The mean RUL of each prediction.
     eol : float
@@ -427,8 +428,10 @@ def scores_against_truth(times: ArrayLike, percentiles: ArrayLike, rul_mean: Arr
     def finite(value) -> float | None:
         return float(value) if np.isfinite(value) else None
 
+    quartiles = ~np.isnan(q[:, 1]) & ~np.isnan(q[:, 3])  # NaN: not given (a fleet's table keeps 5, 50, 95 %)
+    inner = (q[:, 1] <= true) & (true <= q[:, 3])
     return {**scores, "mean_relative_accuracy": finite(np.mean(ra)), "worst_relative_accuracy": finite(np.min(ra)),
             "coverage_90": float(np.mean((q[:, 0] <= true) & (true <= q[:, 4]))),
-            "coverage_50": float(np.mean((q[:, 1] <= true) & (true <= q[:, 3]))),
+            "coverage_50": float(np.mean(inner[quartiles])) if quartiles.any() else None,
             "within_alpha_share": float(np.mean(within)),
             "prognostic_horizon": finite(prognostic_horizon(t, within, eol))}

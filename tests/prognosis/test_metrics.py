@@ -283,3 +283,30 @@ def test_rank_with_ties_rejects_what_it_cannot_rank():
         rank_with_ties({"A": [1.0]}, confidence=1.0)
     with pytest.raises(ValueError, match="rtol"):
         rank_with_ties({"A": [1.0]}, rtol=-1e-3)
+
+
+def test_scores_against_truth_count_what_a_loop_counts():
+    """Coverage, accuracy and the share within alpha recomputed prediction by prediction, with withheld
+    predictions (NaN) and predictions after the end of life left out."""
+    from prognosis import scores_against_truth
+
+    rng = np.random.default_rng(7)
+    k = 40
+    t = np.linspace(0.0, 12.0, k)
+    eol = 10.0
+    centre = (eol - t) * rng.uniform(0.7, 1.3, k)
+    spread = rng.uniform(0.05, 1.5, k)
+    q = np.column_stack([centre - 2 * spread, centre - spread, centre, centre + spread, centre + 2 * spread])
+    q[3] = np.nan                      # withheld
+    q[5, 4] = np.inf                   # the 95 % beyond the horizon
+    mean = centre + 0.1
+    s = scores_against_truth(t, q, mean, eol, alpha=0.2)
+    kept = [j for j in range(k) if eol - t[j] > 0 and not np.isnan(q[j, 2])]
+    true = [eol - t[j] for j in kept]
+    assert s["predictions"] == len(kept) and s["true_rul"] == true
+    assert s["coverage_90"] == sum(q[j, 0] <= eol - t[j] <= q[j, 4] for j in kept) / len(kept)
+    assert s["coverage_50"] == sum(q[j, 1] <= eol - t[j] <= q[j, 3] for j in kept) / len(kept)
+    assert s["within_alpha_share"] == sum(abs(q[j, 2] - (eol - t[j])) <= 0.2 * (eol - t[j]) for j in kept) / len(kept)
+    ra = [1 - abs((eol - t[j]) - mean[j]) / (eol - t[j]) for j in kept]
+    assert s["mean_relative_accuracy"] == pytest.approx(np.mean(ra))
+    assert s["worst_relative_accuracy"] == pytest.approx(min(ra))
