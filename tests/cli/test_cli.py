@@ -117,7 +117,7 @@ def test_reports_typeset_deltas_and_signals_with_their_own_subscripts():
         assert "\\delta_{L_{a}}" in text and "\\delta_{k_{m}}" in text and "\\omega{\\left(t \\right)}" in text
         assert "\\delta_{L a}" not in text
     assert ("<msub><mi>&#948;</mi><msub><mi>L</mi><mi>a</mi></msub></msub>" in html
-            and "<mi>&#969;</mi><mo>(</mo><mi>t</mi><mo>)</mo>" in html)
+            and '<mi>&#969;</mi><mrow><mo stretchy="false">(</mo><mi>t</mi><mo stretchy="false">)</mo></mrow>' in html)
     assert "<mi>omega</mi>" not in html and "delta" not in html.split("<math", 1)[1]
 
 
