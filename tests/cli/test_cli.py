@@ -100,7 +100,8 @@ def test_arr_report_formats(tmp_path, capsys):
         code, _, err = run(capsys, "--quiet", "arr", "dc-motor", "--format", fmt, "--out", str(out))
         assert code == 0, err
         text = out.read_text()
-        name, parameter = ("ARR\\_1\\_m", "k\\_m") if fmt == "tex" else ("ARR_1_m", "k_m")
+        name = "ARR\\_1\\_m" if fmt == "tex" else "ARR_1_m"
+        parameter = "<msub><mi>k</mi><mi>m</mi></msub>" if fmt == "html" else "k_{m}"  # typeset, as in the ARRs
         assert name in text and parameter in text
     html = (tmp_path / "report.html").read_text()
     assert "<svg" in html and "<math" in html
