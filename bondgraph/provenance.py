@@ -42,8 +42,8 @@ __all__ = ["DISTRIBUTION", "MODEL_HASH_SOURCE", "Provenance", "generated_at", "m
 DISTRIBUTION = "bondgraph-phm"
 
 #: What :func:`model_sha256` hashes, in words, for a report to print beside the hash.
-MODEL_HASH_SOURCE = ("SHA-256 of the model's canonical JSON (bondgraph.io.to_json: its name, its elements with "
-                     "every attribute a model file holds, its bonds), nodes sorted by id, bonds by their ends, "
+MODEL_HASH_SOURCE = ("SHA-256 of the model's canonical JSON: bondgraph.io.to_json of its name, its elements with "
+                     "every attribute a model file holds and its bonds; nodes sorted by id, bonds by their ends, "
                      "keys sorted, no whitespace")
 
 
