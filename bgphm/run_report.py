@@ -4,8 +4,8 @@ A report puts on one page what the command found and how: the decision first, th
 from :mod:`bgphm.charts`: the residuals against their thresholds with the alarms, the candidates' evidence over
 time, the estimate with its band and failure value, the RUL with its bands, the truth when ``--truth`` gives
 it), then the model and ARRs used and every setting, with the provenance (tool version, date, the SHA-256 of
-the model and of the record).  Nothing is fetched: no script, font or style sheet from elsewhere, and every
-text that comes from the user (names, paths, messages) is escaped.
+the model and of the record, :mod:`bondgraph.provenance`).  Nothing is fetched: no script, font or style sheet
+from elsewhere, and every text that comes from the user (names, paths, messages) is escaped.
 
 The date honours ``SOURCE_DATE_EPOCH`` (a reproducible build sets it); without it, it is the time of the run.
 
@@ -20,7 +20,6 @@ True
 
 from __future__ import annotations
 
-import datetime
 import hashlib
 import html
 import os
@@ -32,8 +31,7 @@ import numpy as np
 
 from bgphm.charts import Chart
 
-__all__ = ["Page", "detection_page", "file_digest", "model_digest", "prognosis_page", "provenance", "report_date",
-           "simulation_page", "table"]
+__all__ = ["Page", "detection_page", "file_digest", "prognosis_page", "provenance", "simulation_page", "table"]
 
 STYLE = """
 body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 0; color: #1a1a1a; background: #fafafa; }
@@ -120,22 +118,6 @@ def _label(name: str, unit: str | None) -> str:
 
 # ------------------------------------------------------------------------------------------- provenance
 
-def report_date() -> str:
-    """The report's date and time in UTC: ``SOURCE_DATE_EPOCH`` if set (a reproducible build), else now."""
-    epoch = os.environ.get("SOURCE_DATE_EPOCH")
-    moment = (datetime.datetime.fromtimestamp(int(epoch), datetime.timezone.utc) if epoch and epoch.isdigit()
-              else datetime.datetime.now(datetime.timezone.utc))
-    return moment.strftime("%Y-%m-%d %H:%M UTC")
-
-
-def model_digest(model) -> str:
-    """SHA-256 of the model's node-link JSON (:func:`bondgraph.io.to_json`, compact): the same model, the same
-    digest, whatever file it came from."""
-    from bondgraph.io import to_json
-
-    return hashlib.sha256(to_json(model, indent=None).encode("utf-8")).hexdigest()
-
-
 def file_digest(path: str | os.PathLike) -> str:
     """SHA-256 of a file's bytes, read in blocks."""
     digest = hashlib.sha256()
@@ -146,15 +128,13 @@ def file_digest(path: str | os.PathLike) -> str:
 
 
 def provenance(model, data: str | os.PathLike | None = None) -> dict:
-    """What made the report: the tool's version, the date, the model's name and digest, the record's digest."""
-    from importlib.metadata import PackageNotFoundError, version
+    """What made the report (:func:`bondgraph.provenance.provenance`: the tool's version, the date, the model's
+    SHA-256) and the record's name and SHA-256."""
+    from bondgraph.provenance import provenance as made
 
-    try:
-        number = version("bondgraph-phm")
-    except PackageNotFoundError:
-        number = "unknown"
-    found = {"bondgraph-phm": number, "date": report_date(), "model": model.name,
-             "model SHA-256": model_digest(model)}
+    record = made(model)
+    found = {record.tool: record.version, "sympy": record.sympy, "date": record.generated, "model": model.name,
+             "model SHA-256": record.model_sha256}
     if data is not None:
         found.update({"record": Path(data).name, "record SHA-256": file_digest(data)})
     return found

@@ -8,7 +8,8 @@
 The reference covers every name in ``__all__`` of ``bondgraph``, ``diagnosis``, ``prognosis`` and its
 subpackages,
 the modules the tutorials use beside them (``bondgraph.library``, ``bondgraph.io``, ``bondgraph.drawing``,
-``diagnosis.records``, ``prognosis.metrics``), the rules of a model's names and domains (``bondgraph.names``,
+``diagnosis.records``, ``prognosis.metrics``), what a generated document says of its origin
+(``bondgraph.provenance``), the rules of a model's names and domains (``bondgraph.names``,
 ``bondgraph.domains``), ``bgphm.cli.main``, the public functions of
 ``bgphm.plotting`` and the fleet API of ``bgphm.fleet``.  Names are grouped by the module that defines
 them, in source order; a class is followed by its public methods and properties.  Signatures come from
@@ -36,7 +37,7 @@ OUTPUT = ROOT / "docs" / "api.md"
 PACKAGES = [
     ("bondgraph", "model, causality, equations, simulation",
      ["bondgraph.library", "bondgraph.io", "bondgraph.drawing", "bondgraph.names", "bondgraph.domains",
-      "bondgraph.units", "bondgraph.dimensions"]),
+      "bondgraph.units", "bondgraph.dimensions", "bondgraph.provenance"]),
     ("diagnosis", "ARRs, intervals, thresholds, signatures, detection", ["diagnosis.records"]),
     ("diagnosis.intervals", "outward-rounded interval arithmetic and the sympy-to-interval compiler", []),
     ("prognosis", "degradation laws, observation model, particle filter, RUL, metrics, health monitoring",

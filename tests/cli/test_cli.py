@@ -100,7 +100,8 @@ def test_arr_report_formats(tmp_path, capsys):
         code, _, err = run(capsys, "--quiet", "arr", "dc-motor", "--format", fmt, "--out", str(out))
         assert code == 0, err
         text = out.read_text()
-        name, parameter = ("ARR\\_1\\_m", "k\\_m") if fmt == "tex" else ("ARR_1_m", "k_m")
+        name = "ARR\\_1\\_m" if fmt == "tex" else "ARR_1_m"
+        parameter = "<msub><mi>k</mi><mi>m</mi></msub>" if fmt == "html" else "k_{m}"  # typeset, as in the ARRs
         assert name in text and parameter in text
     html = (tmp_path / "report.html").read_text()
     assert "<svg" in html and "<math" in html
@@ -117,7 +118,7 @@ def test_reports_typeset_deltas_and_signals_with_their_own_subscripts():
         assert "\\delta_{L_{a}}" in text and "\\delta_{k_{m}}" in text and "\\omega{\\left(t \\right)}" in text
         assert "\\delta_{L a}" not in text
     assert ("<msub><mi>&#948;</mi><msub><mi>L</mi><mi>a</mi></msub></msub>" in html
-            and "<mi>&#969;</mi><mo>(</mo><mi>t</mi><mo>)</mo>" in html)
+            and '<mi>&#969;</mi><mrow><mo stretchy="false">(</mo><mi>t</mi><mo stretchy="false">)</mo></mrow>' in html)
     assert "<mi>omega</mi>" not in html and "delta" not in html.split("<math", 1)[1]
 
 

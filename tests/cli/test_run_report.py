@@ -11,7 +11,8 @@ from html.parser import HTMLParser
 import pytest
 
 from bgphm.cli import main
-from bgphm.run_report import Page, model_digest
+from bgphm.run_report import Page
+from bondgraph.provenance import model_sha256
 from bondgraph.library import dc_motor
 
 
@@ -75,7 +76,7 @@ def test_the_detection_report_holds_each_residual_with_its_unit_and_the_alarm(wo
     assert f"alarm at {alarm:g} s" in page.svg_texts["legend-label"]
     assert page.scripts == 0 and page.external == []   # offline: nothing fetched, nothing run
     text = (folder / "d" / "report.html").read_text()
-    assert model_digest(dc_motor()) in text and "<math" in text
+    assert model_sha256(dc_motor()) in text and "<math" in text
 
 
 @pytest.mark.slow
@@ -156,10 +157,10 @@ def test_user_text_is_escaped_in_the_page():
 
 
 def test_the_report_date_honours_source_date_epoch(monkeypatch):
-    from bgphm.run_report import report_date
+    from bgphm.run_report import provenance
 
     monkeypatch.setenv("SOURCE_DATE_EPOCH", "0")
-    assert report_date() == "1970-01-01 00:00 UTC"
+    assert provenance(dc_motor())["date"] == "1970-01-01 00:00:00 UTC"
 
 
 def test_simulate_refuses_a_report_on_the_csv(tmp_path, capsys):
