@@ -155,8 +155,9 @@ def arr_report(bg: BondGraph, format: str = "md", *, arrs: list[ARR] | None = No
         notes = [str(w.message) for w in caught if issubclass(w.category, ARRWarning)]
     arrs = list(arrs)
     signature_header, signature_rows = _signature_table(signature_matrix(arrs))
+    units = bg.units
     content = _Content(bg.name, provenance(bg), [header for header, _ in ELEMENT_COLUMNS], _element_rows(bg),
-                       _drawings(bg), [_section(arr) for arr in arrs], signature_header, signature_rows, notes,
+                       _drawings(bg), [_section(arr, units) for arr in arrs], signature_header, signature_rows, notes,
                        _unreached_lines(bg, arrs))
     return {"md": _markdown, "html": _html, "tex": _latex}[format](bg, content)
 
@@ -210,11 +211,19 @@ ELEMENT_COLUMNS: tuple[tuple[str, Callable[[object, Element], tuple]], ...] = (
     ("kind", lambda name, e: (e.kind,)),
     ("parameter", lambda name, e: _name(e.param) if e.param else ()),
     ("nominal", lambda name, e: _number(e.value)),
+    ("unit", lambda name, e: _units(e)),
     ("delta", _delta),
     ("interval", _interval),
     ("law / modulus", _law),
     ("signal", lambda name, e: _name(e.signal) if e.signal else ()),
 )
+
+def _units(e: Element) -> tuple:
+    """The element's unit, then its law constants' and modulating signal's (``M: kg``): as text, SI symbols."""
+    own = (str(e.unit),) if e.unit is not None else ()
+    others = "; ".join(f"{name}: {unit}" for name, unit in e.units.items())
+    return own + ((("; " if own else "") + others,) if others else ())
+
 
 #: The columns whose cells are numbers (right-aligned in HTML).
 _NUMERIC = frozenset({"nominal", "delta", "interval"})
@@ -252,8 +261,12 @@ def _causality(bg: BondGraph, preferred: str):
         return None
 
 
-def _section(arr: ARR) -> _Section:
-    return _Section(arr.name, _arr_details(arr),
+def _section(arr: ARR, units=None) -> _Section:
+    details = _arr_details(arr)
+    unit = arr.unit(units) if units is not None and units.declared else None
+    if unit is not None:
+        details.insert(1, (f"Unit of the residual: {unit}",))
+    return _Section(arr.name, details,
                     [_equation(sp.Symbol("r_n"), arr.nominal), _equation(sp.Symbol("Psi_2"), arr.uncertain)])
 
 
