@@ -17,6 +17,7 @@ option at fault in a :class:`~bgphm.errors.UsageError` (exit code 2).
 
 from __future__ import annotations
 
+import hashlib
 import os
 import tempfile
 from collections.abc import Callable, Iterable, Mapping
@@ -27,7 +28,7 @@ from numpy.typing import ArrayLike
 
 from bgphm.errors import UsageError
 
-__all__ = ["check_output", "csv_text", "input_files", "write_text", "write_with"]
+__all__ = ["check_output", "csv_text", "file_digest", "input_files", "write_text", "write_with"]
 
 
 def input_files(*candidates: str | os.PathLike | None) -> list[Path]:
@@ -176,6 +177,21 @@ def write_text(path: str | os.PathLike, text: str) -> Path:
     '{}'
     """
     return write_with(path, lambda p: p.write_text(text, encoding="utf-8"))
+
+
+def file_digest(path: str | os.PathLike) -> str:
+    """The SHA-256 of a file's bytes (hex), read in blocks: what a report or a manifest says of an input.
+
+    >>> import tempfile, pathlib
+    >>> target = write_text(pathlib.Path(tempfile.mkdtemp()) / "x.txt", "abc")
+    >>> file_digest(target)[:16]
+    'ba7816bf8f01cfea'
+    """
+    digest = hashlib.sha256()
+    with open(path, "rb") as stream:
+        for block in iter(lambda: stream.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def csv_text(columns: Mapping[str, ArrayLike]) -> str:

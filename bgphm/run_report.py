@@ -20,7 +20,6 @@ True
 
 from __future__ import annotations
 
-import hashlib
 import html
 import os
 from collections.abc import Iterable, Mapping, Sequence
@@ -30,8 +29,9 @@ from pathlib import Path
 import numpy as np
 
 from bgphm.charts import Chart
+from bgphm.files import file_digest
 
-__all__ = ["Page", "detection_page", "file_digest", "prognosis_page", "provenance", "simulation_page", "table"]
+__all__ = ["Page", "detection_page", "prognosis_page", "provenance", "simulation_page", "table"]
 
 STYLE = """
 body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 0; color: #1a1a1a; background: #fafafa; }
@@ -117,15 +117,6 @@ def _label(name: str, unit: str | None) -> str:
 
 
 # ------------------------------------------------------------------------------------------- provenance
-
-def file_digest(path: str | os.PathLike) -> str:
-    """SHA-256 of a file's bytes, read in blocks."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as stream:
-        for block in iter(lambda: stream.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
-
 
 def provenance(model, data: str | os.PathLike | None = None) -> dict:
     """What made the report (:func:`bondgraph.provenance.provenance`: the tool's version, the date, the model's
