@@ -20,6 +20,7 @@ from ._progress import Progress
 __all__ = [
     "MAX_TRUTH_BYTES", "TRUTH_FIELDS", "assignments", "candidates_of", "check_truth", "csv_header",
     "detection_settings", "failures_of", "has_value", "laws_of", "load_arrs", "load_record", "named_arr",
+    "parameter_item",
     "read_fleet_truth", "read_truth", "truth_values", "what_can_fail",
 ]
 
@@ -146,16 +147,22 @@ def candidates_of(args, arrs: list, failures: dict, parameters: dict) -> list | 
     return [args.candidate]
 
 
+def parameter_item(item: str, parameters, option: str, form: str = "PARAM=VALUE") -> tuple[str, str]:
+    """``PARAM=TEXT`` split, the parameter checked against the model's; an error names the option and the item."""
+    name, sep, value = item.partition("=")
+    name = name.strip()
+    if not sep:
+        raise UsageError(f"{option} {item!r}: expected {form}")
+    if name not in parameters:
+        raise UsageError(f"{option} {item!r}: the model has no parameter {name!r} "
+                         f"(parameters: {', '.join(parameters)})")
+    return name, value
+
+
 def assignments(items: Sequence[str] | None, parameters: dict, option: str) -> dict:
     out = {}
     for item in items or ():
-        name, sep, value = item.partition("=")
-        name = name.strip()
-        if not sep:
-            raise UsageError(f"{option} {item!r}: expected PARAM=VALUE")
-        if name not in parameters:
-            raise UsageError(f"{option} {item!r}: the model has no parameter {name!r} "
-                             f"(parameters: {', '.join(parameters)})")
+        name, value = parameter_item(item, parameters, option)
         try:
             number = float(value)
         except ValueError:

@@ -15,6 +15,7 @@ from bondgraph.io import ModelSpec, load_model
 from ._inputs import (
     assignments,
     has_value,
+    parameter_item,
 )
 from ._outputs import emit, output_file, units_of, vars_of
 from ._progress import Progress
@@ -94,13 +95,7 @@ def _degradations(items: Sequence[str] | None, spec: ModelSpec, t_end: float, fi
     parameters = spec.model.parameters
     out = {}
     for item in items or ():
-        name, sep, text = item.partition("=")
-        name = name.strip()
-        if not sep:
-            raise UsageError(f"--degrade {item!r}: expected PARAM=LAW:RATE@ONSET, e.g. b=exp:0.05@10")
-        if name not in parameters:
-            raise UsageError(f"--degrade {item!r}: the model has no parameter {name!r} "
-                             f"(parameters: {', '.join(parameters)})")
+        name, text = parameter_item(item, parameters, "--degrade", "PARAM=LAW:RATE@ONSET, e.g. b=exp:0.05@10")
         if name in fixed:
             raise UsageError(f"--degrade {item!r}: {name} is also set by --set; give one of them")
         if name in out:
