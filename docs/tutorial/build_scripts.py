@@ -54,10 +54,10 @@ def fences(text: str) -> list[Fence]:
     for number, line in enumerate(text.splitlines(), start=1):
         if opened is not None:
             if line.rstrip() == "```":
-                language, start = opened
-                found.append(Fence(language, start, "".join(f"{part}\n" for part in body), section,
-                                   blank_since_code))
-                blank_since_code, opened = language in CODE, None
+                kind, start = opened
+                found.append(Fence(kind, start, "".join(f"{part}\n" for part in body), section, blank_since_code))
+                # a text block is the output of the code block before it only if nothing but blank lines is between
+                blank_since_code, opened = kind in CODE, None
             else:
                 body.append(line)
         elif line.startswith("```"):
