@@ -5,7 +5,8 @@
 * :class:`FleetFilter` (:mod:`.filter`): the particle arrays of every (asset, hypothesis) row and the
   vectorized SIR step on per-asset random streams (:mod:`prognosis.random_streams`);
 * :mod:`.rul`: closed-form crossing times and per-asset RUL summaries;
-* :class:`FleetResult` (:mod:`.results`): the tidy tables (alarms, estimates, RUL);
+* :class:`FleetResult` (:mod:`.results`): the tidy tables (alarms, estimates, RUL, residual traces);
+* :func:`~.traces.residual_trace` (:mod:`.traces`): what a fleet keeps of each residual, a short envelope;
 * :func:`write_checkpoint`, :func:`read_checkpoint` (:mod:`.checkpoint`): a stream's state on disk as
   sealed numeric arrays, never a pickle.
 """

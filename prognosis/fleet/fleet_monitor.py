@@ -38,6 +38,7 @@ from .checkpoint import check_state, read_checkpoint, write_checkpoint
 from .filter import ROW_STATE, FleetFilter
 from .live import LiveAsset
 from .results import FleetResult
+from .traces import TRACE_BUCKETS, residual_trace
 from .closed_form_rul import crossing_times, has_closed_form, summarize
 from ..errors import PrognosisError
 
@@ -90,6 +91,10 @@ class FleetMonitor:
         As :class:`~prognosis.isolation.IsolatingMonitor`.
     report_every : int, optional
         Write the estimates (with quantiles) every this many steps (default ``rul_every``).
+    trace_buckets : int
+        :meth:`run` keeps each asset's residuals, per ARR, in this many buckets at most (the ``residuals``
+        table, :func:`~prognosis.fleet.traces.residual_trace`; default
+        :data:`~prognosis.fleet.traces.TRACE_BUCKETS`); 0 keeps none.  A stream (:meth:`update`) keeps none.
 
     Examples
     --------
@@ -115,7 +120,7 @@ class FleetMonitor:
     def __init__(self, arrs: Sequence, failures: Mapping[str, float], *, noise_std: Mapping[str, float],
                  settings: IsolationSettings | None = None, detection: Mapping | None = None,
                  healthy_until: float | None = None, domains: Mapping[str, tuple] | None = None,
-                 report_every: int | None = None, **changes):
+                 report_every: int | None = None, trace_buckets: int = TRACE_BUCKETS, **changes):
         self.settings = s = (settings or FLEET_SETTINGS).changed(**changes)
         if s.method != "sir":
             raise SettingError("method", f"{{setting}}: the fleet's filter is the random-walk one, 'sir'; "
@@ -137,6 +142,9 @@ class FleetMonitor:
         if isinstance(report_every, bool) or int(report_every) != report_every or report_every < 1:
             raise PrognosisError(f"report_every must be a positive whole number of filter steps, got {report_every!r}")
         self.report_every = int(report_every)
+        if isinstance(trace_buckets, bool) or int(trace_buckets) != trace_buckets or trace_buckets < 0:
+            raise PrognosisError(f"trace_buckets must be a whole number >= 0, got {trace_buckets!r}")
+        self.trace_buckets = int(trace_buckets)
         self.streams = AssetStreams(s.seed)
         candidates = list(s.candidates) if s.candidates is not None else list(self.priors.failures)
         self.hypotheses, self.never = self.priors.hypotheses_for(candidates)
@@ -222,6 +230,8 @@ class FleetMonitor:
         record = as_record(record, self._columns, name=getattr(record, "name", None) or f"asset {asset!r}")
         check_signals(record, self._signals, self._sensors)
         evaluations = [a.evaluate(record, **o) for a, o in zip(self.arrs, self.options)]
+        if self.trace_buckets:
+            self._trace(asset, evaluations, result)
         t = evaluations[0].t
         alarm = np.zeros(t.size, bool)
         for e in evaluations:
@@ -243,6 +253,14 @@ class FleetMonitor:
         points = [np.stack([e.points[i][steps] for i in kept], axis=1) if kept else np.empty((steps.size, 0))
                   for e, kept in zip(evaluations, self._kept)]
         return _Asset(asset, t[steps], y, points, started, starts)
+
+    def _trace(self, asset, evaluations: list, result: FleetResult) -> None:
+        """The residuals table's rows of one asset: each ARR's trace (:func:`~prognosis.fleet.traces.residual_trace`).
+        """
+        for arr, evaluation in zip(self.arrs, evaluations):
+            trace = residual_trace(evaluation, self.trace_buckets)
+            size = trace["t"].size
+            result.add("residuals", asset=[asset] * size, arr=[arr.name] * size, **trace)
 
     def _start(self, windows: list, fired: list) -> tuple[list, list]:
         """The hypotheses an alarm starts (those of the signature's candidates) and their initial boxes.

@@ -1,6 +1,6 @@
 """Tidy tables of a fleet's results: one row per (asset, time), columns of plain numpy arrays.
 
-Three tables, each a mapping of column name to a numpy array (all of one length):
+Four tables, each a mapping of column name to a numpy array (all of one length):
 
 * ``alarms``: ``asset``, ``t`` (the first alarm), ``arr`` (one row per ARR in alarm then);
 * ``estimates`` (every ``report_every`` filter steps): ``asset``, ``hypothesis``, ``step``, ``t``,
@@ -9,7 +9,11 @@ Three tables, each a mapping of column name to a numpy array (all of one length)
 * ``rul`` (every ``rul_every`` filter steps): ``asset``, ``step``, ``t``, ``mean``, ``p5``,
   ``p50``, ``p95`` (s; censored particles count as ``+inf`` in the quantiles), ``censored`` (the
   weight that does not fail within the horizon), ``hypothesis`` (the most probable),
-  ``probability`` and ``status`` (of :func:`~prognosis.isolation.decide`).
+  ``probability`` and ``status`` (of :func:`~prognosis.isolation.decide`);
+* ``residuals`` (every asset, alarm or not, from :meth:`~prognosis.fleet.FleetMonitor.run`): ``asset``,
+  ``arr``, ``t``, ``low``, ``high``, ``band_low``, ``band_high``: each ARR's ``-r_n`` in at most
+  :data:`~prognosis.fleet.traces.TRACE_BUCKETS` buckets, its envelope and the threshold band
+  (:func:`~prognosis.fleet.traces.residual_trace`), what a chart of the asset needs.
 
 Asset ids are written as strings.  :meth:`FleetResult.frame` gives a pandas DataFrame (pandas is
 imported on demand); ``bgphm fleet`` writes the tables to Parquet.
@@ -28,12 +32,13 @@ from ..errors import PrognosisError
 
 __all__ = ["COLUMNS", "INTEGER", "TABLES", "TEXT", "FleetResult", "empty_table"]
 
-TABLES = ("alarms", "estimates", "rul")
+TABLES = ("alarms", "estimates", "rul", "residuals")
 COLUMNS = {
     "alarms": ("asset", "t", "arr"),
     "estimates": ("asset", "hypothesis", "step", "t", "theta_mean", "theta_p5", "theta_p50", "theta_p95",
                   "gamma_mean", "gamma_p5", "gamma_p50", "gamma_p95", "ess", "log_evidence"),
     "rul": ("asset", "step", "t", "mean", "p5", "p50", "p95", "censored", "hypothesis", "probability", "status"),
+    "residuals": ("asset", "arr", "t", "low", "high", "band_low", "band_high"),
 }
 TEXT = {"asset", "arr", "hypothesis", "status"}
 INTEGER = {"step"}
@@ -93,6 +98,10 @@ class FleetResult:
     @property
     def rul(self) -> dict:
         return self.table("rul")
+
+    @property
+    def residuals(self) -> dict:
+        return self.table("residuals")
 
     def rows(self, name: str) -> int:
         """Number of rows of table ``name``."""
