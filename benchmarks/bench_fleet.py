@@ -94,6 +94,7 @@ from prognosis import HealthMonitor  # noqa: E402
 from prognosis.degradation import ExponentialDegradation  # noqa: E402
 from prognosis.fleet import FleetFilter  # noqa: E402
 from prognosis.fleet.fleet_monitor import BLOCK  # noqa: E402
+from prognosis.fleet.results import TABLES  # noqa: E402
 from prognosis.hypotheses import Hypothesis, rate_prior  # noqa: E402
 from prognosis.metrics import mean_relative_accuracy, relative_accuracy  # noqa: E402
 from prognosis.health_monitor import filter_stride  # noqa: E402
@@ -232,7 +233,7 @@ def timed_run(spec: FleetSpec, records: Path, out: Path, **options) -> dict:
 
 def identical(a, b) -> bool:
     """Bitwise equality of every column of every table of two fleet results (NaN equal to NaN)."""
-    for name in ("alarms", "estimates", "rul"):
+    for name in TABLES:
         ta, tb_ = a.table(name), b.table(name)
         if set(ta) != set(tb_):
             return False

@@ -11,7 +11,7 @@
     bgphm prognose MODEL DATA.csv --fail PARAM=VALUE [--fail ...] [--candidate P] [--degradation LAW] [--out DIR]
     bgphm fleet MODEL RECORDS --fail PARAM=VALUE [--fail ...] --calibrate T --out DIR [--scheduler ADDRESS]
                 [--workers N] [--particles N] [--dt S] [--rul-every K] [--seed S] [--on-bad-record stop|skip]
-                [--force] [--resume]
+                [--force] [--resume] [--no-page]
     bgphm demo [dc-motor|torsion-bar|three-tank] [--out DIR] [--seed N]
 
 MODEL is a JSON file (networkx node-link form), a Python file defining ``model``, or a built-in example
@@ -56,8 +56,8 @@ COMMANDS = {
     "simulate": "simulate the model and write its signals as CSV",
     "detect": "residuals, robust thresholds and alarms on recorded data",
     "prognose": "estimate a degrading parameter and predict the RUL from recorded data",
-    "fleet": "monitor a fleet: records of many assets to Parquet tables of alarms, estimates and RULs, on Dask "
-             "workers",
+    "fleet": "monitor a fleet: records of many assets to Parquet tables of alarms, estimates, RULs and residuals, "
+             "on Dask workers, and an overview page (index.html)",
     "demo": "run the whole chain on a built-in example and write every output",
 }
 
@@ -310,9 +310,13 @@ def _fleet_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--seed", type=int, default=PROGNOSIS.seed, help=f"random seed (default {PROGNOSIS.seed}); each "
                    "asset's draws depend only on "
                    "it, the asset id and the step")
-    p.add_argument("--out", required=True, help="output directory (new or empty, unless --force)")
+    p.add_argument("--out", required=True, help="output directory (new or empty, unless --force): the Parquet "
+                   "tables alarms/, estimates/, rul/ and residuals/, summary.json, index.html (the overview page: "
+                   "open it in a browser, it needs no network) and manifest.json")
     p.add_argument("--force", action="store_true", help="write into a non-empty --out directory (a previous "
                    "fleet run's tables there are replaced, whole, when this one ends)")
+    p.add_argument("--no-page", action="store_true", help="write no index.html (the page reads the tables whole "
+                   "in this process: for fleets far beyond 10^4 assets)")
     p.add_argument("--on-bad-record", choices=("stop", "skip"), default="stop",
                    help="a record that cannot be used (unreadable, a column without a value, a stuck sensor, too "
                    "short): stop the run naming it (default), or skip the asset and list it with the reason in "

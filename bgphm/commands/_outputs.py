@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from bgphm.files import check_output, input_files, write_text
+from bgphm.units import units_of
 
 from ._progress import Progress
 
@@ -53,15 +54,6 @@ def json_value(value):
     if isinstance(value, np.ndarray):
         return value.tolist()
     raise TypeError(f"not JSON serializable: {type(value).__name__}")
-
-
-def units_of(model, arrs) -> dict:
-    """The units a command's JSON states: time, each signal and parameter of the model, each residual (empty
-    texts where the model declares none)."""
-    units = model.units
-    return {"t": "s", "signals": {s: units.text(s) for s in [*model.inputs, *model.outputs]},
-            "parameters": {p: units.text(p) for p in model.parameters},
-            "residuals": {arr.name: str(arr.unit(units) or "") for arr in arrs}}
 
 
 def estimate_labels(summary: dict, failures: dict, units) -> dict:

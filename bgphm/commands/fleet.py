@@ -25,11 +25,15 @@ def run(args, progress: Progress) -> int:
     first ``--calibrate`` seconds of the first ``--calibrate-assets`` records (by asset id): the median
     over them, per ARR, serves every asset.  The assets then run in shards on a local Dask cluster
     (``--workers``), on a running one (``--scheduler``), or in this process (``--workers 0``), through
-    :func:`bgphm.fleet.run_fleet`, which writes the tables ``alarms/``, ``estimates/`` and ``rul/`` and
-    ``summary.json`` under ``--out``.  Progress goes to stderr by assets done.
+    :func:`bgphm.fleet.run_fleet`, which writes the tables ``alarms/``, ``estimates/``, ``rul/`` and
+    ``residuals/``, ``summary.json`` (with the units), the overview page ``index.html``
+    (:mod:`bgphm.fleet.page`; not with ``--no-page``) and ``manifest.json`` under ``--out``.  Progress
+    goes to stderr by assets done.
     """
     from bgphm.fleet import FleetSpec, model_reference, open_source, run_fleet
     from bgphm.fleet.engine import WORKERS, require_dask
+    from bgphm.fleet.outdir import PAGE
+    from prognosis.fleet.results import TABLES
     from bgphm.fleet.sources import pyarrow_modules
 
     pyarrow_modules()  # the missing extra named before any work
@@ -68,7 +72,7 @@ def run(args, progress: Progress) -> int:
              f"particles each, dt = {dt:g} s")
     summary = run_fleet(job, source, out, scheduler=args.scheduler, workers=args.workers,
                         shard_size=args.shard_size, progress=fleet_progress(progress), notes=calibration,
-                        resume=args.resume, on_bad_record=args.on_bad_record)
+                        resume=args.resume, on_bad_record=args.on_bad_record, page=not args.no_page)
     for asset, why in list(summary["skipped"].items())[:5]:
         progress(f"skipped {asset}: {why}")
     print(f"{summary['assets']} assets, {summary['assets_with_alarm']} with an alarm, {summary['rows']['rul']} RUL "
@@ -78,6 +82,7 @@ def run(args, progress: Progress) -> int:
     if summary["skipped"]:
         print(f"{len(summary['skipped'])} asset(s) skipped for a bad record, each with its reason in "
               f"{out / 'summary.json'} (skipped)")
-    print(f"wrote {out / 'alarms'}, {out / 'estimates'}, {out / 'rul'} (Parquet), {out / 'summary.json'} and "
-          f"{out / 'manifest.json'}{resumed}")
+    tables = ", ".join(str(out / name) for name in TABLES)
+    page = "" if args.no_page else f", {out / PAGE} (open it in a browser)"
+    print(f"wrote {tables} (Parquet), {out / 'summary.json'}{page} and {out / 'manifest.json'}{resumed}")
     return EXIT_OK

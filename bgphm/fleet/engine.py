@@ -27,10 +27,14 @@ from typing import NamedTuple
 
 from bgphm.errors import FleetError, FleetWarning, MissingExtraError, UsageError
 
+from bgphm.units import units_of
+from prognosis.fleet.results import TABLES
+
 from .outdir import Output, locked
+from .page import fleet_page
 from .sources import open_source
 from .spec import FleetSpec, monitor_for
-from .store import BUCKETS, write_shard
+from .store import BUCKETS, read_tables, write_shard
 
 __all__ = ["SERIAL", "WORKERS", "Task", "default_shard_size", "local_cluster", "malloc_setting", "plan", "require_dask",
            "run_fleet", "run_shard", "shard_assets"]
@@ -101,7 +105,7 @@ def run_shard(task: Task) -> dict:
 def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, workers: int = WORKERS,
               shard_size: int | None = None, buckets: int = BUCKETS,
               progress: Callable[[int, int], None] | None = None, notes: dict | None = None,
-              resume: bool = False, on_bad_record: str = "stop") -> dict:
+              resume: bool = False, on_bad_record: str = "stop", page: bool = True) -> dict:
     """Monitor every asset of ``sources`` and write the tables to Parquet under ``out``; return the summary.
 
     Parameters
@@ -112,10 +116,11 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
         A directory of CSV files (one per asset, the id is the file name) or a Parquet file with an
         ``asset`` column (:func:`~bgphm.fleet.sources.open_source`).
     out : path
-        Output directory: ``alarms/``, ``estimates/`` and ``rul/`` (Parquet, partitioned by asset
-        bucket), ``summary.json`` and ``manifest.json`` (:mod:`bgphm.fleet.outdir`).  One run at a
-        time writes there (a second is refused while the first lives); shards are staged and the
-        tables replace a previous run's whole at the end, ``manifest.json`` last.
+        Output directory: ``alarms/``, ``estimates/``, ``rul/`` and ``residuals/`` (Parquet,
+        partitioned by asset bucket), ``summary.json``, ``index.html`` and ``manifest.json``
+        (:mod:`bgphm.fleet.outdir`).  One run at a time writes there (a second is refused while the
+        first lives); shards are staged and the tables replace a previous run's whole at the end,
+        ``manifest.json`` last.
     scheduler : None, "serial", str or distributed.Client
         None: a local Dask cluster of ``workers`` processes (one thread each); ``"serial"`` (or
         ``workers=0``): every shard in this process, without Dask; ``"tcp://host:port"``: the
@@ -139,13 +144,17 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
         Go on with the interrupted run staged under ``out``: the same spec, records, shards and
         buckets are required, and its finished shards (their files checked against their SHA-256)
         are kept; the tables equal those of an uninterrupted run, bit for bit.
+    page : bool
+        Write the overview page ``index.html`` (:mod:`bgphm.fleet.page`), built from the tables this
+        process reads back whole; False removes a previous run's (it would show other tables).
 
     Returns
     -------
     dict
         What ``summary.json`` holds: assets, assets with an alarm, rows per table, shards, seconds
         (wall, and summed over tasks), the monitors the tasks built (one per worker process, none
-        where a process kept it from an earlier run of the same spec), the spec.
+        where a process kept it from an earlier run of the same spec), the spec, and the units
+        (time, signals, parameters, residuals: :func:`bgphm.units.units_of`).
 
     Examples
     --------
@@ -205,8 +214,19 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
             where = _run_dask(todo, scheduler, workers, report) if todo else SERIAL
         summary = _summary(spec, source, done, where, size, buckets, time.perf_counter() - start, notes)
         summary["resumed_shards"] = len(finished)
-        output.publish(summary, _manifest(facts, done, size))
+        built, _ = monitor_for(spec)  # this process built it already (the check above, or the serial shards)
+        summary["units"] = units_of(built.model, built.monitor.arrs)
+        text = _page(output, built, summary, facts, done) if page else None
+        output.publish(summary, _manifest(facts, done, size), text)
     return summary
+
+
+def _page(output: Output, built, summary: dict, facts: dict, done: list) -> str:
+    """The overview page of the run, from its staged tables (read back and checked against their SHA-256)."""
+    files = {path: digest for s in done for path, digest in s["files"].items()}
+    assets = [asset for shard in facts["shards"] for asset in shard]
+    return fleet_page(read_tables(output.staging, files), summary, assets=assets, units=summary["units"],
+                      horizon=built.monitor.settings.rul_horizon)
 
 
 def _manifest(facts: dict, done: list, size: int) -> dict:
@@ -230,7 +250,7 @@ def _check_counts(workers, shard_size, buckets) -> None:
 
 def _summary(spec, source, done, where, size, buckets, seconds, notes) -> dict:
     done = sorted(done, key=lambda s: s["shard"])
-    rows = {name: sum(s["rows"][name] for s in done) for name in ("alarms", "estimates", "rul")}
+    rows = {name: sum(s["rows"].get(name, 0) for s in done) for name in TABLES}
     assets = sum(s["assets"] for s in done)
     task_seconds = sum(s["seconds"] for s in done)
     return {"records": source.describe(), "scheduler": where, "assets": assets,

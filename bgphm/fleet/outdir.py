@@ -6,15 +6,16 @@ Layout under ``--out``::
     .staging/plan.json           # during a run: what it runs (spec, records, shards, buckets)
     .staging/shards.jsonl        # one line per finished shard: its rows and its files' SHA-256
     .staging/rul/bucket=03/part-00012.parquet ...
-    alarms/ estimates/ rul/      # the published tables (Parquet, by asset bucket)
+    alarms/ estimates/ rul/ residuals/    # the published tables (Parquet, by asset bucket)
     summary.json
+    index.html                   # the overview page (bgphm.fleet.page), built from the staged tables
     manifest.json                # written last: assets, shards, files and their SHA-256, settings
 
 A run takes the lock first: a second run on the same ``--out`` is refused while the first lives.
 Workers write each shard's files into ``.staging`` (hidden: pandas and pyarrow skip it), and the
 driver records each finished shard.  At the end the tables are published: ``manifest.json`` goes,
 each table's directory is swapped for its staged one in one rename (files a user put there move
-along), ``summary.json`` is written, and ``manifest.json`` last.  A reader (:func:`~bgphm.fleet.
+along), ``summary.json`` and ``index.html`` are written, and ``manifest.json`` last.  A reader (:func:`~bgphm.fleet.
 store.read_fleet`) requires the manifest and checks the files against it, so the tables it returns
 are those of one whole run.  An interrupted run leaves the previous run's tables whole and its
 finished shards staged; ``resume=True`` checks them against ``plan.json`` and the recorded
@@ -36,13 +37,14 @@ from bgphm.errors import FleetError
 from bgphm.files import write_text
 from prognosis.fleet.results import TABLES
 
-__all__ = ["BUCKET", "MANIFEST", "PART", "STAGING", "Output", "file_digest", "locked", "read_manifest"]
+__all__ = ["BUCKET", "MANIFEST", "PAGE", "PART", "STAGING", "Output", "file_digest", "locked", "read_manifest"]
 
 LOCK = ".lock"
 STAGING = ".staging"
 PLAN = "plan.json"
 DONE = "shards.jsonl"
 MANIFEST = "manifest.json"
+PAGE = "index.html"  # the overview page (bgphm.fleet.page), published with the tables
 FORMAT = "bgphm fleet tables"
 VERSION = 1
 PART = re.compile(r"part-\d+\.parquet")  # a table's files: <table>/bucket=NN/part-SSSSS.parquet
@@ -128,8 +130,12 @@ class Output:
             stream.flush()
             os.fsync(stream.fileno())
 
-    def publish(self, summary: dict, manifest: dict) -> None:
-        """Swap each table for its staged one, then write ``summary.json`` and ``manifest.json`` (last)."""
+    def publish(self, summary: dict, manifest: dict, page: str | None = None) -> None:
+        """Swap each table for its staged one, then write ``summary.json``, the page and ``manifest.json`` (last).
+
+        ``page`` is the text of ``index.html``; without it, an ``index.html`` there is removed (it would show
+        another run's tables).
+        """
         (self.out / MANIFEST).unlink(missing_ok=True)  # from here on, no reader takes the tables as whole
         for name in TABLES:
             staged, table = self.staging / name, self.out / name
@@ -141,6 +147,10 @@ class Output:
             staged.rename(table)
             shutil.rmtree(old, ignore_errors=True)
         write_text(self.out / "summary.json", json.dumps(summary, indent=2))
+        if page is None:
+            (self.out / PAGE).unlink(missing_ok=True)
+        else:
+            write_text(self.out / PAGE, page)
         write_text(self.out / MANIFEST, json.dumps({"format": FORMAT, "version": VERSION, **manifest}, indent=1))
         shutil.rmtree(self.staging, ignore_errors=True)
 

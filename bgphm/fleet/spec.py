@@ -165,10 +165,12 @@ def _thawed(value: Mapping) -> dict:
 
 @dataclass
 class Built:
-    """What a worker builds from a spec: the monitor and the record columns it reads (signals, antiderivatives)."""
+    """What a worker builds from a spec: the monitor, the record columns it reads (signals, antiderivatives) and
+    the model (its units name the page's axes)."""
 
     monitor: object  # a prognosis.fleet.FleetMonitor
     signals: list
+    model: object = None  # the bondgraph.BondGraph
 
 
 _local = threading.local()  # FleetMonitor's streams share one generator: one monitor per thread
@@ -224,5 +226,5 @@ def build(spec: FleetSpec) -> Built:
     # the detection reads the antiderivative columns too (e.g. encoder angles): a source must read them
     signals = list(dict.fromkeys(s for arr, options in zip(monitor.arrs, monitor.options)
                                  for s in (*arr.signals, *(options.get("antiderivatives") or {}).values())))
-    return Built(monitor, signals)
+    return Built(monitor, signals, loaded.model)
 

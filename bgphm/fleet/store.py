@@ -32,7 +32,7 @@ from prognosis.random_streams import asset_key
 from .outdir import BUCKET, MANIFEST, PART, STAGING, file_digest, read_manifest
 from .sources import pyarrow_modules
 
-__all__ = ["BUCKETS", "bucket_of", "read_fleet", "write_shard"]
+__all__ = ["BUCKETS", "bucket_of", "read_fleet", "read_tables", "write_shard"]
 
 BUCKETS = 16  # partitions per table: few enough files, small enough to read one bucket's assets alone
 
@@ -89,7 +89,6 @@ def read_fleet(out: str | Path) -> FleetResult:
         ``out`` holds no fleet tables; the run did not finish, is still running or was interrupted
         (no ``manifest.json``); a table's files are not those of the manifest, or one was altered.
     """
-    pa, pc, pq = pyarrow_modules()
     out = Path(out)
     if not any((out / name).exists() for name in (*TABLES, MANIFEST, STAGING)):
         raise FleetError(f"{out}: not the output of a fleet run (no {', '.join(TABLES)} directories)")
@@ -101,12 +100,25 @@ def read_fleet(out: str | Path) -> FleetResult:
         raise FleetError(f"{out}: the tables' files are not those of manifest.json"
                          + (f"; not listed: {', '.join(extra[:3])}" if extra else "")
                          + (f"; missing: {', '.join(missing[:3])}" if missing else ""))
+    return read_tables(out, listed)
+
+
+def read_tables(root: str | Path, files: dict) -> FleetResult:
+    """The tables of the part files ``files`` (``{path relative to root: SHA-256}``), each checked against its digest.
+
+    :func:`read_fleet` reads a published run with it; ``run_fleet`` reads the staged shards of its run with it,
+    for the page, before it publishes them.  Rows are ordered by asset id, each asset's rows in the order the
+    monitor wrote them.
+    """
+    pa, pc, pq = pyarrow_modules()
+    root = Path(root)
     result = FleetResult()
     for name in TABLES:
         parts = []
-        for path in _parts(out / name):
+        for relative in sorted(path for path in files if path.split("/")[0] == name):
+            path = root / relative
             content = path.read_bytes()
-            if hashlib.sha256(content).hexdigest() != listed[path.relative_to(out).as_posix()]:
+            if hashlib.sha256(content).hexdigest() != files[relative]:
                 raise FleetError(f"{path}: its SHA-256 is not the manifest's: the file was altered after the run")
             parts.append(pq.read_table(pa.BufferReader(content), schema=schema(name)))
         if not parts:

@@ -18,6 +18,7 @@ from bgphm.fleet import (CsvDirectory, FleetSpec, ParquetRecords, bucket_of, def
 from bgphm.fleet.spec import monitor_for
 from bondgraph.errors import PHMError
 from diagnosis.records import RecordError
+from prognosis.fleet.results import TABLES
 
 from .fleets import ONSETS, spec, without_dask, write_fleet
 
@@ -40,7 +41,7 @@ def reference(records, tmp_path_factory):
 
 def same_tables(a, b) -> bool:
     """Bitwise equality of every column of every table (NaN equal to NaN)."""
-    for name in ("alarms", "estimates", "rul"):
+    for name in TABLES:
         ta, tb = a.table(name), b.table(name)
         if set(ta) != set(tb):
             return False
@@ -146,6 +147,23 @@ def test_a_serial_run_writes_the_tables_by_bucket_and_a_summary(reference):
     assert abs(rul["t"][-1] + rul["p50"][-1] - 2.8) < 0.5  # R reaches 20 ohm at t = 2.8 s
 
 
+def test_the_page_is_published_with_the_tables_and_removed_without_it(records, reference, tmp_path):
+    from bgphm.fleet.page import read_page_data
+
+    out, summary = reference
+    data = read_page_data((out / "index.html").read_text(encoding="utf-8"))
+    assert sorted(row[0] for row in data["rows"]) == sorted(ONSETS) and data["counts"]["with_alarm"] == 4
+    assert summary["rows"]["residuals"] == 6 * 64   # every asset, the ARR sensitive to R, 64 buckets
+    assert summary["units"]["residuals"] == {"ARR_J1": "V"} and summary["units"]["parameters"]["R"] == "Ohm"
+    folder = tmp_path / "records"
+    folder.mkdir()
+    (folder / "c0.csv").write_text((records / "c0.csv").read_text())
+    run_fleet(spec(), folder, tmp_path / "out", workers=0)
+    assert (tmp_path / "out" / "index.html").is_file()
+    run_fleet(spec(), folder, tmp_path / "out", workers=0, page=False)   # a page of another run would mislead
+    assert not (tmp_path / "out" / "index.html").exists() and (tmp_path / "out" / "manifest.json").is_file()
+
+
 @pytest.mark.slow
 def test_results_do_not_depend_on_the_sharding(records, reference, tmp_path):
     """One shard of six (the reference), three of two, six of one: bitwise the same tables."""
@@ -187,7 +205,7 @@ def test_a_second_run_replaces_the_parts_of_the_first(records, reference, tmp_pa
 def test_read_fleet_refuses_a_folder_that_is_not_a_fleet_and_a_run_without_its_manifest(reference, tmp_path):
     with pytest.raises(FleetError, match="not the output of a fleet run"):
         read_fleet(tmp_path)
-    for name in ("alarms", "estimates", "rul"):
+    for name in TABLES:
         (tmp_path / name).mkdir()
     with pytest.raises(FleetError, match="no manifest.json: the fleet run did not finish"):
         read_fleet(tmp_path)

@@ -72,6 +72,26 @@ def test_the_command_writes_parquet_tables_and_a_summary(fleet_run):
     assert sorted(set(result.rul["asset"])) == ["c0", "c2"]
 
 
+def test_the_command_writes_the_overview_page_with_the_units(fleet_run):
+    """A real run of the command (three RLC circuits, --workers 0) writes index.html beside the tables."""
+    from bgphm.fleet.page import read_page_data
+
+    code, out, _, folder = fleet_run
+    assert code == 0 and f"{folder / 'index.html'} (open it in a browser)" in out
+    assert f"{folder / 'residuals'}" in out
+    data = read_page_data((folder / "index.html").read_text(encoding="utf-8"))
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["units"]["parameters"]["R"] == "Ohm" and summary["units"]["t"] == "s"
+    assert data["units"]["residuals"] == summary["units"]["residuals"] and data["units"]["rul"] == "s"
+    assert all(summary["units"]["residuals"][arr] for arr in data["arrs"])   # every residual has its unit
+    assert [row[0] for row in data["rows"]][2] == "c1" and data["rows"][2][9] == "no alarm"
+    rul = read_fleet(folder).rul
+    last = {asset: p5 for asset, p5 in zip(rul["asset"], rul["p5"])}   # each asset's last row wins
+    assert [row[0] for row in data["rows"][:2]] == sorted(last, key=last.get)
+    assert data["counts"]["with_alarm"] == 2 and data["kept"] == 3 and data["failures"] == {"R": 20.0}
+    assert data["horizon"] > 0 and data["model"] == "rlc"
+
+
 def test_the_command_reports_progress_by_assets_done(fleet_run):
     _, _, err, _ = fleet_run
     assert "3 assets in CSV directory" in err and "fleet: 3 of 3 assets (100 %)" in err
