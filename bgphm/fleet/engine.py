@@ -27,6 +27,7 @@ from typing import NamedTuple
 
 from bgphm.errors import FleetError, FleetWarning, MissingExtraError, UsageError
 
+from bgphm.run_report import provenance
 from bgphm.units import units_of
 from prognosis.fleet.results import TABLES
 
@@ -226,7 +227,7 @@ def _page(output: Output, built, summary: dict, facts: dict, done: list) -> str:
     files = {path: digest for s in done for path, digest in s["files"].items()}
     assets = [asset for shard in facts["shards"] for asset in shard]
     return fleet_page(read_tables(output.staging, files), summary, assets=assets, units=summary["units"],
-                      horizon=built.monitor.settings.rul_horizon)
+                      horizon=built.monitor.settings.rul_horizon, provenance=provenance(built.model))
 
 
 def _manifest(facts: dict, done: list, size: int) -> dict:

@@ -24,12 +24,12 @@ from __future__ import annotations
 import html
 import json
 import math
-import os
 import re
 from collections.abc import Mapping, Sequence
-from datetime import datetime, timezone
 
 import numpy as np
+
+from bondgraph.provenance import DISTRIBUTION, generated_at, tool_version
 
 from .page_script import SCRIPT, STYLE
 
@@ -144,7 +144,7 @@ def _groups(table: Mapping) -> dict[str, np.ndarray]:
 
 
 def page_data(result, summary: Mapping, *, assets: Sequence[str], units: Mapping, horizon: float | None,
-              generated: str | None = None) -> dict:
+              provenance: Mapping[str, str] | None = None) -> dict:
     """What the page embeds, without the assets' details: header, settings, units, counts, timeline, ranked rows.
 
     Parameters
@@ -159,8 +159,10 @@ def page_data(result, summary: Mapping, *, assets: Sequence[str], units: Mapping
         The ``units`` block (:func:`bgphm.units.units_of`).
     horizon : float, optional
         The RUL horizon (s) of the monitor.
-    generated : str, optional
-        The date shown (default: now, or ``SOURCE_DATE_EPOCH`` when set, as reproducible builds do).
+    provenance : mapping of str to str, optional
+        What made the page, shown as it is (``bgphm.run_report.provenance``: the tool's version, the date, the
+        model's SHA-256); default: the tool's version and the date (now, or ``SOURCE_DATE_EPOCH``,
+        :func:`bondgraph.provenance.generated_at`).
 
     Returns
     -------
@@ -177,7 +179,7 @@ def page_data(result, summary: Mapping, *, assets: Sequence[str], units: Mapping
     ...            p50=[8.0, 2.0], p95=[np.inf, 3.0], censored=[0.2, 0.0], hypothesis=["R/linear"] * 2,
     ...            probability=[1.0, 1.0], status=["isolated"] * 2)
     >>> data = page_data(result, {"spec": {"model": "rlc"}, "skipped": {"d": "no column 'i'"}},
-    ...                  assets=["a", "b", "c", "d"], units={"t": "s"}, horizon=20.0, generated="today")
+    ...                  assets=["a", "b", "c", "d"], units={"t": "s"}, horizon=20.0, provenance={"date": "today"})
     >>> [row[0] for row in data["rows"]], [row[-1] for row in data["rows"]]
     (['b', 'a', 'c', 'd'], ['isolated', 'isolated', 'no alarm', 'skipped'])
     >>> data["counts"]["with_alarm"], data["counts"]["status"]["isolated"], data["rows"][1][6]
@@ -197,7 +199,8 @@ def page_data(result, summary: Mapping, *, assets: Sequence[str], units: Mapping
     statuses = {status: found.count(status) for status in _ORDER if status in found}
     statuses.update({status: found.count(status) for status in sorted(set(found) - set(_ORDER))})
     return {"format": FORMAT, "version": VERSION, "model": str(spec.get("model", "")),
-            "records": str(summary.get("records", "")), "generated": generated or _now(), "bgphm": _version(),
+            "records": str(summary.get("records", "")),
+            "provenance": {str(k): str(v) for k, v in (provenance or _made()).items()},
             "units": {"t": "s", "rul": "s", **dict(units)}, "horizon": _number(horizon),
             "failures": {str(k): _number(v) for k, v in spec.get("failures", {}).items()},
             # the ARRs in the monitor's order (the units block's), then any other the table holds
@@ -275,19 +278,9 @@ def _settings(summary: Mapping, units: Mapping, horizon) -> list[list[str]]:
     return rows
 
 
-def _now() -> str:
-    epoch = os.environ.get("SOURCE_DATE_EPOCH")
-    when = datetime.fromtimestamp(int(epoch), timezone.utc) if epoch and epoch.isdigit() else datetime.now(timezone.utc)
-    return when.strftime("%Y-%m-%d %H:%M UTC")
-
-
-def _version() -> str:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return version("bondgraph-phm")
-    except PackageNotFoundError:  # a source tree never installed
-        return "unknown"
+def _made() -> dict:
+    """The provenance of a page made without a model: the tool's version and the date."""
+    return {DISTRIBUTION: tool_version(), "date": generated_at()}
 
 
 # ------------------------------------------------------------------------------------------ details
@@ -344,7 +337,7 @@ def _json(value) -> str:
 
 
 def fleet_page(result, summary: Mapping, *, assets: Sequence[str], units: Mapping, horizon: float | None = None,
-               budget: int = PAGE_BYTES, generated: str | None = None) -> str:
+               budget: int = PAGE_BYTES, provenance: Mapping[str, str] | None = None) -> str:
     """The text of ``index.html`` for a fleet run's tables (see the module's docstring).
 
     Parameters
@@ -361,8 +354,8 @@ def fleet_page(result, summary: Mapping, *, assets: Sequence[str], units: Mappin
     budget : int
         The page's size bound in bytes: the assets' details go in ranking order while the page holds
         within it (the overview itself always goes in).
-    generated : str, optional
-        The date shown (see :func:`page_data`).
+    provenance : mapping of str to str, optional
+        What made the page (see :func:`page_data`).
 
     Examples
     --------
@@ -373,7 +366,7 @@ def fleet_page(result, summary: Mapping, *, assets: Sequence[str], units: Mappin
     >>> text.count("</script>"), read_page_data(text)["rows"][0][0]
     (2, '</script><b>x')
     """
-    data = page_data(result, summary, assets=assets, units=units, horizon=horizon, generated=generated)
+    data = page_data(result, summary, assets=assets, units=units, horizon=horizon, provenance=provenance)
     tables = {name: result.table(name) for name in ("alarms", "estimates", "rul", "residuals")}
     groups = {name: _groups(table) for name, table in tables.items()}
     head = _head(str(data["model"]))

@@ -23,6 +23,8 @@ h1 { font-size: 24px; margin: 4px 0 6px; }
 h2 { font-size: 18px; margin: 0 0 10px; }
 a { color: var(--accent); }
 .meta, .note { color: var(--muted); margin: 4px 0 10px; }
+.provenance { color: var(--muted); font-size: 13px; margin: 0 0 8px; overflow-wrap: anywhere; }
+.provenance code { font-size: 12px; }
 .panel { border: 1px solid var(--line); border-radius: 8px; padding: 14px 16px; margin: 16px 0; }
 details.settings { margin: 8px 0 4px; }
 details.settings summary { cursor: pointer; color: var(--accent); }
@@ -399,8 +401,9 @@ function overview() {
   const c = DATA.counts;
   const main = h("main", {id: "overview"});
   main.append(h("h1", {}, "Fleet overview: " + DATA.model));
-  main.append(h("p", {class: "meta", id: "meta"}, c.assets + " assets \u00b7 " + DATA.records + " \u00b7 generated "
-    + DATA.generated + " by bgphm " + DATA.bgphm));
+  main.append(h("p", {class: "meta", id: "meta"}, c.assets + " assets \u00b7 " + DATA.records));
+  main.append(h("p", {class: "provenance", id: "provenance"}, Object.entries(DATA.provenance).flatMap(([k, v], i) =>
+    [i ? " \u00b7 " : "", k + ": ", h("code", {}, v)])));
   const settings = h("table", {class: "kv"},
                      DATA.settings.map(([k, v]) => h("tr", {}, [h("td", {}, k), h("td", {}, v)])));
   main.append(h("details", {class: "settings"}, [h("summary", {}, "Run settings"), settings]));

@@ -90,6 +90,7 @@ def test_the_command_writes_the_overview_page_with_the_units(fleet_run):
     assert [row[0] for row in data["rows"][:2]] == sorted(last, key=last.get)
     assert data["counts"]["with_alarm"] == 2 and data["kept"] == 3 and data["failures"] == {"R": 20.0}
     assert data["horizon"] > 0 and data["model"] == "rlc"
+    assert len(data["provenance"]["model SHA-256"]) == 64 and data["provenance"]["date"].endswith(" UTC")
 
 
 def test_the_command_reports_progress_by_assets_done(fleet_run):

@@ -41,7 +41,8 @@ def small():
     rul_rows(result, "a", [1.1, 1.2, 1.3], [9.0, 5.0, 0.4], "isolated")   # the last row decides: p5 = 0.4
     rul_rows(result, "b", [1.6], [3.0], "indistinguishable", p95=[np.inf])
     rul_rows(result, "c", [0.6, 0.7], [0.5, 0.7], "undecided")          # first row lower than a's last, not the last
-    return result, page_data(result, SUMMARY, assets=list("abcdef"), units=UNITS, horizon=25.0, generated="now")
+    return result, page_data(result, SUMMARY, assets=list("abcdef"), units=UNITS, horizon=25.0,
+                                 provenance={"date": "now"})
 
 
 def test_the_ranking_orders_by_the_last_p5_then_alarms_healthy_and_skipped(small):
@@ -70,7 +71,7 @@ def test_the_page_states_its_units_and_settings(small):
     assert data["arrs"] == ["ARR_J1", "ARR_J0"] and data["horizon"] == 25.0 and data["failures"] == {"R": 20.0}
     settings = dict(data["settings"])
     assert settings["failure values"] == "R = 20 Ohm" and settings["ARRs"] == "ARR_J1 (V), ARR_J0 (A)"
-    assert settings["RUL horizon (s)"] == "25" and data["generated"] == "now"
+    assert settings["RUL horizon (s)"] == "25" and data["provenance"] == {"date": "now"}
 
 
 def test_a_series_reads_back_within_a_level_of_its_range():
