@@ -67,24 +67,25 @@ SYNTHETIC_HORIZON = 22.0
 STATUS_CYCLE = ("isolated", "indistinguishable", "undecided", "isolated", "rejected")
 
 
-def synthetic_fleet(count: int, *, rul_rows: int = 30, samples: int = 4001, seed: int = 0):
+def synthetic_fleet(count: int, *, rul_rows: int = 30, samples: int = 4001, seed: int = 0,
+                    rename: dict | None = None):
     """The tables of a fleet of ``count`` assets as a run would write them, without running a filter.
 
     Asset ``k`` (id ``motor-00007``) stays healthy when ``k % 4 == 0``, alarms without a RUL when ``k % 50 == 1``,
     and its record is skipped when ``k % 100 == 2``; the others alarm at a time of their own and get
     ``rul_rows`` RUL rows and as many estimate rows of each of the two hypotheses (b/linear, b/exponential),
-    every 0.11 s, the first few with a censored p95.  Every monitored asset has both ARRs' residual traces
-    (:func:`prognosis.fleet.traces.residual_trace` of a noisy ``samples``-sample record).
+    from the alarm to the record's end (4 s), the first few with a censored p95.  Every monitored asset has both
+    ARRs' residual traces (:func:`prognosis.fleet.traces.residual_trace` of a noisy ``samples``-sample record).
 
-    Returns ``(result, summary, assets)``: a :class:`~prognosis.fleet.FleetResult`, the summary (spec,
-    records, skipped) and every asset id.
+    ``rename`` gives some assets other ids (``{"motor-00007": "a </script> id"}``).  Returns ``(result, summary,
+    assets)``: a :class:`~prognosis.fleet.FleetResult`, the summary (spec, records, skipped) and every asset id.
     """
     from diagnosis.detection import Evaluation
     from prognosis.fleet import FleetResult
     from prognosis.fleet.traces import residual_trace
 
     rng = np.random.default_rng(seed)
-    assets = [f"motor-{k:05d}" for k in range(count)]
+    assets = [(rename or {}).get(f"motor-{k:05d}", f"motor-{k:05d}") for k in range(count)]
     skipped = {a: "column 'i' has no value (every cell is empty or NaN)" for k, a in enumerate(assets) if k % 100 == 2}
     result = FleetResult()
     t = np.linspace(0.0, 4.0, samples)
@@ -116,9 +117,9 @@ def synthetic_fleet(count: int, *, rul_rows: int = 30, samples: int = 4001, seed
 
 def _synthetic_rows(result, asset: str, alarm: float, rows: int, status: str, rng) -> None:
     """Estimates of both hypotheses and the RUL of one asset from its alarm: b grows towards 2e-3."""
-    times = alarm + 0.11 * np.arange(rows)
+    times = np.linspace(alarm, 4.0, rows)  # to the record's end
     step = 10 * np.arange(rows)
-    life = 0.11 * rows + 0.2 + 4.0 * rng.random()  # s from the alarm: beyond the last prediction
+    life = 4.0 - alarm + 0.2 + 4.0 * rng.random()  # s from the alarm: beyond the last prediction
     p50 = life - (times - alarm)
     spread = 0.2 + 0.5 * rng.random()
     p95 = p50 * (1.0 + 2.0 * spread)
