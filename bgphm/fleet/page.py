@@ -373,15 +373,17 @@ def fleet_page(result, summary: Mapping, *, assets: Sequence[str], units: Mappin
     tail = "</script>\n<script>" + SCRIPT + "</script>\n</body>\n</html>\n"
     overview = _json({**data, "details": None})
     used = sum(len(part.encode("utf-8")) for part in (head, overview, tail)) + 16  # 16: the "kept" count
-    details = []
+    details, full = [], False
     for row in data["rows"]:
         asset = row[0]
-        piece = _json(_detail(asset, {name: (tables[name], groups[name].get(asset)) for name in tables},
-                              data["arrs"])) if row[9] != STATUSES["skipped"] else "null"
-        if used + len(piece) + 1 > budget:  # the details are ASCII (ensure_ascii): characters are bytes
-            piece = "null"
-            if used + len(piece) + 1 > budget:
-                break
+        piece = "null"
+        if not full and row[9] != STATUSES["skipped"]:
+            piece = _json(_detail(asset, {name: (tables[name], groups[name].get(asset)) for name in tables},
+                                  data["arrs"]))
+            # the details are ASCII (ensure_ascii): characters are bytes.  Once one does not fit, none after it
+            # goes in: the charts on the page are those of the most urgent assets, a prefix of the ranking
+            full = used + len(piece) + 1 + 5 * (len(data["rows"]) - len(details)) > budget
+            piece = "null" if full else piece
         details.append(piece)
         used += len(piece) + 1
     kept = sum(piece != "null" for piece in details)

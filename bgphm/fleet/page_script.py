@@ -110,7 +110,9 @@ const LEVELS = DATA.levels;
 const PAGE_ROWS = 100;  // table rows drawn at a time: 10^4 rows in the DOM would make every sort slow
 const RANKED = 20;      // assets in the ranking chart
 const U = DATA.units || {};
-const unitOf = (kind, name) => (U[kind] || {})[name] || "";
+// a key of the data, never one of every object's (an asset named "constructor" is not skipped)
+const own = (object, key) => (object && Object.prototype.hasOwnProperty.call(object, key) ? object[key] : undefined);
+const unitOf = (kind, name) => own(own(U, kind), name) || "";
 const label = (name, unit) => (unit ? name + " (" + unit + ")" : name);
 const MINUS_R = "\u2212r\u2099";  // -r_n, typeset
 
@@ -458,7 +460,7 @@ function overview() {
 // ---------------------------------------------------------------------------------------- an asset's page
 function estimateChart(d) {
   const parameter = d.h.split("/")[0], unit = unitOf("parameters", parameter);
-  const failure = num(DATA.failures[parameter]);
+  const failure = num(own(DATA.failures, parameter));
   const t = decode(d.e[0]), [mean, p5, p95] = parts(d.e[1], 3);
   return chart({kind: "estimate", title: "Estimate of " + parameter + " (" + d.h + ")", xlabel: label("t", U.t),
     ylabel: label(parameter, unit), layers: [
@@ -509,11 +511,12 @@ function assetPage(id) {
                  [label("last RUL at t", U.t), fmt(r.t)],
                  [label("RUL p5 / p50 / p95", U.rul), fmt(r.p5) + " / " + fmt(r.p50) + " / " + fmt(r.p95)],
                  ["hypothesis", r.hypothesis || "\u2013"], ["probability", fmt(r.probability)]];
-  if (r.asset in DATA.skipped) facts.push(["record skipped", DATA.skipped[r.asset]]);
+  const skipped = own(DATA.skipped, r.asset);
+  if (skipped !== undefined) facts.push(["record skipped", skipped]);
   main.append(h("dl", {class: "facts"}, facts.flatMap(([k, v]) => [h("dt", {}, k), h("dd", {}, v)])));
   const d = r.detail;
   if (!d) {
-    if (!(r.asset in DATA.skipped)) {
+    if (skipped === undefined) {
       main.append(h("p", {class: "note", id: "not-kept"}, "This asset's charts are not on the page: it holds those of "
         + "the first " + DATA.kept + " assets of the ranking within its size bound. Its rows are in the Parquet "
         + "tables (bgphm.fleet.read_fleet)."));
