@@ -33,6 +33,9 @@ from bgphm.files import file_digest
 
 __all__ = ["Page", "detection_page", "prognosis_page", "provenance", "simulation_page", "table"]
 
+#: -r_n typeset (a minus sign and a subscript n), as the fleet page writes it.
+MINUS_R = "\u2212r\u2099"
+
 STYLE = """
 body { font-family: system-ui, -apple-system, "Segoe UI", sans-serif; margin: 0; color: #1a1a1a; background: #fafafa; }
 main { max-width: 1100px; margin: 0 auto; padding: 1.5rem 2rem 3rem; background: #fff; }
@@ -151,10 +154,10 @@ def _arr_table(arrs, residual_units: Mapping[str, str], forms: Mapping | None = 
 
 def _residual_chart(evaluation, unit: str | None, calibration_end: float | None = None) -> str:
     e = evaluation
-    chart = Chart(f"{e.name}: residual and robust threshold", x_label="t (s)", y_label=_label("-r_n", unit))
+    chart = Chart(f"{e.name}: residual and robust threshold", x_label="t (s)", y_label=_label(MINUS_R, unit))
     chart.band(e.t, e.lower - e.margin, e.upper + e.margin, label="interval threshold (with margin)",
                colour="#d55e00")
-    chart.line(e.t, -np.asarray(e.residual, float), label="-r_n", colour="#0072b2")
+    chart.line(e.t, -np.asarray(e.residual, float), label=MINUS_R, colour="#0072b2")
     if calibration_end is not None:
         chart.vline(calibration_end, label=f"calibration end {calibration_end:g} s", style="dashed",
                     colour="#777777")
@@ -172,7 +175,7 @@ def detection_page(model, arrs, result, record_path, *, units: Mapping, settings
     """The report of ``bgphm detect``: the alarms, each residual against its threshold, the ARRs, the settings.
 
     ``result`` is the :class:`diagnosis.Detection` of the run, ``units`` the ``units`` block of its JSON
-    (:func:`bgphm.commands._outputs.units_of`), ``settings`` what the command line set.
+    (:func:`bgphm.units.units_of`), ``settings`` what the command line set.
     """
     page = Page(f"bgphm detect: {model.name}", provenance(model, record_path))
     fired = [e.name for e in result.evaluations if e.detection_time is not None]

@@ -25,7 +25,6 @@ checksums and runs only the others: the tables equal those of an uninterrupted r
 from __future__ import annotations
 
 import contextlib
-import hashlib
 import json
 import os
 import re
@@ -34,10 +33,10 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from bgphm.errors import FleetError
-from bgphm.files import write_text
+from bgphm.files import file_digest, write_text
 from prognosis.fleet.results import TABLES
 
-__all__ = ["BUCKET", "MANIFEST", "PAGE", "PART", "STAGING", "Output", "file_digest", "locked", "read_manifest"]
+__all__ = ["BUCKET", "MANIFEST", "PAGE", "PART", "STAGING", "Output", "locked", "read_manifest"]
 
 LOCK = ".lock"
 STAGING = ".staging"
@@ -49,15 +48,6 @@ FORMAT = "bgphm fleet tables"
 VERSION = 1
 PART = re.compile(r"part-\d+\.parquet")  # a table's files: <table>/bucket=NN/part-SSSSS.parquet
 BUCKET = re.compile(r"bucket=\d+")
-
-
-def file_digest(path: str | os.PathLike) -> str:
-    """The SHA-256 of a file's bytes (hex)."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as stream:
-        for block in iter(lambda: stream.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 @contextlib.contextmanager

@@ -24,12 +24,12 @@ from pathlib import Path
 import numpy as np
 
 from bgphm.errors import FleetError
-from bgphm.files import write_with
+from bgphm.files import file_digest, write_with
 from prognosis.fleet import FleetResult
 from prognosis.fleet.results import COLUMNS, INTEGER, TABLES, TEXT
 from prognosis.random_streams import asset_key
 
-from .outdir import BUCKET, MANIFEST, PART, STAGING, file_digest, read_manifest
+from .outdir import BUCKET, MANIFEST, PART, STAGING, read_manifest
 from .sources import pyarrow_modules
 
 __all__ = ["BUCKETS", "bucket_of", "read_fleet", "read_tables", "write_shard"]

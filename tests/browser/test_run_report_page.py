@@ -45,7 +45,7 @@ def test_the_run_report_renders_equations_and_units(runs, open_page, tmp_path, c
     assert any(n.replace(" ", "").startswith("d") and "ω" in n for n in numerators)
     assert page.count("math msub") > 0
     axes = page.texts("svg.chart .y-label")
-    assert "-r_n (N*m)" in axes
+    assert "\u2212r\u2099 (N*m)" in axes
     assert set(page.texts("svg.chart .x-label")) == {"t (s)"}
     headers = page.texts("th")
     assert "unit" in headers

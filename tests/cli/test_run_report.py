@@ -70,7 +70,7 @@ def test_the_detection_report_holds_each_residual_with_its_unit_and_the_alarm(wo
     page = _outline(folder / "d" / "report.html")
     assert page.headings[:2] == ["Decision", "Residuals against their thresholds"]
     assert {"Model and ARRs", "Settings"} <= set(page.headings)
-    assert page.svg_texts["axis-label y-label"] == ["-r_n (V)", "-r_n (N*m)"]
+    assert page.svg_texts["axis-label y-label"] == ["\u2212r\u2099 (V)", "\u2212r\u2099 (N*m)"]
     assert set(page.svg_texts["axis-label x-label"]) == {"t (s)"}
     alarm = json.loads((folder / "d" / "detection.json").read_text())["arrs"]["ARR_1_m"]["detection_time"]
     assert f"alarm at {alarm:g} s" in page.svg_texts["legend-label"]
