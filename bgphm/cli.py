@@ -324,6 +324,10 @@ def _fleet_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resume", action="store_true", help="go on with the run interrupted in --out: the same "
                    "options and records, its finished shards kept (checked by SHA-256), the same tables as "
                    "an uninterrupted run")
+    p.add_argument("--truth", metavar="FILE.json", help="the true end of life of each asset, a JSON object "
+                   "{asset: {\"eol\": s}} (null eol: the asset does not fail): the predictions are scored against it "
+                   "(relative accuracy, the 5-95 %% band's coverage, medians within 20 %%), per asset and pooled, "
+                   "in summary.json and on stdout")
     p.add_argument("--scheduler", metavar="ADDRESS", help="a running Dask scheduler, e.g. tcp://10.0.0.5:8786 "
                    "(default: a local cluster of --workers processes)")
     # None: run_fleet's own default (bgphm.fleet.engine.WORKERS), read when the command runs, so that the

@@ -30,7 +30,8 @@ Three method families sit beside it as subpackages:
 from .errors import PrognosisError
 from .degradation import (CustomDegradation, ExponentialDegradation, LinearDegradation, PowerDegradation,
                           degradation_model)
-from .metrics import alpha_lambda, prognostic_horizon, relative_accuracy, relative_rmse, rmad, scores_against_truth
+from .metrics import (alpha_lambda, pooled_scores, prognostic_horizon, relative_accuracy, relative_rmse, rmad,
+                      scores_against_truth)
 from .health_monitor import HealthMonitor, MonitorResult
 from .isolation import MAX_PARTICLES, IsolatingMonitor, IsolationResult, IsolationSettings
 from .pipeline import PrognosisSettings, check_candidate, check_failures, filter_step, prognose, rul_horizon
@@ -47,6 +48,7 @@ __all__ = [
     "LinearDegradation", "MAX_PARTICLES", "MonitorResult", "ObservationModel", "ParticleFilter", "PowerDegradation",
     "PrognosisError", "PrognosisSettings", "RULDistribution", "RULPredictor", "ResampleMoveFilter", "ResidualNoise",
     "StepDiagnostics", "VarianceAdaptation", "alpha_lambda", "check_candidate", "check_failures",
-    "degradation_model", "effective_sample_size", "filter_step", "observation_model", "predict_rul", "prognose",
+    "degradation_model", "effective_sample_size", "filter_step", "observation_model", "pooled_scores", "predict_rul",
+    "prognose",
     "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad", "rul_horizon", "scores_against_truth",
 ]

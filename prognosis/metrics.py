@@ -46,7 +46,8 @@ from .weighted import last_axis, median_along_last, moved_weights, weights_like
 
 __all__ = [
     "MetricWarning", "alpha_lambda", "convergence", "cumulative_relative_accuracy", "mean_relative_accuracy",
-    "mean_rmad", "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad", "scores_against_truth",
+    "mean_rmad", "pooled_scores", "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad",
+    "scores_against_truth",
 ]
 
 
@@ -396,11 +397,12 @@ def scores_against_truth(times: ArrayLike, percentiles: ArrayLike, rul_mean: Arr
     Returns
     -------
     dict
-        ``predictions`` (made before the end of life), ``true_rul`` and per prediction ``relative_accuracy``
-        (eq. 42, of the mean) and ``within_alpha`` (the median); over them ``mean_relative_accuracy`` and
-        ``worst_relative_accuracy``, ``coverage_90`` and ``coverage_50`` (the share of predictions whose
-        5-95 % and 25-75 % bands hold the true RUL, the bands' claims), ``within_alpha_share`` and the
-        ``prognostic_horizon`` (s) of the alpha criterion.  NaN (no prediction) becomes None.
+        ``predictions`` (made before the end of life), ``true_rul`` and per prediction
+        ``relative_accuracy`` (eq. 42, of the mean), ``within_alpha`` (the median) and ``inside_90``
+        (the 5-95 % band); over them ``mean_relative_accuracy`` and ``worst_relative_accuracy``,
+        ``coverage_90`` and ``coverage_50`` (the share of predictions whose 5-95 % and 25-75 % bands
+        hold the true RUL, the bands' claims), ``within_alpha_share`` and the ``prognostic_horizon``
+        (s) of the alpha criterion.  NaN (no prediction) becomes None.
 
     Examples
     --------
@@ -419,8 +421,10 @@ def scores_against_truth(times: ArrayLike, percentiles: ArrayLike, rul_mean: Arr
     t, q, mean, true = t[kept], q[kept], mean[kept], true[kept]
     ra = relative_accuracy(true, mean) if t.size else np.empty(0)
     within = np.abs(q[:, 2] - true) <= alpha * true
+    inside_90 = (q[:, 0] <= true) & (true <= q[:, 4])
     scores = {"predictions": int(t.size), "alpha": alpha, "true_rul": true.tolist(),
-              "relative_accuracy": np.atleast_1d(ra).tolist(), "within_alpha": within.tolist()}
+              "relative_accuracy": np.atleast_1d(ra).tolist(), "within_alpha": within.tolist(),
+              "inside_90": inside_90.tolist()}
     if not t.size:
         return {**scores, **dict.fromkeys(("mean_relative_accuracy", "worst_relative_accuracy", "coverage_90",
                                             "coverage_50", "within_alpha_share", "prognostic_horizon"))}
@@ -431,7 +435,42 @@ def scores_against_truth(times: ArrayLike, percentiles: ArrayLike, rul_mean: Arr
     quartiles = ~np.isnan(q[:, 1]) & ~np.isnan(q[:, 3])  # NaN: not given (a fleet's table keeps 5, 50, 95 %)
     inner = (q[:, 1] <= true) & (true <= q[:, 3])
     return {**scores, "mean_relative_accuracy": finite(np.mean(ra)), "worst_relative_accuracy": finite(np.min(ra)),
-            "coverage_90": float(np.mean((q[:, 0] <= true) & (true <= q[:, 4]))),
+            "coverage_90": float(np.mean(inside_90)),
             "coverage_50": float(np.mean(inner[quartiles])) if quartiles.any() else None,
             "within_alpha_share": float(np.mean(within)),
             "prognostic_horizon": finite(prognostic_horizon(t, within, eol))}
+
+
+def pooled_scores(scores: dict) -> dict:
+    """Many runs' :func:`scores_against_truth` (one per asset) pooled prediction by prediction: each prediction
+    weighs the same, whichever asset made it.
+
+    Returns the number of ``assets`` and ``predictions``, the ``mean_relative_accuracy`` over every prediction
+    and the ``worst_relative_accuracy``, the mean and worst of the assets' own mean accuracies
+    (``asset_mean_relative_accuracy``, ``asset_worst_mean_relative_accuracy``), ``coverage_90`` and
+    ``within_alpha_share`` (None without a prediction).
+
+    >>> one = scores_against_truth([0.0], [[8.0, 9.0, 10.0, 11.0, 12.0]], [10.0], eol=10.5)
+    >>> two = scores_against_truth([0.0, 1.0], [[1.0, 2.0, 3.0, 4.0, 5.0]] * 2, [3.0, 3.0], eol=7.0)
+    >>> pooled = pooled_scores({"a": one, "b": two})
+    >>> pooled["assets"], pooled["predictions"], round(pooled["coverage_90"], 4)
+    (2, 3, 0.3333)
+    """
+    used = [s for s in scores.values() if s.get("predictions")]
+    ra = np.concatenate([np.asarray(s["relative_accuracy"], float) for s in used]) if used else np.empty(0)
+    inside = np.concatenate([np.asarray(s["inside_90"], bool) for s in used]) if used else np.empty(0, bool)
+    within = np.concatenate([np.asarray(s["within_alpha"], bool) for s in used]) if used else np.empty(0, bool)
+    means = np.array([s["mean_relative_accuracy"] if s["mean_relative_accuracy"] is not None else -np.inf
+                      for s in used])
+
+    def finite(value) -> float | None:
+        return float(value) if np.isfinite(value) else None
+
+    if not ra.size:
+        return {"assets": len(used), "predictions": 0, **dict.fromkeys((
+            "mean_relative_accuracy", "worst_relative_accuracy", "asset_mean_relative_accuracy",
+            "asset_worst_mean_relative_accuracy", "coverage_90", "within_alpha_share"))}
+    return {"assets": len(used), "predictions": int(ra.size), "mean_relative_accuracy": finite(np.mean(ra)),
+            "worst_relative_accuracy": finite(np.min(ra)), "asset_mean_relative_accuracy": finite(np.mean(means)),
+            "asset_worst_mean_relative_accuracy": finite(np.min(means)), "coverage_90": float(np.mean(inside)),
+            "within_alpha_share": float(np.mean(within))}

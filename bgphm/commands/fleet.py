@@ -10,11 +10,13 @@ from prognosis import filter_step, rul_horizon
 
 from ._inputs import (
     detection_settings,
+    read_fleet_truth,
     what_can_fail,
 )
+from ._outputs import fmt
 from ._progress import Progress, fleet_progress
 
-__all__ = ["run"]
+__all__ = ["fleet_truth_line", "run"]
 
 
 def run(args, progress: Progress) -> int:
@@ -46,6 +48,7 @@ def run(args, progress: Progress) -> int:
     out = check_output(args.out, kind="directory", inputs=input_files(args.model) + source.inputs(),
                        force=args.force or args.resume)
     detection = detection_settings(args)
+    truth = read_fleet_truth(args.truth) if args.truth is not None else None
     spec, arrs, failures, candidates, laws = what_can_fail(args, progress)
     assets = source.assets()
     progress(f"{len(assets)} assets in {source.describe()}")
@@ -72,7 +75,7 @@ def run(args, progress: Progress) -> int:
              f"particles each, dt = {dt:g} s")
     summary = run_fleet(job, source, out, scheduler=args.scheduler, workers=args.workers,
                         shard_size=args.shard_size, progress=fleet_progress(progress), notes=calibration,
-                        resume=args.resume, on_bad_record=args.on_bad_record, page=not args.no_page)
+                        resume=args.resume, on_bad_record=args.on_bad_record, page=not args.no_page, truth=truth)
     for asset, why in list(summary["skipped"].items())[:5]:
         progress(f"skipped {asset}: {why}")
     print(f"{summary['assets']} assets, {summary['assets_with_alarm']} with an alarm, {summary['rows']['rul']} RUL "
@@ -82,7 +85,25 @@ def run(args, progress: Progress) -> int:
     if summary["skipped"]:
         print(f"{len(summary['skipped'])} asset(s) skipped for a bad record, each with its reason in "
               f"{out / 'summary.json'} (skipped)")
+    if truth is not None:
+        print(fleet_truth_line(summary["truth"]))
     tables = ", ".join(str(out / name) for name in TABLES)
     page = "" if args.no_page else f", {out / PAGE} (open it in a browser)"
     print(f"wrote {tables} (Parquet), {out / 'summary.json'}{page} and {out / 'manifest.json'}{resumed}")
     return EXIT_OK
+
+
+def fleet_truth_line(scored: dict) -> str:
+    """One line: the fleet's predictions against the truth, pooled (``summary["truth"]``)."""
+    pooled = scored["pooled"]
+    if not pooled["predictions"]:
+        return f"truth: no RUL prediction before an asset's end of life to score ({len(scored['assets'])} assets)"
+    extra = "".join(f"; {len(scored[key])} {what}" for key, what in (("without_rul", "asset(s) with a truth but no "
+                                                                      "RUL"), ("not_in_fleet", "truth(s) for no "
+                                                                               "asset of the fleet"))
+                    if scored.get(key))
+    return (f"truth: {pooled['assets']} assets, {pooled['predictions']} predictions: mean RA "
+            f"{fmt(pooled['mean_relative_accuracy'])} (per asset mean {fmt(pooled['asset_mean_relative_accuracy'])}, "
+            f"worst {fmt(pooled['asset_worst_mean_relative_accuracy'])}), the 5-95 % band holds the truth at "
+            f"{100 * pooled['coverage_90']:.0f} %, the median within 20 % at "
+            f"{100 * pooled['within_alpha_share']:.0f} %{extra}")

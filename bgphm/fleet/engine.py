@@ -106,7 +106,7 @@ def run_shard(task: Task) -> dict:
 def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, workers: int = WORKERS,
               shard_size: int | None = None, buckets: int = BUCKETS,
               progress: Callable[[int, int], None] | None = None, notes: dict | None = None,
-              resume: bool = False, on_bad_record: str = "stop", page: bool = True) -> dict:
+              resume: bool = False, on_bad_record: str = "stop", page: bool = True, truth: dict | None = None) -> dict:
     """Monitor every asset of ``sources`` and write the tables to Parquet under ``out``; return the summary.
 
     Parameters
@@ -148,6 +148,10 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
     page : bool
         Write the overview page ``index.html`` (:mod:`bgphm.fleet.page`), built from the tables this
         process reads back whole; False removes a previous run's (it would show other tables).
+    truth : dict, optional
+        Asset -> ``{"eol": s}`` (the true end of life, None for an asset that does not fail): the RUL
+        predictions are scored against it (:meth:`~prognosis.fleet.FleetResult.scores`) into
+        ``summary["truth"]`` (with ``not_in_fleet``, the truths of no asset of the run).
 
     Returns
     -------
@@ -217,16 +221,24 @@ def run_fleet(spec: FleetSpec, sources, out: str | Path, *, scheduler=None, work
         summary["resumed_shards"] = len(finished)
         built, _ = monitor_for(spec)  # this process built it already (the check above, or the serial shards)
         summary["units"] = units_of(built.model, built.monitor.arrs)
-        text = _page(output, built, summary, facts, done) if page else None
+        tables = _staged(output, done) if page or truth else None
+        if truth:
+            summary["truth"] = tables.scores(truth)
+            summary["truth"]["not_in_fleet"] = sorted(set(truth) - set(assets))
+        text = _page(tables, built, summary, facts) if page else None
         output.publish(summary, _manifest(facts, done, size), text)
     return summary
 
 
-def _page(output: Output, built, summary: dict, facts: dict, done: list) -> str:
-    """The overview page of the run, from its staged tables (read back and checked against their SHA-256)."""
-    files = {path: digest for s in done for path, digest in s["files"].items()}
+def _staged(output: Output, done: list):
+    """The run's staged tables, read back and checked against their SHA-256."""
+    return read_tables(output.staging, {path: digest for s in done for path, digest in s["files"].items()})
+
+
+def _page(tables, built, summary: dict, facts: dict) -> str:
+    """The overview page of the run, from its staged tables."""
     assets = [asset for shard in facts["shards"] for asset in shard]
-    return fleet_page(read_tables(output.staging, files), summary, assets=assets, units=summary["units"],
+    return fleet_page(tables, summary, assets=assets, units=summary["units"],
                       horizon=built.monitor.settings.rul_horizon, provenance=provenance(built.model))
 
 

@@ -103,6 +103,40 @@ class FleetResult:
     def residuals(self) -> dict:
         return self.table("residuals")
 
+    def scores(self, truth: dict, alpha: float = 0.2) -> dict:
+        """The RUL predictions scored against each asset's true end of life (``truth``: asset -> ``{"eol": s}``,
+        ``None`` for an asset that does not fail): per asset :func:`~prognosis.metrics.scores_against_truth`
+        (without its per-prediction lists), and pooled over every prediction
+        (:func:`~prognosis.metrics.pooled_scores`).  The table keeps the 5, 50 and 95 % percentiles, so the
+        25-75 % band is not scored.  Assets of ``truth`` without a RUL row are listed in ``without_rul``.
+
+        >>> result = FleetResult()
+        >>> result.add("rul", asset=["a", "a"], step=[0, 1], t=[1.0, 2.0], mean=[9.0, 8.0], p5=[7.0, 6.0],
+        ...            p50=[9.0, 8.0], p95=[11.0, 10.0], censored=[0.0, 0.0], hypothesis=["R/linear"] * 2,
+        ...            probability=[1.0, 1.0], status=["isolated"] * 2)
+        >>> scored = result.scores({"a": {"eol": 10.5}, "b": {"eol": 4.0}})
+        >>> scored["pooled"]["predictions"], scored["assets"]["a"]["coverage_90"], scored["without_rul"]
+        (2, 1.0, ['b'])
+        """
+        from prognosis.metrics import pooled_scores, scores_against_truth
+
+        rul = self.rul
+        per_asset, full, without = {}, {}, []
+        for asset, entry in truth.items():
+            if entry.get("eol") is None:
+                continue
+            rows = rul["asset"] == asset
+            if not rows.any():
+                without.append(asset)
+                continue
+            nan = np.full(int(rows.sum()), np.nan)
+            percentiles = np.column_stack([rul["p5"][rows], nan, rul["p50"][rows], nan, rul["p95"][rows]])
+            full[asset] = scores_against_truth(rul["t"][rows], percentiles, rul["mean"][rows], entry["eol"], alpha)
+            per_asset[asset] = {k: v for k, v in full[asset].items()
+                                if k not in ("true_rul", "relative_accuracy", "within_alpha", "inside_90",
+                                             "coverage_50")}
+        return {"pooled": pooled_scores(full), "assets": per_asset, "without_rul": sorted(without)}
+
     def rows(self, name: str) -> int:
         """Number of rows of table ``name``."""
         return sum(len(p["asset"]) for p in self.parts[name])

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 
 from bgphm.cli import main
@@ -44,6 +45,9 @@ def records(tmp_path_factory):
 def fleet_run(records, tmp_path_factory):
     """One run of the command, its exit code, stdout, stderr and output directory."""
     out = tmp_path_factory.mktemp("run") / "out"
+    truth = out.parent / "truth.json"  # R reaches 20 ohm (10 + 4 ohm/s) 2.5 s after the onset
+    truth.write_text(json.dumps({"c0": {"eol": 0.3 + 2.5}, "c1": {"eol": None}, "c2": {"eol": 0.6 + 2.5},
+                                 "ghost": {"eol": 1.0}}))
     capture = pytest.MonkeyPatch()
     import io
     import sys
@@ -52,7 +56,8 @@ def fleet_run(records, tmp_path_factory):
     capture.setattr(sys, "stdout", stdout)
     capture.setattr(sys, "stderr", stderr)
     try:
-        code = main(["fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "0.2", *FAST, "--out", str(out)])
+        code = main(["fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "0.2", *FAST, "--out", str(out),
+                     "--truth", str(truth)])
     finally:
         capture.undo()
     return code, stdout.getvalue(), stderr.getvalue(), out
@@ -70,6 +75,25 @@ def test_the_command_writes_parquet_tables_and_a_summary(fleet_run):
     result = read_fleet(folder)
     assert sorted(set(result.alarms["asset"])) == ["c0", "c2"]
     assert sorted(set(result.rul["asset"])) == ["c0", "c2"]
+
+
+def test_truth_scores_each_asset_and_pools_its_predictions(fleet_run):
+    """--truth: each failing asset's predictions against its end of life, recomputed here from the RUL table."""
+    code, out, _, folder = fleet_run
+    assert code == 0
+    scored = json.loads((folder / "summary.json").read_text())["truth"]
+    rul = read_fleet(folder).rul
+    eol = {"c0": 2.8, "c2": 3.1}
+    assert sorted(scored["assets"]) == ["c0", "c2"] and scored["not_in_fleet"] == ["ghost"]
+    inside, count = 0, 0
+    for asset, end in eol.items():
+        rows = (rul["asset"] == asset) & (end - rul["t"] > 0) & np.isfinite(rul["p50"])
+        held = (rul["p5"][rows] <= end - rul["t"][rows]) & (end - rul["t"][rows] <= rul["p95"][rows])
+        assert scored["assets"][asset]["predictions"] == int(rows.sum())
+        assert scored["assets"][asset]["coverage_90"] == pytest.approx(held.mean())
+        inside, count = inside + held.sum(), count + rows.sum()
+    assert scored["pooled"]["predictions"] == count and scored["pooled"]["coverage_90"] == pytest.approx(inside / count)
+    assert f"truth: 2 assets, {count} predictions: mean RA" in out and "1 truth(s) for no asset of the fleet" in out
 
 
 def test_the_command_writes_the_overview_page_with_the_units(fleet_run):
@@ -252,3 +276,17 @@ def test_a_parquet_asset_column_of_another_type_is_named_with_exit_2(capsys, tmp
                        "--out", str(tmp_path / "out"), "--workers", "0")
     assert "column 'asset' holds" in line and "asset ids must be text or whole numbers" in line
 
+
+
+@pytest.mark.parametrize("content, message", [
+    ('["c0"]', "expected a JSON object mapping asset ids to truth entries"),
+    ('{"c0": {"eol": "soon"}}', "asset 'c0': 'eol' must be a finite number"),
+    ('{"c0": 2.8}', "asset 'c0': expected a JSON object with 'eol'"),
+])
+def test_a_bad_fleet_truth_file_is_refused_before_any_work(records, tmp_path, capsys, content, message):
+    truth = tmp_path / "truth.json"
+    truth.write_text(content)
+    line = usage_error(capsys, "fleet", "rlc", str(records), "--fail", "R=20", "--calibrate", "0.2", *FAST, "--out",
+                       str(tmp_path / "out"), "--truth", str(truth))
+    assert line.startswith(f"bgphm: error: --truth {truth}") and message in line
+    assert not (tmp_path / "out").exists()

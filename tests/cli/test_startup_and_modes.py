@@ -109,3 +109,11 @@ def test_detect_states_the_units_of_signals_parameters_and_residuals(tmp_path):
     assert units["t"] == "s" and units["signals"] == {"U": "V", "i": "A", "omega": "rad/s"}
     assert units["parameters"]["b"] == "N*m*s/rad" and units["parameters"]["J"] == "kg*m^2"
     assert units["residuals"] == {"ARR_1_e": "V", "ARR_1_m": "N*m"}
+
+
+@pytest.mark.parametrize("command", ["arr", "simulate", "detect", "prognose", "fleet", "demo"])
+def test_every_command_s_help_renders(command, capsys):
+    """argparse formats a help text only when asked: a stray '%' in one would fail here, not at a user's."""
+    with pytest.raises(SystemExit) as stop:
+        main([command, "--help"])
+    assert stop.value.code == 0 and f"usage: bgphm {command}" in capsys.readouterr().out
