@@ -1,0 +1,571 @@
+"""Parameters from healthy records, through the ARRs: what the records identify, the estimates, their intervals.
+
+On a healthy machine every ARR's nominal residual ``r_n(signals; theta)`` is zero but for noise, when
+``theta`` holds the machine's true parameters.  :func:`estimate_parameters` therefore finds the parameters
+that make the residuals of every ARR, over every record, smallest: a least-squares fit in which each ARR
+weighs by its own noise (its residuals' robust spread at the fit) and by how many of its samples are
+independent (a residual of derivatives estimated over a window is correlated over that window: its
+integrated autocorrelation time).  Most ARRs are linear in their parameters and the fit lands in one or two
+steps; the others (a valve's ``sqrt``, a belt's ``1/k``) are fitted the same way, with the exact Jacobian.
+
+Identifiability comes first (:func:`identifiability`): the Jacobian of the residuals with respect to the
+relative change of each parameter, over the records, says which parameters these ARRs and these records can
+tell apart.  A direction of parameters that leaves the residuals (almost) unchanged cannot be estimated:
+its parameters are reported together, with the combination the data do fix (the coefficient of the term of
+the ARR they share, e.g. ``J_m + J_Md/k_belt**2``), and the fit keeps one of them at its datasheet value so
+that the others carry the combination.
+
+The intervals are the 95 % (``level``) confidence intervals of a linearized fit, the noise read from the fit's
+own residuals, inflated by the residuals' correlation; :func:`uncertainty_boxes` turns them, or the spread
+between records, into the multiplicative ``uncertainty=(lo, hi)`` boxes the thresholds use.
+
+Example
+-------
+A DC motor whose datasheet friction is 40 % low and inertia 30 % high, told by a healthy bench run:
+
+>>> import numpy as np
+>>> from bondgraph import simulate
+>>> from bondgraph.library import dc_motor
+>>> from diagnosis import add_noise, as_record
+>>> t = np.linspace(0.0, 2.0, 2001)
+>>> U = lambda t: 12.0 * (t >= 0.05) - 6.0 * (t >= 1.0)
+>>> true = dc_motor(b=1.4e-4, J=0.77e-4)
+>>> record = add_noise(as_record(simulate(true, (0, 2), {"U": U}, t_eval=t).record()), {"i": 0.01, "omega": 0.2},
+...                    seed=1)
+>>> fit = estimate_parameters(dc_motor(b=1e-4, J=1e-4), [record], parameters=["b", "J"])
+>>> {p: round(fit.values[p] / v, 2) for p, v in {"b": 1.4e-4, "J": 0.77e-4}.items()}
+{'b': 1.0, 'J': 1.0}
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import sympy as sp
+from scipy import optimize, stats
+
+from bondgraph.errors import SettingError
+
+from .derivation import derive_arrs
+from .derivatives import default_window
+from .detection import robust_std
+from .records import Record, as_record
+from .steps import step_mask
+
+__all__ = ["Identifiability", "ParameterEstimate", "estimate_parameters", "identifiability", "uncertainty_boxes"]
+
+#: A direction of relative parameter changes whose singular value is below this share of the largest is not
+#: identified by the records (it would need a relative precision beyond what double precision and filtered
+#: derivatives give).
+SINGULAR_FLOOR = 1e-7
+#: The datasheet's relative standard deviation that :func:`estimate_parameters` assumes by default: a datasheet
+#: value within a factor of about two of the machine's.
+PRIOR = 0.5
+#: Passes of :func:`estimate_parameters` after the first, each weighing the ARRs by their noise at the last fit.
+REWEIGHTS = 4
+
+
+@dataclass(frozen=True)
+class Identifiability:
+    """Which parameters a set of records identifies through the ARRs.
+
+    Attributes
+    ----------
+    identified : list of str
+        Parameters the fit can estimate one by one.
+    combinations : list of dict
+        Groups of parameters the records see only together: ``parameters`` (the group), ``expression`` (the
+        combination the data fix, as text, from the ARR's term they share) and ``kept`` (the parameter the
+        fit keeps at its datasheet value so that the others carry the combination).
+    unseen : list of str
+        Parameters in no ARR (the records cannot say anything of them).
+    singular_values : list of float
+        Of the Jacobian in relative changes, largest first (their spread is its conditioning).
+    """
+
+    identified: list
+    combinations: list
+    unseen: list
+    singular_values: list
+
+    @property
+    def condition(self) -> float:
+        s = [v for v in self.singular_values if v > 0]
+        return s[0] / s[-1] if s else math.inf
+
+
+@dataclass
+class ParameterEstimate:
+    """What :func:`estimate_parameters` found.
+
+    Attributes
+    ----------
+    values : dict
+        Every parameter of the model: its estimate where it was estimated, else its datasheet value.
+    datasheet : dict
+        The values the model came with.
+    intervals : dict
+        Estimated parameter -> its ``level`` confidence interval (lo, hi).
+    std : dict
+        Estimated parameter -> its standard error.
+    identifiability : Identifiability
+    residual_std : dict
+        ARR -> the robust spread of its residual at the fit; ``correlation`` ARR -> its integrated
+        autocorrelation time in samples (the intervals' inflation).
+    samples : int
+        Residual samples the fit used (all ARRs, all records).
+    level : float
+    """
+
+    values: dict
+    datasheet: dict
+    intervals: dict = field(default_factory=dict)
+    std: dict = field(default_factory=dict)
+    identifiability: Identifiability | None = None
+    residual_std: dict = field(default_factory=dict)
+    correlation: dict = field(default_factory=dict)
+    samples: int = 0
+    level: float = 0.95
+
+    @property
+    def estimated(self) -> list:
+        return list(self.intervals)
+
+    def model(self, bg, boxes: Mapping | None = None):
+        """A copy of ``bg`` with the estimated values (and, with ``boxes``, those uncertainty boxes)."""
+        from bondgraph import BondGraph
+
+        graph = bg.graph.copy()
+        for name, data in graph.nodes(data=True):
+            param = data.get("param", name) if data.get("kind") in ("C", "I", "R", "TF", "GY", "MTF", "MGY") else None
+            if param in self.intervals and "stiffness" in data:
+                data["stiffness"] = self.values[param]
+            elif param in self.intervals:
+                data["value"] = self.values[param]
+            if param in (boxes or {}):
+                data["uncertainty"] = tuple(boxes[param])
+            constants = dict(data.get("params") or {})
+            for constant in constants:
+                if constant in self.intervals:
+                    constants[constant] = self.values[constant]
+            if constants:
+                data["params"] = constants
+                if boxes:
+                    data["uncertainties"] = {**(data.get("uncertainties") or {}),
+                                             **{c: tuple(boxes[c]) for c in constants if c in boxes}}
+        return BondGraph(graph, name=bg.name)
+
+    def as_dict(self) -> dict:
+        ident = self.identifiability
+        return {"level": self.level, "samples": self.samples,
+                "parameters": {p: {"datasheet": self.datasheet[p], "estimate": self.values[p],
+                                   "interval": list(self.intervals[p]), "std": self.std[p],
+                                   "change": self.values[p] / self.datasheet[p] - 1.0 if self.datasheet[p] else None}
+                               for p in self.intervals},
+                "combinations": [] if ident is None else ident.combinations,
+                "unseen": [] if ident is None else ident.unseen,
+                "condition": None if ident is None or not math.isfinite(ident.condition) else ident.condition,
+                "residual_std": dict(self.residual_std), "correlation": dict(self.correlation)}
+
+
+# ------------------------------------------------------------------------------------------- residuals as functions
+
+#: Samples over which each row integrates an ARR (windows side by side, one sample apart).  The relation
+#: holds integrated over any stretch; integrated, a derivative term ``c dx/dt`` becomes ``c (x(b) - x(a))``,
+#: exact and without the derivative filter's noise, and every other term is averaged.  Noise in a regressor
+#: biases a least-squares fit towards zero by its variance over the regressor's (errors in variables): over a
+#: longer stretch the signal's change grows and its noise does not.
+INTEGRATION_WINDOW = 100
+
+
+@dataclass
+class _Block:
+    """One ARR over the records: ``features`` (rows x terms) of its window-integrated terms and the terms'
+    coefficients as functions of the fitted parameters (and their derivatives)."""
+
+    name: str
+    features: np.ndarray
+    coefficient: object
+    gradient: list
+
+
+@dataclass
+class _Problem:
+    """The window-integrated residuals of the ARRs over the records, as functions of the chosen parameters
+    relative to their datasheet values: ``residual(x)``, ``jacobian(x)``, rows grouped by ARR."""
+
+    names: list
+    nominal: np.ndarray
+    blocks: list
+    weights: dict
+
+    def _coefficients(self, block: _Block, x: np.ndarray) -> np.ndarray:
+        return np.asarray(block.coefficient(*(self.nominal * x)), float).reshape(-1)
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        return np.concatenate([self.weights.get(b.name, 1.0) * (b.features @ self._coefficients(b, x))
+                               for b in self.blocks])
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        theta = self.nominal * x
+        rows = []
+        for b in self.blocks:
+            columns = [np.asarray(g(*theta), float).reshape(-1) for g in b.gradient]
+            rows.append(self.weights.get(b.name, 1.0) * (b.features @ np.column_stack(columns)) * self.nominal)
+        return np.vstack(rows)
+
+    def per_arr(self, x: np.ndarray) -> dict:
+        """ARR name -> its unweighted window residuals."""
+        return {b.name: b.features @ self._coefficients(b, x) for b in self.blocks}
+
+
+def _problem(arrs: Sequence, records: Sequence[Record], names: list, values: Mapping, window: int | None) -> _Problem:
+    symbols = [sp.Symbol(n) for n in names]
+    fixed = {sp.Symbol(p): v for p, v in values.items() if p not in names}
+    blocks = []
+    for arr in arrs:
+        if not set(names) & set(arr.parameters):
+            continue
+        compiled = arr.compiled
+        terms = _terms(arr.nominal.xreplace(compiled.symbols).xreplace(fixed), compiled.points, symbols)
+        features = np.vstack([_window_features(compiled, record, list(terms), window) for record in records])
+        coefficients = sp.Matrix([list(terms.values())])
+        blocks.append(_Block(arr.name, features, sp.lambdify(symbols, coefficients, modules="numpy"),
+                             [sp.lambdify(symbols, coefficients.diff(s), modules="numpy") for s in symbols]))
+    return _Problem(names, np.array([float(values[n]) for n in names]), blocks, {})
+
+
+def _terms(expression: sp.Expr, points: list, parameters: list) -> dict:
+    """The ARR as ``sum coefficient(theta) * feature(points)``: feature -> coefficient.  A term whose parameters
+    and signals cannot be told apart (a parameter inside a function of the signals) raises ValueError."""
+    found: dict = {}
+    for term in sp.Add.make_args(sp.expand_mul(expression)):
+        coefficient, feature = term.as_independent(*points, as_Add=False)
+        if feature.free_symbols & set(parameters):
+            coefficient, feature = sp.expand_power_base(term, force=True).as_independent(*points, as_Add=False)
+        if feature.free_symbols & set(parameters):
+            raise ValueError(f"{term} mixes parameters and signals")
+        found[feature] = found.get(feature, 0) + coefficient
+    return found
+
+
+def _window_features(compiled, record: Record, features: list, window: int | None) -> np.ndarray:
+    """Each feature integrated over the windows of ``record`` (rows: windows, columns: features).  A first
+    derivative ``dx/dt`` integrates exactly to ``x(b) - x(a)``; any other feature is integrated by the trapezoid
+    rule from its samples, which needs the derivative estimates it holds (so a window is kept only where they
+    are finite and do not reach across an input's step)."""
+    width = int(window or INTEGRATION_WINDOW)
+    t = record.t
+    numeric = [f for f in features if not (f in compiled.derivatives and compiled.derivatives[f][1] == 1)]
+    points = compiled.point_values(record) if any(f.free_symbols - set(map(sp.Symbol, compiled.signals))
+                                                  for f in numeric) else None
+    columns = []
+    values = {sp.Symbol(s): record[s] for s in compiled.signals}
+    if points is not None:
+        values.update(dict(zip(compiled.points, points)))
+    usable = _trusted_samples(compiled, record, points or [], numeric)
+    for name in compiled.signals:  # a gap in any signal
+        usable &= np.isfinite(np.asarray(record[name], float))
+    cumulative = []
+    for feature in features:
+        if feature in compiled.derivatives and compiled.derivatives[feature][1] == 1:
+            cumulative.append(np.asarray(record[compiled.derivatives[feature][0]], float))  # x itself: its jumps
+            continue
+        samples = np.broadcast_to(np.asarray(sp.lambdify(list(values), feature, modules="numpy")(*values.values()),
+                                             float), t.shape)
+        samples = np.where(usable, samples, 0.0)  # windows holding an unusable sample are dropped below
+        cumulative.append(np.concatenate([[0.0], np.cumsum(0.5 * (samples[1:] + samples[:-1]) * np.diff(t))]))
+    # windows one sample apart: two windows sharing an end sample would share its noise (x(b) - x(a) then x(c) -
+    # x(b)), and their residuals would be anti-correlated
+    starts = np.arange(0, len(record) - width, width + 1)
+    ends = starts + width
+    bad = np.concatenate([[0], np.cumsum(~usable)])
+    keep = (bad[ends + 1] - bad[starts]) == 0  # no unusable sample in [start, end]
+    for series in cumulative:
+        columns.append(series[ends[keep]] - series[starts[keep]])
+    return np.column_stack(columns) if columns else np.empty((0, 0))
+
+
+def _trusted_samples(compiled, record: Record, points: list, features: list) -> np.ndarray:
+    """Samples where the point values the numeric features need are finite and not across an input's step."""
+    needed = set().union(*(f.free_symbols for f in features)) if features else set()
+    usable = np.ones(len(record), bool)
+    for symbol, values in zip(compiled.points, points):
+        if symbol in needed:
+            usable &= np.isfinite(values)
+    arr = compiled.arr
+    orders = [compiled.derivatives[s][1] for s in needed if s in compiled.derivatives]
+    inputs = [s for s in arr.signals if s not in arr.sensors and s in record.columns]
+    if inputs:  # a step, and the fast transient after it, defeat the derivative filter and the trapezoid rule
+        reach = default_window() + max(orders, default=1)
+        usable &= ~step_mask({"t": record.t, **{s: record[s] for s in inputs}}, inputs, reach)
+    return usable
+
+
+def _autocorrelation_time(samples: np.ndarray, limit: int = 200) -> float:
+    """The integrated autocorrelation time (samples per independent sample): 1 + 2 sum of the autocorrelation
+    up to its first non-positive lag."""
+    x = samples - samples.mean()
+    n = x.size
+    if n < 4 or not np.any(x):
+        return 1.0
+    spectrum = np.fft.rfft(x, 2 * n)
+    acf = np.fft.irfft(spectrum * np.conj(spectrum))[:min(n, limit)]
+    acf = acf / acf[0]
+    positive = np.argmax(acf[1:] <= 0) + 1 if np.any(acf[1:] <= 0) else acf.size
+    return float(max(1.0, 1.0 + 2.0 * acf[1:positive].sum()))
+
+
+# ------------------------------------------------------------------------------------------- identifiability
+
+def _choose(bg, arrs: Sequence, parameters: Sequence[str] | None) -> tuple[list, list]:
+    """The parameters to fit (those asked, else every parameter of an ARR) and those in no ARR."""
+    in_arrs = list(dict.fromkeys(p for arr in arrs for p in sorted(arr.parameters)))
+    values = bg.parameters
+    if parameters is None:
+        chosen = [p for p in values if p in in_arrs]
+    else:
+        unknown = [p for p in parameters if p not in values]
+        if unknown:
+            raise SettingError("parameters", f"{{setting}}: the model has no parameter {unknown[0]!r} (parameters: "
+                               f"{', '.join(values)})")
+        chosen = list(dict.fromkeys(parameters))
+    unseen = [p for p in chosen if p not in in_arrs]
+    return [p for p in chosen if p in in_arrs and values[p] != 0], unseen
+
+
+def _rank_out(problem: _Problem, x: np.ndarray) -> tuple[list, list, np.ndarray]:
+    """Split the parameters into those the Jacobian at ``x`` identifies and groups it does not: one null
+    direction at a time, its largest member kept out (at its datasheet value)."""
+    names = list(problem.names)
+    active = list(range(len(names)))
+    groups = []
+    if names and not np.any(problem.residual(np.zeros(len(names)))):
+        # every term holds a fitted parameter: scaling them all alike leaves each residual's zero where it is,
+        # so only their ratios are seen; the first keeps its datasheet value and sets the scale
+        groups.append((list(names), names[0]))
+        active.remove(0)
+    jac = problem.jacobian(x)
+    scale = np.linalg.norm(jac, axis=0)
+    scale[scale == 0] = 1.0
+    singular = np.linalg.svd(jac / scale, compute_uv=False)
+    while len(active) > 1 or (active and not np.any(jac[:, active])):
+        sub = jac[:, active] / scale[active]
+        _, s, vt = np.linalg.svd(sub, full_matrices=False)
+        if s[-1] > SINGULAR_FLOOR * s[0] and s[-1] > 0:
+            break
+        direction = vt[-1]
+        members = [active[k] for k in np.flatnonzero(np.abs(direction) > 0.1 * np.abs(direction).max())]
+        kept = max(members, key=lambda k: abs(direction[active.index(k)]))
+        groups.append(([names[k] for k in members], names[kept]))
+        active.remove(kept)
+    return [names[k] for k in active], groups, singular
+
+
+def _combination(arrs: Sequence, members: list, values: Mapping) -> str:
+    """The coefficient, in an ARR holding the group, of the term that joins its members: what the data fix."""
+    symbols = {sp.Symbol(m) for m in members}
+    if len(members) > 2:
+        return "the ratios of " + ", ".join(members)
+    for arr in arrs:
+        if not symbols & arr.nominal.free_symbols:
+            continue
+        expression = sp.expand(arr.nominal)
+        signal_atoms = [a for a in expression.atoms(sp.Derivative, sp.Integral, sp.core.function.AppliedUndef)
+                        if not a.free_symbols & symbols]
+        collected = sp.collect(expression, signal_atoms, evaluate=False) if signal_atoms else {}
+        for coefficient in collected.values():
+            if len(coefficient.free_symbols & symbols) >= 2:
+                return str(sp.simplify(coefficient))
+    return " ~ ".join(members)
+
+
+def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = None, *, arrs: Sequence | None = None,
+                    window: int | None = None) -> Identifiability:
+    """Which parameters these records identify through the ARRs, at the model's (datasheet) values.
+
+    >>> import numpy as np
+    >>> from bondgraph import simulate
+    >>> from bondgraph.library import dc_motor
+    >>> t = np.linspace(0.0, 1.0, 1001)
+    >>> record = simulate(dc_motor(), (0, 1), {"U": lambda t: 12.0 * (t > 0.05)}, t_eval=t).record()
+    >>> identifiability(dc_motor(), [record]).identified
+    ['R_a', 'L_a', 'k_m', 'J', 'b']
+    """
+    arrs = list(arrs) if arrs is not None else derive_arrs(bg)
+    records = [as_record(r) for r in records]
+    names, unseen = _choose(bg, arrs, parameters)
+    problem = _problem(arrs, records, names, bg.parameters, window)
+    identified, groups, singular = _rank_out(problem, np.ones(len(names)))
+    combinations = [{"parameters": members, "kept": kept, "expression": _combination(arrs, members, bg.parameters)}
+                    for members, kept in groups]
+    return Identifiability(identified, combinations, unseen, singular.tolist())
+
+
+# ------------------------------------------------------------------------------------------- estimation
+
+def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None = None, *,
+                        arrs: Sequence | None = None, window: int | None = None,
+                        level: float = 0.95, prior: float | None = PRIOR) -> ParameterEstimate:
+    """Estimate a model's parameters from healthy records by making its ARRs' residuals smallest.
+
+    Parameters
+    ----------
+    bg : BondGraph
+        The model with its datasheet values (the starting point, and the value of every parameter not fitted).
+    records : sequence of Record or mapping
+        Healthy records (each with ``t`` and the ARRs' signals), from different days or operating points.
+    parameters : sequence of str, optional
+        The parameters to estimate; default: every parameter in an ARR that the records identify (the others
+        stay at their datasheet values and are reported, see :class:`Identifiability`).
+    arrs : sequence of ARR, optional
+        Default: :func:`~diagnosis.derive_arrs` of ``bg`` (differentiated forms, no integral of a signal).
+    window : int, optional
+        Savitzky-Golay window of the derivatives (default: the detection's default).
+    level : float
+        Confidence level of the intervals.
+    prior : float or None
+        The datasheet's own uncertainty: each parameter's relative standard deviation about its datasheet
+        value (default :data:`PRIOR`, 50 %).  A direction the records barely see stays near the datasheet
+        rather than swinging to absorb the residuals' estimation errors (a regularized, maximum a posteriori
+        fit); a direction they see well is the data's.  None: the records alone.
+
+    Returns
+    -------
+    ParameterEstimate
+
+    Raises
+    ------
+    SettingError
+        A parameter the model lacks, a level outside (0, 1), or no sample to fit on.
+    """
+    if not 0.0 < level < 1.0:
+        raise SettingError("level", f"{{setting}} must lie in (0, 1), got {level!r}")
+    arrs = list(arrs) if arrs is not None else derive_arrs(bg)
+    records = [as_record(r) for r in records]
+    datasheet = dict(bg.parameters)
+    ident = identifiability(bg, records, parameters, arrs=arrs, window=window)
+    names = ident.identified
+    if not names:
+        return ParameterEstimate(dict(datasheet), datasheet, identifiability=ident, level=level)
+    values = dict(datasheet)
+    problem = _problem(arrs, records, names, values, window)
+    if not sum(b.features.shape[0] for b in problem.blocks):
+        raise SettingError("records", "{setting}: no sample where every signal and derivative of the ARRs is known")
+    lower, upper = _bounds(bg, names, problem.nominal)
+    x = np.ones(len(names))
+    # weights fixed before the fit, from the residuals at the datasheet values: a weight read at the fit
+    # would reward a fit that shrinks an ARR's residual by shrinking its parameters
+    _weigh(problem, x, correlation=False)
+    if prior is not None and not (math.isfinite(prior) and prior > 0):
+        raise SettingError("prior", f"{{setting}} must be a relative standard deviation > 0, or None, got {prior!r}")
+    spread = math.inf if prior is None else prior
+
+    def residual(x):
+        return np.concatenate([problem.residual(x), (x - 1.0) / spread])
+
+    def jacobian(x):
+        return np.vstack([problem.jacobian(x), np.eye(x.size) / spread])
+
+    for passes in range(REWEIGHTS + 1):
+        # later passes weigh each ARR by its noise at the previous fit: its residual at the datasheet values
+        # holds the datasheet's error too, which would let the prior outweigh the records
+        if passes:
+            _weigh(problem, x, correlation=False)
+        previous, x = x, optimize.least_squares(residual, x, jac=jacobian, bounds=(lower, upper), x_scale="jac",
+                                                method="trf", ftol=1e-14, xtol=1e-14, gtol=1e-14).x
+        if passes and np.max(np.abs(x - previous)) < 1e-9:
+            break
+    covariance, noise, correlation = _covariance(problem, x, spread)
+    z = stats.norm.ppf(0.5 + level / 2)
+    theta = problem.nominal * x
+    std = np.sqrt(np.maximum(np.diag(covariance), 0.0)) * np.abs(problem.nominal)
+    values.update(dict(zip(names, theta.tolist())))
+    return ParameterEstimate(
+        values=values, datasheet=datasheet,
+        intervals={n: (float(v - z * s), float(v + z * s)) for n, v, s in zip(names, theta, std)},
+        std=dict(zip(names, std.tolist())), identifiability=ident, residual_std=noise, correlation=correlation,
+        samples=int(sum(b.features.shape[0] for b in problem.blocks)), level=level)
+
+
+#: Lags of the residuals' autocorrelation that the intervals count (Newey-West): neighbouring windows share an
+#: end sample, and a derivative estimate's noise spans a few samples.
+LAGS = 5
+
+
+def _covariance(problem: _Problem, x: np.ndarray, prior: float = math.inf) -> tuple[np.ndarray, dict, dict]:
+    """The fit's covariance (relative parameters), robust to the residuals' own variance and autocorrelation:
+    the sandwich with a Newey-West middle (Bartlett weights over :data:`LAGS` lags), each ARR's rows on their
+    own.  Also each ARR's residual noise and the ratio of its variance with the lags to without (its inflation)."""
+    jac = problem.jacobian(x)
+    per_arr = problem.per_arr(x)
+    information = jac.T @ jac + np.eye(x.size) / prior ** 2
+    bread = np.linalg.pinv(information)
+    meat = np.eye(x.size) / prior ** 2  # the prior's own share of the information
+    noise, inflation, start = {}, {}, 0
+    for name, residual in per_arr.items():
+        rows = jac[start:start + residual.size]
+        start += residual.size
+        scores = rows * (problem.weights[name] * residual)[:, None]
+        middle = scores.T @ scores
+        lagged = np.zeros_like(middle)
+        for lag in range(1, min(LAGS, len(scores) - 1) + 1):
+            cross = scores[lag:].T @ scores[:-lag]
+            lagged += (1.0 - lag / (LAGS + 1)) * (cross + cross.T)
+        meat += middle + lagged
+        noise[name] = float(robust_std(residual))
+        inflation[name] = float(np.trace(middle + lagged) / np.trace(middle)) if np.trace(middle) > 0 else 1.0
+    return bread @ meat @ bread, noise, inflation
+
+
+def _weigh(problem: _Problem, x: np.ndarray, correlation: bool = True) -> None:
+    """Each ARR's rows weigh 1 / its residual's robust noise at ``x`` (and, with ``correlation``, 1 / sqrt of
+    its correlation time): ARRs in different units count alike."""
+    for name, residual in problem.per_arr(x).items():
+        noise = robust_std(residual) or float(np.std(residual)) or 1.0
+        problem.weights[name] = 1.0 / (noise * (math.sqrt(_autocorrelation_time(residual)) if correlation else 1.0))
+
+
+def _bounds(bg, names: list, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Each parameter's physical domain (:attr:`BondGraph.domains`), in relative terms, kept off its edge."""
+    domains = bg.domains
+    lower, upper = [], []
+    for name, value in zip(names, nominal):
+        lo, hi = domains.get(name, (-math.inf, math.inf))
+        a, b = sorted((lo / value, hi / value)) if value else (-math.inf, math.inf)
+        lower.append(a + 1e-9 if math.isfinite(a) else -np.inf)
+        upper.append(b - 1e-9 if math.isfinite(b) else np.inf)
+    return np.array(lower), np.array(upper)
+
+
+# ------------------------------------------------------------------------------------------- boxes
+
+def uncertainty_boxes(estimate: ParameterEstimate, method: str = "confidence", *,
+                      per_record: Sequence[ParameterEstimate] = ()) -> dict:
+    """Multiplicative boxes ``(lo, hi)`` about the estimates, for ``uncertainty=`` of the model's elements.
+
+    ``"confidence"``: the estimate's confidence interval, ``(lo / value - 1, hi / value - 1)``.
+    ``"records"``: the spread of the estimates made on each record alone (``per_record``, at least two),
+    their range about the pooled estimate, widened by each one's own interval.
+
+    >>> fit = ParameterEstimate({"b": 2.0}, {"b": 1.0}, intervals={"b": (1.8, 2.3)}, std={"b": 0.1})
+    >>> uncertainty_boxes(fit)
+    {'b': (-0.1, 0.15)}
+    """
+    if method == "confidence":
+        return {p: (round(lo / estimate.values[p] - 1.0, 12), round(hi / estimate.values[p] - 1.0, 12))
+                for p, (lo, hi) in estimate.intervals.items()}
+    if method == "records":
+        if len(per_record) < 2:
+            raise SettingError("method", "{setting} 'records' needs the estimates of at least two records")
+        boxes = {}
+        for p, value in ((p, estimate.values[p]) for p in estimate.intervals):
+            seen = [r.intervals[p] for r in per_record if p in r.intervals]
+            lo = min([a for a, _ in seen] + [estimate.intervals[p][0]])
+            hi = max([b for _, b in seen] + [estimate.intervals[p][1]])
+            boxes[p] = (lo / value - 1.0, hi / value - 1.0)
+        return boxes
+    raise SettingError("method", f"{{setting}} must be 'confidence' or 'records', got {method!r}")
