@@ -2,22 +2,27 @@
 
 On a healthy machine every ARR's nominal residual ``r_n(signals; theta)`` is zero but for noise, when
 ``theta`` holds the machine's true parameters.  :func:`estimate_parameters` therefore finds the parameters
-that make the residuals of every ARR, over every record, smallest: a least-squares fit in which each ARR
-weighs by its own noise (its residuals' robust spread at the fit) and by how many of its samples are
-independent (a residual of derivatives estimated over a window is correlated over that window: its
-integrated autocorrelation time).  Most ARRs are linear in their parameters and the fit lands in one or two
-steps; the others (a valve's ``sqrt``, a belt's ``1/k``) are fitted the same way, with the exact Jacobian.
+that make the residuals of every ARR, over every record, smallest.  Each ARR is written as a sum of terms,
+``coefficient(theta) * feature(signals)``, and each feature is integrated over windows of
+:data:`INTEGRATION_WINDOW` samples: a derivative term ``c dx/dt`` becomes ``c (x(b) - x(a))``, exact and without
+the derivative filter's noise, and every other term is averaged (windows that reach across an input's step are
+left out).  The fit is a least-squares fit of the window residuals in which each ARR weighs by its own noise
+(reweighed at the fit), the regressors' own noise (estimated from each signal's fourth differences) is taken
+out of the normal equations where that is safe (errors in variables), and a prior about the datasheet values
+(:data:`PRIOR`, 50 %) keeps the directions the records barely see near them.  Most ARRs are linear in their
+parameters; the others (a valve's ``sqrt``, a belt's ``1/k``) are fitted the same way, with the exact Jacobian.
 
 Identifiability comes first (:func:`identifiability`): the Jacobian of the residuals with respect to the
 relative change of each parameter, over the records, says which parameters these ARRs and these records can
 tell apart.  A direction of parameters that leaves the residuals (almost) unchanged cannot be estimated:
 its parameters are reported together, with the combination the data do fix (the coefficient of the term of
-the ARR they share, e.g. ``J_m + J_Md/k_belt**2``), and the fit keeps one of them at its datasheet value so
-that the others carry the combination.
+the ARR they share, e.g. ``J_m + J_Md/k_belt**2``, or the ratios of a relation whose every term holds a fitted
+parameter), and the fit keeps one of them at its datasheet value so that the others carry the combination.
 
-The intervals are the 95 % (``level``) confidence intervals of a linearized fit, the noise read from the fit's
-own residuals, inflated by the residuals' correlation; :func:`uncertainty_boxes` turns them, or the spread
-between records, into the multiplicative ``uncertainty=(lo, hi)`` boxes the thresholds use.
+The intervals are ``level`` (95 %) confidence intervals of the linearized fit: a sandwich covariance whose
+middle adds the ARRs' scores window by window (ARRs that share a sensor share its noise) with Newey-West lags,
+scaled for the degrees of freedom the windows leave, with a t quantile.  :func:`uncertainty_boxes` turns them,
+or the spread between records, into the multiplicative ``uncertainty=(lo, hi)`` boxes the thresholds use.
 
 Example
 -------
@@ -178,7 +183,7 @@ class ParameterEstimate:
 #: exact and without the derivative filter's noise, and every other term is averaged.  Noise in a regressor
 #: biases a least-squares fit towards zero by its variance over the regressor's (errors in variables): over a
 #: longer stretch the signal's change grows and its noise does not.
-INTEGRATION_WINDOW = 100
+INTEGRATION_WINDOW = 50
 
 
 @dataclass
@@ -190,6 +195,8 @@ class _Block:
     features: np.ndarray
     coefficient: object
     gradient: list
+    root: np.ndarray | None = None  # R with R'R = F'F less the features' noise (errors in variables), or None
+    keys: list = field(default_factory=list)  # (record, first sample) of each row's window
 
 
 @dataclass
@@ -205,17 +212,24 @@ class _Problem:
     def _coefficients(self, block: _Block, x: np.ndarray) -> np.ndarray:
         return np.asarray(block.coefficient(*(self.nominal * x)), float).reshape(-1)
 
-    def residual(self, x: np.ndarray) -> np.ndarray:
-        return np.concatenate([self.weights.get(b.name, 1.0) * (b.features @ self._coefficients(b, x))
-                               for b in self.blocks])
+    def residual(self, x: np.ndarray, compensated: bool = False) -> np.ndarray:
+        """The weighted window residuals; ``compensated``: per ARR ``R c`` instead (:func:`_compensated_root`),
+        whose squares add up to the residuals' less what the regressors' noise adds."""
+        return np.concatenate([self.weights.get(b.name, 1.0) * (self._matrix(b, compensated)
+                                                                 @ self._coefficients(b, x)) for b in self.blocks])
 
-    def jacobian(self, x: np.ndarray) -> np.ndarray:
+    def jacobian(self, x: np.ndarray, compensated: bool = False) -> np.ndarray:
         theta = self.nominal * x
         rows = []
         for b in self.blocks:
             columns = [np.asarray(g(*theta), float).reshape(-1) for g in b.gradient]
-            rows.append(self.weights.get(b.name, 1.0) * (b.features @ np.column_stack(columns)) * self.nominal)
+            rows.append(self.weights.get(b.name, 1.0) * (self._matrix(b, compensated) @ np.column_stack(columns))
+                        * self.nominal)
         return np.vstack(rows)
+
+    @staticmethod
+    def _matrix(block: _Block, compensated: bool) -> np.ndarray:
+        return block.root if compensated and block.root is not None else block.features
 
     def per_arr(self, x: np.ndarray) -> dict:
         """ARR name -> its unweighted window residuals."""
@@ -231,10 +245,13 @@ def _problem(arrs: Sequence, records: Sequence[Record], names: list, values: Map
             continue
         compiled = arr.compiled
         terms = _terms(arr.nominal.xreplace(compiled.symbols).xreplace(fixed), compiled.points, symbols)
-        features = np.vstack([_window_features(compiled, record, list(terms), window) for record in records])
+        parts = [_window_features(compiled, record, list(terms), window) for record in records]
+        features = np.vstack([f for f, _, _ in parts])
         coefficients = sp.Matrix([list(terms.values())])
         blocks.append(_Block(arr.name, features, sp.lambdify(symbols, coefficients, modules="numpy"),
-                             [sp.lambdify(symbols, coefficients.diff(s), modules="numpy") for s in symbols]))
+                             [sp.lambdify(symbols, coefficients.diff(s), modules="numpy") for s in symbols],
+                             _compensated_root(features, sum(n for _, n, _ in parts)),
+                             [(r, int(start)) for r, (_, _, starts) in enumerate(parts) for start in starts]))
     return _Problem(names, np.array([float(values[n]) for n in names]), blocks, {})
 
 
@@ -252,11 +269,50 @@ def _terms(expression: sp.Expr, points: list, parameters: list) -> dict:
     return found
 
 
-def _window_features(compiled, record: Record, features: list, window: int | None) -> np.ndarray:
-    """Each feature integrated over the windows of ``record`` (rows: windows, columns: features).  A first
-    derivative ``dx/dt`` integrates exactly to ``x(b) - x(a)``; any other feature is integrated by the trapezoid
-    rule from its samples, which needs the derivative estimates it holds (so a window is kept only where they
-    are finite and do not reach across an input's step)."""
+#: A regressor's noise is taken out of the fit (errors in variables) only where it is at most this share of the
+#: regressor's own spread: beyond, the subtraction would leave the fit to the noise estimate's own errors.
+COMPENSATED_SHARE = 0.25
+
+
+def _compensated_root(features: np.ndarray, noise: np.ndarray) -> np.ndarray | None:
+    """``R`` with ``R'R = F'F - N``: the features' Gram matrix less what their noise adds to it (``N``, the sum
+    over rows of each row's noise covariance).  A least-squares fit on noisy regressors is biased towards zero by
+    that term (errors in variables); without it the fit is unbiased to first order.  Only the features whose
+    noise is at most :data:`COMPENSATED_SHARE` of their spread are corrected, and the correction is halved until
+    ``F'F - N`` stays positive definite: a correction that made some direction free would let the fit collapse
+    into it.  None when nothing is corrected."""
+    if not features.size or not np.any(noise):
+        return None
+    gram = features.T @ features
+    diagonal = np.diag(gram)
+    noise = np.where(np.diag(noise) <= COMPENSATED_SHARE * diagonal, np.diag(noise), 0.0)
+    for _ in range(6):
+        if not np.any(noise):
+            return None
+        values, vectors = np.linalg.eigh(gram - np.diag(noise))
+        if values.min() > 1e-9 * values.max():
+            return (vectors * np.sqrt(values)).T
+        noise = noise / 2.0
+    return None
+
+
+def _sensor_noise(values: np.ndarray) -> float:
+    """A sampled signal's white-noise standard deviation, from its fourth differences (``70 sigma^2`` for white
+    noise; a smooth signal's own are far smaller, and a step's few are outliers the robust spread ignores)."""
+    samples = np.asarray(values, float)
+    samples = samples[np.isfinite(samples)]
+    if samples.size < 20:
+        return 0.0
+    return float(robust_std(np.diff(samples, 4)) / math.sqrt(70.0))
+
+
+def _window_features(compiled, record: Record, features: list, window: int | None) -> tuple:
+    """Each feature integrated over the windows of ``record`` (rows: windows, columns: features), the sum over
+    the rows of the features' noise covariance, and each row's first sample.  A first derivative ``dx/dt``
+    integrates exactly to ``x(b) - x(a)`` (its noise ``2 sigma_x^2``); a signal ``x`` by the trapezoid rule
+    (``sigma_x^2 dt^2 (width - 1/2)``); any other feature by the trapezoid rule from its samples, which needs the
+    derivative estimates it holds (so a window is kept only where they are finite and do not reach across an
+    input's step), its noise not counted."""
     width = int(window or INTEGRATION_WINDOW)
     t = record.t
     numeric = [f for f in features if not (f in compiled.derivatives and compiled.derivatives[f][1] == 1)]
@@ -286,7 +342,15 @@ def _window_features(compiled, record: Record, features: list, window: int | Non
     keep = (bad[ends + 1] - bad[starts]) == 0  # no unusable sample in [start, end]
     for series in cumulative:
         columns.append(series[ends[keep]] - series[starts[keep]])
-    return np.column_stack(columns) if columns else np.empty((0, 0))
+    variance = np.zeros(len(features))
+    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    for k, feature in enumerate(features):
+        if feature in compiled.derivatives and compiled.derivatives[feature][1] == 1:
+            variance[k] = 2.0 * _sensor_noise(record[compiled.derivatives[feature][0]]) ** 2
+        elif isinstance(feature, sp.Symbol) and str(feature) in compiled.signals:
+            variance[k] = _sensor_noise(record[str(feature)]) ** 2 * step ** 2 * (width - 0.5)
+    matrix = np.column_stack(columns) if columns else np.empty((0, 0))
+    return matrix, int(keep.sum()) * np.diag(variance), starts[keep]
 
 
 def _trusted_samples(compiled, record: Record, points: list, features: list) -> np.ndarray:
@@ -465,10 +529,10 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     spread = math.inf if prior is None else prior
 
     def residual(x):
-        return np.concatenate([problem.residual(x), (x - 1.0) / spread])
+        return np.concatenate([problem.residual(x, compensated=True), (x - 1.0) / spread])
 
     def jacobian(x):
-        return np.vstack([problem.jacobian(x), np.eye(x.size) / spread])
+        return np.vstack([problem.jacobian(x, compensated=True), np.eye(x.size) / spread])
 
     for passes in range(REWEIGHTS + 1):
         # later passes weigh each ARR by its noise at the previous fit: its residual at the datasheet values
@@ -480,7 +544,12 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
         if passes and np.max(np.abs(x - previous)) < 1e-9:
             break
     covariance, noise, correlation = _covariance(problem, x, spread)
-    z = stats.norm.ppf(0.5 + level / 2)
+    # few windows: the residuals' spread is itself estimated, with as many degrees of freedom as windows left
+    # over by the parameters (a t quantile, and the residual variance's own correction)
+    rows = sum(b.features.shape[0] for b in problem.blocks)
+    freedom = max(rows - len(names), 1)
+    covariance = covariance * rows / freedom
+    z = stats.t.ppf(0.5 + level / 2, freedom)
     theta = problem.nominal * x
     std = np.sqrt(np.maximum(np.diag(covariance), 0.0)) * np.abs(problem.nominal)
     values.update(dict(zip(names, theta.tolist())))
@@ -498,27 +567,37 @@ LAGS = 5
 
 def _covariance(problem: _Problem, x: np.ndarray, prior: float = math.inf) -> tuple[np.ndarray, dict, dict]:
     """The fit's covariance (relative parameters), robust to the residuals' own variance and autocorrelation:
-    the sandwich with a Newey-West middle (Bartlett weights over :data:`LAGS` lags), each ARR's rows on their
-    own.  Also each ARR's residual noise and the ratio of its variance with the lags to without (its inflation)."""
+    the sandwich with a Newey-West middle (Bartlett weights over :data:`LAGS` lags).  The scores of the ARRs'
+    rows over the same window are added first: ARRs that share a sensor share its noise, window by window.
+    Also each ARR's residual noise and the ratio of its variance with the lags to without (its inflation)."""
     jac = problem.jacobian(x)
     per_arr = problem.per_arr(x)
-    information = jac.T @ jac + np.eye(x.size) / prior ** 2
-    bread = np.linalg.pinv(information)
-    meat = np.eye(x.size) / prior ** 2  # the prior's own share of the information
+    bread = np.linalg.pinv(jac.T @ jac + np.eye(x.size) / prior ** 2)
     noise, inflation, start = {}, {}, 0
-    for name, residual in per_arr.items():
+    windows: dict = {}
+    for block in problem.blocks:
+        residual = per_arr[block.name]
         rows = jac[start:start + residual.size]
         start += residual.size
-        scores = rows * (problem.weights[name] * residual)[:, None]
-        middle = scores.T @ scores
-        lagged = np.zeros_like(middle)
-        for lag in range(1, min(LAGS, len(scores) - 1) + 1):
-            cross = scores[lag:].T @ scores[:-lag]
-            lagged += (1.0 - lag / (LAGS + 1)) * (cross + cross.T)
-        meat += middle + lagged
-        noise[name] = float(robust_std(residual))
-        inflation[name] = float(np.trace(middle + lagged) / np.trace(middle)) if np.trace(middle) > 0 else 1.0
+        scores = rows * (problem.weights[block.name] * residual)[:, None]
+        for key, score in zip(block.keys, scores):
+            windows[key] = windows.get(key, 0.0) + score
+        noise[block.name] = float(robust_std(residual))
+        own = _newey_west(scores)
+        inflation[block.name] = float(np.trace(own) / np.trace(scores.T @ scores)) if np.any(scores) else 1.0
+    meat = np.eye(x.size) / prior ** 2  # the prior's own share of the information
+    for record in sorted({r for r, _ in windows}):
+        meat += _newey_west(np.array([windows[k] for k in sorted(k for k in windows if k[0] == record)]))
     return bread @ meat @ bread, noise, inflation
+
+
+def _newey_west(scores: np.ndarray) -> np.ndarray:
+    """``sum_t g_t g_t' + sum_l (1 - l/(L+1)) sum_t (g_t g_{t-l}' + g_{t-l} g_t')`` over consecutive rows."""
+    middle = scores.T @ scores
+    for lag in range(1, min(LAGS, len(scores) - 1) + 1):
+        cross = scores[lag:].T @ scores[:-lag]
+        middle = middle + (1.0 - lag / (LAGS + 1)) * (cross + cross.T)
+    return middle
 
 
 def _weigh(problem: _Problem, x: np.ndarray, correlation: bool = True) -> None:
