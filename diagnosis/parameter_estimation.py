@@ -528,11 +528,13 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
         raise SettingError("prior", f"{{setting}} must be a relative standard deviation > 0, or None, got {prior!r}")
     spread = math.inf if prior is None else prior
 
+    # the prior on the logarithm of each relative value: a factor 2 above the datasheet costs what a factor 2
+    # below does, and zero is infinitely far
     def residual(x):
-        return np.concatenate([problem.residual(x, compensated=True), (x - 1.0) / spread])
+        return np.concatenate([problem.residual(x, compensated=True), np.log(np.abs(x)) / spread])
 
     def jacobian(x):
-        return np.vstack([problem.jacobian(x, compensated=True), np.eye(x.size) / spread])
+        return np.vstack([problem.jacobian(x, compensated=True), np.diag(1.0 / x) / spread])
 
     for passes in range(REWEIGHTS + 1):
         # later passes weigh each ARR by its noise at the previous fit: its residual at the datasheet values
@@ -575,6 +577,7 @@ def _covariance(problem: _Problem, x: np.ndarray, prior: float = math.inf) -> tu
     bread = np.linalg.pinv(jac.T @ jac + np.eye(x.size) / prior ** 2)
     noise, inflation, start = {}, {}, 0
     windows: dict = {}
+    numeric = np.zeros((x.size, x.size))
     for block in problem.blocks:
         residual = per_arr[block.name]
         rows = jac[start:start + residual.size]
@@ -583,9 +586,12 @@ def _covariance(problem: _Problem, x: np.ndarray, prior: float = math.inf) -> tu
         for key, score in zip(block.keys, scores):
             windows[key] = windows.get(key, 0.0) + score
         noise[block.name] = float(robust_std(residual))
+        floor = _noise_floor(problem, block, x)
+        if floor > noise[block.name]:  # a residual below the numbers' own error: count that error instead
+            numeric += (problem.weights[block.name] * floor) ** 2 * rows.T @ rows
         own = _newey_west(scores)
         inflation[block.name] = float(np.trace(own) / np.trace(scores.T @ scores)) if np.any(scores) else 1.0
-    meat = np.eye(x.size) / prior ** 2  # the prior's own share of the information
+    meat = np.eye(x.size) / prior ** 2 + numeric  # the prior's own share of the information, the numeric floor
     for record in sorted({r for r, _ in windows}):
         meat += _newey_west(np.array([windows[k] for k in sorted(k for k in windows if k[0] == record)]))
     return bread @ meat @ bread, noise, inflation
@@ -600,12 +606,33 @@ def _newey_west(scores: np.ndarray) -> np.ndarray:
     return middle
 
 
+#: An ARR is never trusted to hold better than this share of the size of its terms: its residual on a clean
+#: record is the error of the numbers that stand for the signals (the trapezoid rule, a derivative estimate, an
+#: encoder's counts), which no sensor noise hides.  Without that floor a noise-free record would weigh its
+#: windows infinitely and a weakly seen direction would swing to absorb those errors.
+NUMERIC_FLOOR = 1e-4
+
+
+def _noise_floor(problem: _Problem, block: _Block, x: np.ndarray) -> float:
+    """:data:`NUMERIC_FLOOR` times the median over the windows of the ARR's largest term."""
+    terms = np.abs(block.features * problem._coefficients(block, x))
+    return NUMERIC_FLOOR * float(np.median(terms.max(axis=1))) if terms.size else 0.0
+
+
+def _noise(problem: _Problem, block: _Block, residual: np.ndarray, x: np.ndarray) -> float:
+    """The ARR's residual noise at ``x``: its robust spread, at least the numeric floor."""
+    return max(robust_std(residual), _noise_floor(problem, block, x)) or float(np.std(residual)) or 1.0
+
+
 def _weigh(problem: _Problem, x: np.ndarray, correlation: bool = True) -> None:
-    """Each ARR's rows weigh 1 / its residual's robust noise at ``x`` (and, with ``correlation``, 1 / sqrt of
-    its correlation time): ARRs in different units count alike."""
-    for name, residual in problem.per_arr(x).items():
-        noise = robust_std(residual) or float(np.std(residual)) or 1.0
-        problem.weights[name] = 1.0 / (noise * (math.sqrt(_autocorrelation_time(residual)) if correlation else 1.0))
+    """Each ARR's rows weigh 1 / its residual's noise at ``x`` (and, with ``correlation``, 1 / sqrt of its
+    correlation time): ARRs in different units count alike."""
+    per_arr = problem.per_arr(x)
+    for block in problem.blocks:
+        residual = per_arr[block.name]
+        noise = _noise(problem, block, residual, x)
+        problem.weights[block.name] = 1.0 / (noise * (math.sqrt(_autocorrelation_time(residual)) if correlation
+                                                      else 1.0))
 
 
 def _bounds(bg, names: list, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
