@@ -14,6 +14,8 @@ from .detection import Evaluation, evaluate, noise_margin, robust_std
 from .calibration import POOLED_RECORDS, Calibration, DetectionSettings, calibrate, calibration_end, pooled_calibration
 from .detectability import Detectability, detectability
 from .monitoring import Detection, consistent_faults, detect
+from .model_validation import (ModelFigures, ModelValidation, Whiteness, held_out_figures, residual_whiteness,
+                               validate_calibration)
 from .parameter_estimation import (Identifiability, ParameterEstimate, estimate_parameters, identifiability,
                                    uncertainty_boxes)
 from .elimination import structural_arrs, unreached
@@ -28,11 +30,12 @@ from .structural import StructuralLimitError, StructuralModel, structural_model
 
 __all__ = [
     "ARR", "ARRError", "ARRWarning", "Calibration", "Detectability", "Detection", "DetectionSettings", "Evaluation",
-    "Identifiability", "Interval", "IntervalArray", "IntervalWarning", "POOLED_RECORDS", "ParameterEstimate",
-    "Record", "RecordError", "RecordWarning", "SensorFault", "SignatureMatrix", "StreamChunk", "StreamingEvaluation",
-    "StructuralLimitError", "StructuralModel", "add_noise", "add_sensor_faults", "affine_range", "as_record",
-    "calibrate", "calibration_end", "check_signals", "compile_interval", "consistent_faults", "delta", "derive_arrs",
-    "detect", "detectability", "estimate_parameters", "evaluable", "evaluate", "identifiability", "noise_margin",
-    "pooled_calibration", "read_csv", "resample", "robust_std", "signature_matrix", "structural_arrs",
-    "structural_model", "uncertainty_boxes", "unreached",
+    "Identifiability", "Interval", "IntervalArray", "IntervalWarning", "ModelFigures", "ModelValidation",
+    "POOLED_RECORDS", "ParameterEstimate", "Record", "RecordError", "RecordWarning", "SensorFault", "SignatureMatrix",
+    "StreamChunk", "StreamingEvaluation", "StructuralLimitError", "StructuralModel", "Whiteness", "add_noise",
+    "add_sensor_faults", "affine_range", "as_record", "calibrate", "calibration_end", "check_signals",
+    "compile_interval", "consistent_faults", "delta", "derive_arrs", "detect", "detectability", "estimate_parameters",
+    "evaluable", "evaluate", "held_out_figures", "identifiability", "noise_margin", "pooled_calibration", "read_csv",
+    "resample", "residual_whiteness", "robust_std", "signature_matrix", "structural_arrs", "structural_model",
+    "uncertainty_boxes", "unreached", "validate_calibration",
 ]
