@@ -7,7 +7,8 @@
   with ``source`` and ``target`` (the power direction) and an optional ``label``, and ``graph`` with
   an optional ``name`` and the run settings ``inputs`` (signal -> a number, or the text of an expression
   of the time ``t`` such as ``"12*step(t - 0.5)"``: :class:`~bondgraph.inputs.InputExpression`),
-  ``t_end`` and ``x0``;
+  ``t_end`` and ``x0``, and an optional ``calibration`` object (what ``bgphm calibrate`` writes: where the
+  values came from), kept as read in :attr:`ModelSpec.calibration`;
 * a Python file (``*.py``) that defines ``model`` (a :class:`~bondgraph.model.BondGraph` or a function
   returning one), or exactly one bond graph or one such function, and optionally ``inputs`` (a
   string among them is an expression of ``t``, as in JSON), ``t_end`` and ``x0``; ``file.py:name``
@@ -68,7 +69,7 @@ __all__ = ["ModelFileError", "ModelSpec", "load_model", "model_from_json", "to_j
 #: the model contract's node attributes and the ``id``.
 NODE_FIELDS = NODE_ATTRIBUTES | {"id"}
 LINK_FIELDS = BOND_ATTRIBUTES | {"source", "target"}
-GRAPH_FIELDS = frozenset({"name", "inputs", "t_end", "x0", "description"})
+GRAPH_FIELDS = frozenset({"name", "inputs", "t_end", "x0", "description", "calibration"})
 
 #: The largest JSON model file (bytes; characters of a text given to :func:`model_from_json`).  A model
 #: at :data:`MAX_NODES` written by :func:`to_json` takes about 1.3 MB; parsing the limit costs about a
@@ -101,6 +102,9 @@ class ModelSpec:
         Initial state by storage element name.
     source : str
         Where the model came from (path or ``library:<name>``).
+    calibration : dict
+        The ``calibration`` object of a JSON model's ``graph`` (the provenance of calibrated values: the
+        records, the method, the estimates), as read; empty without one.
     """
 
     model: BondGraph
@@ -108,6 +112,7 @@ class ModelSpec:
     t_end: float | None = None
     x0: dict = field(default_factory=dict)
     source: str = ""
+    calibration: dict = field(default_factory=dict)
 
 
 def load_model(source: str | Path) -> ModelSpec:
@@ -209,16 +214,22 @@ def model_from_json(text: str, *, where: str = "JSON model") -> ModelSpec:
         raise type(exc)(f"{where}: {exc}") from None
     inputs = _input_values(settings.get("inputs", {}), f"{where}: graph.inputs")
     x0 = _numbers(settings.get("x0", {}), f"{where}: graph.x0")
-    return _spec(model, inputs, settings.get("t_end"), x0, where, "graph.")
+    calibration = settings.get("calibration", {})
+    if not isinstance(calibration, dict):
+        raise ModelFileError(f"{where}: graph.calibration must be an object, got {type(calibration).__name__}")
+    spec = _spec(model, inputs, settings.get("t_end"), x0, where, "graph.")
+    spec.calibration = calibration
+    return spec
 
 
 def to_json(bg: BondGraph, *, inputs: Mapping | None = None, t_end: float | None = None, x0: Mapping | None = None,
-            indent: int | None = 1) -> str:
+            calibration: Mapping | None = None, indent: int | None = 1) -> str:
     """The node-link JSON of a bond graph that :func:`model_from_json` reads back.
 
     Laws and moduli are written as strings.  An input is stored as a number, or as the text of an
     expression of ``t`` (an :class:`~bondgraph.inputs.InputExpression`, or a string, which is parsed
     first); any other function of time (a Python function, a table, a controller) cannot be stored.
+    ``calibration`` (JSON data, finite numbers only) is stored as ``graph.calibration``.
 
     Examples
     --------
@@ -232,6 +243,8 @@ def to_json(bg: BondGraph, *, inputs: Mapping | None = None, t_end: float | None
     (True, {'V': 1.0}, 0.5)
     >>> json.loads(to_json(rlc_circuit(), inputs={"V": "5 + sin(7*t)"}))["graph"]["inputs"]
     {'V': '5 + sin(7*t)'}
+    >>> model_from_json(to_json(rlc_circuit(), calibration={"method": "least squares"})).calibration
+    {'method': 'least squares'}
     """
     require_model(bg, "to_json")
     graph_settings: dict = {"name": bg.name}
@@ -244,6 +257,8 @@ def to_json(bg: BondGraph, *, inputs: Mapping | None = None, t_end: float | None
         graph_settings["x0"] = {str(k): float(v) for k, v in x0.items()}
     if t_end is not None:
         graph_settings["t_end"] = float(t_end)
+    if calibration is not None:
+        graph_settings["calibration"] = _json_data(calibration, "to_json: calibration")
     nodes = []
     for name, data in bg.graph.nodes(data=True):
         node = {"id": name}
@@ -393,6 +408,16 @@ def _stored_input(name, value):
         raise ModelError(f"to_json: inputs[{name!r}] is a {type(value).__name__}; only a number or an expression "
                          "of t (bondgraph.inputs.InputExpression) can be stored in JSON")
     return float(value)
+
+
+def _json_data(value: Mapping, where: str) -> dict:
+    """``value`` as plain JSON data (a copy), refused with a ModelError if it holds anything else or a NaN."""
+    if not isinstance(value, Mapping):
+        raise ModelError(f"{where} must be a mapping, got {type(value).__name__}")
+    try:
+        return json.loads(json.dumps(dict(value), allow_nan=False))
+    except (TypeError, ValueError) as exc:
+        raise ModelError(f"{where}: not JSON data with finite numbers ({exc})") from None
 
 
 def _pair(value, where: str) -> tuple[float, float]:
