@@ -89,6 +89,7 @@ def test_the_calibrated_residuals_are_white_and_the_datasheet_s_are_not(bench):
 
 def test_as_dict_is_plain_json(bench):
     _, result = bench
+    assert isinstance(result, ModelValidation)
     data = json.loads(json.dumps(result.as_dict(), allow_nan=False))
     assert set(data) == {"training", "held_out", "settings", "datasheet", "calibrated"}
     assert data["datasheet"]["false_alarms"] == result.before.false_alarms
