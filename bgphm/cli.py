@@ -8,6 +8,9 @@
                    [--gain SIGNAL=FACTOR@ONSET ...] [--input SIGNAL=EXPR ...] [--inputs FILE.csv] [--seed N]
                    [--out CSV]
     bgphm detect MODEL DATA.csv [--margin M | --calibrate T] [--persistence N] [--out DIR]
+    bgphm calibrate MODEL HEALTHY.csv [HEALTHY.csv ...] --out FILE.json [--parameters P ...]
+                    [--boxes confidence|records] [--hold-out K | --validate FILE.csv ...] [--level L] [--prior S]
+                    [--report FILE.html] [--force]
     bgphm prognose MODEL DATA.csv --fail PARAM=VALUE [--fail ...] [--candidate P] [--degradation LAW] [--out DIR]
     bgphm fleet MODEL RECORDS --fail PARAM=VALUE [--fail ...] --calibrate T --out DIR [--scheduler ADDRESS]
                 [--workers N] [--particles N] [--dt S] [--rul-every K] [--seed S] [--on-bad-record stop|skip]
@@ -25,6 +28,13 @@ by :func:`bondgraph.scenarios.parse_degradation`), a sensor's bias, drift and ga
 same draws for the same ``--seed``); its inputs may be expressions of ``t`` (``--input U='12*step(t - 0.5)'``,
 :class:`bondgraph.inputs.InputExpression`, never evaluated) or samples from a CSV file (``--inputs``,
 :class:`bondgraph.inputs.TabulatedInput`).
+
+``calibrate`` estimates the model's parameters from healthy records through its ARRs
+(:func:`diagnosis.estimate_parameters`), gives the estimated ones uncertainty boxes (their confidence intervals,
+or the spread of one estimate per record), checks the calibrated model against the datasheet's on held-out
+healthy records (false alarms, smallest detectable changes, the residuals' whiteness:
+:func:`diagnosis.validate_calibration`) and writes it as a JSON model whose ``graph.calibration`` block says where
+its values came from (the records and their SHA-256, the method, the date), with an offline report.
 
 Exit codes: 0 success, 2 bad usage or bad input (one line on stderr naming the file, line, column,
 node or parameter), 1 anything else (an interrupted run included).  Progress goes to stderr;
@@ -55,6 +65,8 @@ COMMANDS = {
     "arr": "ARR report: elements, drawing, ARRs, fault signatures",
     "simulate": "simulate the model and write its signals as CSV",
     "detect": "residuals, robust thresholds and alarms on recorded data",
+    "calibrate": "parameters from healthy records, validated on held-out ones: the calibrated model (JSON, with "
+                 "its provenance) and a report",
     "prognose": "estimate a degrading parameter and predict the RUL from recorded data",
     "fleet": "monitor a fleet: records of many assets to Parquet tables of alarms, estimates, RULs and residuals, "
              "on Dask workers, and an overview page (index.html)",
@@ -82,7 +94,7 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser(commands: Collection[str] | None = None) -> argparse.ArgumentParser:
     """The ``bgphm`` argument parser: ``--quiet``, ``--debug``, ``--version`` and the commands arr, simulate, detect,
-    prognose, fleet, demo.
+    calibrate, prognose, fleet, demo.
 
     ``commands`` are those whose options are built (the others are listed with their help line); :func:`main`
     builds the one on the line alone, or none for ``bgphm --help``: a command's defaults are the library's, and
@@ -216,6 +228,46 @@ def _record_options(p: argparse.ArgumentParser, command: str) -> None:
                    help="write into a non-empty --out directory, replacing files of the same names")
 
 
+def _calibrate_options(p: argparse.ArgumentParser) -> None:
+    import inspect
+
+    from diagnosis import estimate_parameters
+
+    ESTIMATION = {k: v.default for k, v in inspect.signature(estimate_parameters).parameters.items()}  # its defaults
+    p.add_argument("model", metavar="MODEL", help=MODEL_HELP)
+    p.add_argument("records", metavar="HEALTHY.csv", nargs="+", help="healthy records, each a CSV with a column t "
+                   "and one per signal the ARRs use, from different days or operating points")
+    p.add_argument("--out", required=True, metavar="FILE.json", help="the calibrated model: JSON that every command "
+                   "reads as MODEL, with a graph.calibration block (records and their SHA-256, method, date, "
+                   "estimates, intervals, validation)")
+    p.add_argument("--parameters", nargs="+", action="extend", metavar="P", help="the parameters to estimate "
+                   "(several after one --parameters, or it repeated; default: every parameter the ARRs and the "
+                   "records identify)")
+    p.add_argument("--boxes", choices=("confidence", "records"), default="confidence",
+                   help="the calibrated uncertainty boxes: each estimate's confidence interval (default), or the "
+                        "spread of one estimate per training record (needs two training records or more)")
+    held = p.add_mutually_exclusive_group()
+    held.add_argument("--hold-out", type=int, metavar="K", help="validate on the last K records, estimate on the "
+                      "others (default: 1 with two records or more, else 0: no validation)")
+    held.add_argument("--validate", nargs="+", action="extend", metavar="FILE.csv",
+                      help="validate on these healthy records instead, and estimate on every HEALTHY.csv")
+    p.add_argument("--level", type=float, default=ESTIMATION["level"],
+                   help=f"confidence level of the intervals (default {ESTIMATION['level']:g})")
+    p.add_argument("--prior", type=_prior, default=ESTIMATION["prior"], metavar="S",
+                   help="the datasheet's relative standard deviation: a parameter the records barely see stays near "
+                        f"its datasheet value (default {ESTIMATION['prior']:g}; none: the records alone)")
+    p.add_argument("--report", metavar="FILE.html", help="the offline report (default: --out with .html)")
+    p.add_argument("--force", action="store_true", help="replace existing --out and report files (never an input)")
+
+
+def _prior(text: str) -> float | None:
+    """``--prior``: a number, or ``none``."""
+    return None if text.strip().lower() == "none" else float(text)
+
+
+_prior.__name__ = "prior"  # argparse names the type in its message: "invalid prior value: 'x'"
+
+
 def _prognose_options(p: argparse.ArgumentParser) -> None:
     from prognosis import IsolationSettings
 
@@ -342,14 +394,15 @@ def _fleet_options(p: argparse.ArgumentParser) -> None:
 
 #: Each command's options.
 OPTIONS_OF = {"arr": _arr_options, "simulate": _simulate_options, "detect": _detect_options,
-              "prognose": _prognose_options, "fleet": _fleet_options, "demo": _demo_options}
+              "calibrate": _calibrate_options, "prognose": _prognose_options, "fleet": _fleet_options,
+              "demo": _demo_options}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``bgphm`` console script; returns the exit code.
 
-    Commands: ``arr`` (the ARR report), ``simulate``, ``detect``, ``prognose``, ``fleet`` and ``demo``; ``bgphm
-    COMMAND --help`` lists each one's options.  Exit codes: 0 success, 2 bad usage or bad input (one
+    Commands: ``arr`` (the ARR report), ``simulate``, ``detect``, ``calibrate``, ``prognose``, ``fleet`` and
+    ``demo``; ``bgphm COMMAND --help`` lists each one's options.  Exit codes: 0 success, 2 bad usage or bad input (one
     line on stderr naming the file, line, column, node or parameter), 1 anything else, including an
     interrupted run.  Progress goes to stderr unless ``--quiet``.
 

@@ -31,7 +31,7 @@ import numpy as np
 from bgphm.charts import Chart
 from bgphm.files import file_digest
 
-__all__ = ["Page", "detection_page", "prognosis_page", "provenance", "simulation_page", "table"]
+__all__ = ["Page", "calibration_page", "detection_page", "prognosis_page", "provenance", "simulation_page", "table"]
 
 #: -r_n typeset (a minus sign and a subscript n), as the fleet page writes it.
 MINUS_R = "\u2212r\u2099"
@@ -361,3 +361,126 @@ def simulation_page(model, columns: Mapping[str, np.ndarray], *, units: Mapping,
     page.section("Model", _model_summary(model, units), "model")
     page.section("Settings", _settings_table(settings), "settings")
     return page
+
+
+def calibration_page(model, calibrated, fit, boxes: Mapping, validation, calibration: Mapping, *, units: Mapping,
+                     settings: Mapping) -> Page:
+    """The report of ``bgphm calibrate``: the estimates against the datasheet, what the records cannot tell apart,
+    the boxes, the validation on held-out records (datasheet model before, calibrated model after), the records
+    and the method.
+
+    ``fit`` is the :class:`diagnosis.ParameterEstimate`, ``boxes`` the calibrated uncertainty boxes,
+    ``validation`` the :class:`diagnosis.ModelValidation` (None without held-out records), ``calibration`` the
+    provenance block the calibrated model carries, ``units`` :func:`bgphm.units.units_of` of the model.
+    """
+    from bondgraph.provenance import model_sha256
+
+    page = Page(f"bgphm calibrate: {model.name}", {**provenance(model), "calibrated SHA-256": model_sha256(calibrated)})
+    page.section("Estimates", _estimates_table(fit, boxes, units.get("parameters", {})) + _unidentified(fit),
+                 "estimates")
+    page.section("Validation on held-out records", _validation_body(validation), "validation")
+    noise = [[name, std, fit.correlation.get(name), units.get("residuals", {}).get(name) or "-"]
+             for name, std in fit.residual_std.items()]
+    page.section("Residuals at the fit", table(["ARR", "robust std", "correlation inflation", "unit"], noise)
+                 + f"<p>{_e(fit.samples)} window-integrated residual samples.</p>", "residuals")
+    records = [[r["name"], r["role"], r["samples"], r["sha256"]] for r in calibration.get("records", [])]
+    method = calibration.get("method", {})
+    page.section("Records and method", table(["record", "role", "samples", "SHA-256"], records)
+                 + _settings_table({key: value for key, value in method.items()}), "records")
+    page.section("Settings", _settings_table(settings), "settings")
+    return page
+
+
+def _estimates_table(fit, boxes: Mapping, units: Mapping) -> str:
+    level = f"{fit.level:.0%}".replace("%", " %")
+    rows = []
+    for name, (lo, hi) in fit.intervals.items():
+        sheet, value = fit.datasheet[name], fit.values[name]
+        box = boxes.get(name)
+        rows.append([name, units.get(name) or "-", sheet, value, lo, hi, fit.std[name],
+                     _signed_percent(value / sheet - 1.0) if sheet else "-",
+                     f"[{_signed_percent(box[0])}, {_signed_percent(box[1])}]" if box else "-"])
+    return table(["parameter", "unit", "datasheet", "estimate", f"{level} low", f"{level} high", "std. error",
+                  "change", "box"], rows)
+
+
+def _signed_percent(value: float) -> str:
+    return f"{100 * value:+.3g} %"
+
+
+def _unidentified(fit) -> str:
+    ident = fit.identifiability
+    if ident is None or not (ident.combinations or ident.unseen):
+        return "<p>The records identify every parameter asked for.</p>"
+    rows = [[", ".join(c["parameters"]), c["expression"], c["kept"]] for c in ident.combinations]
+    body = ""
+    if rows:
+        body += ("<p>Seen only together (one kept at its datasheet value, the others carry the combination):</p>"
+                 + table(["parameters", "what the records fix", "kept"], rows))
+    if ident.unseen:
+        body += f"<p>In no ARR, kept at the datasheet value: {_e(', '.join(ident.unseen))}</p>"
+    return body
+
+
+def _validation_body(validation) -> str:
+    if validation is None:
+        return '<p class="note">No held-out record: the calibrated model was not validated.</p>'
+    before, after = validation.before, validation.after
+    count = len(validation.held_out)
+    intro = (f"<p>Margins calibrated on the {_e(len(validation.training))} training record(s) "
+             f"({_e(', '.join(validation.training))}) for each model, applied to the {_e(count)} held-out "
+             f"one(s); any alarm on a held-out record, all healthy, is false.</p>")
+    summary = table(["", "datasheet", "calibrated"], [
+        ["held-out records with a false alarm", f"{len(before.false_alarms)} of {count}",
+         f"{len(after.false_alarms)} of {count}"]])
+    alarms = [[record, _alarm_text(before.alarms.get(record)), _alarm_text(after.alarms.get(record))]
+              for record in validation.held_out]
+    changes = [[p, _change_text(before.smallest_changes.get(p)), _change_text(v)]
+               for p, v in after.smallest_changes.items()]
+    white = [[name, *_white_cells(before.whiteness.get(name)), *_white_cells(w)] for name, w in after.whiteness.items()]
+    margins = [[name, before.margins.get(name), m] for name, m in after.margins.items()]
+    return (intro + summary
+            + "<h3>Alarms per held-out record</h3>" + table(["record", "datasheet", "calibrated"], alarms)
+            + "<h3>Smallest detectable change (on every held-out record)</h3>"
+            + table(["parameter", "datasheet", "calibrated"], changes)
+            + f"<h3>Whiteness of the residuals (every derivative window, {_e(validation.lags)} lags)</h3>"
+            + table(["ARR", "datasheet lag-1 autocorrelation", "datasheet Ljung-Box p", "calibrated lag-1 "
+                     "autocorrelation", "calibrated Ljung-Box p"], white)
+            + _autocorrelation_charts(validation)
+            + "<h3>Margins</h3>" + table(["ARR", "datasheet", "calibrated"], margins))
+
+
+def _alarm_text(alarms) -> str:
+    if not alarms:
+        return "no alarm"
+    return ", ".join(f"{name} at {t:g} s" for name, t in alarms.items())
+
+
+def _change_text(value) -> str:
+    return "none" if value is None or not np.isfinite(value) else f"{100 * value:.3g} %"
+
+
+def _white_cells(white) -> list:
+    if white is None:
+        return ["-", "-"]
+    verdict = "white" if white.white else "not white"
+    first = white.autocorrelation[0] if white.autocorrelation else None
+    return [first, f"{white.p_value:.2g} ({verdict})" if np.isfinite(white.p_value) else "-"]
+
+
+def _autocorrelation_charts(validation) -> str:
+    charts = []
+    for name, after in validation.after.whiteness.items():
+        before = validation.before.whiteness.get(name)
+        lags = np.arange(1, len(after.autocorrelation) + 1)
+        chart = Chart(f"{name}: autocorrelation of the held-out residuals", x_label="lag (derivative windows)",
+                      y_label="autocorrelation")
+        if after.samples:  # white noise stays within about 2 / sqrt(n) (95 %)
+            edge = 1.96 / np.sqrt(after.samples)
+            chart.band(lags, np.full(lags.size, -edge), np.full(lags.size, edge), label="white noise, 95 %",
+                       colour="#999999")
+        if before is not None:
+            chart.line(lags, before.autocorrelation, label="datasheet", style="dashed", colour="#d55e00")
+        chart.line(lags, after.autocorrelation, label="calibrated", colour="#0072b2")
+        charts.append(chart.svg())
+    return "".join(charts)
