@@ -49,6 +49,7 @@ def run(args, progress: Progress) -> int:
     model = spec.model
     _check_parameters(args.parameters, model)
     arrs = load_arrs(spec, progress, None)
+    _check_seen(args.parameters, arrs)
     training = [load_record(path, arrs, progress, extra=model.inputs) for path in plan.training]
     held_out = [load_record(path, arrs, progress, extra=model.inputs) for path in plan.held_out]
     fit, boxes = _estimate(model, arrs, training, plan, args, progress)
@@ -125,6 +126,14 @@ def _check_parameters(parameters, model) -> None:
         if name not in model.parameters:
             raise UsageError(f"--parameters {name!r}: the model has no such parameter (parameters: "
                              f"{', '.join(model.parameters)})")
+
+
+def _check_seen(parameters, arrs: list) -> None:
+    """Some parameter asked for must be in an ARR: the records say nothing of the others."""
+    seen = {p for arr in arrs for p in arr.parameters}
+    if parameters and not seen & set(parameters):
+        raise UsageError(f"--parameters {' '.join(parameters)}: in no ARR, so no record can tell anything of "
+                         f"{'it' if len(parameters) == 1 else 'them'} (the ARRs hold {', '.join(sorted(seen))})")
 
 
 def _names(paths: list, records: list) -> dict:
