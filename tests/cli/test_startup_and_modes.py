@@ -111,7 +111,7 @@ def test_detect_states_the_units_of_signals_parameters_and_residuals(tmp_path):
     assert units["residuals"] == {"ARR_1_e": "V", "ARR_1_m": "N*m"}
 
 
-@pytest.mark.parametrize("command", ["arr", "simulate", "detect", "prognose", "fleet", "demo"])
+@pytest.mark.parametrize("command", ["arr", "simulate", "detect", "calibrate", "prognose", "fleet", "demo"])
 def test_every_command_s_help_renders(command, capsys):
     """argparse formats a help text only when asked: a stray '%' in one would fail here, not at a user's."""
     with pytest.raises(SystemExit) as stop:
