@@ -98,8 +98,10 @@ def plan_of(args, progress: Progress) -> Plan:
                      "FILE.csv)")
         training, held_out = records[:len(records) - count], records[len(records) - count:]
     if args.boxes == "records" and len(training) < 2:
+        hint = " (the last record is held out by default: give --hold-out 0, or more records)" if held_out and \
+            args.hold_out is None and not args.validate else ""
         raise UsageError(f"--boxes records: needs two training records or more (one estimate per record), got "
-                         f"{len(training)}")
+                         f"{len(training)}{hint}")
     inputs = input_files(args.model, *training, *held_out)
     if not args.out.lower().endswith(".json"):
         raise UsageError(f"--out {args.out}: the calibrated model is JSON; give a name ending in .json (the "

@@ -218,6 +218,7 @@ def bad_records(bench):
 @pytest.mark.parametrize("extra, words", [
     (["--parameters", "R_z"], ["--parameters 'R_z'", "no such parameter", "R_a"]),
     (["--boxes", "records", "--hold-out", "1"], ["--boxes records", "two training records", "got 1"]),
+    (["--boxes", "records"], ["--boxes records", "got 1", "held out by default: give --hold-out 0"]),
     (["--hold-out", "2"], ["--hold-out 2", "[0, 1]"]),
     (["--hold-out", "-1"], ["--hold-out -1"]),
     (["--hold-out", "1", "--validate", "{d}"], ["--validate", "not allowed with argument --hold-out"]),
