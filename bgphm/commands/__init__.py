@@ -6,7 +6,8 @@ library's settings from its options, reads its files, calls the library's pipeli
 writes what it returns; every numerical decision and every default is the library's.
 
 * :mod:`.arr`: the ARR report; :mod:`.simulate`: a model's record as CSV;
-* :mod:`.detect`: :func:`diagnosis.detect`; :mod:`.prognose`: :func:`prognosis.prognose`;
+* :mod:`.detect`: :func:`diagnosis.detect`; :mod:`.calibrate`: :func:`diagnosis.estimate_parameters` and
+  :func:`diagnosis.validate_calibration`; :mod:`.prognose`: :func:`prognosis.prognose`;
 * :mod:`.fleet`: :func:`bgphm.fleet.run_fleet`; :mod:`.demo`: a built-in example end to end.
 
 Shared by them: what they read (:mod:`._inputs`), what they write (:mod:`._outputs`), progress
