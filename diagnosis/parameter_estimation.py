@@ -245,7 +245,10 @@ def _problem(arrs: Sequence, records: Sequence[Record], names: list, values: Map
             continue
         compiled = arr.compiled
         terms = _terms(arr.nominal.xreplace(compiled.symbols).xreplace(fixed), compiled.points, symbols)
-        parts = [_window_features(compiled, record, list(terms), window) for record in records]
+        parts = [part for part in (_window_features(compiled, record, list(terms), window) for record in records)
+                 if part[0].shape[0]]
+        if not parts:  # no whole window in any record
+            continue
         features = np.vstack([f for f, _, _ in parts])
         coefficients = sp.Matrix([list(terms.values())])
         blocks.append(_Block(arr.name, features, sp.lambdify(symbols, coefficients, modules="numpy"),
@@ -462,7 +465,13 @@ def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = No
     arrs = list(arrs) if arrs is not None else derive_arrs(bg)
     records = [as_record(r) for r in records]
     names, unseen = _choose(bg, arrs, parameters)
+    if not names:
+        return Identifiability([], [], unseen, [])
     problem = _problem(arrs, records, names, bg.parameters, window)
+    if not problem.blocks:
+        width = int(window or INTEGRATION_WINDOW)
+        raise SettingError("records", f"{{setting}}: no window of {width + 1} usable samples in any record (the "
+                           "records are too short, or every stretch holds a gap or an input's step)")
     identified, groups, singular = _rank_out(problem, np.ones(len(names)))
     combinations = [{"parameters": members, "kept": kept, "expression": _combination(arrs, members, bg.parameters)}
                     for members, kept in groups]

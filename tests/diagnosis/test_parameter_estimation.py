@@ -100,3 +100,21 @@ def test_boxes_and_the_calibrated_model():
     widest = uncertainty_boxes(fit, "records", per_record=[fit, other])
     assert widest["J"][0] <= boxes["J"][0] + 1e-12 and widest["J"][1] >= boxes["J"][1] - 1e-12
     assert widest["J"][0] == pytest.approx(0.9e-4 / fit.values["J"] - 1)
+
+
+def test_records_too_short_for_a_window_are_refused_naming_the_records():
+    short = as_record({k: v[:40] for k, v in motor_record().columns.items()} | {"t": motor_record().t[:40]})
+    with pytest.raises(SettingError) as error:
+        estimate_parameters(dc_motor(), [short])
+    assert error.value.setting == "records" and "no window of 51 usable samples" in str(error.value)
+
+
+def test_parameters_in_no_arr_are_reported_unseen_not_fitted():
+    from bondgraph.library import torsion_bar_with_load
+
+    bg = torsion_bar_with_load()
+    record = torsion_bar_record(5.0, {})
+    found = identifiability(bg, [record], ["g"], arrs=[a for a in derive_arrs(bg) if "g" not in a.parameters])
+    assert found.unseen == ["g"] and found.identified == []
+    fit = estimate_parameters(bg, [record], ["g"], arrs=[a for a in derive_arrs(bg) if "g" not in a.parameters])
+    assert fit.estimated == [] and fit.values["g"] == bg.parameters["g"]
