@@ -175,6 +175,7 @@ def test_integrals_are_typeset_in_every_format():
                 else r"\int\limits_{0}^{t}") in line, fmt
 
 
+@pytest.mark.slow  # derives the three-tank system's long relations: about 6 s
 def test_a_long_equation_is_broken_between_terms_alike_in_every_format():
     bg = three_tank()
     with warnings.catch_warnings():
