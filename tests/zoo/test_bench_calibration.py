@@ -1,0 +1,75 @@
+"""benchmarks/bench_calibration.py on one small zoo model and two seeds: the shape and sanity of its figures
+(not their values, which the benchmark reports), and how it scores a parameter that carries a combination."""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import math
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_calibration.py"
+SPEC = importlib.util.spec_from_file_location("bench_calibration", PATH)
+bench_calibration = importlib.util.module_from_spec(SPEC)
+SPEC.loader.exec_module(bench_calibration)
+
+
+def share(value) -> bool:
+    return value is None or 0.0 <= value <= 1.0
+
+
+def test_one_system_over_two_seeds_gives_a_complete_line():
+    case = bench_calibration.all_cases()["flywheel_speed_loop"]
+    rows = [bench_calibration.one_seed(case, seed) for seed in (0, 1)]
+    # seeds that really differ: another machine, another noise
+    assert rows[0]["factors"] != rows[1]["factors"]
+    assert all(1 - bench_calibration.SPREAD <= f <= 1 + bench_calibration.SPREAD
+               for r in rows for f in r["factors"].values())
+    assert bench_calibration.one_seed(case, 1)["factors"] == rows[1]["factors"]  # and reproducible
+    line = bench_calibration.pooled(case, rows)
+    json.loads(json.dumps(line, allow_nan=False))  # plain JSON, no NaN or infinity
+    assert line["case"] == "flywheel_speed_loop" and line["seeds"] == 2 and line["fitted"] == 2
+    assert line["drawn"] == list(case.faults)
+    assert set(case.faults) <= set(line["coverage"])  # every drawn parameter is estimated and scored
+    assert all(share(c) for c in line["coverage"].values())
+    assert line["coverage_worst"]["coverage"] == min(c for c in line["coverage"].values() if c is not None)
+    assert line["relative_error_worst"] >= line["relative_error_mean"] >= 0
+    assert all(w > 0 for w in line["half_width"].values())
+    for when in ("before", "after"):
+        assert share(line[f"false_alarm_{when}"]) and share(line[f"false_alarm_own_stretch_{when}"])
+        assert set(line[f"smallest_change_{when}"]) == set(case.faults)
+        for figures in line[f"smallest_change_{when}"].values():
+            assert 0 < figures["mean"] <= bench_calibration.BLIND and share(figures["within_fault"])
+    assert line["cpu_s"] > 0
+
+
+def fit(values: dict, combinations: list) -> SimpleNamespace:
+    """What targets() reads of a ParameterEstimate: the datasheet, the estimated names, the combinations."""
+    kept = {c["kept"] for c in combinations}
+    return SimpleNamespace(datasheet=values, estimated=[p for p in values if p not in kept],
+                           identifiability=SimpleNamespace(combinations=combinations))
+
+
+def test_a_combination_carrier_is_scored_against_the_value_that_gives_the_combination_its_truth():
+    datasheet = {"J_m": 1.0, "J_i": 8.0, "n_g": 2.0, "b": 0.1}
+    truth = {"J_m": 1.5, "J_i": 8.0, "n_g": 2.0, "b": 0.2}
+    summed = {"parameters": ["J_m", "J_i"], "kept": "J_m", "expression": "-J_i/n_g**2 - J_m"}
+    aim = bench_calibration.targets(fit(datasheet, [summed]), truth)
+    # J_m held at 1.0 instead of 1.5: J_i / 4 carries the 0.5, so J_i aims at 10
+    assert aim["J_i"] == pytest.approx(10.0) and aim["b"] == 0.2
+    ratios = {"parameters": ["J_m", "b"], "kept": "J_m", "expression": "the ratios of J_m, b"}
+    assert bench_calibration.targets(fit(datasheet, [ratios]), truth)["b"] == pytest.approx(0.2 / 1.5)
+    three = {"parameters": ["J_m", "J_i", "b"], "kept": "J_m", "expression": "J_m + J_i*b"}
+    assert bench_calibration.targets(fit(datasheet, [three]), truth)["J_i"] is None  # not written: not scored
+    kept_right = dict(truth, J_m=1.0)
+    assert bench_calibration.targets(fit(datasheet, [summed]), kept_right)["J_i"] == 8.0
+
+
+def test_boxes_are_cut_to_the_parameters_domains():
+    boxes, cut = bench_calibration.inside_domains({"L": (-4.0, 4.0), "R": (-0.1, 0.2)}, {"L": 1e-3, "R": 2.0},
+                                                  {"L": (0.0, math.inf), "R": (0.0, math.inf)})
+    assert cut == ["L"] and boxes["R"] == (-0.1, 0.2)
+    assert -1.0 < boxes["L"][0] < -0.99 and boxes["L"][1] == 4.0
