@@ -30,9 +30,12 @@ calibrated on the held-out record's own first part, the datasheet model's margin
 error wherever that part resembles the rest.  That default use (``bgphm detect`` on the held-out play
 alone, its first 20 % the stretch) is reported beside it (``false_alarm_own_stretch_*``).  A false alarm
 is any ARR in alarm on the held-out play; a calibration stretch the detection refuses as not fault-free
-(its split-half check) counts as one too, and apart (``refused_*``).  The smallest detectable changes are
-the detection's own (``Detection.smallest_changes``): per parameter, the smallest relative change any ARR
-would detect on the held-out play at those margins; above 100 % (a blind ARR's mark) it counts as 100 %.
+(its split-half check) counts as one too, and apart (``refused_*``).  The library's own check of a
+calibration, :func:`diagnosis.validate_calibration` (margins from the training play, one derivative window,
+alarms after the held-out play's start-up), is reported beside them (``validation_*``).  The smallest
+detectable changes are the detection's own (``Detection.smallest_changes``): per parameter, the smallest
+relative change any ARR would detect on the held-out play at those margins; above 100 % (a blind ARR's
+mark) it counts as 100 %.
 
 Per system, over the seeds: the coverage of each parameter's interval (the share of the seeds in which
 it was scored), the worst parameter's and those below 90 %, the mean and worst relative error, the mean
@@ -73,7 +76,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from bondgraph import PHMError, SettingError  # noqa: E402
 from bondgraph.library import dc_motor  # noqa: E402
-from diagnosis import DetectionSettings, as_record, detect, estimate_parameters, uncertainty_boxes  # noqa: E402
+from diagnosis import (DetectionSettings, as_record, derive_arrs, detect, estimate_parameters,  # noqa: E402
+                       uncertainty_boxes, validate_calibration)
 from tests.zoo.case import ZooCase  # noqa: E402
 from tests.zoo.chain import cases as zoo_cases  # noqa: E402
 from tests.zoo.reference import record, simulate_reference  # noqa: E402
@@ -137,42 +141,57 @@ def drawn(case: ZooCase, bg) -> tuple:
     return tuple(case.faults) or tuple(bg.uncertainties)
 
 
-def targets(fit, truth: dict) -> dict:
-    """Estimated parameter -> the value its estimate aims at (None: not writable).
+def targets(fit, truth: dict, arrs) -> dict:
+    """Estimated parameter -> the value its estimate aims at (None: not written here, not scored).
 
-    A parameter in no combination aims at its truth.  In a combination whose kept member is held at its
-    datasheet value while its truth differs, the others carry the difference: a plain scaling (``the ratios
-    of ...``) scales them by datasheet / truth of the kept one; a combination of two members aims at the value
-    that gives the expression its true value with the kept one at its datasheet value.
+    A parameter in no combination aims at its truth, and so does one whose combination's kept member (held
+    at its datasheet value by the fit) is at its datasheet value in the truth too.  Otherwise the others
+    carry the kept member's error: where every ARR that holds the group is homogeneous in its members (a
+    plain scaling: only their ratios are seen), they scale by the kept member's datasheet / truth; in a
+    combination of two members, the carrier aims at the value that gives the expression its true value with
+    the kept one at its datasheet value.
     """
     aim = {p: truth[p] for p in fit.estimated}
     for group in fit.identifiability.combinations:
         kept, members = group["kept"], group["parameters"]
-        if math.isclose(truth[kept], fit.datasheet[kept], rel_tol=1e-12):
-            continue
-        expression = group["expression"]
         carriers = [m for m in members if m != kept and m in aim]
-        if expression.startswith("the ratios of "):
+        if math.isclose(truth[kept], fit.datasheet[kept], rel_tol=1e-12) or not carriers:
+            continue
+        if _scales_alike(arrs, members):
             for m in carriers:
                 aim[m] = None if aim[m] is None else aim[m] * fit.datasheet[kept] / truth[kept]
             continue
+        aim.update(dict.fromkeys(carriers))  # unless the two-member expression below writes it
         if len(members) != 2 or len(carriers) != 1:
-            for m in carriers:
-                aim[m] = None
             continue
         (m,) = carriers
         try:
-            formula = sp.sympify(expression)
+            formula = sp.sympify(group["expression"])
         except (sp.SympifyError, TypeError, SyntaxError):
-            aim[m] = None
             continue
-        x = sp.Symbol(m)
-        others = {sp.Symbol(p): v for p, v in truth.items() if p not in (m, kept)}
+        if not {sp.Symbol(m), sp.Symbol(kept)} <= formula.free_symbols:
+            continue
         goal = float(formula.xreplace({sp.Symbol(p): v for p, v in truth.items()}))
-        equation = formula.xreplace({**others, sp.Symbol(kept): fit.datasheet[kept]}) - goal
-        roots = [float(r) for r in sp.solve(equation, x) if r.is_real]
-        aim[m] = min(roots, key=lambda r: abs(r - truth[m])) if roots and aim[m] is not None else None
+        equation = formula.xreplace({**{sp.Symbol(p): v for p, v in truth.items() if p not in (m, kept)},
+                                     sp.Symbol(kept): fit.datasheet[kept]}) - goal
+        roots = [float(r) for r in sp.solve(equation, sp.Symbol(m)) if r.is_real]
+        aim[m] = min(roots, key=lambda r: abs(r - truth[m])) if roots else None
     return aim
+
+
+def _scales_alike(arrs, members: list) -> bool:
+    """Whether every ARR that holds some of ``members`` is homogeneous in them (scaling them all alike scales
+    the ARR by a constant, and leaves its zeros where they are)."""
+    factor = sp.Dummy("c", positive=True)
+    symbols = {sp.Symbol(m) for m in members}
+    for arr in arrs:
+        expression = arr.nominal
+        if not expression.free_symbols & symbols:
+            continue
+        ratio = sp.simplify(expression.xreplace({s: factor * s for s in symbols}) / expression)
+        if ratio.free_symbols - {factor}:
+            return False
+    return True
 
 
 def inside_domains(boxes: dict, values: dict, domains: dict) -> tuple[dict, list]:
@@ -229,7 +248,7 @@ def one_seed(case: ZooCase, seed: int, fit_only: str = "all") -> dict:
         row["error"] = f"{type(exc).__name__}: {exc}"[:300]
         row["cpu_s"] = time.process_time() - started
         return row
-    aim = targets(fit, truth)
+    aim = targets(fit, truth, derive_arrs(sheet))
     for p in fit.estimated:
         lo, hi = fit.intervals[p]
         goal = aim[p]
@@ -247,6 +266,12 @@ def one_seed(case: ZooCase, seed: int, fit_only: str = "all") -> dict:
         row[name] = detection(model, whole, until)
         # the library's default stretch on the held-out play alone (its first 20 %): for comparison
         row[f"{name}_own"] = detection(model, held_out)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        checked = validate_calibration(sheet, calibrated, [training], [held_out])
+    for name, figures in (("before", checked.before), ("after", checked.after)):
+        row[f"{name}_validation"] = {"false_alarm": bool(figures.false_alarms), "refused": None, "fired": [],
+                                     "smallest": {p: float(v) for p, v in figures.smallest_changes.items()}}
     row["cpu_s"] = time.process_time() - started
     return row
 
@@ -323,6 +348,12 @@ def pooled(case: ZooCase, rows: list[dict]) -> dict:
         line[f"smallest_change_{when}"] = changes
         line[f"false_alarm_own_stretch_{when}"] = _mean([float(r[f"{when}_own"]["false_alarm"]) for r in fitted])
         line[f"refused_own_stretch_{when}"] = sum(bool(r[f"{when}_own"]["refused"]) for r in fitted)
+    for when in ("before", "after"):
+        changes = _changes(fitted, f"{when}_validation", chosen)
+        line[f"validation_false_alarm_{when}"] = _mean([float(r[f"{when}_validation"]["false_alarm"])
+                                                        for r in fitted])
+        line[f"validation_smallest_change_mean_{when}"] = _mean(c["mean"] for c in changes.values())
+        line[f"validation_within_{FAULT:.0%}_{when}"] = _mean(c["within_fault"] for c in changes.values())
     line["cpu_s"] = round(sum(r["cpu_s"] for r in rows), 1)
     return _clean(line)
 
@@ -370,6 +401,11 @@ def main() -> int:
         for p in line["drawn"]:
             b, a = line["smallest_change_before"][p], line["smallest_change_after"][p]
             print(f"    {p:10s} {_pct(b['mean'])} -> {_pct(a['mean'])}")
+        print(f"  validate_calibration: false alarms {_pct(line['validation_false_alarm_before'])} -> "
+              f"{_pct(line['validation_false_alarm_after'])}; smallest change, mean "
+              f"{_pct(line['validation_smallest_change_mean_before'])} -> "
+              f"{_pct(line['validation_smallest_change_mean_after'])}; {FAULT:.0%} changes detectable "
+              f"{_pct(line['validation_' + within + '_before'])} -> {_pct(line['validation_' + within + '_after'])}")
     return 0
 
 

@@ -10,6 +10,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
+import sympy as sp
 
 PATH = Path(__file__).resolve().parents[2] / "benchmarks" / "bench_calibration.py"
 SPEC = importlib.util.spec_from_file_location("bench_calibration", PATH)
@@ -40,6 +41,8 @@ def test_one_system_over_two_seeds_gives_a_complete_line():
     assert all(w > 0 for w in line["half_width"].values())
     for when in ("before", "after"):
         assert share(line[f"false_alarm_{when}"]) and share(line[f"false_alarm_own_stretch_{when}"])
+        assert share(line[f"validation_false_alarm_{when}"]) and share(line[f"validation_within_30%_{when}"])
+        assert 0 < line[f"validation_smallest_change_mean_{when}"] <= bench_calibration.BLIND
         assert set(line[f"smallest_change_{when}"]) == set(case.faults)
         for figures in line[f"smallest_change_{when}"].values():
             assert 0 < figures["mean"] <= bench_calibration.BLIND and share(figures["within_fault"])
@@ -53,19 +56,28 @@ def fit(values: dict, combinations: list) -> SimpleNamespace:
                            identifiability=SimpleNamespace(combinations=combinations))
 
 
+def arr(text: str) -> SimpleNamespace:
+    x = sp.Function("x")(sp.Symbol("t"))
+    return SimpleNamespace(nominal=sp.sympify(text, locals={"x": x, "dx": x.diff(sp.Symbol("t"))}))
+
+
 def test_a_combination_carrier_is_scored_against_the_value_that_gives_the_combination_its_truth():
     datasheet = {"J_m": 1.0, "J_i": 8.0, "n_g": 2.0, "b": 0.1}
     truth = {"J_m": 1.5, "J_i": 8.0, "n_g": 2.0, "b": 0.2}
+    arrs = [arr("(J_m + J_i/n_g**2)*dx + b*x - 3")]
     summed = {"parameters": ["J_m", "J_i"], "kept": "J_m", "expression": "-J_i/n_g**2 - J_m"}
-    aim = bench_calibration.targets(fit(datasheet, [summed]), truth)
+    aim = bench_calibration.targets(fit(datasheet, [summed]), truth, arrs)
     # J_m held at 1.0 instead of 1.5: J_i / 4 carries the 0.5, so J_i aims at 10
     assert aim["J_i"] == pytest.approx(10.0) and aim["b"] == 0.2
-    ratios = {"parameters": ["J_m", "b"], "kept": "J_m", "expression": "the ratios of J_m, b"}
-    assert bench_calibration.targets(fit(datasheet, [ratios]), truth)["b"] == pytest.approx(0.2 / 1.5)
-    three = {"parameters": ["J_m", "J_i", "b"], "kept": "J_m", "expression": "J_m + J_i*b"}
-    assert bench_calibration.targets(fit(datasheet, [three]), truth)["J_i"] is None  # not written: not scored
-    kept_right = dict(truth, J_m=1.0)
-    assert bench_calibration.targets(fit(datasheet, [summed]), kept_right)["J_i"] == 8.0
+    assert bench_calibration.targets(fit(datasheet, [summed]), dict(truth, J_m=1.0), arrs)["J_i"] == 8.0
+    # a relation homogeneous in its group: only the ratios are seen, and b scales with J_m's error
+    scaling = {"parameters": ["J_m", "J_i", "b"], "kept": "J_m", "expression": "the ratios of J_m, J_i, b"}
+    homogeneous = [arr("(J_m + J_i/n_g**2)*dx + b*x")]
+    aim = bench_calibration.targets(fit(datasheet, [scaling]), truth, homogeneous)
+    assert aim["b"] == pytest.approx(0.2 / 1.5) and aim["J_i"] == pytest.approx(8.0 / 1.5)
+    # the same group where the ARR is not homogeneous in it: the aim is not written, the carriers not scored
+    aim = bench_calibration.targets(fit(datasheet, [scaling]), truth, arrs)
+    assert aim["b"] is None and aim["J_i"] is None and aim["n_g"] == 2.0
 
 
 def test_boxes_are_cut_to_the_parameters_domains():
