@@ -38,7 +38,11 @@ relative change any ARR would detect on the held-out play at those margins; abov
 mark) it counts as 100 %.
 
 Per system, over the seeds: the coverage of each parameter's interval (the share of the seeds in which
-it was scored), the worst parameter's and those below 90 %, the mean and worst relative error, the mean
+it was scored), the worst parameter's and those below 90 %, the mean and worst relative error (and per
+parameter its bias, the mean signed error; ``miss``, the median of |error| / half-width: about 0.35
+for intervals as wide as the errors' spread asks, above 1 for intervals that mostly miss; and
+``toward_datasheet``, the share of the seeds whose error points from the truth towards the datasheet value:
+a half when the fit is unbiased, near 1 when the prior or noisy regressors pull it back), the mean
 (and median) relative half-width, the combinations reported, the false-alarm rates before/after, per drawn
 parameter the mean smallest detectable change before/after and the share of seeds in which a 30 % change
 is detectable, the CPU seconds.  The acceptance (issue 35): coverage >= 90 % of the identified
@@ -256,7 +260,10 @@ def one_seed(case: ZooCase, seed: int, fit_only: str = "all") -> dict:
             "inside": None if goal is None else bool(lo <= goal <= hi),
             "error": None if goal is None else fit.values[p] / goal - 1.0,
             # to the value aimed at (the estimate itself may sit at its domain's edge, near zero)
-            "half_width": (hi - lo) / 2 / abs(goal if goal is not None else truth[p])}
+            "half_width": (hi - lo) / 2 / abs(goal if goal is not None else truth[p]),
+            # an error towards the datasheet value (a prior's or an attenuation's mark), where the two differ
+            "toward": None if goal is None or math.isclose(goal, fit.datasheet[p], rel_tol=1e-9)
+            else bool((fit.values[p] - goal) * (fit.datasheet[p] - goal) > 0)}
     row["combinations"] = [f"{g['expression']} (kept {g['kept']})" for g in fit.identifiability.combinations]
     row["unseen"] = list(fit.identifiability.unseen)
     boxes, row["cut"] = inside_domains(uncertainty_boxes(fit), fit.values, sheet.domains)
@@ -316,7 +323,14 @@ def pooled(case: ZooCase, rows: list[dict]) -> dict:
         coverage[p] = _mean([float(i) for i in inside])
         scored[p] = f"{len(inside)}/{len(seen)}"
         size = [abs(s["error"]) for s in seen if s["error"] is not None]
-        errors[p] = {"mean": _mean(size), "worst": max(size, default=None)}
+        # bias: the mean signed error; miss: the median of |error| / half-width (1 at the interval's edge, 0.35
+        # for errors that a 95 % interval's normal spread would give)
+        errors[p] = {"mean": _mean(size), "worst": max(size, default=None),
+                     "bias": _mean([s["error"] for s in seen if s["error"] is not None]),
+                     "miss": float(np.median([abs(s["error"]) / s["half_width"] for s in seen
+                                              if s["error"] is not None and s["half_width"]]))
+                     if any(s["error"] is not None and s["half_width"] for s in seen) else None,
+                     "toward_datasheet": _mean([float(s["toward"]) for s in seen if s.get("toward") is not None])}
         widths[p] = _mean([s["half_width"] for s in seen])
     covered = {p: c for p, c in coverage.items() if c is not None}
     worst = min(covered, key=covered.get) if covered else None
@@ -388,7 +402,10 @@ def main() -> int:
         for p, c in line["coverage"].items():
             print(f"    {p:10s} {'drawn' if p in line['drawn'] else '     '}  coverage {_pct(c)} ({line['scored'][p]})"
                   f"  |error| mean {_pct(line['relative_error'][p]['mean'])}"
-                  f" worst {_pct(line['relative_error'][p]['worst'])}  half-width {_pct(line['half_width'][p])}")
+                  f" worst {_pct(line['relative_error'][p]['worst'])}  bias {_pct(line['relative_error'][p]['bias'])}"
+                  f"  half-width {_pct(line['half_width'][p])}  |error|/half-width median "
+                  f"{_num(line['relative_error'][p]['miss'])}  towards the datasheet "
+                  f"{_pct(line['relative_error'][p]['toward_datasheet'])}")
         for expression, count in line["combinations"].items():
             print(f"    combination {expression}: {count} seeds")
         print(f"  false alarms on the held-out play: {_pct(line['false_alarm_before'])} -> "
@@ -407,6 +424,10 @@ def main() -> int:
               f"{_pct(line['validation_smallest_change_mean_after'])}; {FAULT:.0%} changes detectable "
               f"{_pct(line['validation_' + within + '_before'])} -> {_pct(line['validation_' + within + '_after'])}")
     return 0
+
+
+def _num(value) -> str:
+    return "-" if value is None else f"{value:.2f}"
 
 
 def _pct(value) -> str:

@@ -39,6 +39,10 @@ def test_one_system_over_two_seeds_gives_a_complete_line():
     assert line["coverage_worst"]["coverage"] == min(c for c in line["coverage"].values() if c is not None)
     assert line["relative_error_worst"] >= line["relative_error_mean"] >= 0
     assert all(w > 0 for w in line["half_width"].values())
+    for p, figures in line["relative_error"].items():
+        assert abs(figures["bias"]) <= figures["mean"] <= figures["worst"] and figures["miss"] >= 0, p
+        assert share(figures["toward_datasheet"]), p
+    assert all(line["relative_error"][p]["toward_datasheet"] is not None for p in case.faults)
     for when in ("before", "after"):
         assert share(line[f"false_alarm_{when}"]) and share(line[f"false_alarm_own_stretch_{when}"])
         assert share(line[f"validation_false_alarm_{when}"]) and share(line[f"validation_within_30%_{when}"])
