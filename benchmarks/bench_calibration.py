@@ -45,7 +45,8 @@ for intervals as wide as the errors' spread asks, above 1 for intervals that mos
 a half when the fit is unbiased, near 1 when the prior or noisy regressors pull it back), the mean
 (and median) relative half-width, the combinations reported, the false-alarm rates before/after, per drawn
 parameter the mean smallest detectable change before/after and the share of seeds in which a 30 % change
-is detectable, the CPU seconds.  The acceptance (issue 35): coverage >= 90 % of the identified
+is detectable (and ``lost_30%``: per drawn parameter, the seeds in which a 30 % change detectable before
+calibration is not after), the CPU seconds.  The acceptance (issue 35): coverage >= 90 % of the identified
 parameters, the non-identifiable ones reported as combinations, no false alarm after calibration and no
 30 % change lost.  Nothing of the truth reaches the fit or the detection: the truth only scores them.
 ``--json`` prints one JSON object per system, one per line.
@@ -362,6 +363,11 @@ def pooled(case: ZooCase, rows: list[dict]) -> dict:
         line[f"smallest_change_{when}"] = changes
         line[f"false_alarm_own_stretch_{when}"] = _mean([float(r[f"{when}_own"]["false_alarm"]) for r in fitted])
         line[f"refused_own_stretch_{when}"] = sum(bool(r[f"{when}_own"]["refused"]) for r in fitted)
+    # a change detectable before calibration and not after: lost (issue 35: "the same faults are detected")
+    both = [r for r in fitted if not r["before"]["refused"] and not r["after"]["refused"]]
+    lost = {p: sum(r["before"]["smallest"].get(p, math.inf) <= FAULT < r["after"]["smallest"].get(p, math.inf)
+                   for r in both) for p in chosen}
+    line[f"lost_{FAULT:.0%}"] = {p: n for p, n in lost.items() if n}
     for when in ("before", "after"):
         changes = _changes(fitted, f"{when}_validation", chosen)
         line[f"validation_false_alarm_{when}"] = _mean([float(r[f"{when}_validation"]["false_alarm"])
@@ -394,6 +400,7 @@ def main() -> int:
             continue
         worst = line["coverage_worst"] or {}
         within = f"within_{FAULT:.0%}"
+        lost = ", ".join(f"{p} {n}" for p, n in line[f"lost_{FAULT:.0%}"].items()) or "none"
         print(f"{name} ({line['domain']}): fitted on {line['fitted']} of {line['seeds']} seeds, {line['cpu_s']} s CPU"
               f"{'; ' + '; '.join(line['errors']) if line['errors'] else ''}")
         print(f"  coverage: worst {worst.get('parameter')} {_pct(worst.get('coverage'))}, below 90 %: "
@@ -414,7 +421,7 @@ def main() -> int:
               f"{_pct(line['false_alarm_own_stretch_after'])}")
         print(f"  smallest detectable change, mean: {_pct(line['smallest_change_mean_before'])} -> "
               f"{_pct(line['smallest_change_mean_after'])}; {FAULT:.0%} changes detectable "
-              f"{_pct(line[within + '_before'])} -> {_pct(line[within + '_after'])}")
+              f"{_pct(line[within + '_before'])} -> {_pct(line[within + '_after'])}; lost (seeds): {lost}")
         for p in line["drawn"]:
             b, a = line["smallest_change_before"][p], line["smallest_change_after"][p]
             print(f"    {p:10s} {_pct(b['mean'])} -> {_pct(a['mean'])}")

@@ -50,6 +50,7 @@ def test_one_system_over_two_seeds_gives_a_complete_line():
         assert set(line[f"smallest_change_{when}"]) == set(case.faults)
         for figures in line[f"smallest_change_{when}"].values():
             assert 0 < figures["mean"] <= bench_calibration.BLIND and share(figures["within_fault"])
+    assert set(line["lost_30%"]) <= set(case.faults) and all(0 < n <= 2 for n in line["lost_30%"].values())
     assert line["cpu_s"] > 0
 
 
