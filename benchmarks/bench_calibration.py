@@ -96,6 +96,8 @@ SPREAD = 0.3
 FAULT = 0.3
 #: A smallest detectable change above this (the library's blind ARR) counts as this in the means.
 BLIND = 1.0
+#: Significant digits of the figures printed.
+DIGITS = 4
 #: A box cut to its parameter's domain stops this share short of the domain's edge.
 CUT = 1e-3
 
@@ -292,13 +294,13 @@ def _mean(values) -> float | None:
 
 
 def _clean(value):
-    """Plain JSON: a non-finite float becomes None."""
+    """Plain JSON: a non-finite float becomes None, a float keeps :data:`DIGITS` significant digits."""
     if isinstance(value, dict):
         return {k: _clean(v) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
         return [_clean(v) for v in value]
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
+    if isinstance(value, float):
+        return float(f"{value:.{DIGITS}g}") if math.isfinite(value) else None
     return value
 
 
