@@ -372,22 +372,6 @@ def _trusted_samples(compiled, record: Record, points: list, features: list) -> 
     return usable
 
 
-def _autocorrelation_time(samples: np.ndarray, limit: int = 200) -> float:
-    """The integrated autocorrelation time (samples per independent sample): 1 + 2 sum of the autocorrelation
-    up to its first non-positive lag."""
-    x = samples - samples.mean()
-    n = x.size
-    if n < 4 or not np.any(x):
-        return 1.0
-    spectrum = np.fft.rfft(x, 2 * n)
-    acf = np.fft.irfft(spectrum * np.conj(spectrum))[:min(n, limit)]
-    acf = acf / acf[0]
-    positive = np.argmax(acf[1:] <= 0) + 1 if np.any(acf[1:] <= 0) else acf.size
-    return float(max(1.0, 1.0 + 2.0 * acf[1:positive].sum()))
-
-
-# ------------------------------------------------------------------------------------------- identifiability
-
 def _choose(bg, arrs: Sequence, parameters: Sequence[str] | None) -> tuple[list, list]:
     """The parameters to fit (those asked, else every parameter of an ARR) and those in no ARR."""
     in_arrs = list(dict.fromkeys(p for arr in arrs for p in sorted(arr.parameters)))
@@ -532,7 +516,7 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     x = np.ones(len(names))
     # weights fixed before the fit, from the residuals at the datasheet values: a weight read at the fit
     # would reward a fit that shrinks an ARR's residual by shrinking its parameters
-    _weigh(problem, x, correlation=False)
+    _weigh(problem, x)
     if prior is not None and not (math.isfinite(prior) and prior > 0):
         raise SettingError("prior", f"{{setting}} must be a relative standard deviation > 0, or None, got {prior!r}")
     spread = math.inf if prior is None else prior
@@ -549,7 +533,7 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
         # later passes weigh each ARR by its noise at the previous fit: its residual at the datasheet values
         # holds the datasheet's error too, which would let the prior outweigh the records
         if passes:
-            _weigh(problem, x, correlation=False)
+            _weigh(problem, x)
         previous, x = x, optimize.least_squares(residual, x, jac=jacobian, bounds=(lower, upper), x_scale="jac",
                                                 method="trf", ftol=1e-14, xtol=1e-14, gtol=1e-14).x
         if passes and np.max(np.abs(x - previous)) < 1e-9:
@@ -633,15 +617,11 @@ def _noise(problem: _Problem, block: _Block, residual: np.ndarray, x: np.ndarray
     return max(robust_std(residual), _noise_floor(problem, block, x)) or float(np.std(residual)) or 1.0
 
 
-def _weigh(problem: _Problem, x: np.ndarray, correlation: bool = True) -> None:
-    """Each ARR's rows weigh 1 / its residual's noise at ``x`` (and, with ``correlation``, 1 / sqrt of its
-    correlation time): ARRs in different units count alike."""
+def _weigh(problem: _Problem, x: np.ndarray) -> None:
+    """Each ARR's rows weigh 1 / its residual's noise at ``x``: ARRs in different units count alike."""
     per_arr = problem.per_arr(x)
     for block in problem.blocks:
-        residual = per_arr[block.name]
-        noise = _noise(problem, block, residual, x)
-        problem.weights[block.name] = 1.0 / (noise * (math.sqrt(_autocorrelation_time(residual)) if correlation
-                                                      else 1.0))
+        problem.weights[block.name] = 1.0 / _noise(problem, block, per_arr[block.name], x)
 
 
 def _bounds(bg, names: list, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
