@@ -16,7 +16,8 @@ play is the held-out record, never seen by the fit.
 Per seed and estimated parameter: whether the truth lies inside the reported 95 % interval, the relative
 error of the estimate, the interval's half-width relative to the truth.  A parameter the fit estimates as
 part of a combination (another member kept at its datasheet value) is scored against the value that gives
-the combination its true value: a plain scaling (``the ratios of ...``) or a two-member expression; any
+the combination its true value: a scaling of its members along the group's direction that leaves every ARR
+unchanged (a symmetry: ``b/J, k_m/J``, ``C_1*R_1, ...``) or a two-member expression; any
 other combination whose kept member is off its datasheet value leaves its carriers unscored (``scored``
 says how many seeds count).
 
@@ -153,8 +154,8 @@ def targets(fit, truth: dict, arrs) -> dict:
 
     A parameter in no combination aims at its truth, and so does one whose combination's kept member (held
     at its datasheet value by the fit) is at its datasheet value in the truth too.  Otherwise the others
-    carry the kept member's error: where every ARR that holds the group is homogeneous in its members (a
-    plain scaling: only their ratios are seen), they scale by the kept member's datasheet / truth; in a
+    carry the kept member's error: where the group's direction is a symmetry of every ARR that holds it
+    (:func:`_symmetry`), they move along it until the kept member sits at its datasheet value; in a
     combination of two members, the carrier aims at the value that gives the expression its true value with
     the kept one at its datasheet value.
     """
@@ -164,9 +165,10 @@ def targets(fit, truth: dict, arrs) -> dict:
         carriers = [m for m in members if m != kept and m in aim]
         if math.isclose(truth[kept], fit.datasheet[kept], rel_tol=1e-12) or not carriers:
             continue
-        if _scales_alike(arrs, members):
+        powers = _symmetry(arrs, group.get("direction", {}))
+        if powers:
             for m in carriers:
-                aim[m] = None if aim[m] is None else aim[m] * fit.datasheet[kept] / truth[kept]
+                aim[m] = None if aim[m] is None else aim[m] * (fit.datasheet[kept] / truth[kept]) ** powers[m]
             continue
         aim.update(dict.fromkeys(carriers))  # unless the two-member expression below writes it
         if len(members) != 2 or len(carriers) != 1:
@@ -186,19 +188,22 @@ def targets(fit, truth: dict, arrs) -> dict:
     return aim
 
 
-def _scales_alike(arrs, members: list) -> bool:
-    """Whether every ARR that holds some of ``members`` is homogeneous in them (scaling them all alike scales
-    the ARR by a constant, and leaves its zeros where they are)."""
+def _symmetry(arrs, direction: dict) -> dict:
+    """The group's direction as exact powers, when every ARR that holds a member is unchanged but for a
+    constant factor by scaling each member ``p`` to ``p * c**power`` (a symmetry: only the products of powers
+    it leaves alone are seen); else {}."""
+    powers = {m: sp.Rational(v).limit_denominator(4) for m, v in direction.items()}
+    if not powers or any(abs(float(powers[m]) - v) > 1e-3 for m, v in direction.items()):
+        return {}
     factor = sp.Dummy("c", positive=True)
-    symbols = {sp.Symbol(m) for m in members}
     for arr in arrs:
         expression = arr.nominal
-        if not expression.free_symbols & symbols:
+        if not expression.free_symbols & {sp.Symbol(m) for m in powers}:
             continue
-        ratio = sp.simplify(expression.xreplace({s: factor * s for s in symbols}) / expression)
-        if ratio.free_symbols - {factor}:
-            return False
-    return True
+        scaled = expression.xreplace({sp.Symbol(m): factor ** q * sp.Symbol(m) for m, q in powers.items()})
+        if sp.simplify(scaled / expression).free_symbols - {factor}:
+            return {}
+    return {m: float(q) for m, q in powers.items()}
 
 
 def inside_domains(boxes: dict, values: dict, domains: dict) -> tuple[dict, list]:

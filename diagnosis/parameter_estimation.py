@@ -6,23 +6,30 @@ that make the residuals of every ARR, over every record, smallest.  Each ARR is 
 ``coefficient(theta) * feature(signals)``, and each feature is integrated over windows of
 :data:`INTEGRATION_WINDOW` samples: a derivative term ``c dx/dt`` becomes ``c (x(b) - x(a))``, exact and without
 the derivative filter's noise, and every other term is averaged (windows that reach across an input's step are
-left out).  The fit is a least-squares fit of the window residuals in which each ARR weighs by its own noise
-(reweighed at the fit), the regressors' own noise (estimated from each signal's fourth differences) is taken
-out of the normal equations where that is safe (errors in variables), and a prior about the datasheet values
-(:data:`PRIOR`, 50 %) keeps the directions the records barely see near them.  Most ARRs are linear in their
-parameters; the others (a valve's ``sqrt``, a belt's ``1/k``) are fitted the same way, with the exact Jacobian.
+left out).  The fit makes smallest the sum of the window residuals squared, each divided by the noise that the
+sensors give it at the parameters tried: the signals' white noise (estimated from their fourth differences)
+reaches every feature, through its slope where the feature is a curve of the signals, and the residual through
+the coefficients, ``sqrt(c(theta)' N c(theta))``.  That is the maximum-likelihood fit of noisy regressors
+(errors in variables): unbiased where plain least squares would shrink the coefficients of noisy features
+towards zero, and blind to scaling an ARR as a whole (a fit cannot make an ARR quieter by making its
+parameters smaller).  A curved feature's mean shift by the noise (``omega**2`` gains ``sigma**2``) is taken
+off its samples, and a prior about the datasheet values (:data:`PRIOR`, 50 %) keeps the directions the
+records barely see near them.  Most ARRs are linear in their parameters; the others (a valve's ``sqrt``, a
+belt's ``1/k``) are fitted the same way, with the exact Jacobian.
 
 Identifiability comes first (:func:`identifiability`): the Jacobian of the residuals with respect to the
 relative change of each parameter, over the records, says which parameters these ARRs and these records can
 tell apart.  A direction of parameters that leaves the residuals (almost) unchanged cannot be estimated:
 its parameters are reported together, with the combination the data do fix (the coefficient of the term of
-the ARR they share, e.g. ``J_m + J_Md/k_belt**2``, or the ratios of a relation whose every term holds a fitted
-parameter), and the fit keeps one of them at its datasheet value so that the others carry the combination.
+the ARR two of them share, e.g. ``J_m + J_Md/k_belt**2``, or the products of powers a scaling of the group
+leaves unchanged, e.g. ``b/J, k_m/J``), and the fit keeps one of them at its datasheet value so that the
+others carry the combination.
 
-The intervals are ``level`` (95 %) confidence intervals of the linearized fit: a sandwich covariance whose
-middle adds the ARRs' scores window by window (ARRs that share a sensor share its noise) with Newey-West lags,
-scaled for the degrees of freedom the windows leave, with a t quantile.  :func:`uncertainty_boxes` turns them,
-or the spread between records, into the multiplicative ``uncertainty=(lo, hi)`` boxes the thresholds use.
+The intervals are ``level`` (95 %) confidence intervals of the linearized fit: a sandwich covariance (the
+objective's Hessian about the scores) whose middle adds the ARRs' scores window by window (ARRs that share a
+sensor share its noise) with Newey-West lags, scaled for the degrees of freedom the windows leave, with a t
+quantile.  :func:`uncertainty_boxes` turns them, or the spread between records, into the multiplicative
+``uncertainty=(lo, hi)`` boxes the thresholds use.
 
 Example
 -------
@@ -47,6 +54,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 import sympy as sp
@@ -69,8 +77,6 @@ SINGULAR_FLOOR = 1e-7
 #: The datasheet's relative standard deviation that :func:`estimate_parameters` assumes by default: a datasheet
 #: value within a factor of about two of the machine's.
 PRIOR = 0.5
-#: Passes of :func:`estimate_parameters` after the first, each weighing the ARRs by their noise at the last fit.
-REWEIGHTS = 4
 
 
 @dataclass(frozen=True)
@@ -83,8 +89,10 @@ class Identifiability:
         Parameters the fit can estimate one by one.
     combinations : list of dict
         Groups of parameters the records see only together: ``parameters`` (the group), ``expression`` (the
-        combination the data fix, as text, from the ARR's term they share) and ``kept`` (the parameter the
-        fit keeps at its datasheet value so that the others carry the combination).
+        combination the data fix, as text: the ARR's term two members share, or the products of powers the
+        group's scaling leaves unchanged), ``kept`` (the parameter the fit keeps at its datasheet value so that
+        the others carry the combination) and ``direction`` (member -> its relative change along the change the
+        records cannot see, per relative change of the kept member).
     unseen : list of str
         Parameters in no ARR (the records cannot say anything of them).
     singular_values : list of float
@@ -184,55 +192,69 @@ class ParameterEstimate:
 #: biases a least-squares fit towards zero by its variance over the regressor's (errors in variables): over a
 #: longer stretch the signal's change grows and its noise does not.
 INTEGRATION_WINDOW = 50
+#: An ARR is never trusted to hold better than this share of the size of its terms: its residual on a clean
+#: record is the error of the numbers that stand for the signals (the trapezoid rule, a derivative estimate, an
+#: encoder's counts), which no sensor noise hides.  Without that floor a noise-free record would weigh its
+#: windows infinitely and a weakly seen direction would swing to absorb those errors.
+NUMERIC_FLOOR = 1e-4
 
 
 @dataclass
 class _Block:
-    """One ARR over the records: ``features`` (rows x terms) of its window-integrated terms and the terms'
-    coefficients as functions of the fitted parameters (and their derivatives)."""
+    """One ARR over the records: ``features`` (rows x terms) of its window-integrated terms, the terms'
+    coefficients as functions of the fitted parameters (and their derivatives), and ``noise``: the covariance of
+    one row's features that the sensors' noise and the numbers' own error make (see :func:`_scale`)."""
 
     name: str
     features: np.ndarray
     coefficient: object
     gradient: list
-    root: np.ndarray | None = None  # R with R'R = F'F less the features' noise (errors in variables), or None
+    noise: np.ndarray
     keys: list = field(default_factory=list)  # (record, first sample) of each row's window
 
 
 @dataclass
 class _Problem:
     """The window-integrated residuals of the ARRs over the records, as functions of the chosen parameters
-    relative to their datasheet values: ``residual(x)``, ``jacobian(x)``, rows grouped by ARR."""
+    relative to their datasheet values, each ARR's divided by the noise its sensors give it at those parameters:
+    ``residual(x)``, ``jacobian(x)``, rows grouped by ARR."""
 
     names: list
     nominal: np.ndarray
     blocks: list
-    weights: dict
 
     def _coefficients(self, block: _Block, x: np.ndarray) -> np.ndarray:
         return np.asarray(block.coefficient(*(self.nominal * x)), float).reshape(-1)
 
-    def residual(self, x: np.ndarray, compensated: bool = False) -> np.ndarray:
-        """The weighted window residuals; ``compensated``: per ARR ``R c`` instead (:func:`_compensated_root`),
-        whose squares add up to the residuals' less what the regressors' noise adds."""
-        return np.concatenate([self.weights.get(b.name, 1.0) * (self._matrix(b, compensated)
-                                                                 @ self._coefficients(b, x)) for b in self.blocks])
-
-    def jacobian(self, x: np.ndarray, compensated: bool = False) -> np.ndarray:
+    def _gradient(self, block: _Block, x: np.ndarray) -> np.ndarray:
+        """d coefficients / d x (terms x parameters)."""
         theta = self.nominal * x
+        return np.column_stack([np.asarray(g(*theta), float).reshape(-1) for g in block.gradient]) * self.nominal
+
+    def _scale(self, block: _Block, c: np.ndarray) -> float:
+        """The ARR's window residual noise at coefficients ``c``: ``sqrt(c' N c)``."""
+        return math.sqrt(max(float(c @ block.noise @ c), 0.0)) or 1.0
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        """Each ARR's window residuals over their noise at ``x``."""
+        parts = []
+        for b in self.blocks:
+            c = self._coefficients(b, x)
+            parts.append(b.features @ c / self._scale(b, c))
+        return np.concatenate(parts)
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
         rows = []
         for b in self.blocks:
-            columns = [np.asarray(g(*theta), float).reshape(-1) for g in b.gradient]
-            rows.append(self.weights.get(b.name, 1.0) * (self._matrix(b, compensated) @ np.column_stack(columns))
-                        * self.nominal)
+            c, dc = self._coefficients(b, x), self._gradient(b, x)
+            scale = self._scale(b, c)
+            # d(r / s) = dr / s - r ds / s^2, with ds = dc' N c / s
+            rows.append(b.features @ dc / scale
+                        - np.outer(b.features @ c, dc.T @ b.noise @ c) / scale ** 3)
         return np.vstack(rows)
 
-    @staticmethod
-    def _matrix(block: _Block, compensated: bool) -> np.ndarray:
-        return block.root if compensated and block.root is not None else block.features
-
     def per_arr(self, x: np.ndarray) -> dict:
-        """ARR name -> its unweighted window residuals."""
+        """ARR name -> its window residuals, in the ARR's own unit."""
         return {b.name: b.features @ self._coefficients(b, x) for b in self.blocks}
 
 
@@ -250,12 +272,14 @@ def _problem(arrs: Sequence, records: Sequence[Record], names: list, values: Map
         if not parts:  # no whole window in any record
             continue
         features = np.vstack([f for f, _, _ in parts])
+        noise = sum(n for _, n, _ in parts) / features.shape[0]
+        # the numbers' own error (trapezoid rule, derivative estimates, an encoder's counts): a share of each term
+        noise = noise + NUMERIC_FLOOR ** 2 * np.diag(np.mean(features ** 2, axis=0))
         coefficients = sp.Matrix([list(terms.values())])
         blocks.append(_Block(arr.name, features, sp.lambdify(symbols, coefficients, modules="numpy"),
-                             [sp.lambdify(symbols, coefficients.diff(s), modules="numpy") for s in symbols],
-                             _compensated_root(features, sum(n for _, n, _ in parts)),
+                             [sp.lambdify(symbols, coefficients.diff(s), modules="numpy") for s in symbols], noise,
                              [(r, int(start)) for r, (_, _, starts) in enumerate(parts) for start in starts]))
-    return _Problem(names, np.array([float(values[n]) for n in names]), blocks, {})
+    return _Problem(names, np.array([float(values[n]) for n in names]), blocks)
 
 
 def _terms(expression: sp.Expr, points: list, parameters: list) -> dict:
@@ -272,33 +296,6 @@ def _terms(expression: sp.Expr, points: list, parameters: list) -> dict:
     return found
 
 
-#: A regressor's noise is taken out of the fit (errors in variables) only where it is at most this share of the
-#: regressor's own spread: beyond, the subtraction would leave the fit to the noise estimate's own errors.
-COMPENSATED_SHARE = 0.25
-
-
-def _compensated_root(features: np.ndarray, noise: np.ndarray) -> np.ndarray | None:
-    """``R`` with ``R'R = F'F - N``: the features' Gram matrix less what their noise adds to it (``N``, the sum
-    over rows of each row's noise covariance).  A least-squares fit on noisy regressors is biased towards zero by
-    that term (errors in variables); without it the fit is unbiased to first order.  Only the features whose
-    noise is at most :data:`COMPENSATED_SHARE` of their spread are corrected, and the correction is halved until
-    ``F'F - N`` stays positive definite: a correction that made some direction free would let the fit collapse
-    into it.  None when nothing is corrected."""
-    if not features.size or not np.any(noise):
-        return None
-    gram = features.T @ features
-    diagonal = np.diag(gram)
-    noise = np.where(np.diag(noise) <= COMPENSATED_SHARE * diagonal, np.diag(noise), 0.0)
-    for _ in range(6):
-        if not np.any(noise):
-            return None
-        values, vectors = np.linalg.eigh(gram - np.diag(noise))
-        if values.min() > 1e-9 * values.max():
-            return (vectors * np.sqrt(values)).T
-        noise = noise / 2.0
-    return None
-
-
 def _sensor_noise(values: np.ndarray) -> float:
     """A sampled signal's white-noise standard deviation, from its fourth differences (``70 sigma^2`` for white
     noise; a smooth signal's own are far smaller, and a step's few are outliers the robust spread ignores)."""
@@ -311,49 +308,97 @@ def _sensor_noise(values: np.ndarray) -> float:
 
 def _window_features(compiled, record: Record, features: list, window: int | None) -> tuple:
     """Each feature integrated over the windows of ``record`` (rows: windows, columns: features), the sum over
-    the rows of the features' noise covariance, and each row's first sample.  A first derivative ``dx/dt``
-    integrates exactly to ``x(b) - x(a)`` (its noise ``2 sigma_x^2``); a signal ``x`` by the trapezoid rule
-    (``sigma_x^2 dt^2 (width - 1/2)``); any other feature by the trapezoid rule from its samples, which needs the
-    derivative estimates it holds (so a window is kept only where they are finite and do not reach across an
-    input's step), its noise not counted."""
+    the rows of the features' noise covariance, and each row's first sample.
+
+    A first derivative ``dx/dt`` integrates exactly to ``x(b) - x(a)``; any other feature by the trapezoid rule
+    from its samples, which needs the derivative estimates it holds (so a window is kept only where they are
+    finite and do not reach across an input's step).  Each signal's white noise (:func:`_sensor_noise`) reaches
+    the features through their slopes, read by differences one noise level either side; the same three values
+    give the mean a curved feature gains from the noise (``x**2`` gains ``sigma**2``), taken off its samples.
+    The noise of derivative estimates inside a feature is not counted (the numeric floor stands for it)."""
     width = int(window or INTEGRATION_WINDOW)
     t = record.t
-    numeric = [f for f in features if not (f in compiled.derivatives and compiled.derivatives[f][1] == 1)]
+    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    differences = {k: compiled.derivatives[f][0] for k, f in enumerate(features)
+                   if f in compiled.derivatives and compiled.derivatives[f][1] == 1}
+    numeric = [f for k, f in enumerate(features) if k not in differences]
     points = compiled.point_values(record) if any(f.free_symbols - set(map(sp.Symbol, compiled.signals))
                                                   for f in numeric) else None
-    columns = []
-    values = {sp.Symbol(s): record[s] for s in compiled.signals}
+    values = {sp.Symbol(s): np.asarray(record[s], float) for s in compiled.signals}
     if points is not None:
         values.update(dict(zip(compiled.points, points)))
+    sigma = {sp.Symbol(s): _sensor_noise(record[s]) for s in compiled.signals}
     usable = _trusted_samples(compiled, record, points or [], numeric)
     for name in compiled.signals:  # a gap in any signal
         usable &= np.isfinite(np.asarray(record[name], float))
-    cumulative = []
-    for feature in features:
-        if feature in compiled.derivatives and compiled.derivatives[feature][1] == 1:
-            cumulative.append(np.asarray(record[compiled.derivatives[feature][0]], float))  # x itself: its jumps
-            continue
-        samples = np.broadcast_to(np.asarray(sp.lambdify(list(values), feature, modules="numpy")(*values.values()),
-                                             float), t.shape)
-        samples = np.where(usable, samples, 0.0)  # windows holding an unusable sample are dropped below
-        cumulative.append(np.concatenate([[0.0], np.cumsum(0.5 * (samples[1:] + samples[:-1]) * np.diff(t))]))
     # windows one sample apart: two windows sharing an end sample would share its noise (x(b) - x(a) then x(c) -
     # x(b)), and their residuals would be anti-correlated
     starts = np.arange(0, len(record) - width, width + 1)
     ends = starts + width
     bad = np.concatenate([[0], np.cumsum(~usable)])
     keep = (bad[ends + 1] - bad[starts]) == 0  # no unusable sample in [start, end]
-    for series in cumulative:
-        columns.append(series[ends[keep]] - series[starts[keep]])
-    variance = np.zeros(len(features))
-    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    a, b = starts[keep], ends[keep]
+    columns, slopes = [], []  # slopes[k]: signal -> d feature / d signal at every sample (integrated features)
     for k, feature in enumerate(features):
-        if feature in compiled.derivatives and compiled.derivatives[feature][1] == 1:
-            variance[k] = 2.0 * _sensor_noise(record[compiled.derivatives[feature][0]]) ** 2
-        elif isinstance(feature, sp.Symbol) and str(feature) in compiled.signals:
-            variance[k] = _sensor_noise(record[str(feature)]) ** 2 * step ** 2 * (width - 0.5)
+        if k in differences:
+            series = values[sp.Symbol(differences[k])]
+            columns.append(series[b] - series[a])
+            slopes.append({})
+            continue
+        samples, slope = _feature_samples(feature, values, sigma, t.shape)
+        samples = np.where(usable, samples, 0.0)  # windows holding an unusable sample were dropped above
+        cumulative = np.concatenate([[0.0], np.cumsum(0.5 * (samples[1:] + samples[:-1]) * np.diff(t))])
+        columns.append(cumulative[b] - cumulative[a])
+        slopes.append({s: np.where(usable, v, 0.0) for s, v in slope.items()})
+    noise = np.zeros((len(features), len(features)))
+    for k in range(len(features)):
+        for m in range(k, len(features)):
+            noise[k, m] = noise[m, k] = _shared_noise(k, m, differences, slopes, sigma, a, b, step)
     matrix = np.column_stack(columns) if columns else np.empty((0, 0))
-    return matrix, int(keep.sum()) * np.diag(variance), starts[keep]
+    return matrix, noise, a
+
+
+def _feature_samples(feature: sp.Expr, values: dict, sigma: dict, shape: tuple) -> tuple[np.ndarray, dict]:
+    """A feature's samples, less the mean its signals' noise adds to it, and its slope along each noisy signal."""
+    symbols = list(values)
+    function = sp.lambdify(symbols, feature, modules="numpy")
+
+    def at(shift: dict) -> np.ndarray:
+        with np.errstate(all="ignore"):
+            return np.broadcast_to(np.asarray(function(*(values[s] + shift.get(s, 0.0) for s in symbols)), float),
+                                   shape)
+
+    samples = at({})
+    slopes, bias = {}, np.zeros(shape)
+    for s in feature.free_symbols & {s for s, v in sigma.items() if v > 0}:
+        up, down = at({s: sigma[s]}), at({s: -sigma[s]})
+        slopes[s] = np.nan_to_num((up - down) / (2.0 * sigma[s]), posinf=0.0, neginf=0.0)
+        bias += np.nan_to_num(0.5 * (up - 2.0 * samples + down), posinf=0.0, neginf=0.0)
+    return samples - bias, slopes
+
+
+def _shared_noise(k: int, m: int, differences: dict, slopes: list, sigma: dict, a: np.ndarray, b: np.ndarray,
+                  step: float) -> float:
+    """The covariance of features ``k`` and ``m`` over the windows ``[a, b]``, summed: a difference ``x(b) -
+    x(a)`` carries its end samples' noise, a trapezoid integral each sample's times its weight (``step``, half
+    at the ends) and the feature's slope."""
+    if k in differences and m in differences:
+        same = differences[k] == differences[m]
+        return 2.0 * sigma[sp.Symbol(differences[k])] ** 2 * a.size if same else 0.0
+    if k in differences or m in differences:
+        d, i = (k, m) if k in differences else (m, k)
+        s = sp.Symbol(differences[d])
+        if s not in slopes[i]:
+            return 0.0
+        slope = slopes[i][s]
+        return float(sigma[s] ** 2 * 0.5 * step * np.sum(slope[b] - slope[a]))
+    total = 0.0
+    for s in slopes[k].keys() & slopes[m].keys():
+        product = slopes[k][s] * slopes[m][s]
+        cumulative = np.concatenate([[0.0], np.cumsum(product)])
+        inside = cumulative[b + 1] - cumulative[a] - 0.75 * (product[a] + product[b])  # ends weigh half
+        total += float(sigma[s] ** 2 * step ** 2 * np.sum(inside))
+    return total
 
 
 def _trusted_samples(compiled, record: Record, points: list, features: list) -> np.ndarray:
@@ -390,15 +435,11 @@ def _choose(bg, arrs: Sequence, parameters: Sequence[str] | None) -> tuple[list,
 
 def _rank_out(problem: _Problem, x: np.ndarray) -> tuple[list, list, np.ndarray]:
     """Split the parameters into those the Jacobian at ``x`` identifies and groups it does not: one null
-    direction at a time, its largest member kept out (at its datasheet value)."""
+    direction at a time, its largest member kept out (at its datasheet value).  Each group comes with its
+    direction: member -> its relative change per relative change of the kept member."""
     names = list(problem.names)
     active = list(range(len(names)))
     groups = []
-    if names and not np.any(problem.residual(np.zeros(len(names)))):
-        # every term holds a fitted parameter: scaling them all alike leaves each residual's zero where it is,
-        # so only their ratios are seen; the first keeps its datasheet value and sets the scale
-        groups.append((list(names), names[0]))
-        active.remove(0)
     jac = problem.jacobian(x)
     scale = np.linalg.norm(jac, axis=0)
     scale[scale == 0] = 1.0
@@ -408,30 +449,41 @@ def _rank_out(problem: _Problem, x: np.ndarray) -> tuple[list, list, np.ndarray]
         _, s, vt = np.linalg.svd(sub, full_matrices=False)
         if s[-1] > SINGULAR_FLOOR * s[0] and s[-1] > 0:
             break
-        direction = vt[-1]
-        members = [active[k] for k in np.flatnonzero(np.abs(direction) > 0.1 * np.abs(direction).max())]
+        direction = vt[-1] / scale[active]  # back from the scaled columns to relative changes
+        largest = np.abs(direction).max()
+        members = [active[k] for k in np.flatnonzero(np.abs(direction) > 0.1 * largest)]
         kept = max(members, key=lambda k: abs(direction[active.index(k)]))
-        groups.append(([names[k] for k in members], names[kept]))
+        along = {names[k]: float(direction[active.index(k)] / direction[active.index(kept)]) for k in members}
+        groups.append(([names[k] for k in members], names[kept], along))
         active.remove(kept)
     return [names[k] for k in active], groups, singular
 
 
-def _combination(arrs: Sequence, members: list, values: Mapping) -> str:
-    """The coefficient, in an ARR holding the group, of the term that joins its members: what the data fix."""
+def _combination(arrs: Sequence, members: list, kept: str, direction: Mapping) -> str:
+    """What the data fix of a group.  Two members: the coefficient, in an ARR holding both, of the term that
+    joins them (``J_m + J_Md/k_belt**2``).  More: the products of powers that the group's direction leaves
+    unchanged, one per member besides the kept one (``C_1*R_1, R_2/R_1``), when the direction's ratios are
+    simple fractions; else their ratios."""
     symbols = {sp.Symbol(m) for m in members}
-    if len(members) > 2:
+    if len(members) == 1:
+        return f"{members[0]} alone: too weakly seen to estimate"
+    if len(members) == 2:
+        for arr in arrs:
+            if not symbols & arr.nominal.free_symbols:
+                continue
+            expression = sp.expand(arr.nominal)
+            signal_atoms = [a for a in expression.atoms(sp.Derivative, sp.Integral, sp.core.function.AppliedUndef)
+                            if not a.free_symbols & symbols]
+            collected = sp.collect(expression, signal_atoms, evaluate=False) if signal_atoms else {}
+            for coefficient in collected.values():
+                if len(coefficient.free_symbols & symbols) >= 2:
+                    return str(sp.simplify(coefficient))
+    exponents = {m: Fraction(direction[m]).limit_denominator(4) for m in members}
+    if any(abs(float(exponents[m]) - direction[m]) > 1e-3 for m in members):
         return "the ratios of " + ", ".join(members)
-    for arr in arrs:
-        if not symbols & arr.nominal.free_symbols:
-            continue
-        expression = sp.expand(arr.nominal)
-        signal_atoms = [a for a in expression.atoms(sp.Derivative, sp.Integral, sp.core.function.AppliedUndef)
-                        if not a.free_symbols & symbols]
-        collected = sp.collect(expression, signal_atoms, evaluate=False) if signal_atoms else {}
-        for coefficient in collected.values():
-            if len(coefficient.free_symbols & symbols) >= 2:
-                return str(sp.simplify(coefficient))
-    return " ~ ".join(members)
+    invariants = [sp.Symbol(m) * sp.Symbol(kept) ** sp.Rational(-exponents[m].numerator, exponents[m].denominator)
+                  for m in members if m != kept]
+    return ", ".join(str(v) for v in invariants)
 
 
 def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = None, *, arrs: Sequence | None = None,
@@ -442,8 +494,12 @@ def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = No
     >>> from bondgraph import simulate
     >>> from bondgraph.library import dc_motor
     >>> t = np.linspace(0.0, 1.0, 1001)
-    >>> record = simulate(dc_motor(), (0, 1), {"U": lambda t: 12.0 * (t > 0.05)}, t_eval=t).record()
-    >>> identifiability(dc_motor(), [record]).identified
+    >>> step = simulate(dc_motor(), (0, 1), {"U": lambda t: 12.0 * (t > 0.05)}, t_eval=t).record()
+    >>> seen = identifiability(dc_motor(), [step])
+    >>> seen.identified, seen.combinations[0]["expression"]  # the current's 1 ms transient hides in the step
+    (['R_a', 'k_m', 'J', 'b'], 'L_a alone: too weakly seen to estimate')
+    >>> varying = simulate(dc_motor(), (0, 1), {"U": lambda t: 12.0 + 6.0 * np.sin(40.0 * t)}, t_eval=t).record()
+    >>> identifiability(dc_motor(), [varying]).identified
     ['R_a', 'L_a', 'k_m', 'J', 'b']
     """
     arrs = list(arrs) if arrs is not None else derive_arrs(bg)
@@ -457,8 +513,8 @@ def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = No
         raise SettingError("records", f"{{setting}}: no window of {width + 1} usable samples in any record (the "
                            "records are too short, or every stretch holds a gap or an input's step)")
     identified, groups, singular = _rank_out(problem, np.ones(len(names)))
-    combinations = [{"parameters": members, "kept": kept, "expression": _combination(arrs, members, bg.parameters)}
-                    for members, kept in groups]
+    combinations = [{"parameters": members, "kept": kept, "direction": along,
+                     "expression": _combination(arrs, members, kept, along)} for members, kept, along in groups]
     return Identifiability(identified, combinations, unseen, singular.tolist())
 
 
@@ -513,10 +569,6 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     if not sum(b.features.shape[0] for b in problem.blocks):
         raise SettingError("records", "{setting}: no sample where every signal and derivative of the ARRs is known")
     lower, upper = _bounds(bg, names, problem.nominal)
-    x = np.ones(len(names))
-    # weights fixed before the fit, from the residuals at the datasheet values: a weight read at the fit
-    # would reward a fit that shrinks an ARR's residual by shrinking its parameters
-    _weigh(problem, x)
     if prior is not None and not (math.isfinite(prior) and prior > 0):
         raise SettingError("prior", f"{{setting}} must be a relative standard deviation > 0, or None, got {prior!r}")
     spread = math.inf if prior is None else prior
@@ -524,20 +576,13 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     # the prior on the logarithm of each relative value: a factor 2 above the datasheet costs what a factor 2
     # below does, and zero is infinitely far
     def residual(x):
-        return np.concatenate([problem.residual(x, compensated=True), np.log(np.abs(x)) / spread])
+        return np.concatenate([problem.residual(x), np.log(np.abs(x)) / spread])
 
     def jacobian(x):
-        return np.vstack([problem.jacobian(x, compensated=True), np.diag(1.0 / x) / spread])
+        return np.vstack([problem.jacobian(x), np.diag(1.0 / x) / spread])
 
-    for passes in range(REWEIGHTS + 1):
-        # later passes weigh each ARR by its noise at the previous fit: its residual at the datasheet values
-        # holds the datasheet's error too, which would let the prior outweigh the records
-        if passes:
-            _weigh(problem, x)
-        previous, x = x, optimize.least_squares(residual, x, jac=jacobian, bounds=(lower, upper), x_scale="jac",
-                                                method="trf", ftol=1e-14, xtol=1e-14, gtol=1e-14).x
-        if passes and np.max(np.abs(x - previous)) < 1e-9:
-            break
+    x = optimize.least_squares(residual, np.ones(len(names)), jac=jacobian, bounds=(lower, upper), x_scale="jac",
+                               method="trf", ftol=1e-14, xtol=1e-14, gtol=1e-14).x
     covariance, noise, correlation = _covariance(problem, x, spread)
     # few windows: the residuals' spread is itself estimated, with as many degrees of freedom as windows left
     # over by the parameters (a t quantile, and the residual variance's own correction)
@@ -562,32 +607,52 @@ LAGS = 5
 
 def _covariance(problem: _Problem, x: np.ndarray, prior: float = math.inf) -> tuple[np.ndarray, dict, dict]:
     """The fit's covariance (relative parameters), robust to the residuals' own variance and autocorrelation:
-    the sandwich with a Newey-West middle (Bartlett weights over :data:`LAGS` lags).  The scores of the ARRs'
-    rows over the same window are added first: ARRs that share a sensor share its noise, window by window.
-    Also each ARR's residual noise and the ratio of its variance with the lags to without (its inflation)."""
-    jac = problem.jacobian(x)
-    per_arr = problem.per_arr(x)
-    bread = np.linalg.pinv(jac.T @ jac + np.eye(x.size) / prior ** 2)
+    the sandwich of the objective's Hessian (:func:`_hessian`) about a Newey-West middle (Bartlett weights over
+    :data:`LAGS` lags).  The scores of the ARRs' rows over the same window are added first: ARRs that share a
+    sensor share its noise, window by window.  An ARR whose residual is quieter than its sensors and numbers
+    predict (a clean record) counts as noisy as predicted.  Also each ARR's residual spread, in its own unit,
+    and the ratio of its scores' variance with the lags to without (its inflation)."""
+    jac, scaled, per_arr = problem.jacobian(x), problem.residual(x), problem.per_arr(x)
+    bread = np.linalg.pinv(_hessian(problem, x, jac, scaled) + np.eye(x.size) / prior ** 2)
     noise, inflation, start = {}, {}, 0
     windows: dict = {}
-    numeric = np.zeros((x.size, x.size))
+    meat = np.eye(x.size) / prior ** 2  # the prior's own share of the information
     for block in problem.blocks:
-        residual = per_arr[block.name]
-        rows = jac[start:start + residual.size]
-        start += residual.size
-        scores = rows * (problem.weights[block.name] * residual)[:, None]
+        size = block.features.shape[0]
+        rows, residual = jac[start:start + size], scaled[start:start + size]
+        start += size
+        scores = rows * residual[:, None]
         for key, score in zip(block.keys, scores):
             windows[key] = windows.get(key, 0.0) + score
-        noise[block.name] = float(robust_std(residual))
-        floor = _noise_floor(problem, block, x)
-        if floor > noise[block.name]:  # a residual below the numbers' own error: count that error instead
-            numeric += (problem.weights[block.name] * floor) ** 2 * rows.T @ rows
+        noise[block.name] = float(robust_std(per_arr[block.name]))
+        spread = robust_std(residual)
+        if spread < 1.0:  # quieter than predicted: the prediction's share of the information
+            meat += (1.0 - spread ** 2) * rows.T @ rows
         own = _newey_west(scores)
         inflation[block.name] = float(np.trace(own) / np.trace(scores.T @ scores)) if np.any(scores) else 1.0
-    meat = np.eye(x.size) / prior ** 2 + numeric  # the prior's own share of the information, the numeric floor
     for record in sorted({r for r, _ in windows}):
         meat += _newey_west(np.array([windows[k] for k in sorted(k for k in windows if k[0] == record)]))
     return bread @ meat @ bread, noise, inflation
+
+
+def _hessian(problem: _Problem, x: np.ndarray, jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
+    """Half the Hessian of the sum of squared residuals, by central differences of its gradient.  Its
+    Gauss-Newton part alone, ``J'J``, counts the regressors' noise as information (it holds their noisy
+    Gram matrix), which the curvature of the noise scaling takes back; where the difference is not positive
+    definite (a flat direction), ``J'J``."""
+    gauss_newton = jac.T @ jac
+    step = 1e-6
+    columns = []
+    for k in range(x.size):
+        dx = np.zeros(x.size)
+        dx[k] = step * max(abs(x[k]), 1.0)
+        up = problem.jacobian(x + dx).T @ problem.residual(x + dx)
+        down = problem.jacobian(x - dx).T @ problem.residual(x - dx)
+        columns.append((up - down) / (2.0 * dx[k]))
+    hessian = 0.5 * (np.column_stack(columns) + np.column_stack(columns).T)
+    if not np.all(np.isfinite(hessian)) or np.linalg.eigvalsh(hessian).min() <= 1e-9 * np.abs(hessian).max():
+        return gauss_newton
+    return hessian
 
 
 def _newey_west(scores: np.ndarray) -> np.ndarray:
@@ -597,31 +662,6 @@ def _newey_west(scores: np.ndarray) -> np.ndarray:
         cross = scores[lag:].T @ scores[:-lag]
         middle = middle + (1.0 - lag / (LAGS + 1)) * (cross + cross.T)
     return middle
-
-
-#: An ARR is never trusted to hold better than this share of the size of its terms: its residual on a clean
-#: record is the error of the numbers that stand for the signals (the trapezoid rule, a derivative estimate, an
-#: encoder's counts), which no sensor noise hides.  Without that floor a noise-free record would weigh its
-#: windows infinitely and a weakly seen direction would swing to absorb those errors.
-NUMERIC_FLOOR = 1e-4
-
-
-def _noise_floor(problem: _Problem, block: _Block, x: np.ndarray) -> float:
-    """:data:`NUMERIC_FLOOR` times the median over the windows of the ARR's largest term."""
-    terms = np.abs(block.features * problem._coefficients(block, x))
-    return NUMERIC_FLOOR * float(np.median(terms.max(axis=1))) if terms.size else 0.0
-
-
-def _noise(problem: _Problem, block: _Block, residual: np.ndarray, x: np.ndarray) -> float:
-    """The ARR's residual noise at ``x``: its robust spread, at least the numeric floor."""
-    return max(robust_std(residual), _noise_floor(problem, block, x)) or float(np.std(residual)) or 1.0
-
-
-def _weigh(problem: _Problem, x: np.ndarray) -> None:
-    """Each ARR's rows weigh 1 / its residual's noise at ``x``: ARRs in different units count alike."""
-    per_arr = problem.per_arr(x)
-    for block in problem.blocks:
-        problem.weights[block.name] = 1.0 / _noise(problem, block, per_arr[block.name], x)
 
 
 def _bounds(bg, names: list, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

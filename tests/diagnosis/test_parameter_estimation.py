@@ -58,7 +58,8 @@ def test_a_homogeneous_relation_identifies_only_ratios():
     fit = estimate_parameters(dc_motor(**DATASHEET), [motor_record()], ["J", "b", "k_m"], arrs=mechanical, prior=None)
     (group,) = fit.identifiability.combinations
     assert group["parameters"] == ["J", "b", "k_m"] and group["kept"] == "J"
-    assert "ratios" in group["expression"] and fit.values["J"] == DATASHEET["J"]
+    assert group["expression"] == "b/J, k_m/J" and fit.values["J"] == DATASHEET["J"]
+    assert group["direction"] == pytest.approx({"J": 1.0, "b": 1.0, "k_m": 1.0}, rel=1e-6)
     for name in ("b", "k_m"):
         assert fit.values[name] / fit.values["J"] == pytest.approx(TRUE[name] / TRUE["J"], rel=2e-3)
 

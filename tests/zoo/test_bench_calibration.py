@@ -76,13 +76,19 @@ def test_a_combination_carrier_is_scored_against_the_value_that_gives_the_combin
     assert aim["J_i"] == pytest.approx(10.0) and aim["b"] == 0.2
     assert bench_calibration.targets(fit(datasheet, [summed]), dict(truth, J_m=1.0), arrs)["J_i"] == 8.0
     # a relation homogeneous in its group: only the ratios are seen, and b scales with J_m's error
-    scaling = {"parameters": ["J_m", "J_i", "b"], "kept": "J_m", "expression": "the ratios of J_m, J_i, b"}
+    scaling = {"parameters": ["J_m", "J_i", "b"], "kept": "J_m", "expression": "J_i/J_m, b/J_m",
+               "direction": {"J_m": 1.0, "J_i": 1.0, "b": 1.0}}
     homogeneous = [arr("(J_m + J_i/n_g**2)*dx + b*x")]
     aim = bench_calibration.targets(fit(datasheet, [scaling]), truth, homogeneous)
     assert aim["b"] == pytest.approx(0.2 / 1.5) and aim["J_i"] == pytest.approx(8.0 / 1.5)
     # the same group where the ARR is not homogeneous in it: the aim is not written, the carriers not scored
     aim = bench_calibration.targets(fit(datasheet, [scaling]), truth, arrs)
     assert aim["b"] is None and aim["J_i"] is None and aim["n_g"] == 2.0
+    # a symmetry with powers: C up and R down alike leave C*dx + x/R unchanged but for a factor
+    ladder = {"parameters": ["C", "R"], "kept": "R", "expression": "C*R", "direction": {"R": 1.0, "C": -1.0}}
+    aim = bench_calibration.targets(fit({"C": 1.0, "R": 2.0}, [ladder]), {"C": 1.2, "R": 2.5},
+                                    [arr("C*dx + x/R")])
+    assert aim["C"] == pytest.approx(1.2 * 2.5 / 2.0)  # R held 20 % low: C carries the product C*R = 3
 
 
 def test_boxes_are_cut_to_the_parameters_domains():
