@@ -157,19 +157,20 @@ def set_membership_boxes(bg, records: Sequence, parameters: Sequence[str], *, ar
         raise SettingError("records", "{setting}: at least one healthy record is needed")
     data = [as_record(r, names + [n for n in bg.inputs if has_column(r, n) and n not in names], name=f"records[{k}]")
             for k, r in enumerate(records)]
-    rows, needs, where, weights = [], [], [], np.zeros(len(sized))
+    rows, needs, where, weights, counted = [], [], [], np.zeros(len(sized)), 0
     for arr in arrs:
-        widening, counted = np.zeros(len(sized)), 0
+        widening, weighed = np.zeros(len(sized)), 0
         for k, record in enumerate(data):
             for coefficients, need, t, spread, decided in _constraints(arr, record, k, sized, bg, settings):
                 rows.append(coefficients)
                 needs.append(need)
                 where += [(arr.name, k, float(s)) for s in t]
-                widening += spread
                 counted += decided
-        if counted:
-            weights += widening / counted
-    if not weights.any():
+                if spread is not None:
+                    widening, weighed = widening + spread, weighed + decided
+        if weighed:
+            weights += widening / weighed
+    if not counted:
         raise SettingError("records", f"{{setting}}: no sample where an ARR holding {', '.join(sized)} is decided "
                                       "(the records are too short, or every sample lies near a step, a gap or an end)")
     return _solve(np.vstack(rows), np.concatenate(needs), where, sized, 1.0 + weights, _bounds(bg, sized))
@@ -205,7 +206,7 @@ def _constraints(arr, data: Record, k: int, sized: list, bg, settings: Detection
     """``(coefficients, need, times, spread, counted)`` per form of ``arr`` that :func:`~diagnosis.detect` may
     choose on the ``k``-th record: the rows ``coefficients @ [a, b] >= need`` (need > 0) of its counted samples
     that the margin and the other boxes alone do not hold, their times, the sum over the counted samples of each
-    sized parameter's ``|g_p| / m``, and how many samples were counted."""
+    sized parameter's ``|g_p| / m`` (None when ``m`` is 0), and how many samples were counted."""
     sensitivities = [_sensitivity(arr, p) for p in sized]
     band = arr.compiled.cached(f"set membership band {sized}", lambda: _fixed_band(arr, sized))
     try:
@@ -251,7 +252,8 @@ def _constraints(arr, data: Record, k: int, sized: list, bg, settings: Detection
         yield (np.vstack([np.hstack([fall[above], rise[above]]), np.hstack([rise[below], fall[below]])]),
                np.concatenate([(s - margin - hi)[above], (lo - margin - s)[below]]),
                np.concatenate([evaluation.t[above], evaluation.t[below]]),
-               np.abs(g[keep]).sum(axis=0) / max(margin, 1e-300), int(keep.sum()))
+               # a margin of 0 (a noise-free record) measures no widening
+               np.abs(g[keep]).sum(axis=0) / margin if margin > 0 else None, int(keep.sum()))
 
 
 def _in_runs(outside: np.ndarray, length: int) -> np.ndarray:

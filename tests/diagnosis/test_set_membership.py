@@ -180,3 +180,25 @@ def test_a_residual_no_box_of_these_parameters_explains_names_the_arr_and_the_re
     with pytest.raises(SettingError, match=r"records\[1\]: ARR_1_e leaves its threshold at t = ") as error:
         set_membership_boxes(dc_motor(**TRUE), [record(1), resting], ["R_a"])
     assert "R_a" in str(error.value) and "\n" not in str(error.value)
+
+
+def test_a_parameter_not_linear_in_its_uncertainty_is_refused():
+    """A resistance in parallel with a capacitor enters as v / (R (1 + delta_R)): its band is no linear function of
+    the box, so no linear program sizes it; the capacitor's term, C delta_C dv/dt, is linear."""
+    bg = BondGraph(name="parallel RC")
+    bg.add("Q", "Sf", unit="A")
+    bg.add("J0", "0")
+    bg.add("R", "R", value=10.0, uncertainty=(-0.05, 0.05), unit="Ohm")
+    bg.add("C", "C", value=1e-3, uncertainty=(-0.1, 0.1), unit="F")
+    bg.add("v", "De", unit="V")
+    for tail, head in [("Q", "J0"), ("J0", "R"), ("J0", "C"), ("J0", "v")]:
+        bg.bond(tail, head)
+    t = np.linspace(0.0, 1.0, 1001)
+    rng = np.random.default_rng(0)
+    # Q = C dv/dt + v / R for v = sin(10 t) (written here), measured with 1 mV of noise
+    run = {"t": t, "Q": 1e-3 * 10 * np.cos(10 * t) + np.sin(10 * t) / 10.0,
+           "v": np.sin(10 * t) + rng.normal(0.0, 1e-3, t.size)}
+    with pytest.raises(SettingError, match="ARR_J0 is not linear in the uncertainty of 'R'"):
+        set_membership_boxes(bg, [run], ["R", "C"])
+    (lo, hi), = set_membership_boxes(bg, [run], ["C"]).values()
+    assert -1.0 < lo <= 0.0 <= hi
