@@ -84,13 +84,15 @@ def set_membership_boxes(bg, records: Sequence, parameters: Sequence[str], *, ar
 
     The **counted samples** are those :func:`~diagnosis.detect` decides: not the undecided ones near a step of an
     input or a sensor, near either end of the record, or in a gap, and not the start-up (the first
-    ``START_SHARE`` of the healthy stretch, which the detection's own margin also leaves out).  An alarm needs
-    violations on as many samples in a row as the form's persistence (``settings.persistence``, and at least half
-    the derivative window): a counted sample outside the band with the sized boxes at 0 but in no such run of
-    them can be in no alarm whatever the boxes, so it sets no constraint (a lone burst of noise does not size a
-    box).  The samples of the longer runs must all stay inside: sufficient for the detection's rule, which needs
-    one of every ``persistence`` of them inside, so the boxes are a little wider than the smallest that rule allows
-    (that smallest is no linear program).
+    ``START_SHARE`` of the healthy stretch, which the detection's margin leaves out too).  The rest of the healthy
+    stretch counts, although no alarm is raised there: kept inside at the noise margin, it keeps the margin
+    :func:`~diagnosis.detect` calibrates within ``SAFETY`` times the noise margin, instead of letting it grow to
+    hold the model's error.  An alarm needs violations on as many samples in a row as the form's persistence
+    (``settings.persistence``, and at least half the derivative window), and a box can only shorten a run of
+    samples outside the band: a sample outside it with the sized boxes at 0 sets a constraint only if it lies in
+    a run of that many such samples (a lone burst of noise sizes no box).  Every sample of such a run must stay
+    inside, where the detection's rule needs one of every ``persistence`` of them: the boxes are sufficient for the
+    rule and a little wider than the smallest it allows (which is no linear program).
 
     A side of a box no sample needs is 0, and a parameter no sample needs gets ``(0.0, 0.0)`` (the model accepts
     it: a box must hold 0, nothing more): the boxes are the smallest the records allow, and anything wider only

@@ -13,7 +13,7 @@ from scipy.integrate import solve_ivp
 
 from bondgraph import BondGraph, SettingError
 from bondgraph.library import dc_motor
-from diagnosis import derive_arrs, detect, evaluate, noise_margin
+from diagnosis import DetectionSettings, derive_arrs, detect, evaluate, noise_margin
 from diagnosis.set_membership import set_membership_boxes
 
 #: The machine (dc_motor's parameter names: R_a, L_a, k_m on the gyrator, J, b).
@@ -98,6 +98,18 @@ def test_held_out_records_of_the_same_machine_raise_few_alarms():
     model = boxed(OFF, off_boxes())
     alarms = [seed for seed in HELD_OUT if fired(model, record(seed))]
     assert len(alarms) <= 1, alarms
+
+
+def test_the_detection_settings_are_those_the_boxes_keep():
+    """A fixed derivative window and a shorter healthy stretch: sized with them, the boxes keep detect with them
+    quiet on the training records (and without boxes it is not)."""
+    settings = DetectionSettings(calibrate=0.3, window=41)
+    runs = [record(s) for s in TRAINING]
+    boxes = set_membership_boxes(OFF, runs, ["b", "J"], settings=settings)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert detect(boxed(OFF, {"b": (0.0, 0.0), "J": (0.0, 0.0)}), runs[0], settings).fired
+        assert [detect(boxed(OFF, boxes), run, settings).fired for run in runs] == [[], []]
 
 
 def _violations(bg: BondGraph, seed: int, persistence: bool = False) -> int:
