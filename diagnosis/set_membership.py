@@ -246,7 +246,7 @@ def _constraints(arr, data: Record, k: int, sized: list, bg, settings: Detection
         with np.errstate(invalid="ignore"):
             above = keep & (s - margin - hi > 0)   # -r_n above the band: the upper ends must reach it
             below = keep & (lo - margin - s > 0)
-        # only runs as long as an alarm's can be one (a box only narrows the runs outside the band)
+        # only a run as long as an alarm needs can become one (a box only shortens the runs outside the band)
         run = _in_runs(above | below, settings.persistence if arr.order == 0 else max(
             settings.persistence, (window or default_window(options.get("polyorder", 3))) // 2))
         above, below = above & run, below & run
