@@ -243,9 +243,10 @@ def _calibrate_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--parameters", nargs="+", action="extend", metavar="P", help="the parameters to estimate "
                    "(several after one --parameters, or it repeated; default: every parameter the ARRs and the "
                    "records identify)")
-    p.add_argument("--boxes", choices=("confidence", "records"), default="confidence",
-                   help="the calibrated uncertainty boxes: each estimate's confidence interval (default), or the "
-                        "spread of one estimate per training record (needs two training records or more)")
+    p.add_argument("--boxes", choices=("confidence", "records", "set-membership"), default="confidence",
+                   help="the calibrated uncertainty boxes: each estimate's confidence interval (default), the "
+                        "spread of one estimate per training record (needs two training records or more), or the "
+                        "smallest boxes that keep every training record inside the thresholds")
     held = p.add_mutually_exclusive_group()
     held.add_argument("--hold-out", type=int, metavar="K", help="validate on the last K records, estimate on the "
                       "others (default: 1 with two records or more, else 0: no validation)")

@@ -52,6 +52,7 @@ A DC motor whose datasheet friction is 40 % low and inertia 30 % high, told by a
 from __future__ import annotations
 
 import math
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -66,6 +67,7 @@ from .derivation import derive_arrs
 from .derivatives import default_window
 from .detection import robust_std
 from .records import Record, as_record
+from .set_membership import set_membership_boxes
 from .steps import step_mask
 
 __all__ = ["Identifiability", "ParameterEstimate", "estimate_parameters", "identifiability", "uncertainty_boxes"]
@@ -258,7 +260,8 @@ class _Problem:
         return {b.name: b.features @ self._coefficients(b, x) for b in self.blocks}
 
 
-def _problem(arrs: Sequence, records: Sequence[Record], names: list, values: Mapping, window: int | None) -> _Problem:
+def _problem(arrs: Sequence, records: Sequence[Record], names: list, values: Mapping, window: int | None,
+             domains: Mapping | None = None) -> _Problem:
     symbols = [sp.Symbol(n) for n in names]
     fixed = {sp.Symbol(p): v for p, v in values.items() if p not in names}
     blocks = []
@@ -266,7 +269,11 @@ def _problem(arrs: Sequence, records: Sequence[Record], names: list, values: Map
         if not set(names) & set(arr.parameters):
             continue
         compiled = arr.compiled
-        terms = _terms(arr.nominal.xreplace(compiled.symbols).xreplace(fixed), compiled.points, symbols)
+        try:
+            terms = _terms(arr.nominal.xreplace(compiled.symbols).xreplace(fixed), compiled.points, symbols, domains)
+        except ValueError as error:  # the other ARRs may still hold its parameters
+            warnings.warn(f"{arr.name} is left out of the parameter fit: {error}", stacklevel=3)
+            continue
         parts = [part for part in (_window_features(compiled, record, list(terms), window) for record in records)
                  if part[0].shape[0]]
         if not parts:  # no whole window in any record
@@ -282,9 +289,32 @@ def _problem(arrs: Sequence, records: Sequence[Record], names: list, values: Map
     return _Problem(names, np.array([float(values[n]) for n in names]), blocks)
 
 
-def _terms(expression: sp.Expr, points: list, parameters: list) -> dict:
-    """The ARR as ``sum coefficient(theta) * feature(points)``: feature -> coefficient.  A term whose parameters
-    and signals cannot be told apart (a parameter inside a function of the signals) raises ValueError."""
+def _terms(expression: sp.Expr, points: list, parameters: list, domains: Mapping | None = None) -> dict:
+    """The ARR as ``sum coefficient(theta) * feature(points)``: feature -> coefficient.
+
+    A parameter whose domain has one sign is taken with it, so that ``Abs(Q/a)`` is ``Abs(Q)/a``; a relation
+    whose denominator mixes parameters and signals (a gas law's ``p_0 V/(V_a - V)``) is taken by its numerator,
+    which holds where the relation does.  A term whose parameters and signals still cannot be told apart (a
+    parameter inside a function of the signals) raises ValueError."""
+    signed = {}
+    for p in parameters:
+        lo, hi = (domains or {}).get(str(p), (-math.inf, math.inf))
+        if lo >= 0 or hi <= 0:
+            signed[p] = sp.Symbol(str(p), positive=lo >= 0, negative=hi <= 0)
+    back = {v: k for k, v in signed.items()}
+    expression = expression.xreplace(signed)  # rebuilt: Abs and sign take the signs out
+    chosen = [signed.get(p, p) for p in parameters]
+    try:
+        found = _split(expression, points, chosen)
+    except ValueError:
+        numerator, denominator = sp.fraction(sp.together(expression))
+        if not (denominator.free_symbols & set(chosen) and denominator.free_symbols & set(points)):
+            raise
+        found = _split(numerator, points, chosen)
+    return {feature: coefficient.xreplace(back) for feature, coefficient in found.items()}
+
+
+def _split(expression: sp.Expr, points: list, parameters: list) -> dict:
     found: dict = {}
     for term in sp.Add.make_args(sp.expand_mul(expression)):
         coefficient, feature = term.as_independent(*points, as_Add=False)
@@ -310,18 +340,18 @@ def _window_features(compiled, record: Record, features: list, window: int | Non
     """Each feature integrated over the windows of ``record`` (rows: windows, columns: features), the sum over
     the rows of the features' noise covariance, and each row's first sample.
 
-    A first derivative ``dx/dt`` integrates exactly to ``x(b) - x(a)``; any other feature by the trapezoid rule
-    from its samples, which needs the derivative estimates it holds (so a window is kept only where they are
-    finite and do not reach across an input's step).  Each signal's white noise (:func:`_sensor_noise`) reaches
-    the features through their slopes, read by differences one noise level either side; the same three values
+    A feature ``g(x) dx/dt`` (a first derivative, ``g = 1``) integrates exactly to ``G(x(b)) - G(x(a))``, ``G``
+    the antiderivative of ``g`` (:func:`_antiderivative`); any other feature by the trapezoid rule from its
+    samples, which needs the derivative estimates it holds (so a window is kept only where they are finite and
+    do not reach across an input's step).  Each signal's white noise (:func:`_sensor_noise`) reaches the
+    features through their slopes, read by differences one noise level either side; the same three values
     give the mean a curved feature gains from the noise (``x**2`` gains ``sigma**2``), taken off its samples.
     The noise of derivative estimates inside a feature is not counted (the numeric floor stands for it)."""
     width = int(window or INTEGRATION_WINDOW)
     t = record.t
     step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
-    differences = {k: compiled.derivatives[f][0] for k, f in enumerate(features)
-                   if f in compiled.derivatives and compiled.derivatives[f][1] == 1}
-    numeric = [f for k, f in enumerate(features) if k not in differences]
+    exact = {k: g for k, g in ((k, _antiderivative(f, compiled)) for k, f in enumerate(features)) if g is not None}
+    numeric = [f for k, f in enumerate(features) if k not in exact]
     points = compiled.point_values(record) if any(f.free_symbols - set(map(sp.Symbol, compiled.signals))
                                                   for f in numeric) else None
     values = {sp.Symbol(s): np.asarray(record[s], float) for s in compiled.signals}
@@ -338,24 +368,39 @@ def _window_features(compiled, record: Record, features: list, window: int | Non
     bad = np.concatenate([[0], np.cumsum(~usable)])
     keep = (bad[ends + 1] - bad[starts]) == 0  # no unusable sample in [start, end]
     a, b = starts[keep], ends[keep]
-    columns, slopes = [], []  # slopes[k]: signal -> d feature / d signal at every sample (integrated features)
+    columns, slopes = [], []  # slopes[k]: signal -> d (G or feature) / d signal at every sample
     for k, feature in enumerate(features):
-        if k in differences:
-            series = values[sp.Symbol(differences[k])]
-            columns.append(series[b] - series[a])
-            slopes.append({})
-            continue
-        samples, slope = _feature_samples(feature, values, sigma, t.shape)
-        samples = np.where(usable, samples, 0.0)  # windows holding an unusable sample were dropped above
-        cumulative = np.concatenate([[0.0], np.cumsum(0.5 * (samples[1:] + samples[:-1]) * np.diff(t))])
-        columns.append(cumulative[b] - cumulative[a])
+        samples, slope = _feature_samples(exact.get(k, feature), values, sigma, t.shape)
+        if k in exact:
+            columns.append(samples[b] - samples[a])
+        else:
+            samples = np.where(usable, samples, 0.0)  # windows holding an unusable sample were dropped above
+            cumulative = np.concatenate([[0.0], np.cumsum(0.5 * (samples[1:] + samples[:-1]) * np.diff(t))])
+            columns.append(cumulative[b] - cumulative[a])
         slopes.append({s: np.where(usable, v, 0.0) for s, v in slope.items()})
     noise = np.zeros((len(features), len(features)))
     for k in range(len(features)):
         for m in range(k, len(features)):
-            noise[k, m] = noise[m, k] = _shared_noise(k, m, differences, slopes, sigma, a, b, step)
+            noise[k, m] = noise[m, k] = _shared_noise((k in exact, slopes[k]), (m in exact, slopes[m]), sigma,
+                                                      a, b, step)
     matrix = np.column_stack(columns) if columns else np.empty((0, 0))
     return matrix, noise, a
+
+
+def _antiderivative(feature: sp.Expr, compiled) -> sp.Expr | None:
+    """``G(x)`` with ``dG/dt = feature`` when the feature is ``g(x) dx/dt`` for one signal ``x`` (``x`` itself for
+    ``dx/dt``), else None: its integral over a window is then exact, with no derivative estimate."""
+    for point, (name, order) in compiled.derivatives.items():
+        if order != 1 or point not in feature.free_symbols:
+            continue
+        signal = sp.Symbol(name)
+        slope = sp.diff(feature, point)
+        if not slope.free_symbols <= {signal} or sp.simplify(feature - slope * point) != 0:
+            return None
+        real = sp.Dummy("x", real=True)
+        antiderivative = sp.integrate(slope.xreplace({signal: real}), real)
+        return None if antiderivative.has(sp.Integral) else antiderivative.xreplace({real: signal})
+    return None
 
 
 def _feature_samples(feature: sp.Expr, values: dict, sigma: dict, shape: tuple) -> tuple[np.ndarray, dict]:
@@ -377,27 +422,22 @@ def _feature_samples(feature: sp.Expr, values: dict, sigma: dict, shape: tuple) 
     return samples - bias, slopes
 
 
-def _shared_noise(k: int, m: int, differences: dict, slopes: list, sigma: dict, a: np.ndarray, b: np.ndarray,
-                  step: float) -> float:
-    """The covariance of features ``k`` and ``m`` over the windows ``[a, b]``, summed: a difference ``x(b) -
-    x(a)`` carries its end samples' noise, a trapezoid integral each sample's times its weight (``step``, half
-    at the ends) and the feature's slope."""
-    if k in differences and m in differences:
-        same = differences[k] == differences[m]
-        return 2.0 * sigma[sp.Symbol(differences[k])] ** 2 * a.size if same else 0.0
-    if k in differences or m in differences:
-        d, i = (k, m) if k in differences else (m, k)
-        s = sp.Symbol(differences[d])
-        if s not in slopes[i]:
-            return 0.0
-        slope = slopes[i][s]
-        return float(sigma[s] ** 2 * 0.5 * step * np.sum(slope[b] - slope[a]))
+def _shared_noise(first: tuple, second: tuple, sigma: dict, a: np.ndarray, b: np.ndarray, step: float) -> float:
+    """The covariance of two features over the windows ``[a, b]``, summed.  Each feature is (exact, slopes): an
+    exact one, ``G(x(b)) - G(x(a))``, carries its end samples' noise times ``G``'s slope; a trapezoid integral
+    each sample's times its weight (``step``, half at the ends) and the feature's slope."""
+    (exact_k, slopes_k), (exact_m, slopes_m) = first, second
     total = 0.0
-    for s in slopes[k].keys() & slopes[m].keys():
-        product = slopes[k][s] * slopes[m][s]
-        cumulative = np.concatenate([[0.0], np.cumsum(product)])
-        inside = cumulative[b + 1] - cumulative[a] - 0.75 * (product[a] + product[b])  # ends weigh half
-        total += float(sigma[s] ** 2 * step ** 2 * np.sum(inside))
+    for s in slopes_k.keys() & slopes_m.keys():
+        k, m = slopes_k[s], slopes_m[s]
+        if exact_k and exact_m:
+            shared = k[b] * m[b] + k[a] * m[a]
+        elif exact_k or exact_m:
+            shared = 0.5 * step * (k[b] * m[b] - k[a] * m[a])
+        else:
+            cumulative = np.concatenate([[0.0], np.cumsum(k * m)])
+            shared = step ** 2 * (cumulative[b + 1] - cumulative[a] - 0.75 * (k[a] * m[a] + k[b] * m[b]))
+        total += float(sigma[s] ** 2 * np.sum(shared))
     return total
 
 
@@ -507,7 +547,7 @@ def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = No
     names, unseen = _choose(bg, arrs, parameters)
     if not names:
         return Identifiability([], [], unseen, [])
-    problem = _problem(arrs, records, names, bg.parameters, window)
+    problem = _problem(arrs, records, names, bg.parameters, window, bg.domains)
     if not problem.blocks:
         width = int(window or INTEGRATION_WINDOW)
         raise SettingError("records", f"{{setting}}: no window of {width + 1} usable samples in any record (the "
@@ -565,7 +605,7 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     if not names:
         return ParameterEstimate(dict(datasheet), datasheet, identifiability=ident, level=level)
     values = dict(datasheet)
-    problem = _problem(arrs, records, names, values, window)
+    problem = _problem(arrs, records, names, values, window, bg.domains)
     if not sum(b.features.shape[0] for b in problem.blocks):
         raise SettingError("records", "{setting}: no sample where every signal and derivative of the ARRs is known")
     lower, upper = _bounds(bg, names, problem.nominal)
@@ -679,17 +719,28 @@ def _bounds(bg, names: list, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarra
 # ------------------------------------------------------------------------------------------- boxes
 
 def uncertainty_boxes(estimate: ParameterEstimate, method: str = "confidence", *,
-                      per_record: Sequence[ParameterEstimate] = ()) -> dict:
+                      per_record: Sequence[ParameterEstimate] = (), model=None, records: Sequence = (),
+                      settings=None) -> dict:
     """Multiplicative boxes ``(lo, hi)`` about the estimates, for ``uncertainty=`` of the model's elements.
 
-    ``"confidence"``: the estimate's confidence interval, ``(lo / value - 1, hi / value - 1)``.
+    ``"confidence"`` (the default): the estimate's confidence interval, ``(lo / value - 1, hi / value - 1)``:
+    what the records leave unknown of each parameter.
     ``"records"``: the spread of the estimates made on each record alone (``per_record``, at least two),
-    their range about the pooled estimate, widened by each one's own interval.
+    their range about the pooled estimate, widened by each one's own interval: what changes between days and
+    operating points.
+    ``"set-membership"``: the smallest boxes about the estimates in which every one of ``records`` (healthy,
+    typically those of the fit) stays inside the thresholds of :func:`~diagnosis.detect` with ``settings``
+    (:func:`~diagnosis.set_membership.set_membership_boxes`, a linear program), ``model`` being the datasheet
+    model the estimate was made on: what the model's remaining error needs, no more.
 
     >>> fit = ParameterEstimate({"b": 2.0}, {"b": 1.0}, intervals={"b": (1.8, 2.3)}, std={"b": 0.1})
     >>> uncertainty_boxes(fit)
     {'b': (-0.1, 0.15)}
     """
+    if method == "set-membership":
+        if model is None or not records:
+            raise SettingError("method", "{setting} 'set-membership' needs the model and the healthy records")
+        return set_membership_boxes(estimate.model(model), records, estimate.estimated, settings=settings)
     if method == "confidence":
         return {p: (round(lo / estimate.values[p] - 1.0, 12), round(hi / estimate.values[p] - 1.0, 12))
                 for p, (lo, hi) in estimate.intervals.items()}
@@ -703,4 +754,4 @@ def uncertainty_boxes(estimate: ParameterEstimate, method: str = "confidence", *
             hi = max([b for _, b in seen] + [estimate.intervals[p][1]])
             boxes[p] = (lo / value - 1.0, hi / value - 1.0)
         return boxes
-    raise SettingError("method", f"{{setting}} must be 'confidence' or 'records', got {method!r}")
+    raise SettingError("method", f"{{setting}} must be 'confidence', 'records' or 'set-membership', got {method!r}")

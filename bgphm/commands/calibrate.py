@@ -163,7 +163,9 @@ def _estimate(model, arrs, training: list, plan: Plan, args, progress: Progress)
             progress(f"estimating on {path} alone (--boxes records)")
             per_record.append(_estimated(lambda r=record: estimate_parameters(model, [r], args.parameters,
                                                                                **options), [path]))
-    return fit, uncertainty_boxes(fit, args.boxes, per_record=per_record)
+    if args.boxes == "set-membership":
+        progress("sizing the smallest boxes that keep the training records inside the thresholds")
+    return fit, uncertainty_boxes(fit, args.boxes, per_record=per_record, model=model, records=training)
 
 
 def _estimated(estimate, paths: list):

@@ -171,6 +171,20 @@ def test_parameters_boxes_records_hold_out_zero_level_and_prior(bench, tmp_path)
         assert lo <= interval[0] / value - 1 + 1e-12 and hi >= interval[1] / value - 1 - 1e-12
 
 
+def test_set_membership_boxes_keep_the_training_records_inside_and_are_no_wider_than_needed(bench, tmp_path):
+    out = tmp_path / "sm.json"
+    code, stdout, stderr = run("calibrate", "dc-motor", bench / "a.csv", bench / "c.csv", "--parameters", "J", "b",
+                               "--boxes", "set-membership", "--hold-out", "0", "--out", out)
+    assert code == 0, stderr
+    block = load_model(out).calibration
+    assert block["method"]["boxes"] == "set-membership" and set(block["boxes"]) == {"J", "b"}
+    assert all(-1.0 < lo <= 0.0 <= hi for lo, hi in block["boxes"].values())
+    # the calibrated model holds the records within the noise margins: no box wider than its confidence interval
+    for name, (lo, hi) in block["boxes"].items():
+        interval, value = block["estimates"][name]["interval"], block["estimates"][name]["estimate"]
+        assert hi - lo <= (interval[1] - interval[0]) / value + 1e-12, name
+
+
 def test_validate_and_report_and_force(bench, tmp_path):
     out, report = tmp_path / "v.json", tmp_path / "pages" / "calibration.html"
     argv = ["--quiet", "calibrate", bench / "sheet.json", bench / "a.csv", bench / "b.csv", "--validate",
