@@ -625,8 +625,9 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
                                method="trf", ftol=1e-14, xtol=1e-14, gtol=1e-14).x
     covariance, noise, correlation = _covariance(problem, x, spread)
     # few windows: the residuals' spread is itself estimated, with as many degrees of freedom as windows left
-    # over by the parameters (a t quantile, and the residual variance's own correction)
-    rows = sum(b.features.shape[0] for b in problem.blocks)
+    # over by the parameters (a t quantile, and the residual variance's own correction); the ARRs over one
+    # window share its noise: the windows count, not the rows
+    rows = len({key for b in problem.blocks for key in b.keys})
     freedom = max(rows - len(names), 1)
     covariance = covariance * rows / freedom
     z = stats.t.ppf(0.5 + level / 2, freedom)
