@@ -80,17 +80,17 @@ NOISES = {
 }
 NOISE = NOISES["paper"]
 #: ``--datasheet wrong``: factors on Table VI's values, fixed beforehand (nothing of a seed's truth sets them).
-#: The healthy record, a 1 s start-up to a constant 30 rad/s at the motor disk, shows one thing well: the
-#: viscous friction the motor works against at that speed, ``f_m + (b_Md + b_s)/k_belt**2`` in ARR_1_1 (b_s
-#: drops out at a constant speed), 99 % of it b_Md.  Its 95 % interval is about +-0.5 % of b_Md; f_m is seen only
-#: in that combination (:func:`diagnosis.estimate_parameters` reports it), and the inertias, k_s, b_s and b_Ld
-#: are not seen: their intervals are as wide as the prior (J_Md, J_Ld, b_s, b_Ld), or the fit shrinks the
-#: shaft's relation ARR_1_2 towards zero (k_s -97 %, J_Ld -88 % with narrow intervals): at a constant speed the
-#: shaft's twist rate and the load's acceleration are noise, and the start-up lasts half a second.  So the
-#: datasheet is wrong on that combination, with both signs: b_Md 25 % low, f_m 30 % high.
+#: The healthy record is a start-up (half a second) to a constant 30 rad/s at the motor disk.  What it shows well
+#: is the viscous friction the motor works against at that speed, ``f_m + b_Md/k_belt**2`` in ARR_1_1 (b_s's
+#: term cancels between rest and that speed, where the shaft does not twist), 99 % of it b_Md: b_Md's 95 %
+#: interval is about +-0.5 %, and f_m is seen only in that combination (:func:`diagnosis.estimate_parameters`
+#: reports it).  The rest is not seen: the inertias, b_s and b_Ld have intervals as wide as the prior, and the fit
+#: shrinks the shaft's relation ARR_1_2 towards zero (k_s -97 %, J_Ld -88 %, with narrow intervals): at a
+#: constant speed the twist rate and the load's acceleration are noise.  So the datasheet is wrong on that
+#: combination, with both signs: b_Md 25 % low, f_m 30 % high (benchmarks/bench_case_calibration.py measures it).
 WRONG_DATASHEET = {"b_Md": 0.75, "f_m": 1.3}
 #: What ``--datasheet wrong`` fits on the healthy record: b_Md alone.  Fitted together with f_m, the
-#: combination's carrier is the noise's pick (f_m carried it, at +4400 %, in two of five seeds), and f_m's
+#: combination's carrier is the noise's pick (f_m carried it, at +4400 %, in 3 of 10 seeds), and f_m's
 #: 30 % error is 0.2 % of b_Md, which b_Md then carries.
 CALIBRATED = ("b_Md",)
 DATASHEETS = ("true", "wrong", "wrong-uncalibrated")
