@@ -1,6 +1,7 @@
 """Du et al. (n.d.) on the DTS200 three-tank system: ARRs, detection, and the Kalman family beside the PF.
 
     python examples/three_tank.py [--seeds 20] [--first-seed 0] [--methods ...] [--workers 2] [--out DIR]
+                                  [--datasheet true|wrong|wrong-uncalibrated]
 
 1. builds the three-tank bond graph (tanks as C, valves as nonlinear R with
    the law of eq. 58, level sensors, inputs Q1 and Q2; section 6.1) and its
@@ -28,6 +29,11 @@ filters and 1e-2 for the PF (a bootstrap PF cannot move its particles' levels
 faster than the process noise, so with 1e-3 it loses the drift; the docs give
 both); P_0 from the level noise and a 5 % az2 spread; strong tracking with
 rho = 0.95, beta = 1.
+
+Datasheets (``--datasheet``, issue 35): ``true`` builds the ARRs and the filters' model from the DTS200
+values, the simulation's own; ``wrong`` from a deliberately wrong datasheet (:data:`WRONG_DATASHEET`)
+calibrated on each seed's fault-free calibration record (:func:`chain`); ``wrong-uncalibrated`` from the
+wrong datasheet as it is.  The simulation (the truth) is the DTS200 physics in all three.
 """
 
 from __future__ import annotations
@@ -52,7 +58,7 @@ from bgphm.plotting import pyplot, save_figure, write_figures  # noqa: E402
 from bgphm.runs import over_seeds, progress_line, run_main  # noqa: E402
 from bondgraph.library import THREE_TANK, three_tank  # noqa: E402
 from bondgraph.scenarios import three_tank_az2  # noqa: E402
-from diagnosis import derive_arrs, noise_margin, signature_matrix  # noqa: E402
+from diagnosis import derive_arrs, estimate_parameters, noise_margin, signature_matrix  # noqa: E402
 from prognosis.ranking import format_ranking, rank_with_ties  # noqa: E402
 from prognosis.statespace import (BootstrapParticleFilter, CubatureKalmanFilter, ExtendedKalmanFilter,  # noqa: E402
                                   SeriesForecaster, StrongTracking, UnscentedKalmanFilter, discretize, predict_ahead)
@@ -93,11 +99,27 @@ KEYS = ("mae", "rmse", "mse", "held_mae", "filtered_rmse", "seconds", "mean_fadi
 # and above 0.1 % of the MAE: the strong-tracking filters differ by 1e-9 to 2e-6 in every seed.
 RANKING = {"rtol": 1e-3, "confidence": 0.95}
 
+#: ``--datasheet wrong``: factors on the DTS200 values, fixed beforehand (nothing of a seed's truth sets them).
+#: The fault-free calibration record (the levels settling from (1.0, 0.95, 0.9) m under the constant inflows,
+#: 200 s) identifies every toleranced parameter one by one through the three junction ARRs, no combination:
+#: the valves to about 1 %, the areas to a few % (both biased: the ARRs are the continuous mass balances, the
+#: truth eq. 59's Euler step at dt = 1 s; docs/three_tank.md).  The errors are on the valves, both signs (a
+#: manual valve's coefficient is what its setting gives; a machined cylinder's area is known to 2 %).
+WRONG_DATASHEET = {"az1": 1.25, "az2": 0.8, "az3": 1.3}
+#: What ``--datasheet wrong`` fits on the calibration record: every parameter with a tolerance (S_n and g,
+#: the valves' reference section and gravity, are constants: S_n only scales the valves).
+CALIBRATED = ("az1", "az2", "az3", "A_1", "A_2", "A_3")
+DATASHEETS = ("true", "wrong", "wrong-uncalibrated")
+#: Each tank's level sensor, its volume (a state of the discrete model) and its area (a parameter of the bond
+#: graph): the filters start from the volumes ``area * level`` of the chain's model, not of the truth.
+TANKS = (("h1", "q_A_1", "A_1"), ("h2", "q_A_2", "A_2"), ("h3", "q_A_3", "A_3"))
+
 
 @lru_cache(maxsize=None)
-def bond_graph():
-    """The DTS200 bond graph with our uncertainty box."""
-    return three_tank(uncertainty=VALVE_UNCERTAINTY, area_uncertainty=AREA_UNCERTAINTY)
+def bond_graph(datasheet: str = "true"):
+    """The DTS200 bond graph with our uncertainty box: the true values, or (``"wrong"``) :data:`WRONG_DATASHEET`."""
+    values = {} if datasheet == "true" else {p: THREE_TANK[p] * f for p, f in WRONG_DATASHEET.items()}
+    return three_tank(**values, uncertainty=VALVE_UNCERTAINTY, area_uncertainty=AREA_UNCERTAINTY)
 
 
 @lru_cache(maxsize=None)
@@ -113,7 +135,47 @@ def arrs() -> tuple:
 @lru_cache(maxsize=None)
 def model():
     """Discrete model, state (q_A_1, q_A_2, q_A_3, az2): tank volumes from the bond graph, levels measured."""
-    return discretize(bond_graph().state_equations(), dt=DT, augment=["az2"], outputs=["h1", "h2", "h3"])
+    return discrete_model(bond_graph())
+
+
+def discrete_model(bg):
+    """:func:`model` of the bond graph ``bg`` (the truth's, or the model a chain is built from)."""
+    return discretize(bg.state_equations(), dt=DT, augment=["az2"], outputs=["h1", "h2", "h3"])
+
+
+@dataclass(frozen=True)
+class Chain:
+    """What the detection and the filters are built from: a bond graph, its ARRs, its discrete model and, with
+    ``--datasheet wrong``, the calibration's estimate."""
+
+    datasheet: str
+    graph: object
+    arrs: tuple
+    model: object
+    fit: object = None
+
+    @property
+    def values(self) -> dict:
+        return self.graph.parameters
+
+
+def chain(datasheet: str = "true", calibration=None) -> Chain:
+    """The chain's model for ``datasheet``: ``true``, the DTS200 values; ``wrong-uncalibrated``,
+    :data:`WRONG_DATASHEET`; ``wrong``, the wrong datasheet with :data:`CALIBRATED` estimated on the fault-free
+    ``calibration`` record alone (never the degraded one) through its junction ARRs
+    (:func:`diagnosis.estimate_parameters`).  The uncertainty boxes stay the datasheet's (relative to the
+    calibrated values): the chain is built exactly as from the true model."""
+    if datasheet not in DATASHEETS:
+        raise ValueError(f"unknown datasheet {datasheet!r}; choose one of {', '.join(DATASHEETS)}")
+    if datasheet == "true":
+        return Chain(datasheet, bond_graph(), arrs(), model())
+    wrong = bond_graph("wrong")
+    fit = None
+    if datasheet == "wrong":
+        fit = estimate_parameters(wrong, [calibration], list(CALIBRATED),
+                                  arrs=list(derive_arrs(wrong, complete=False)))
+        wrong = fit.model(wrong)
+    return Chain(datasheet, wrong, tuple(derive_arrs(wrong, complete=False)), discrete_model(wrong), fit)
 
 
 def az2_drift(steps: int = STEPS) -> np.ndarray:
@@ -163,10 +225,11 @@ def scenario(seed: int) -> Scenario:
     return Scenario(seed, states, states[:, :3] / AREA, measured, nominal, calibration)
 
 
-def detect(s: Scenario) -> dict:
-    """Every ARR on the degraded and the fault-free record: detection times and false alarms."""
+def detect(s: Scenario, c: Chain | None = None) -> dict:
+    """Every ARR (of the chain ``c``, default the true model's) on the degraded and the fault-free record:
+    detection times and false alarms."""
     out = {}
-    for arr in arrs():
+    for arr in (arrs() if c is None else c.arrs):
         margin = noise_margin(arr, s.record("calibration"), k=MARGIN_SIGMAS, window=DETECTION["window"])
         options = {**DETECTION, "margin": margin}
         degraded, quiet = arr.evaluate(s.record(), **options), arr.evaluate(s.record("nominal"), **options)
@@ -175,14 +238,23 @@ def detect(s: Scenario) -> dict:
     return out
 
 
-def estimator(name: str, seed: int = 0, parameter_std: float | None = None):
-    """A fresh filter for ``name`` at k = 0: levels known to the sensor noise, az2 at its nominal value."""
-    m = model()
+def estimator(name: str, seed: int = 0, parameter_std: float | None = None, c: Chain | None = None):
+    """A fresh filter for ``name`` at k = 0: levels known to the sensor noise, az2 at its nominal value.
+
+    The model, the areas and az2's start are the chain ``c``'s (default the true model's), by name
+    (:data:`TANKS`): the volume ``q_A_i`` starts at ``A_i`` times the known level ``h_i``.
+    """
+    c = chain() if c is None else c
+    m = c.model
     pf = name == "PF"
     d = parameter_std if parameter_std is not None else TUNING["pf_parameter_std" if pf else "parameter_std"]
-    x0 = np.array([*(AREA * h for h in LEVELS_0), THREE_TANK["az2"]])
-    p0 = np.diag([(AREA * NOISE_STD) ** 2] * 3 + [TUNING["initial_parameter_std"] ** 2])
-    q = np.diag([(AREA * PROCESS_STD) ** 2] * 3 + [d ** 2])
+    x0, p0, q = (np.zeros(m.n_states) for _ in range(3))
+    for (_, volume, area), h in zip(TANKS, LEVELS_0):
+        i = m.index(volume)
+        x0[i], p0[i], q[i] = c.values[area] * h, (c.values[area] * NOISE_STD) ** 2, (c.values[area] * PROCESS_STD) ** 2
+    i = m.index("az2")
+    x0[i], p0[i], q[i] = c.values["az2"], TUNING["initial_parameter_std"] ** 2, d ** 2
+    p0, q = np.diag(p0), np.diag(q)
     r = np.eye(3) * NOISE_STD ** 2
     if pf:
         return BootstrapParticleFilter(m, x0, p0, q, r, n_particles=TUNING["particles"], seed=seed)
@@ -206,19 +278,24 @@ def elm_forecasts(measured: np.ndarray, seed: int) -> tuple[np.ndarray, float]:
     return out, time.perf_counter() - start
 
 
-def run_seed(seed: int, methods=METHODS, parameter_std: float | None = None, keep: bool = False) -> dict:
-    """Detection and every method's 5-step-ahead prediction of az2 for one noise seed."""
+def run_seed(seed: int, methods=METHODS, parameter_std: float | None = None, keep: bool = False,
+             datasheet: str = "true") -> dict:
+    """Detection and every method's 5-step-ahead prediction of az2 for one noise seed, by the chain built from
+    ``datasheet`` (:func:`chain`; ``wrong`` calibrates on the seed's fault-free calibration record)."""
     s = scenario(seed)
+    c = chain(datasheet, s.record("calibration"))
     forecasts, elm_seconds = elm_forecasts(s.measured, seed)
     n = forecasts.shape[0]  # forecast j made at time k is for time k + j + 1, row k + j of the truth
     errors = np.stack([forecasts[:, j] - s.levels[TRAIN + j:TRAIN + j + n] for j in range(HORIZON)])
     result = {"seed": seed, "elm_seconds": elm_seconds,
               "elm_rmse_by_step": np.sqrt(np.mean(errors ** 2, axis=(1, 2))).tolist(),
-              "detection": {name: {k: v for k, v in d.items() if k != "evaluation"} for name, d in detect(s).items()},
-              "methods": {}}
+              "detection": {name: {k: v for k, v in d.items() if k != "evaluation"}
+                            for name, d in detect(s, c).items()},
+              "datasheet": datasheet, "model": {p: c.values[p] for p in CALIBRATED},
+              "calibration": None if c.fit is None else c.fit.as_dict(), "methods": {}}
     runs = {}
     for name in methods:
-        run = predict_ahead(estimator(name, seed, parameter_std), s.measured, horizon=HORIZON, start=TRAIN,
+        run = predict_ahead(estimator(name, seed, parameter_std, c), s.measured, horizon=HORIZON, start=TRAIN,
                             forecasts=lambda k: forecasts[k - TRAIN], inputs=INPUTS)
         error = run.predicted[:, 3] - s.states[run.target - 1, 3]
         filtered = run.filtered[TRAIN - 1:, 3] - s.states[TRAIN - 1:, 3]
@@ -231,7 +308,7 @@ def run_seed(seed: int, methods=METHODS, parameter_std: float | None = None, kee
         }
         runs[name] = run
     if keep:
-        result["scenario"], result["runs"], result["forecasts"] = s, runs, forecasts
+        result["scenario"], result["runs"], result["forecasts"], result["chain"] = s, runs, forecasts, c
     return result
 
 
@@ -255,7 +332,8 @@ def summarize(results: list[dict]) -> dict:
                           "false_alarms_nominal": int(sum(r["detection"][arr]["false_alarms_nominal"]
                                                           for r in results))}
     ranking = rank_by_mae(results)
-    return {"seeds": [r["seed"] for r in results], "table": table, **ranking, "detection": detection,
+    return {"seeds": [r["seed"] for r in results], "datasheet": results[0].get("datasheet", "true"), "table": table,
+            **ranking, "detection": detection,
             "elm_rmse_by_step_m": np.mean([r["elm_rmse_by_step"] for r in results], axis=0).tolist(),
             "elm_seconds": float(np.mean([r["elm_seconds"] for r in results]))}
 
@@ -292,13 +370,14 @@ def markdown(summary: dict) -> str:
 def write(out: Path, summary: dict, results: list[dict], first: dict) -> list[Path]:
     """results.json, predictions.csv (first seed) and, with matplotlib, the figures."""
     out.mkdir(parents=True, exist_ok=True)
-    fsm = signature_matrix(list(arrs()), sensor_faults=False)   # the paper's parameter faults
+    chain_arrs = first["chain"].arrs
+    fsm = signature_matrix(list(chain_arrs), sensor_faults=False)   # the paper's parameter faults
     payload = {
         "setting": {"steps": STEPS, "dt_s": DT, "onset_k": ONSET, "rate": RATE, "process_std_m": PROCESS_STD,
                     "noise_std_m": NOISE_STD, "train": TRAIN, "horizon": HORIZON, "elm": ELM,
                     "valve_uncertainty": VALVE_UNCERTAINTY, "area_uncertainty": AREA_UNCERTAINTY,
                     "detection": DETECTION, "margin_sigmas": MARGIN_SIGMAS, "tuning": TUNING, "ranking": RANKING},
-        "arrs": {arr.name: str(arr.nominal) for arr in arrs()},
+        "arrs": {arr.name: str(arr.nominal) for arr in chain_arrs},
         "signature_matrix": {row: fsm.row(row) for row in fsm.rows},
         "paper_table_1": {name: {"mae": v[0], "rmse_column": v[1], "seconds": v[2]} for name, v in PAPER_TABLE.items()},
         **summary,
@@ -355,7 +434,7 @@ def plot(out: Path, first: dict) -> list[Path]:
         ax.set_ylabel("STSCKF fading factor")
         paths.append(save_figure(fig, out / "fig03_fading_factor.png"))
 
-    evaluations = detect(s)
+    evaluations = detect(s, first["chain"])
     fig, axes = plt.subplots(len(evaluations), 1, figsize=(7, 7), sharex=True)
     for ax, (name, d) in zip(axes, evaluations.items()):
         e = d["evaluation"]
@@ -382,6 +461,9 @@ def main(argv=None) -> dict:
     parser.add_argument("--workers", type=int, default=2, help="processes over seeds (default 2)")
     parser.add_argument("--out", type=Path, help="directory for results.json, predictions.csv and plots")
     parser.add_argument("--quiet", action="store_true", help="no progress on stderr")
+    parser.add_argument("--datasheet", choices=DATASHEETS, default="true",
+                        help="the model the chain is built from: true (default); wrong (WRONG_DATASHEET calibrated "
+                             "on each seed's fault-free record); wrong-uncalibrated (the wrong datasheet as is)")
     args = parser.parse_args(argv)
     if args.seeds < 1:
         parser.error("--seeds must be at least 1")
@@ -389,17 +471,22 @@ def main(argv=None) -> dict:
         parser.error("--parameter-std must be positive")
     seeds = list(range(args.first_seed, args.first_seed + args.seeds))
     print(f"Du et al. (n.d.) on the DTS200 three-tank system: {STEPS} steps, az2 drift from k = {ONSET}, "
-          f"{HORIZON}-step-ahead prediction from k = {TRAIN}, {len(seeds)} seeds")
-    first = run_seed(seeds[0], args.methods, args.parameter_std, keep=True)
-    results = [{k: v for k, v in first.items() if k not in ("scenario", "runs", "forecasts")}]
+          f"{HORIZON}-step-ahead prediction from k = {TRAIN}, {len(seeds)} seeds, {args.datasheet} datasheet")
+    first = run_seed(seeds[0], args.methods, args.parameter_std, keep=True, datasheet=args.datasheet)
+    results = [{k: v for k, v in first.items() if k not in ("scenario", "runs", "forecasts", "chain")}]
     report = progress_line(args.quiet)
     if report:
         report(1, len(seeds))
     if len(seeds) > 1:  # the first seed ran here, to keep its arrays for the figures
-        results += over_seeds(run_seed, [(seed, args.methods, args.parameter_std) for seed in seeds[1:]],
+        results += over_seeds(run_seed, [(seed, args.methods, args.parameter_std, False, args.datasheet)
+                                         for seed in seeds[1:]],
                               workers=max(1, args.workers),
                               progress=report and (lambda done, _: report(done + 1, len(seeds))))
     summary = summarize(results)
+    if args.datasheet != "true":
+        models = np.array([[r["model"][p] for p in CALIBRATED] for r in results])
+        print(f"  model ({args.datasheet}), mean over seeds: "
+              + ", ".join(f"{p} = {v:.4g}" for p, v in zip(CALIBRATED, models.mean(axis=0))))
     for name, d in summary["detection"].items():
         when = ("never" if d["detection_time_s"] is None
                 else f"k = {d['detection_time_s']:.1f} +- {d['detection_time_s_std']:.1f}")
