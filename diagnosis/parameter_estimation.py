@@ -199,6 +199,8 @@ INTEGRATION_WINDOW = 50
 #: encoder's counts), which no sensor noise hides.  Without that floor a noise-free record would weigh its
 #: windows infinitely and a weakly seen direction would swing to absorb those errors.
 NUMERIC_FLOOR = 1e-4
+#: The rules a window's integral of a feature's samples may follow (see :func:`estimate_parameters`).
+QUADRATURES = ("trapezoid", "euler")
 
 
 @dataclass
@@ -261,7 +263,7 @@ class _Problem:
 
 
 def _problem(arrs: Sequence, records: Sequence[Record], names: list, values: Mapping, window: int | None,
-             domains: Mapping | None = None) -> _Problem:
+             domains: Mapping | None = None, quadrature: str = "trapezoid") -> _Problem:
     symbols = [sp.Symbol(n) for n in names]
     fixed = {sp.Symbol(p): v for p, v in values.items() if p not in names}
     blocks = []
@@ -274,7 +276,8 @@ def _problem(arrs: Sequence, records: Sequence[Record], names: list, values: Map
         except ValueError as error:  # the other ARRs may still hold its parameters
             warnings.warn(f"{arr.name} is left out of the parameter fit: {error}", stacklevel=3)
             continue
-        parts = [part for part in (_window_features(compiled, record, list(terms), window) for record in records)
+        parts = [part for part in (_window_features(compiled, record, list(terms), window, quadrature)
+                                         for record in records)
                  if part[0].shape[0]]
         if not parts:  # no whole window in any record
             continue
@@ -336,12 +339,14 @@ def _sensor_noise(values: np.ndarray) -> float:
     return float(robust_std(np.diff(samples, 4)) / math.sqrt(70.0))
 
 
-def _window_features(compiled, record: Record, features: list, window: int | None) -> tuple:
+def _window_features(compiled, record: Record, features: list, window: int | None,
+                     quadrature: str = "trapezoid") -> tuple:
     """Each feature integrated over the windows of ``record`` (rows: windows, columns: features), the sum over
     the rows of the features' noise covariance, and each row's first sample.
 
     A feature ``g(x) dx/dt`` (a first derivative, ``g = 1``) integrates exactly to ``G(x(b)) - G(x(a))``, ``G``
-    the antiderivative of ``g`` (:func:`_antiderivative`); any other feature by the trapezoid rule from its
+    the antiderivative of ``g`` (:func:`_antiderivative`); any other feature by the trapezoid rule
+    (``quadrature="euler"``: the left rectangle rule, exact for a record of an explicit Euler model) from its
     samples, which needs the derivative estimates it holds (so a window is kept only where they are finite and
     do not reach across an input's step).  Each signal's white noise (:func:`_sensor_noise`) reaches the
     features through their slopes, read by differences one noise level either side; the same three values
@@ -375,14 +380,15 @@ def _window_features(compiled, record: Record, features: list, window: int | Non
             columns.append(samples[b] - samples[a])
         else:
             samples = np.where(usable, samples, 0.0)  # windows holding an unusable sample were dropped above
-            cumulative = np.concatenate([[0.0], np.cumsum(0.5 * (samples[1:] + samples[:-1]) * np.diff(t))])
+            heights = samples[:-1] if quadrature == "euler" else 0.5 * (samples[1:] + samples[:-1])
+            cumulative = np.concatenate([[0.0], np.cumsum(heights * np.diff(t))])
             columns.append(cumulative[b] - cumulative[a])
         slopes.append({s: np.where(usable, v, 0.0) for s, v in slope.items()})
     noise = np.zeros((len(features), len(features)))
     for k in range(len(features)):
         for m in range(k, len(features)):
             noise[k, m] = noise[m, k] = _shared_noise((k in exact, slopes[k]), (m in exact, slopes[m]), sigma,
-                                                      a, b, step)
+                                                      a, b, step, quadrature)
     matrix = np.column_stack(columns) if columns else np.empty((0, 0))
     return matrix, noise, a
 
@@ -422,21 +428,26 @@ def _feature_samples(feature: sp.Expr, values: dict, sigma: dict, shape: tuple) 
     return samples - bias, slopes
 
 
-def _shared_noise(first: tuple, second: tuple, sigma: dict, a: np.ndarray, b: np.ndarray, step: float) -> float:
+def _shared_noise(first: tuple, second: tuple, sigma: dict, a: np.ndarray, b: np.ndarray, step: float,
+                  quadrature: str = "trapezoid") -> float:
     """The covariance of two features over the windows ``[a, b]``, summed.  Each feature is (exact, slopes): an
-    exact one, ``G(x(b)) - G(x(a))``, carries its end samples' noise times ``G``'s slope; a trapezoid integral
-    each sample's times its weight (``step``, half at the ends) and the feature's slope."""
+    exact one, ``G(x(b)) - G(x(a))``, carries its end samples' noise times ``G``'s slope; an integral each
+    sample's times its weight (``step``; the trapezoid's ends half, the left rule's last end nothing) and the
+    feature's slope."""
     (exact_k, slopes_k), (exact_m, slopes_m) = first, second
     total = 0.0
     for s in slopes_k.keys() & slopes_m.keys():
         k, m = slopes_k[s], slopes_m[s]
         if exact_k and exact_m:
             shared = k[b] * m[b] + k[a] * m[a]
+        elif (exact_k or exact_m) and quadrature == "euler":
+            shared = -step * k[a] * m[a]
         elif exact_k or exact_m:
             shared = 0.5 * step * (k[b] * m[b] - k[a] * m[a])
         else:
             cumulative = np.concatenate([[0.0], np.cumsum(k * m)])
-            shared = step ** 2 * (cumulative[b + 1] - cumulative[a] - 0.75 * (k[a] * m[a] + k[b] * m[b]))
+            ends = k[b] * m[b] if quadrature == "euler" else 0.75 * (k[a] * m[a] + k[b] * m[b])
+            shared = step ** 2 * (cumulative[b + 1] - cumulative[a] - ends)
         total += float(sigma[s] ** 2 * np.sum(shared))
     return total
 
@@ -527,7 +538,7 @@ def _combination(arrs: Sequence, members: list, kept: str, direction: Mapping) -
 
 
 def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = None, *, arrs: Sequence | None = None,
-                    window: int | None = None) -> Identifiability:
+                    window: int | None = None, quadrature: str = "trapezoid") -> Identifiability:
     """Which parameters these records identify through the ARRs, at the model's (datasheet) values.
 
     >>> import numpy as np
@@ -547,7 +558,11 @@ def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = No
     names, unseen = _choose(bg, arrs, parameters)
     if not names:
         return Identifiability([], [], unseen, [])
-    problem = _problem(arrs, records, names, bg.parameters, window, bg.domains)
+    if quadrature not in QUADRATURES:
+        raise SettingError("quadrature", f"{{setting}} must be one of {', '.join(QUADRATURES)}, got {quadrature!r}")
+    if window is not None and not (isinstance(window, int) and window >= 2):
+        raise SettingError("window", f"{{setting}} must be a whole number of samples >= 2, got {window!r}")
+    problem = _problem(arrs, records, names, bg.parameters, window, bg.domains, quadrature)
     if not problem.blocks:
         width = int(window or INTEGRATION_WINDOW)
         raise SettingError("records", f"{{setting}}: no window of {width + 1} usable samples in any record (the "
@@ -561,7 +576,7 @@ def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = No
 # ------------------------------------------------------------------------------------------- estimation
 
 def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None = None, *,
-                        arrs: Sequence | None = None, window: int | None = None,
+                        arrs: Sequence | None = None, window: int | None = None, quadrature: str = "trapezoid",
                         level: float = 0.95, prior: float | None = PRIOR) -> ParameterEstimate:
     """Estimate a model's parameters from healthy records by making its ARRs' residuals smallest.
 
@@ -577,7 +592,12 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     arrs : sequence of ARR, optional
         Default: :func:`~diagnosis.derive_arrs` of ``bg`` (differentiated forms, no integral of a signal).
     window : int, optional
-        Savitzky-Golay window of the derivatives (default: the detection's default).
+        Samples each row integrates the ARRs over (default :data:`INTEGRATION_WINDOW`, 50); a short record
+        (a few hundred samples) needs shorter windows to leave enough rows.
+    quadrature : {"trapezoid", "euler"}
+        How a feature's samples are integrated over a window: the trapezoid rule (default, for records of a
+        continuous machine), or the left rectangle rule, exact for records of a discrete-time model stepped by
+        explicit Euler (``x[k+1] = x[k] + dt f(x[k])``, as some papers define their plants).
     level : float
         Confidence level of the intervals.
     prior : float or None
@@ -593,19 +613,19 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     Raises
     ------
     SettingError
-        A parameter the model lacks, a level outside (0, 1), or no sample to fit on.
+        A parameter the model lacks, a level outside (0, 1), a bad window or quadrature, or no sample to fit on.
     """
     if not 0.0 < level < 1.0:
         raise SettingError("level", f"{{setting}} must lie in (0, 1), got {level!r}")
     arrs = list(arrs) if arrs is not None else derive_arrs(bg)
     records = [as_record(r) for r in records]
     datasheet = dict(bg.parameters)
-    ident = identifiability(bg, records, parameters, arrs=arrs, window=window)
+    ident = identifiability(bg, records, parameters, arrs=arrs, window=window, quadrature=quadrature)
     names = ident.identified
     if not names:
         return ParameterEstimate(dict(datasheet), datasheet, identifiability=ident, level=level)
     values = dict(datasheet)
-    problem = _problem(arrs, records, names, values, window, bg.domains)
+    problem = _problem(arrs, records, names, values, window, bg.domains, quadrature)
     if not sum(b.features.shape[0] for b in problem.blocks):
         raise SettingError("records", "{setting}: no sample where every signal and derivative of the ARRs is known")
     lower, upper = _bounds(bg, names, problem.nominal)
@@ -625,11 +645,10 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
                                method="trf", ftol=1e-14, xtol=1e-14, gtol=1e-14).x
     covariance, noise, correlation = _covariance(problem, x, spread)
     # few windows: the residuals' spread is itself estimated, with as many degrees of freedom as windows left
-    # over by the parameters (a t quantile, and the residual variance's own correction); the ARRs over one
-    # window share its noise: the windows count, not the rows
+    # over by the parameters (a t quantile); the ARRs over one window share its noise: the windows count, not
+    # the rows
     rows = len({key for b in problem.blocks for key in b.keys})
     freedom = max(rows - len(names), 1)
-    covariance = covariance * rows / freedom
     z = stats.t.ppf(0.5 + level / 2, freedom)
     theta = problem.nominal * x
     std = np.sqrt(np.maximum(np.diag(covariance), 0.0)) * np.abs(problem.nominal)
@@ -649,31 +668,87 @@ LAGS = 5
 def _covariance(problem: _Problem, x: np.ndarray, prior: float = math.inf) -> tuple[np.ndarray, dict, dict]:
     """The fit's covariance (relative parameters), robust to the residuals' own variance and autocorrelation:
     the sandwich of the objective's Hessian (:func:`_hessian`) about a Newey-West middle (Bartlett weights over
-    :data:`LAGS` lags).  The scores of the ARRs' rows over the same window are added first: ARRs that share a
-    sensor share its noise, window by window.  An ARR whose residual is quieter than its sensors and numbers
-    predict (a clean record) counts as noisy as predicted.  Also each ARR's residual spread, in its own unit,
-    and the ratio of its scores' variance with the lags to without (its inflation)."""
+    :data:`LAGS` lags) of the windows' scores.  A window's score adds its rows of every ARR (ARRs that share a
+    sensor share its noise), its residuals first scaled up by their leverage (:func:`_window_scores`).  An ARR
+    whose residual is quieter than its sensors and numbers predict (a clean record) counts as noisy as
+    predicted.  Also each ARR's residual spread, in its own unit, and the ratio of its scores' variance with
+    the lags to without (its inflation)."""
     jac, scaled, per_arr = problem.jacobian(x), problem.residual(x), problem.per_arr(x)
-    bread = np.linalg.pinv(_hessian(problem, x, jac, scaled) + np.eye(x.size) / prior ** 2)
+    information = np.eye(x.size) / prior ** 2  # the prior's own share
+    bread = np.linalg.pinv(_hessian(problem, x, jac, scaled) + information)
     noise, inflation, start = {}, {}, 0
-    windows: dict = {}
-    meat = np.eye(x.size) / prior ** 2  # the prior's own share of the information
+    keys = []
+    meat = information.copy()
     for block in problem.blocks:
         size = block.features.shape[0]
         rows, residual = jac[start:start + size], scaled[start:start + size]
         start += size
+        keys.extend(block.keys)
         scores = rows * residual[:, None]
-        for key, score in zip(block.keys, scores):
-            windows[key] = windows.get(key, 0.0) + score
         noise[block.name] = float(robust_std(per_arr[block.name]))
         spread = robust_std(residual)
         if spread < 1.0:  # quieter than predicted: the prediction's share of the information
             meat += (1.0 - spread ** 2) * rows.T @ rows
         own = _newey_west(scores)
         inflation[block.name] = float(np.trace(own) / np.trace(scores.T @ scores)) if np.any(scores) else 1.0
+    windows = _window_scores(jac, scaled, keys, np.linalg.pinv(jac.T @ jac + information))
     for record in sorted({r for r, _ in windows}):
         meat += _newey_west(np.array([windows[k] for k in sorted(k for k in windows if k[0] == record)]))
-    return bread @ meat @ bread, noise, inflation
+    sandwich = bread @ meat @ bread
+    # the same sandwich with the windows' scores averaged over the record: each ARR's residual variance (at least
+    # the predicted) and the ARRs' correlations (redundant ARRs share their sensors' noise).  The plain middle
+    # squares the scores of the few windows that hold most of a parameter's information, and on some records it
+    # comes out far too small; this one cannot, and the intervals take the wider of the two
+    steady = bread @ (_modelled_middle(problem, jac, scaled) + information) @ bread
+    wider = np.sqrt(np.maximum(np.diag(steady), np.diag(sandwich)) / np.maximum(np.diag(sandwich), 1e-300))
+    return sandwich * np.outer(wider, wider), noise, inflation
+
+
+def _modelled_middle(problem: _Problem, jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
+    """``sum_w J_w' V J_w`` over the windows, ``V`` the covariance of the ARRs' scaled residuals over one window,
+    estimated over all of them (each ARR's variance at least 1, the predicted)."""
+    index: dict = {}  # window -> {block: row}
+    start = 0
+    for b, block in enumerate(problem.blocks):
+        for row, key in enumerate(block.keys):
+            index.setdefault(key, {})[b] = start + row
+        start += block.features.shape[0]
+    count = len(problem.blocks)
+    second, shared = np.zeros((count, count)), np.zeros((count, count))
+    for rows in index.values():
+        blocks = list(rows)
+        values = residual[[rows[b] for b in blocks]]
+        second[np.ix_(blocks, blocks)] += np.outer(values, values)
+        shared[np.ix_(blocks, blocks)] += 1.0
+    covariance = second / np.maximum(shared, 1.0)
+    spread = np.sqrt(np.maximum(np.diag(covariance), 1e-300))
+    correlation = np.clip(covariance / np.outer(spread, spread), -1.0, 1.0)
+    level = np.maximum(spread, 1.0)
+    covariance = correlation * np.outer(level, level)
+    middle = np.zeros((jac.shape[1], jac.shape[1]))
+    for rows in index.values():
+        blocks = list(rows)
+        block = jac[[rows[b] for b in blocks]]
+        middle += block.T @ covariance[np.ix_(blocks, blocks)] @ block
+    return middle
+
+
+def _window_scores(jac: np.ndarray, residual: np.ndarray, keys: list, inverse: np.ndarray) -> dict:
+    """Window -> its score ``J_w' (I - H_w)^(-1/2) u_w``: the rows of every ARR over that window, their residuals
+    scaled up by their leverage ``H_w = J_w (J'J)^-1 J_w'`` (Bell and McCaffrey's small-sample correction).  A
+    window that pulls the fit towards itself leaves a residual smaller than its noise; with few windows per
+    parameter the plain scores would make the intervals too narrow."""
+    rows: dict = {}
+    for index, key in enumerate(keys):
+        rows.setdefault(key, []).append(index)
+    scores = {}
+    for key, index in rows.items():
+        block = jac[index]
+        values, vectors = np.linalg.eigh(np.eye(len(index)) - block @ inverse @ block.T)
+        # a leverage of 1 (a window that alone fixes a direction) would divide by zero: cap its correction
+        root = (vectors / np.sqrt(np.clip(values, 0.01, 1.0))) @ vectors.T
+        scores[key] = block.T @ (root @ residual[index])
+    return scores
 
 
 def _hessian(problem: _Problem, x: np.ndarray, jac: np.ndarray, residual: np.ndarray) -> np.ndarray:

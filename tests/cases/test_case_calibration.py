@@ -152,9 +152,5 @@ def test_three_tank_calibration_undoes_most_of_the_wrong_datasheets_prediction_e
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(reason="issue 35 not met for the three tanks' prediction: the calibration fits the continuous mass "
-                          "balances to a truth simulated by eq. 59's Euler step at dt = 1 s, which biases az2 and the "
-                          "areas (noise-free: A_2 -2.8 %, A_3 -6.1 %, az2 -0.8 %); the STSCKF's MAE comes out about "
-                          "60 % higher (benchmarks/bench_case_calibration.py)")
 def test_three_tank_calibrated_prediction_within_the_true_chains_spread(tank_predictions):
     assert within_spread(tank_predictions["true"], tank_predictions["wrong"])

@@ -78,6 +78,8 @@ def test_a_combination_of_inertias_through_the_belt_is_reported_as_such():
     ({"parameters": ["R_x"]}, "parameters", "no parameter 'R_x'"),
     ({"level": 1.5}, "level", "(0, 1)"),
     ({"prior": -1.0}, "prior", "> 0"),
+    ({"window": 1}, "window", ">= 2"),
+    ({"quadrature": "simpson"}, "quadrature", "trapezoid, euler"),
 ])
 def test_bad_settings_name_the_setting(options, setting, words):
     with pytest.raises(SettingError) as error:
@@ -151,3 +153,21 @@ def test_a_gas_law_is_fitted_through_its_numerator():
     assert all(not (c.free_symbols & {p, q, v}) and not (f.free_symbols & {R_a, V_a, p_0}) for f, c in terms.items())
     with pytest.raises(ValueError, match="mixes parameters and signals"):
         _terms(p - sp.exp(R_a * q), [p, q, v], [R_a, V_a, p_0])
+
+
+def test_a_record_of_an_explicit_euler_model_is_fitted_exactly_by_the_left_rule():
+    """x[k+1] = x[k] + dt f(x[k]): the left rectangle rule sums exactly what the steps added; the trapezoid
+    rule, right for a continuous machine, is off by the step's own error."""
+    dt, steps = 2e-4, 10001
+    t = np.arange(steps) * dt
+    u = voltage(t)
+    i, w = np.zeros(steps), np.zeros(steps)
+    for k in range(steps - 1):
+        i[k + 1] = i[k] + dt * (u[k] - TRUE["R_a"] * i[k] - TRUE["k_m"] * w[k]) / TRUE["L_a"]
+        w[k + 1] = w[k] + dt * (TRUE["k_m"] * i[k] - TRUE["b"] * w[k]) / TRUE["J"]
+    record = as_record({"t": t, "U": u, "i": i, "omega": w})
+    errors = {}
+    for rule in ("euler", "trapezoid"):
+        fit = estimate_parameters(dc_motor(**DATASHEET), [record], quadrature=rule)
+        errors[rule] = max(abs(fit.values[p] / TRUE[p] - 1) for p in TRUE)
+    assert errors["euler"] < 1e-4 and errors["trapezoid"] > 10 * errors["euler"]
