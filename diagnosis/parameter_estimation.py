@@ -19,11 +19,14 @@ belt's ``1/k``) are fitted the same way, with the exact Jacobian.
 
 Identifiability comes first (:func:`identifiability`): the Jacobian of the residuals with respect to the
 relative change of each parameter, over the records, says which parameters these ARRs and these records can
-tell apart.  A direction of parameters that leaves the residuals (almost) unchanged cannot be estimated:
-its parameters are reported together, with the combination the data do fix (the coefficient of the term of
-the ARR two of them share, e.g. ``J_m + J_Md/k_belt**2``, or the products of powers a scaling of the group
-leaves unchanged, e.g. ``b/J, k_m/J``), and the fit keeps one of them at its datasheet value so that the
-others carry the combination.
+tell apart.  A direction of parameters that leaves the residuals (almost) unchanged cannot be estimated, and
+neither can one the records tell less well than the datasheet (a relative standard deviation above the
+prior's): a fit along it would follow the residuals' smallest flaws, a torsion bar's stiffness 40 times its
+value on a record that barely twists the shaft.  Either way its parameters are reported together, with the
+combination the data do fix (the coefficient of the term of the ARR two of them share, e.g.
+``J_m + J_Md/k_belt**2``, or the products of powers a scaling of the group leaves unchanged, e.g.
+``b/J, k_m/J``), and the fit keeps one of them at its datasheet value so that the others carry the
+combination.
 
 The intervals are ``level`` (95 %) confidence intervals of the linearized fit: a sandwich covariance (the
 objective's Hessian about the scores) whose middle adds the ARRs' scores window by window (ARRs that share a
@@ -60,11 +63,12 @@ from fractions import Fraction
 import numpy as np
 import sympy as sp
 from scipy import optimize, stats
+from scipy.signal import savgol_coeffs
 
 from bondgraph.errors import SettingError
 
 from .derivation import derive_arrs
-from .derivatives import default_window
+from .derivatives import default_window, derivative
 from .detection import robust_std
 from .records import Record, as_record
 from .set_membership import set_membership_boxes
@@ -93,8 +97,9 @@ class Identifiability:
         Groups of parameters the records see only together: ``parameters`` (the group), ``expression`` (the
         combination the data fix, as text: the ARR's term two members share, or the products of powers the
         group's scaling leaves unchanged), ``kept`` (the parameter the fit keeps at its datasheet value so that
-        the others carry the combination) and ``direction`` (member -> its relative change along the change the
-        records cannot see, per relative change of the kept member).
+        the others carry the combination), ``direction`` (member -> its relative change along the change the
+        records cannot see, per relative change of the kept member) and ``weak`` (the records see the
+        direction, less well than the datasheet tells it, rather than not at all).
     unseen : list of str
         Parameters in no ARR (the records cannot say anything of them).
     singular_values : list of float
@@ -345,24 +350,31 @@ def _window_features(compiled, record: Record, features: list, window: int | Non
     the rows of the features' noise covariance, and each row's first sample.
 
     A feature ``g(x) dx/dt`` (a first derivative, ``g = 1``) integrates exactly to ``G(x(b)) - G(x(a))``, ``G``
-    the antiderivative of ``g`` (:func:`_antiderivative`); any other feature by the trapezoid rule
-    (``quadrature="euler"``: the left rectangle rule, exact for a record of an explicit Euler model) from its
-    samples, which needs the derivative estimates it holds (so a window is kept only where they are finite and
-    do not reach across an input's step).  Each signal's white noise (:func:`_sensor_noise`) reaches the
-    features through their slopes, read by differences one noise level either side; the same three values
-    give the mean a curved feature gains from the noise (``x**2`` gains ``sigma**2``), taken off its samples.
-    The noise of derivative estimates inside a feature is not counted (the numeric floor stands for it)."""
+    the antiderivative of ``g`` (:func:`_antiderivative`), and a higher derivative ``d^n x/dt^n`` to the
+    difference of the estimates of ``d^(n-1) x/dt^(n-1)`` at the window's ends; any other feature by the
+    trapezoid rule (``quadrature="euler"``: the left rectangle rule, exact for a record of an explicit Euler
+    model) from its samples.  A window is kept only where the derivative estimates it needs are finite and do
+    not reach across an input's step.  Each signal's white noise (:func:`_sensor_noise`) reaches the features
+    through their slopes, read by differences one noise level either side, and through the derivative filter's
+    coefficients (:func:`_noise_kernels`); the same three values give the mean a curved feature gains from the
+    noise (``x**2`` gains ``sigma**2``), taken off its samples."""
     width = int(window or INTEGRATION_WINDOW)
     t = record.t
     step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
     exact = {k: g for k, g in ((k, _antiderivative(f, compiled)) for k, f in enumerate(features)) if g is not None}
+    higher = {k: compiled.derivatives[f] for k, f in enumerate(features)
+              if k not in exact and f in compiled.derivatives and compiled.derivatives[f][1] > 1}
     numeric = [f for k, f in enumerate(features) if k not in exact]
     points = compiled.point_values(record) if any(f.free_symbols - set(map(sp.Symbol, compiled.signals))
                                                   for f in numeric) else None
     values = {sp.Symbol(s): np.asarray(record[s], float) for s in compiled.signals}
+    sigma = {sp.Symbol(s): _sensor_noise(record[s]) for s in compiled.signals}
+    filters = {}  # derivative point -> (its signal, the filter's coefficients)
     if points is not None:
         values.update(dict(zip(compiled.points, points)))
-    sigma = {sp.Symbol(s): _sensor_noise(record[s]) for s in compiled.signals}
+        for point, (name, order) in compiled.derivatives.items():
+            filters[point] = (sp.Symbol(name), savgol_coeffs(default_window(), 3, deriv=order, delta=step, use="dot"))
+            sigma[point] = sigma[sp.Symbol(name)] * float(np.linalg.norm(filters[point][1]))
     usable = _trusted_samples(compiled, record, points or [], numeric)
     for name in compiled.signals:  # a gap in any signal
         usable &= np.isfinite(np.asarray(record[name], float))
@@ -373,8 +385,19 @@ def _window_features(compiled, record: Record, features: list, window: int | Non
     bad = np.concatenate([[0], np.cumsum(~usable)])
     keep = (bad[ends + 1] - bad[starts]) == 0  # no unusable sample in [start, end]
     a, b = starts[keep], ends[keep]
-    columns, slopes = [], []  # slopes[k]: signal -> d (G or feature) / d signal at every sample
+    weights = np.full(width + 1, step)  # each sample's share of a window's integral
+    if quadrature == "euler":
+        weights[-1] = 0.0
+    else:
+        weights[[0, -1]] = step / 2
+    columns, kernels = [], []
     for k, feature in enumerate(features):
+        if k in higher:
+            name, order = higher[k]
+            lower = derivative(record, name, order=order - 1, window=default_window())
+            columns.append(lower[b] - lower[a])
+            kernels.append(_end_kernels(sp.Symbol(name), order - 1, sigma, a.size, width, step))
+            continue
         samples, slope = _feature_samples(exact.get(k, feature), values, sigma, t.shape)
         if k in exact:
             columns.append(samples[b] - samples[a])
@@ -383,14 +406,49 @@ def _window_features(compiled, record: Record, features: list, window: int | Non
             heights = samples[:-1] if quadrature == "euler" else 0.5 * (samples[1:] + samples[:-1])
             cumulative = np.concatenate([[0.0], np.cumsum(heights * np.diff(t))])
             columns.append(cumulative[b] - cumulative[a])
-        slopes.append({s: np.where(usable, v, 0.0) for s, v in slope.items()})
+        kernels.append(_noise_kernels(slope, filters, a, width, None if k in exact else weights))
     noise = np.zeros((len(features), len(features)))
     for k in range(len(features)):
         for m in range(k, len(features)):
-            noise[k, m] = noise[m, k] = _shared_noise((k in exact, slopes[k]), (m in exact, slopes[m]), sigma,
-                                                      a, b, step, quadrature)
+            noise[k, m] = noise[m, k] = sum(sigma[s] ** 2 * float(np.sum(kernels[k][s] * kernels[m][s]))
+                                            for s in kernels[k].keys() & kernels[m].keys())
     matrix = np.column_stack(columns) if columns else np.empty((0, 0))
     return matrix, noise, a
+
+
+def _noise_kernels(slopes: dict, filters: dict, a: np.ndarray, width: int, weights: np.ndarray | None) -> dict:
+    """Signal -> (windows x samples): how much of each sample's noise, from half a derivative filter before the
+    window to half one after it, a feature's window value carries.  ``weights`` None: an exact difference, its
+    slope at the ends; else an integral, each sample's weight times the slope, spread over the derivative
+    filter's span for a derivative estimate."""
+    half = (default_window() - 1) // 2
+    span = width + 1 + 2 * half
+    out: dict = {}
+    inside = a[:, None] + np.arange(width + 1)
+    for point, slope in slopes.items():
+        signal, coefficients = filters.get(point, (point, None))
+        kernel = out.setdefault(signal, np.zeros((a.size, span)))
+        if weights is None:
+            kernel[:, half + width] += slope[a + width]
+            kernel[:, half] -= slope[a]
+            continue
+        share = weights * slope[inside]
+        if coefficients is None:
+            kernel[:, half:half + width + 1] += share
+            continue
+        for q, c in enumerate(coefficients):  # the estimate at i reads samples i - half ... i + half
+            kernel[:, q:q + width + 1] += c * share
+    return out
+
+
+def _end_kernels(signal, order: int, sigma: dict, windows: int, width: int, step: float) -> dict:
+    """Signal -> (windows x samples) of a difference of ``order``-th derivative estimates at a window's ends."""
+    half = (default_window() - 1) // 2
+    coefficients = savgol_coeffs(default_window(), 3, deriv=order, delta=step, use="dot")
+    kernel = np.zeros((windows, width + 1 + 2 * half))
+    kernel[:, width:width + 2 * half + 1] += coefficients
+    kernel[:, :2 * half + 1] -= coefficients
+    return {signal: kernel} if sigma.get(signal, 0.0) > 0 else {}
 
 
 def _antiderivative(feature: sp.Expr, compiled) -> sp.Expr | None:
@@ -428,30 +486,6 @@ def _feature_samples(feature: sp.Expr, values: dict, sigma: dict, shape: tuple) 
     return samples - bias, slopes
 
 
-def _shared_noise(first: tuple, second: tuple, sigma: dict, a: np.ndarray, b: np.ndarray, step: float,
-                  quadrature: str = "trapezoid") -> float:
-    """The covariance of two features over the windows ``[a, b]``, summed.  Each feature is (exact, slopes): an
-    exact one, ``G(x(b)) - G(x(a))``, carries its end samples' noise times ``G``'s slope; an integral each
-    sample's times its weight (``step``; the trapezoid's ends half, the left rule's last end nothing) and the
-    feature's slope."""
-    (exact_k, slopes_k), (exact_m, slopes_m) = first, second
-    total = 0.0
-    for s in slopes_k.keys() & slopes_m.keys():
-        k, m = slopes_k[s], slopes_m[s]
-        if exact_k and exact_m:
-            shared = k[b] * m[b] + k[a] * m[a]
-        elif (exact_k or exact_m) and quadrature == "euler":
-            shared = -step * k[a] * m[a]
-        elif exact_k or exact_m:
-            shared = 0.5 * step * (k[b] * m[b] - k[a] * m[a])
-        else:
-            cumulative = np.concatenate([[0.0], np.cumsum(k * m)])
-            ends = k[b] * m[b] if quadrature == "euler" else 0.75 * (k[a] * m[a] + k[b] * m[b])
-            shared = step ** 2 * (cumulative[b + 1] - cumulative[a] - ends)
-        total += float(sigma[s] ** 2 * np.sum(shared))
-    return total
-
-
 def _trusted_samples(compiled, record: Record, points: list, features: list) -> np.ndarray:
     """Samples where the point values the numeric features need are finite and not across an input's step."""
     needed = set().union(*(f.free_symbols for f in features)) if features else set()
@@ -484,10 +518,14 @@ def _choose(bg, arrs: Sequence, parameters: Sequence[str] | None) -> tuple[list,
     return [p for p in chosen if p in in_arrs and values[p] != 0], unseen
 
 
-def _rank_out(problem: _Problem, x: np.ndarray) -> tuple[list, list, np.ndarray]:
-    """Split the parameters into those the Jacobian at ``x`` identifies and groups it does not: one null
-    direction at a time, its largest member kept out (at its datasheet value).  Each group comes with its
-    direction: member -> its relative change per relative change of the kept member."""
+def _rank_out(problem: _Problem, x: np.ndarray, prior: float | None = None) -> tuple[list, list, np.ndarray]:
+    """Split the parameters into those the Jacobian at ``x`` identifies and groups it does not: one direction
+    at a time, its largest member kept out (at its datasheet value).  A direction is not identified where the
+    Jacobian is singular to working precision (:data:`SINGULAR_FLOOR`), or, with ``prior``, where the records
+    would tell its relative change with a standard deviation above the datasheet's own (the residuals being
+    scaled to unit noise, ``1 / singular value``): a fit would then follow the residuals' smallest flaws along
+    it, as far as the prior lets it.  Each group comes with its direction (member -> its relative change per
+    relative change of the kept member) and whether it is only weakly seen."""
     names = list(problem.names)
     active = list(range(len(names)))
     groups = []
@@ -495,19 +533,37 @@ def _rank_out(problem: _Problem, x: np.ndarray) -> tuple[list, list, np.ndarray]
     scale = np.linalg.norm(jac, axis=0)
     scale[scale == 0] = 1.0
     singular = np.linalg.svd(jac / scale, compute_uv=False)
-    while len(active) > 1 or (active and not np.any(jac[:, active])):
-        sub = jac[:, active] / scale[active]
-        _, s, vt = np.linalg.svd(sub, full_matrices=False)
-        if s[-1] > SINGULAR_FLOOR * s[0] and s[-1] > 0:
+    while active:
+        sub = jac[:, active]
+        if len(active) > 1 or not np.any(sub):
+            _, s, vt = np.linalg.svd(sub / scale[active], full_matrices=False)
+            if not (s[-1] > SINGULAR_FLOOR * s[0] and s[-1] > 0):
+                groups.append(_group(names, active, vt[-1] / scale[active], weak=False))
+                continue
+        if prior is None:
             break
-        direction = vt[-1] / scale[active]  # back from the scaled columns to relative changes
-        largest = np.abs(direction).max()
-        members = [active[k] for k in np.flatnonzero(np.abs(direction) > 0.1 * largest)]
-        kept = max(members, key=lambda k: abs(direction[active.index(k)]))
-        along = {names[k]: float(direction[active.index(k)] / direction[active.index(kept)]) for k in members}
-        groups.append(([names[k] for k in members], names[kept], along))
-        active.remove(kept)
+        _, s, vt = np.linalg.svd(sub, full_matrices=False)
+        if s[-1] * prior >= 1.0:
+            break
+        groups.append(_group(names, active, vt[-1], weak=True))
     return [names[k] for k in active], groups, singular
+
+
+def _group(names: list, active: list, direction: np.ndarray, weak: bool) -> tuple:
+    """The members of a direction (its components above a tenth of the largest), the largest kept out of
+    ``active``, the direction per member relative to the kept one, and whether it is weakly seen."""
+    largest = np.abs(direction).max()
+    members = [active[k] for k in np.flatnonzero(np.abs(direction) > 0.1 * largest)]
+    kept = max(members, key=lambda k: abs(direction[active.index(k)]))
+    along = {names[k]: float(direction[active.index(k)] / direction[active.index(kept)]) for k in members}
+    active.remove(kept)
+    return [names[k] for k in members], names[kept], along, weak
+
+
+def _weakly_seen(members: list) -> str:
+    """The label of a direction the records tell less well than the datasheet."""
+    what = members[0] if len(members) == 1 else " and ".join([", ".join(members[:-1]), members[-1]]) + " together"
+    return f"{what}: the records tell less than the datasheet"
 
 
 def _combination(arrs: Sequence, members: list, kept: str, direction: Mapping) -> str:
@@ -538,7 +594,8 @@ def _combination(arrs: Sequence, members: list, kept: str, direction: Mapping) -
 
 
 def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = None, *, arrs: Sequence | None = None,
-                    window: int | None = None, quadrature: str = "trapezoid") -> Identifiability:
+                    window: int | None = None, quadrature: str = "trapezoid",
+                    prior: float | None = PRIOR) -> Identifiability:
     """Which parameters these records identify through the ARRs, at the model's (datasheet) values.
 
     >>> import numpy as np
@@ -558,6 +615,8 @@ def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = No
     names, unseen = _choose(bg, arrs, parameters)
     if not names:
         return Identifiability([], [], unseen, [])
+    if prior is not None and not (math.isfinite(prior) and prior > 0):
+        raise SettingError("prior", f"{{setting}} must be a relative standard deviation > 0, or None, got {prior!r}")
     if quadrature not in QUADRATURES:
         raise SettingError("quadrature", f"{{setting}} must be one of {', '.join(QUADRATURES)}, got {quadrature!r}")
     if window is not None and not (isinstance(window, int) and window >= 2):
@@ -567,9 +626,10 @@ def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = No
         width = int(window or INTEGRATION_WINDOW)
         raise SettingError("records", f"{{setting}}: no window of {width + 1} usable samples in any record (the "
                            "records are too short, or every stretch holds a gap or an input's step)")
-    identified, groups, singular = _rank_out(problem, np.ones(len(names)))
-    combinations = [{"parameters": members, "kept": kept, "direction": along,
-                     "expression": _combination(arrs, members, kept, along)} for members, kept, along in groups]
+    identified, groups, singular = _rank_out(problem, np.ones(len(names)), prior)
+    combinations = [{"parameters": members, "kept": kept, "direction": along, "weak": weak,
+                     "expression": _weakly_seen(members) if weak else _combination(arrs, members, kept, along)}
+                    for members, kept, along, weak in groups]
     return Identifiability(identified, combinations, unseen, singular.tolist())
 
 
@@ -620,7 +680,7 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     arrs = list(arrs) if arrs is not None else derive_arrs(bg)
     records = [as_record(r) for r in records]
     datasheet = dict(bg.parameters)
-    ident = identifiability(bg, records, parameters, arrs=arrs, window=window, quadrature=quadrature)
+    ident = identifiability(bg, records, parameters, arrs=arrs, window=window, quadrature=quadrature, prior=prior)
     names = ident.identified
     if not names:
         return ParameterEstimate(dict(datasheet), datasheet, identifiability=ident, level=level)
@@ -629,8 +689,6 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     if not sum(b.features.shape[0] for b in problem.blocks):
         raise SettingError("records", "{setting}: no sample where every signal and derivative of the ARRs is known")
     lower, upper = _bounds(bg, names, problem.nominal)
-    if prior is not None and not (math.isfinite(prior) and prior > 0):
-        raise SettingError("prior", f"{{setting}} must be a relative standard deviation > 0, or None, got {prior!r}")
     spread = math.inf if prior is None else prior
 
     # the prior on the logarithm of each relative value: a factor 2 above the datasheet costs what a factor 2

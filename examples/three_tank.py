@@ -102,8 +102,9 @@ RANKING = {"rtol": 1e-3, "confidence": 0.95}
 #: ``--datasheet wrong``: factors on the DTS200 values, fixed beforehand (nothing of a seed's truth sets them).
 #: The fault-free calibration record (the levels settling from (1.0, 0.95, 0.9) m under the constant inflows,
 #: 200 s) identifies every toleranced parameter one by one through the three junction ARRs, no combination:
-#: the valves to about 1 %, the areas to a few %, integrated by eq. 59's own Euler rule (docs/three_tank.md).  The errors are on the valves, both signs (a
-#: manual valve's coefficient is what its setting gives; a machined cylinder's area is known to 2 %).
+#: the valves to about 1 %, the areas to a few %, integrated by eq. 59's own Euler rule (docs/three_tank.md).
+#: The errors are on the valves, both signs (a manual valve's coefficient is what its setting gives; a machined
+#: cylinder's area is known to 2 %).
 WRONG_DATASHEET = {"az1": 1.25, "az2": 0.8, "az3": 1.3}
 #: What ``--datasheet wrong`` fits on the calibration record: every parameter with a tolerance (S_n and g,
 #: the valves' reference section and gravity, are constants: S_n only scales the valves).
