@@ -702,6 +702,10 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     x = optimize.least_squares(residual, np.ones(len(names)), jac=jacobian, bounds=(lower, upper), x_scale="jac",
                                method="trf", ftol=1e-14, xtol=1e-14, gtol=1e-14).x
     covariance, noise, correlation = _covariance(problem, x, spread)
+    kept = [g["kept"] for g in ident.combinations if g.get("weak")]
+    if kept and prior is not None:
+        covariance = covariance + _kept_uncertainty(arrs, records, names, kept, values, x, window, bg.domains,
+                                                    quadrature, prior)
     # few windows: the residuals' spread is itself estimated, with as many degrees of freedom as windows left
     # over by the parameters (a t quantile); the ARRs over one window share its noise: the windows count, not
     # the rows
@@ -721,6 +725,19 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
 #: Lags of the residuals' autocorrelation that the intervals count (Newey-West): neighbouring windows share an
 #: end sample, and a derivative estimate's noise spans a few samples.
 LAGS = 5
+
+
+def _kept_uncertainty(arrs: Sequence, records: Sequence, names: list, kept: list, values: Mapping, x: np.ndarray,
+                      window: int | None, domains: Mapping, quadrature: str, prior: float) -> np.ndarray:
+    """What the datasheet's own uncertainty (``prior``) of the weakly seen parameters held at their datasheet
+    values adds to the fitted ones' covariance: ``G diag(prior^2) G'``, ``G`` how the fit would move per relative
+    change of a held one (``-(J'J)^-1 J' J_held`` at the fit).  Held without it, they would pass their
+    datasheet error on to the others with intervals that do not know it."""
+    both = _problem(arrs, records, names + kept, values, window, domains, quadrature)
+    jac = both.jacobian(np.concatenate([x, np.ones(len(kept))]))
+    fitted, held = jac[:, :len(names)], jac[:, len(names):]
+    moved = -np.linalg.pinv(fitted.T @ fitted + np.eye(len(names)) / prior ** 2) @ fitted.T @ held
+    return prior ** 2 * moved @ moved.T
 
 
 def _covariance(problem: _Problem, x: np.ndarray, prior: float = math.inf) -> tuple[np.ndarray, dict, dict]:
