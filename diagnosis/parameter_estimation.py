@@ -132,6 +132,9 @@ class ParameterEstimate:
     std : dict
         Estimated parameter -> its standard error.
     identifiability : Identifiability
+    given_held : dict
+        Estimated parameter -> its interval were the weakly seen parameters (held at their datasheet values)
+        exactly there: what the thresholds' boxes take, the held parameters keeping boxes of their own.
     residual_std : dict
         ARR -> the robust spread of its residual at the fit; ``correlation`` ARR -> its integrated
         autocorrelation time in samples (the intervals' inflation).
@@ -144,6 +147,7 @@ class ParameterEstimate:
     datasheet: dict
     intervals: dict = field(default_factory=dict)
     std: dict = field(default_factory=dict)
+    given_held: dict = field(default_factory=dict)
     identifiability: Identifiability | None = None
     residual_std: dict = field(default_factory=dict)
     correlation: dict = field(default_factory=dict)
@@ -183,6 +187,7 @@ class ParameterEstimate:
         return {"level": self.level, "samples": self.samples,
                 "parameters": {p: {"datasheet": self.datasheet[p], "estimate": self.values[p],
                                    "interval": list(self.intervals[p]), "std": self.std[p],
+                                   "interval_given_held": list(self.given_held.get(p, self.intervals[p])),
                                    "change": self.values[p] / self.datasheet[p] - 1.0 if self.datasheet[p] else None}
                                for p in self.intervals},
                 "combinations": [] if ident is None else ident.combinations,
@@ -538,23 +543,34 @@ def _rank_out(problem: _Problem, x: np.ndarray, prior: float | None = None) -> t
         if len(active) > 1 or not np.any(sub):
             _, s, vt = np.linalg.svd(sub / scale[active], full_matrices=False)
             if not (s[-1] > SINGULAR_FLOOR * s[0] and s[-1] > 0):
-                groups.append(_group(names, active, vt[-1] / scale[active], weak=False))
+                groups.append(_group(names, active, vt[-1] / scale[active], jac, weak=False))
                 continue
         if prior is None:
             break
         _, s, vt = np.linalg.svd(sub, full_matrices=False)
         if s[-1] * prior >= 1.0:
             break
-        groups.append(_group(names, active, vt[-1], weak=True))
+        groups.append(_group(names, active, vt[-1], jac, weak=True))
     return [names[k] for k in active], groups, singular
 
 
-def _group(names: list, active: list, direction: np.ndarray, weak: bool) -> tuple:
-    """The members of a direction (its components above a tenth of the largest), the largest kept out of
-    ``active``, the direction per member relative to the kept one, and whether it is weakly seen."""
+def _group(names: list, active: list, direction: np.ndarray, jac: np.ndarray, weak: bool) -> tuple:
+    """The members of a direction (its components above a tenth of the largest), the one kept out of
+    ``active``, the direction per member relative to the kept one, and whether it is weakly seen.
+
+    The member kept (at its datasheet value) is the one that leaves the others best told apart: the largest
+    smallest singular value of the unit-noise Jacobian without it.  A pump's gear ratio rather than its
+    friction: held, the gear leaves each of the motor constant, the inertia and the friction fixed by one
+    combination of its own; the friction, poorly seen, would pass its spread on to the gear and the motor
+    constant, and their boxes would blunt every threshold they enter."""
     largest = np.abs(direction).max()
     members = [active[k] for k in np.flatnonzero(np.abs(direction) > 0.1 * largest)]
-    kept = max(members, key=lambda k: abs(direction[active.index(k)]))
+
+    def left(k: int) -> float:
+        rest = [j for j in active if j != k]
+        return float(np.linalg.svd(jac[:, rest], compute_uv=False)[-1]) if rest else math.inf
+
+    kept = max(members, key=lambda k: (left(k), abs(direction[active.index(k)])))
     along = {names[k]: float(direction[active.index(k)] / direction[active.index(kept)]) for k in members}
     active.remove(kept)
     return [names[k] for k in members], names[kept], along, weak
@@ -702,6 +718,7 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     x = optimize.least_squares(residual, np.ones(len(names)), jac=jacobian, bounds=(lower, upper), x_scale="jac",
                                method="trf", ftol=1e-14, xtol=1e-14, gtol=1e-14).x
     covariance, noise, correlation = _covariance(problem, x, spread)
+    conditional = covariance
     kept = [g["kept"] for g in ident.combinations if g.get("weak")]
     if kept and prior is not None:
         covariance = covariance + _kept_uncertainty(arrs, records, names, kept, values, x, window, bg.domains,
@@ -714,10 +731,12 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     z = stats.t.ppf(0.5 + level / 2, freedom)
     theta = problem.nominal * x
     std = np.sqrt(np.maximum(np.diag(covariance), 0.0)) * np.abs(problem.nominal)
+    given = np.sqrt(np.maximum(np.diag(conditional), 0.0)) * np.abs(problem.nominal)
     values.update(dict(zip(names, theta.tolist())))
     return ParameterEstimate(
         values=values, datasheet=datasheet,
         intervals={n: (float(v - z * s), float(v + z * s)) for n, v, s in zip(names, theta, std)},
+        given_held={n: (float(v - z * s), float(v + z * s)) for n, v, s in zip(names, theta, given)},
         std=dict(zip(names, std.tolist())), identifiability=ident, residual_std=noise, correlation=correlation,
         samples=int(sum(b.features.shape[0] for b in problem.blocks)), level=level)
 
@@ -875,7 +894,8 @@ def uncertainty_boxes(estimate: ParameterEstimate, method: str = "confidence", *
     """Multiplicative boxes ``(lo, hi)`` about the estimates, for ``uncertainty=`` of the model's elements.
 
     ``"confidence"`` (the default): the estimate's confidence interval, ``(lo / value - 1, hi / value - 1)``:
-    what the records leave unknown of each parameter.
+    what the records leave unknown of each parameter (given the weakly seen ones, held at the datasheet with
+    boxes of their own: :attr:`ParameterEstimate.given_held`).
     ``"records"``: the spread of the estimates made on each record alone (``per_record``, at least two),
     their range about the pooled estimate, widened by each one's own interval: what changes between days and
     operating points.
@@ -894,7 +914,7 @@ def uncertainty_boxes(estimate: ParameterEstimate, method: str = "confidence", *
         return set_membership_boxes(estimate.model(model), records, estimate.estimated, settings=settings)
     if method == "confidence":
         return {p: (round(lo / estimate.values[p] - 1.0, 12), round(hi / estimate.values[p] - 1.0, 12))
-                for p, (lo, hi) in estimate.intervals.items()}
+                for p, (lo, hi) in {**estimate.intervals, **estimate.given_held}.items()}
     if method == "records":
         if len(per_record) < 2:
             raise SettingError("method", "{setting} 'records' needs the estimates of at least two records")
