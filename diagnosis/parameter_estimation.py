@@ -701,23 +701,21 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     if not names:
         return ParameterEstimate(dict(datasheet), datasheet, identifiability=ident, level=level)
     values = dict(datasheet)
-    problem = _problem(arrs, records, names, values, window, bg.domains, quadrature)
-    if not sum(b.features.shape[0] for b in problem.blocks):
-        raise SettingError("records", "{setting}: no sample where every signal and derivative of the ARRs is known")
-    lower, upper = _bounds(bg, names, problem.nominal)
     spread = math.inf if prior is None else prior
-
-    # the prior on the logarithm of each relative value: a factor 2 above the datasheet costs what a factor 2
-    # below does, and zero is infinitely far
-    def residual(x):
-        return np.concatenate([problem.residual(x), np.log(np.abs(x)) / spread])
-
-    def jacobian(x):
-        return np.vstack([problem.jacobian(x), np.diag(1.0 / x) / spread])
-
-    x = optimize.least_squares(residual, np.ones(len(names)), jac=jacobian, bounds=(lower, upper), x_scale="jac",
-                               method="trf", ftol=1e-14, xtol=1e-14, gtol=1e-14).x
-    covariance, noise, correlation = _covariance(problem, x, spread)
+    while True:
+        problem = _problem(arrs, records, names, values, window, bg.domains, quadrature)
+        if not sum(b.features.shape[0] for b in problem.blocks):
+            raise SettingError("records", "{setting}: no sample where every signal and derivative of the ARRs is "
+                                          "known")
+        x = _fit(problem, _bounds(bg, names, problem.nominal), spread)
+        covariance, noise, correlation = _covariance(problem, x, spread)
+        # judged at the fit, not at the datasheet: a parameter whose interval tells less than the prior is held
+        relative = np.sqrt(np.maximum(np.diag(covariance), 0.0))
+        if prior is None or len(names) < 2 or relative.max() <= prior:
+            break
+        worst = names[int(np.argmax(relative))]
+        ident = _held(ident, worst)
+        names = ident.identified
     conditional = covariance
     kept = [g["kept"] for g in ident.combinations if g.get("weak")]
     if kept and prior is not None:
@@ -744,6 +742,28 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
 #: Lags of the residuals' autocorrelation that the intervals count (Newey-West): neighbouring windows share an
 #: end sample, and a derivative estimate's noise spans a few samples.
 LAGS = 5
+
+
+def _fit(problem: _Problem, bounds: tuple, spread: float) -> np.ndarray:
+    """The relative parameters that make the scaled residuals and the prior smallest."""
+    # the prior on the logarithm of each relative value: a factor 2 above the datasheet costs what a factor 2
+    # below does, and zero is infinitely far
+    def residual(x):
+        return np.concatenate([problem.residual(x), np.log(np.abs(x)) / spread])
+
+    def jacobian(x):
+        return np.vstack([problem.jacobian(x), np.diag(1.0 / x) / spread])
+
+    return optimize.least_squares(residual, np.ones(len(problem.names)), jac=jacobian, bounds=bounds,
+                                  x_scale="jac", method="trf", ftol=1e-14, xtol=1e-14, gtol=1e-14).x
+
+
+def _held(ident: Identifiability, name: str) -> Identifiability:
+    """``ident`` with ``name`` moved from the identified parameters to a weakly seen group of its own."""
+    group = {"parameters": [name], "kept": name, "direction": {name: 1.0}, "weak": True,
+             "expression": _weakly_seen([name])}
+    return Identifiability([p for p in ident.identified if p != name], [*ident.combinations, group], ident.unseen,
+                           ident.singular_values)
 
 
 def _kept_uncertainty(arrs: Sequence, records: Sequence, names: list, kept: list, values: Mapping, x: np.ndarray,
@@ -899,6 +919,9 @@ def uncertainty_boxes(estimate: ParameterEstimate, method: str = "confidence", *
     ``"records"``: the spread of the estimates made on each record alone (``per_record``, at least two),
     their range about the pooled estimate, widened by each one's own interval: what changes between days and
     operating points.
+    With ``model`` (the datasheet model), a box that would reach out of its parameter's domain (a poorly seen
+    positive parameter whose interval reaches below zero) is cut :data:`BOX_CUT` of the way short of the
+    domain's edge, with a warning naming it: the model refuses such a box.
     ``"set-membership"``: the smallest boxes about the estimates in which every one of ``records`` (healthy,
     typically those of the fit) stays inside the thresholds of :func:`~diagnosis.detect` with ``settings``
     (:func:`~diagnosis.set_membership.set_membership_boxes`, a linear program), ``model`` being the datasheet
@@ -913,8 +936,9 @@ def uncertainty_boxes(estimate: ParameterEstimate, method: str = "confidence", *
             raise SettingError("method", "{setting} 'set-membership' needs the model and the healthy records")
         return set_membership_boxes(estimate.model(model), records, estimate.estimated, settings=settings)
     if method == "confidence":
-        return {p: (round(lo / estimate.values[p] - 1.0, 12), round(hi / estimate.values[p] - 1.0, 12))
-                for p, (lo, hi) in {**estimate.intervals, **estimate.given_held}.items()}
+        boxes = {p: (round(lo / estimate.values[p] - 1.0, 12), round(hi / estimate.values[p] - 1.0, 12))
+                 for p, (lo, hi) in {**estimate.intervals, **estimate.given_held}.items()}
+        return boxes if model is None else _inside_domains(boxes, estimate.values, model.domains)
     if method == "records":
         if len(per_record) < 2:
             raise SettingError("method", "{setting} 'records' needs the estimates of at least two records")
@@ -924,5 +948,30 @@ def uncertainty_boxes(estimate: ParameterEstimate, method: str = "confidence", *
             lo = min([a for a, _ in seen] + [estimate.intervals[p][0]])
             hi = max([b for _, b in seen] + [estimate.intervals[p][1]])
             boxes[p] = (lo / value - 1.0, hi / value - 1.0)
-        return boxes
+        return boxes if model is None else _inside_domains(boxes, estimate.values, model.domains)
     raise SettingError("method", f"{{setting}} must be 'confidence', 'records' or 'set-membership', got {method!r}")
+
+
+#: A box cut to its parameter's domain stops this share of the way short of the domain's edge.
+BOX_CUT = 1e-3
+
+
+def _inside_domains(boxes: dict, values: Mapping, domains: Mapping) -> dict:
+    """The boxes, each side cut to its parameter's (open) domain, with a warning naming those cut."""
+    out, cut = {}, []
+    for p, (lo, hi) in boxes.items():
+        value = values[p]
+        low, high = domains.get(p, (-math.inf, math.inf))
+        sides = []
+        for relative in (lo, hi):
+            bound = value * (1.0 + relative)
+            edge = low if bound <= low else high if bound >= high else None
+            if edge is not None:
+                relative = (edge / value - 1.0) * (1.0 - BOX_CUT)
+                cut.append(p)
+            sides.append(relative)
+        out[p] = (min(sides), max(sides))
+    if cut:
+        names = ", ".join(dict.fromkeys(cut))
+        warnings.warn(f"uncertainty box of {names} cut to its domain (the interval reaches past it)", stacklevel=3)
+    return out

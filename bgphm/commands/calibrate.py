@@ -185,7 +185,8 @@ def _nothing_estimated(fit, parameters) -> str:
     if ident is not None and ident.unseen:
         why.append(f"in no ARR: {', '.join(ident.unseen)}")
     if ident is not None and ident.combinations:
-        why.append("seen only together: " + "; ".join(", ".join(c["parameters"]) for c in ident.combinations))
+        why.append("seen only together or less well than the datasheet: "
+                   + "; ".join(", ".join(c["parameters"]) for c in ident.combinations))
     asked = f"--parameters {' '.join(parameters)}" if parameters else "the model"
     return f"{asked}: no parameter can be estimated from these records ({'; '.join(why) or 'none identified'})"
 
@@ -205,6 +206,10 @@ def _table(fit, boxes: dict) -> list[str]:
     lines = ["  ".join(cell.ljust(w) for cell, w in zip(row, widths)).rstrip() for row in rows]
     ident = fit.identifiability
     for group in (ident.combinations if ident else []):
+        if group.get("weak"):
+            lines.append(f"told less well by the records than by the datasheet: {', '.join(group['parameters'])}; "
+                         f"{group['kept']} kept at its datasheet value (its uncertainty widens the intervals)")
+            continue
         lines.append(f"seen only together: {', '.join(group['parameters'])} (the records fix {group['expression']}); "
                      f"{group['kept']} kept at its datasheet value")
     if ident and ident.unseen:

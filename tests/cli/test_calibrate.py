@@ -185,6 +185,34 @@ def test_set_membership_boxes_keep_the_training_records_inside_and_are_no_wider_
         assert hi - lo <= (interval[1] - interval[0]) / value + 1e-12, name
 
 
+def test_a_parameter_the_record_tells_less_well_than_the_datasheet_is_named_and_held(tmp_path):
+    """Steps only: the armature's 1 ms transient hides in them and L_a is told less well than by the datasheet."""
+    import numpy as np
+    from scipy.integrate import solve_ivp
+
+    from diagnosis import add_noise, as_record
+
+    def steps(t):
+        return 12.0 * (t >= 0.05) - 6.0 * (t >= 1.0)
+
+    def rhs(t, x):
+        return [(steps(t) - TRUE["R_a"] * x[0] - TRUE["k_m"] * x[1]) / TRUE["L_a"],
+                (TRUE["k_m"] * x[0] - TRUE["b"] * x[1]) / TRUE["J"]]
+
+    t = np.linspace(0.0, 2.0, 4001)
+    sol = solve_ivp(rhs, (0.0, 2.0), [0.0, 0.0], t_eval=t, method="LSODA", rtol=1e-10, atol=1e-12, max_step=1e-3)
+    record = add_noise(as_record({"t": t, "U": steps(t), "i": sol.y[0], "omega": sol.y[1]}),
+                       {"i": 0.01, "omega": 0.2}, seed=3)
+    path = write_record(tmp_path / "steps.csv", record)
+    sheet = tmp_path / "sheet.json"
+    sheet.write_text(to_json(dc_motor(**{**DATASHEET, "L_a": 0.8 * TRUE["L_a"]}), inputs={"U": 12.0}, t_end=2.0))
+    code, stdout, stderr = run("--quiet", "calibrate", sheet, path, "--hold-out", "0", "--out", tmp_path / "s.json")
+    assert code == 0, stderr
+    assert "told less well by the records than by the datasheet: L_a; L_a kept at its datasheet value" in stdout
+    block = load_model(tmp_path / "s.json").calibration
+    assert "L_a" not in block["estimates"] and {"R_a", "k_m", "J", "b"} <= set(block["estimates"])
+
+
 def test_validate_and_report_and_force(bench, tmp_path):
     out, report = tmp_path / "v.json", tmp_path / "pages" / "calibration.html"
     argv = ["--quiet", "calibrate", bench / "sheet.json", bench / "a.csv", bench / "b.csv", "--validate",
