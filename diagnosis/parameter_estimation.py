@@ -701,21 +701,8 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     if not names:
         return ParameterEstimate(dict(datasheet), datasheet, identifiability=ident, level=level)
     values = dict(datasheet)
-    spread = math.inf if prior is None else prior
-    while True:
-        problem = _problem(arrs, records, names, values, window, bg.domains, quadrature)
-        if not sum(b.features.shape[0] for b in problem.blocks):
-            raise SettingError("records", "{setting}: no sample where every signal and derivative of the ARRs is "
-                                          "known")
-        x = _fit(problem, _bounds(bg, names, problem.nominal), spread)
-        covariance, noise, correlation = _covariance(problem, x, spread)
-        # judged at the fit, not at the datasheet: a parameter whose interval tells less than the prior is held
-        relative = np.sqrt(np.maximum(np.diag(covariance), 0.0))
-        if prior is None or len(names) < 2 or relative.max() <= prior:
-            break
-        worst = names[int(np.argmax(relative))]
-        ident = _held(ident, worst)
-        names = ident.identified
+    problem, x, covariance, noise, correlation, ident = _settled(bg, arrs, records, ident, window, quadrature, prior)
+    names = ident.identified
     conditional = covariance
     kept = [g["kept"] for g in ident.combinations if g.get("weak")]
     if kept and prior is not None:
@@ -742,6 +729,27 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
 #: Lags of the residuals' autocorrelation that the intervals count (Newey-West): neighbouring windows share an
 #: end sample, and a derivative estimate's noise spans a few samples.
 LAGS = 5
+
+
+def _settled(bg, arrs: Sequence, records: Sequence, ident: Identifiability, window: int | None, quadrature: str,
+             prior: float | None) -> tuple:
+    """The fit of the identified parameters, refitted without the one whose interval tells least while any
+    tells less than the prior (judged at the fit: at a datasheet far off, the Jacobian promises more than the
+    fit gives).  The problem, the relative estimates, their covariance, each ARR's noise and inflation, and
+    the identifiability with the parameters held."""
+    spread = math.inf if prior is None else prior
+    while True:
+        names = ident.identified
+        problem = _problem(arrs, records, names, bg.parameters, window, bg.domains, quadrature)
+        if not sum(b.features.shape[0] for b in problem.blocks):
+            raise SettingError("records", "{setting}: no sample where every signal and derivative of the ARRs is "
+                                          "known")
+        x = _fit(problem, _bounds(bg, names, problem.nominal), spread)
+        covariance, noise, correlation = _covariance(problem, x, spread)
+        relative = np.sqrt(np.maximum(np.diag(covariance), 0.0))
+        if prior is None or len(names) < 2 or relative.max() <= prior:
+            return problem, x, covariance, noise, correlation, ident
+        ident = _held(ident, names[int(np.argmax(relative))])
 
 
 def _fit(problem: _Problem, bounds: tuple, spread: float) -> np.ndarray:
