@@ -412,11 +412,16 @@ def _unidentified(fit) -> str:
     ident = fit.identifiability
     if ident is None or not (ident.combinations or ident.unseen):
         return "<p>The records identify every parameter asked for.</p>"
-    rows = [[", ".join(c["parameters"]), c["expression"], c["kept"]] for c in ident.combinations]
+    rows = [[", ".join(c["parameters"]), c["expression"], c["kept"]] for c in ident.combinations
+            if not c.get("weak")]
+    weak = [[", ".join(c["parameters"]), c["kept"]] for c in ident.combinations if c.get("weak")]
     body = ""
     if rows:
         body += ("<p>Seen only together (one kept at its datasheet value, the others carry the combination):</p>"
                  + table(["parameters", "what the records fix", "kept"], rows))
+    if weak:
+        body += ("<p>Told less well by the records than by the datasheet (kept at its datasheet value, its "
+                 "uncertainty widening the others' intervals):</p>" + table(["parameters", "kept"], weak))
     if ident.unseen:
         body += f"<p>In no ARR, kept at the datasheet value: {_e(', '.join(ident.unseen))}</p>"
     return body

@@ -211,6 +211,7 @@ def test_a_parameter_the_record_tells_less_well_than_the_datasheet_is_named_and_
     assert "told less well by the records than by the datasheet: L_a; L_a kept at its datasheet value" in stdout
     block = load_model(tmp_path / "s.json").calibration
     assert "L_a" not in block["estimates"] and {"R_a", "k_m", "J", "b"} <= set(block["estimates"])
+    assert "Told less well by the records than by the datasheet" in (tmp_path / "s.html").read_text()
 
 
 def test_validate_and_report_and_force(bench, tmp_path):
