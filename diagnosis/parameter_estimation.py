@@ -63,16 +63,14 @@ from fractions import Fraction
 import numpy as np
 import sympy as sp
 from scipy import optimize, stats
-from scipy.signal import savgol_coeffs
 
 from bondgraph.errors import SettingError
 
+from ._fit_covariance import fit_covariance
+from ._windowed_residuals import INTEGRATION_WINDOW, QUADRATURES, Problem, windowed_problem
 from .derivation import derive_arrs
-from .derivatives import default_window, derivative
-from .detection import robust_std
-from .records import Record, as_record
+from .records import as_record
 from .set_membership import set_membership_boxes
-from .steps import step_mask
 
 __all__ = ["Identifiability", "ParameterEstimate", "estimate_parameters", "identifiability", "uncertainty_boxes"]
 
@@ -196,317 +194,6 @@ class ParameterEstimate:
                 "residual_std": dict(self.residual_std), "correlation": dict(self.correlation)}
 
 
-# ------------------------------------------------------------------------------------------- residuals as functions
-
-#: Samples over which each row integrates an ARR (windows side by side, one sample apart).  The relation
-#: holds integrated over any stretch; integrated, a derivative term ``c dx/dt`` becomes ``c (x(b) - x(a))``,
-#: exact and without the derivative filter's noise, and every other term is averaged.  Noise in a regressor
-#: biases a least-squares fit towards zero by its variance over the regressor's (errors in variables): over a
-#: longer stretch the signal's change grows and its noise does not.
-INTEGRATION_WINDOW = 50
-#: An ARR is never trusted to hold better than this share of the size of its terms: its residual on a clean
-#: record is the error of the numbers that stand for the signals (the trapezoid rule, a derivative estimate, an
-#: encoder's counts), which no sensor noise hides.  Without that floor a noise-free record would weigh its
-#: windows infinitely and a weakly seen direction would swing to absorb those errors.
-NUMERIC_FLOOR = 1e-4
-#: The rules a window's integral of a feature's samples may follow (see :func:`estimate_parameters`).
-QUADRATURES = ("trapezoid", "euler")
-
-
-@dataclass
-class _Block:
-    """One ARR over the records: ``features`` (rows x terms) of its window-integrated terms, the terms'
-    coefficients as functions of the fitted parameters (and their derivatives), and ``noise``: the covariance of
-    one row's features that the sensors' noise and the numbers' own error make (see :func:`_scale`)."""
-
-    name: str
-    features: np.ndarray
-    coefficient: object
-    gradient: list
-    noise: np.ndarray
-    keys: list = field(default_factory=list)  # (record, first sample) of each row's window
-
-
-@dataclass
-class _Problem:
-    """The window-integrated residuals of the ARRs over the records, as functions of the chosen parameters
-    relative to their datasheet values, each ARR's divided by the noise its sensors give it at those parameters:
-    ``residual(x)``, ``jacobian(x)``, rows grouped by ARR."""
-
-    names: list
-    nominal: np.ndarray
-    blocks: list
-
-    def _coefficients(self, block: _Block, x: np.ndarray) -> np.ndarray:
-        return np.asarray(block.coefficient(*(self.nominal * x)), float).reshape(-1)
-
-    def _gradient(self, block: _Block, x: np.ndarray) -> np.ndarray:
-        """d coefficients / d x (terms x parameters)."""
-        theta = self.nominal * x
-        return np.column_stack([np.asarray(g(*theta), float).reshape(-1) for g in block.gradient]) * self.nominal
-
-    def _scale(self, block: _Block, c: np.ndarray) -> float:
-        """The ARR's window residual noise at coefficients ``c``: ``sqrt(c' N c)``."""
-        return math.sqrt(max(float(c @ block.noise @ c), 0.0)) or 1.0
-
-    def residual(self, x: np.ndarray) -> np.ndarray:
-        """Each ARR's window residuals over their noise at ``x``."""
-        parts = []
-        for b in self.blocks:
-            c = self._coefficients(b, x)
-            parts.append(b.features @ c / self._scale(b, c))
-        return np.concatenate(parts)
-
-    def jacobian(self, x: np.ndarray) -> np.ndarray:
-        rows = []
-        for b in self.blocks:
-            c, dc = self._coefficients(b, x), self._gradient(b, x)
-            scale = self._scale(b, c)
-            # d(r / s) = dr / s - r ds / s^2, with ds = dc' N c / s
-            rows.append(b.features @ dc / scale
-                        - np.outer(b.features @ c, dc.T @ b.noise @ c) / scale ** 3)
-        return np.vstack(rows)
-
-    def per_arr(self, x: np.ndarray) -> dict:
-        """ARR name -> its window residuals, in the ARR's own unit."""
-        return {b.name: b.features @ self._coefficients(b, x) for b in self.blocks}
-
-
-def _problem(arrs: Sequence, records: Sequence[Record], names: list, values: Mapping, window: int | None,
-             domains: Mapping | None = None, quadrature: str = "trapezoid") -> _Problem:
-    symbols = [sp.Symbol(n) for n in names]
-    fixed = {sp.Symbol(p): v for p, v in values.items() if p not in names}
-    blocks = []
-    for arr in arrs:
-        if not set(names) & set(arr.parameters):
-            continue
-        compiled = arr.compiled
-        try:
-            terms = _terms(arr.nominal.xreplace(compiled.symbols).xreplace(fixed), compiled.points, symbols, domains)
-        except ValueError as error:  # the other ARRs may still hold its parameters
-            warnings.warn(f"{arr.name} is left out of the parameter fit: {error}", stacklevel=3)
-            continue
-        parts = [part for part in (_window_features(compiled, record, list(terms), window, quadrature)
-                                         for record in records)
-                 if part[0].shape[0]]
-        if not parts:  # no whole window in any record
-            continue
-        features = np.vstack([f for f, _, _ in parts])
-        noise = sum(n for _, n, _ in parts) / features.shape[0]
-        # the numbers' own error (trapezoid rule, derivative estimates, an encoder's counts): a share of each term
-        noise = noise + NUMERIC_FLOOR ** 2 * np.diag(np.mean(features ** 2, axis=0))
-        coefficients = sp.Matrix([list(terms.values())])
-        blocks.append(_Block(arr.name, features, sp.lambdify(symbols, coefficients, modules="numpy"),
-                             [sp.lambdify(symbols, coefficients.diff(s), modules="numpy") for s in symbols], noise,
-                             [(r, int(start)) for r, (_, _, starts) in enumerate(parts) for start in starts]))
-    return _Problem(names, np.array([float(values[n]) for n in names]), blocks)
-
-
-def _terms(expression: sp.Expr, points: list, parameters: list, domains: Mapping | None = None) -> dict:
-    """The ARR as ``sum coefficient(theta) * feature(points)``: feature -> coefficient.
-
-    A parameter whose domain has one sign is taken with it, so that ``Abs(Q/a)`` is ``Abs(Q)/a``; a relation
-    whose denominator mixes parameters and signals (a gas law's ``p_0 V/(V_a - V)``) is taken by its numerator,
-    which holds where the relation does.  A term whose parameters and signals still cannot be told apart (a
-    parameter inside a function of the signals) raises ValueError."""
-    signed = {}
-    for p in parameters:
-        lo, hi = (domains or {}).get(str(p), (-math.inf, math.inf))
-        if lo >= 0 or hi <= 0:
-            signed[p] = sp.Symbol(str(p), positive=lo >= 0, negative=hi <= 0)
-    back = {v: k for k, v in signed.items()}
-    expression = expression.xreplace(signed)  # rebuilt: Abs and sign take the signs out
-    chosen = [signed.get(p, p) for p in parameters]
-    try:
-        found = _split(expression, points, chosen)
-    except ValueError:
-        numerator, denominator = sp.fraction(sp.together(expression))
-        if not (denominator.free_symbols & set(chosen) and denominator.free_symbols & set(points)):
-            raise
-        found = _split(numerator, points, chosen)
-    return {feature: coefficient.xreplace(back) for feature, coefficient in found.items()}
-
-
-def _split(expression: sp.Expr, points: list, parameters: list) -> dict:
-    found: dict = {}
-    for term in sp.Add.make_args(sp.expand_mul(expression)):
-        coefficient, feature = term.as_independent(*points, as_Add=False)
-        if feature.free_symbols & set(parameters):
-            coefficient, feature = sp.expand_power_base(term, force=True).as_independent(*points, as_Add=False)
-        if feature.free_symbols & set(parameters):
-            raise ValueError(f"{term} mixes parameters and signals")
-        found[feature] = found.get(feature, 0) + coefficient
-    return found
-
-
-def _sensor_noise(values: np.ndarray) -> float:
-    """A sampled signal's white-noise standard deviation, from its fourth differences (``70 sigma^2`` for white
-    noise; a smooth signal's own are far smaller, and a step's few are outliers the robust spread ignores)."""
-    samples = np.asarray(values, float)
-    samples = samples[np.isfinite(samples)]
-    if samples.size < 20:
-        return 0.0
-    return float(robust_std(np.diff(samples, 4)) / math.sqrt(70.0))
-
-
-def _window_features(compiled, record: Record, features: list, window: int | None,
-                     quadrature: str = "trapezoid") -> tuple:
-    """Each feature integrated over the windows of ``record`` (rows: windows, columns: features), the sum over
-    the rows of the features' noise covariance, and each row's first sample.
-
-    A feature ``g(x) dx/dt`` (a first derivative, ``g = 1``) integrates exactly to ``G(x(b)) - G(x(a))``, ``G``
-    the antiderivative of ``g`` (:func:`_antiderivative`), and a higher derivative ``d^n x/dt^n`` to the
-    difference of the estimates of ``d^(n-1) x/dt^(n-1)`` at the window's ends; any other feature by the
-    trapezoid rule (``quadrature="euler"``: the left rectangle rule, exact for a record of an explicit Euler
-    model) from its samples.  A window is kept only where the derivative estimates it needs are finite and do
-    not reach across an input's step.  Each signal's white noise (:func:`_sensor_noise`) reaches the features
-    through their slopes, read by differences one noise level either side, and through the derivative filter's
-    coefficients (:func:`_noise_kernels`); the same three values give the mean a curved feature gains from the
-    noise (``x**2`` gains ``sigma**2``), taken off its samples."""
-    width = int(window or INTEGRATION_WINDOW)
-    t = record.t
-    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
-    exact = {k: g for k, g in ((k, _antiderivative(f, compiled)) for k, f in enumerate(features)) if g is not None}
-    higher = {k: compiled.derivatives[f] for k, f in enumerate(features)
-              if k not in exact and f in compiled.derivatives and compiled.derivatives[f][1] > 1}
-    numeric = [f for k, f in enumerate(features) if k not in exact]
-    points = compiled.point_values(record) if any(f.free_symbols - set(map(sp.Symbol, compiled.signals))
-                                                  for f in numeric) else None
-    values = {sp.Symbol(s): np.asarray(record[s], float) for s in compiled.signals}
-    sigma = {sp.Symbol(s): _sensor_noise(record[s]) for s in compiled.signals}
-    filters = {}  # derivative point -> (its signal, the filter's coefficients)
-    if points is not None:
-        values.update(dict(zip(compiled.points, points)))
-        for point, (name, order) in compiled.derivatives.items():
-            filters[point] = (sp.Symbol(name), savgol_coeffs(default_window(), 3, deriv=order, delta=step, use="dot"))
-            sigma[point] = sigma[sp.Symbol(name)] * float(np.linalg.norm(filters[point][1]))
-    usable = _trusted_samples(compiled, record, points or [], numeric)
-    for name in compiled.signals:  # a gap in any signal
-        usable &= np.isfinite(np.asarray(record[name], float))
-    # windows one sample apart: two windows sharing an end sample would share its noise (x(b) - x(a) then x(c) -
-    # x(b)), and their residuals would be anti-correlated
-    starts = np.arange(0, len(record) - width, width + 1)
-    ends = starts + width
-    bad = np.concatenate([[0], np.cumsum(~usable)])
-    keep = (bad[ends + 1] - bad[starts]) == 0  # no unusable sample in [start, end]
-    a, b = starts[keep], ends[keep]
-    weights = np.full(width + 1, step)  # each sample's share of a window's integral
-    if quadrature == "euler":
-        weights[-1] = 0.0
-    else:
-        weights[[0, -1]] = step / 2
-    columns, kernels = [], []
-    for k, feature in enumerate(features):
-        if k in higher:
-            name, order = higher[k]
-            lower = derivative(record, name, order=order - 1, window=default_window())
-            columns.append(lower[b] - lower[a])
-            kernels.append(_end_kernels(sp.Symbol(name), order - 1, sigma, a.size, width, step))
-            continue
-        samples, slope = _feature_samples(exact.get(k, feature), values, sigma, t.shape)
-        if k in exact:
-            columns.append(samples[b] - samples[a])
-        else:
-            samples = np.where(usable, samples, 0.0)  # windows holding an unusable sample were dropped above
-            heights = samples[:-1] if quadrature == "euler" else 0.5 * (samples[1:] + samples[:-1])
-            cumulative = np.concatenate([[0.0], np.cumsum(heights * np.diff(t))])
-            columns.append(cumulative[b] - cumulative[a])
-        kernels.append(_noise_kernels(slope, filters, a, width, None if k in exact else weights))
-    noise = np.zeros((len(features), len(features)))
-    for k in range(len(features)):
-        for m in range(k, len(features)):
-            noise[k, m] = noise[m, k] = sum(sigma[s] ** 2 * float(np.sum(kernels[k][s] * kernels[m][s]))
-                                            for s in kernels[k].keys() & kernels[m].keys())
-    matrix = np.column_stack(columns) if columns else np.empty((0, 0))
-    return matrix, noise, a
-
-
-def _noise_kernels(slopes: dict, filters: dict, a: np.ndarray, width: int, weights: np.ndarray | None) -> dict:
-    """Signal -> (windows x samples): how much of each sample's noise, from half a derivative filter before the
-    window to half one after it, a feature's window value carries.  ``weights`` None: an exact difference, its
-    slope at the ends; else an integral, each sample's weight times the slope, spread over the derivative
-    filter's span for a derivative estimate."""
-    half = (default_window() - 1) // 2
-    span = width + 1 + 2 * half
-    out: dict = {}
-    inside = a[:, None] + np.arange(width + 1)
-    for point, slope in slopes.items():
-        signal, coefficients = filters.get(point, (point, None))
-        kernel = out.setdefault(signal, np.zeros((a.size, span)))
-        if weights is None:
-            kernel[:, half + width] += slope[a + width]
-            kernel[:, half] -= slope[a]
-            continue
-        share = weights * slope[inside]
-        if coefficients is None:
-            kernel[:, half:half + width + 1] += share
-            continue
-        for q, c in enumerate(coefficients):  # the estimate at i reads samples i - half ... i + half
-            kernel[:, q:q + width + 1] += c * share
-    return out
-
-
-def _end_kernels(signal, order: int, sigma: dict, windows: int, width: int, step: float) -> dict:
-    """Signal -> (windows x samples) of a difference of ``order``-th derivative estimates at a window's ends."""
-    half = (default_window() - 1) // 2
-    coefficients = savgol_coeffs(default_window(), 3, deriv=order, delta=step, use="dot")
-    kernel = np.zeros((windows, width + 1 + 2 * half))
-    kernel[:, width:width + 2 * half + 1] += coefficients
-    kernel[:, :2 * half + 1] -= coefficients
-    return {signal: kernel} if sigma.get(signal, 0.0) > 0 else {}
-
-
-def _antiderivative(feature: sp.Expr, compiled) -> sp.Expr | None:
-    """``G(x)`` with ``dG/dt = feature`` when the feature is ``g(x) dx/dt`` for one signal ``x`` (``x`` itself for
-    ``dx/dt``), else None: its integral over a window is then exact, with no derivative estimate."""
-    for point, (name, order) in compiled.derivatives.items():
-        if order != 1 or point not in feature.free_symbols:
-            continue
-        signal = sp.Symbol(name)
-        slope = sp.diff(feature, point)
-        if not slope.free_symbols <= {signal} or sp.simplify(feature - slope * point) != 0:
-            return None
-        real = sp.Dummy("x", real=True)
-        antiderivative = sp.integrate(slope.xreplace({signal: real}), real)
-        return None if antiderivative.has(sp.Integral) else antiderivative.xreplace({real: signal})
-    return None
-
-
-def _feature_samples(feature: sp.Expr, values: dict, sigma: dict, shape: tuple) -> tuple[np.ndarray, dict]:
-    """A feature's samples, less the mean its signals' noise adds to it, and its slope along each noisy signal."""
-    symbols = list(values)
-    function = sp.lambdify(symbols, feature, modules="numpy")
-
-    def at(shift: dict) -> np.ndarray:
-        with np.errstate(all="ignore"):
-            return np.broadcast_to(np.asarray(function(*(values[s] + shift.get(s, 0.0) for s in symbols)), float),
-                                   shape)
-
-    samples = at({})
-    slopes, bias = {}, np.zeros(shape)
-    for s in feature.free_symbols & {s for s, v in sigma.items() if v > 0}:
-        up, down = at({s: sigma[s]}), at({s: -sigma[s]})
-        slopes[s] = np.nan_to_num((up - down) / (2.0 * sigma[s]), posinf=0.0, neginf=0.0)
-        bias += np.nan_to_num(0.5 * (up - 2.0 * samples + down), posinf=0.0, neginf=0.0)
-    return samples - bias, slopes
-
-
-def _trusted_samples(compiled, record: Record, points: list, features: list) -> np.ndarray:
-    """Samples where the point values the numeric features need are finite and not across an input's step."""
-    needed = set().union(*(f.free_symbols for f in features)) if features else set()
-    usable = np.ones(len(record), bool)
-    for symbol, values in zip(compiled.points, points):
-        if symbol in needed:
-            usable &= np.isfinite(values)
-    arr = compiled.arr
-    orders = [compiled.derivatives[s][1] for s in needed if s in compiled.derivatives]
-    inputs = [s for s in arr.signals if s not in arr.sensors and s in record.columns]
-    if inputs:  # a step, and the fast transient after it, defeat the derivative filter and the trapezoid rule
-        reach = default_window() + max(orders, default=1)
-        usable &= ~step_mask({"t": record.t, **{s: record[s] for s in inputs}}, inputs, reach)
-    return usable
-
-
 def _choose(bg, arrs: Sequence, parameters: Sequence[str] | None) -> tuple[list, list]:
     """The parameters to fit (those asked, else every parameter of an ARR) and those in no ARR."""
     in_arrs = list(dict.fromkeys(p for arr in arrs for p in sorted(arr.parameters)))
@@ -523,7 +210,7 @@ def _choose(bg, arrs: Sequence, parameters: Sequence[str] | None) -> tuple[list,
     return [p for p in chosen if p in in_arrs and values[p] != 0], unseen
 
 
-def _rank_out(problem: _Problem, x: np.ndarray, prior: float | None = None) -> tuple[list, list, np.ndarray]:
+def _rank_out(problem: Problem, x: np.ndarray, prior: float | None = None) -> tuple[list, list, np.ndarray]:
     """Split the parameters into those the Jacobian at ``x`` identifies and groups it does not: one direction
     at a time, its largest member kept out (at its datasheet value).  A direction is not identified where the
     Jacobian is singular to working precision (:data:`SINGULAR_FLOOR`), or, with ``prior``, where the records
@@ -637,7 +324,7 @@ def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = No
         raise SettingError("quadrature", f"{{setting}} must be one of {', '.join(QUADRATURES)}, got {quadrature!r}")
     if window is not None and not (isinstance(window, int) and window >= 2):
         raise SettingError("window", f"{{setting}} must be a whole number of samples >= 2, got {window!r}")
-    problem = _problem(arrs, records, names, bg.parameters, window, bg.domains, quadrature)
+    problem = windowed_problem(arrs, records, names, bg.parameters, window, bg.domains, quadrature)
     if not problem.blocks:
         width = int(window or INTEGRATION_WINDOW)
         raise SettingError("records", f"{{setting}}: no window of {width + 1} usable samples in any record (the "
@@ -726,11 +413,6 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
         samples=int(sum(b.features.shape[0] for b in problem.blocks)), level=level)
 
 
-#: Lags of the residuals' autocorrelation that the intervals count (Newey-West): neighbouring windows share an
-#: end sample, and a derivative estimate's noise spans a few samples.
-LAGS = 5
-
-
 def _settled(bg, arrs: Sequence, records: Sequence, ident: Identifiability, window: int | None, quadrature: str,
              prior: float | None) -> tuple:
     """The fit of the identified parameters, refitted without the one whose interval tells least while any
@@ -740,19 +422,19 @@ def _settled(bg, arrs: Sequence, records: Sequence, ident: Identifiability, wind
     spread = math.inf if prior is None else prior
     while True:
         names = ident.identified
-        problem = _problem(arrs, records, names, bg.parameters, window, bg.domains, quadrature)
+        problem = windowed_problem(arrs, records, names, bg.parameters, window, bg.domains, quadrature)
         if not sum(b.features.shape[0] for b in problem.blocks):
             raise SettingError("records", "{setting}: no sample where every signal and derivative of the ARRs is "
                                           "known")
         x = _fit(problem, _bounds(bg, names, problem.nominal), spread)
-        covariance, noise, correlation = _covariance(problem, x, spread)
+        covariance, noise, correlation = fit_covariance(problem, x, spread)
         relative = np.sqrt(np.maximum(np.diag(covariance), 0.0))
         if prior is None or len(names) < 2 or relative.max() <= prior:
             return problem, x, covariance, noise, correlation, ident
         ident = _held(ident, names[int(np.argmax(relative))])
 
 
-def _fit(problem: _Problem, bounds: tuple, spread: float) -> np.ndarray:
+def _fit(problem: Problem, bounds: tuple, spread: float) -> np.ndarray:
     """The relative parameters that make the scaled residuals and the prior smallest."""
     # the prior on the logarithm of each relative value: a factor 2 above the datasheet costs what a factor 2
     # below does, and zero is infinitely far
@@ -780,126 +462,11 @@ def _kept_uncertainty(arrs: Sequence, records: Sequence, names: list, kept: list
     values adds to the fitted ones' covariance: ``G diag(prior^2) G'``, ``G`` how the fit would move per relative
     change of a held one (``-(J'J)^-1 J' J_held`` at the fit).  Held without it, they would pass their
     datasheet error on to the others with intervals that do not know it."""
-    both = _problem(arrs, records, names + kept, values, window, domains, quadrature)
+    both = windowed_problem(arrs, records, names + kept, values, window, domains, quadrature)
     jac = both.jacobian(np.concatenate([x, np.ones(len(kept))]))
     fitted, held = jac[:, :len(names)], jac[:, len(names):]
     moved = -np.linalg.pinv(fitted.T @ fitted + np.eye(len(names)) / prior ** 2) @ fitted.T @ held
     return prior ** 2 * moved @ moved.T
-
-
-def _covariance(problem: _Problem, x: np.ndarray, prior: float = math.inf) -> tuple[np.ndarray, dict, dict]:
-    """The fit's covariance (relative parameters), robust to the residuals' own variance and autocorrelation:
-    the sandwich of the objective's Hessian (:func:`_hessian`) about a Newey-West middle (Bartlett weights over
-    :data:`LAGS` lags) of the windows' scores.  A window's score adds its rows of every ARR (ARRs that share a
-    sensor share its noise), its residuals first scaled up by their leverage (:func:`_window_scores`).  An ARR
-    whose residual is quieter than its sensors and numbers predict (a clean record) counts as noisy as
-    predicted.  Also each ARR's residual spread, in its own unit, and the ratio of its scores' variance with
-    the lags to without (its inflation)."""
-    jac, scaled, per_arr = problem.jacobian(x), problem.residual(x), problem.per_arr(x)
-    information = np.eye(x.size) / prior ** 2  # the prior's own share
-    bread = np.linalg.pinv(_hessian(problem, x, jac, scaled) + information)
-    noise, inflation, start = {}, {}, 0
-    keys = []
-    meat = information.copy()
-    for block in problem.blocks:
-        size = block.features.shape[0]
-        rows, residual = jac[start:start + size], scaled[start:start + size]
-        start += size
-        keys.extend(block.keys)
-        scores = rows * residual[:, None]
-        noise[block.name] = float(robust_std(per_arr[block.name]))
-        spread = robust_std(residual)
-        if spread < 1.0:  # quieter than predicted: the prediction's share of the information
-            meat += (1.0 - spread ** 2) * rows.T @ rows
-        own = _newey_west(scores)
-        inflation[block.name] = float(np.trace(own) / np.trace(scores.T @ scores)) if np.any(scores) else 1.0
-    windows = _window_scores(jac, scaled, keys, np.linalg.pinv(jac.T @ jac + information))
-    for record in sorted({r for r, _ in windows}):
-        meat += _newey_west(np.array([windows[k] for k in sorted(k for k in windows if k[0] == record)]))
-    sandwich = bread @ meat @ bread
-    # the same sandwich with the windows' scores averaged over the record: each ARR's residual variance (at least
-    # the predicted) and the ARRs' correlations (redundant ARRs share their sensors' noise).  The plain middle
-    # squares the scores of the few windows that hold most of a parameter's information, and on some records it
-    # comes out far too small; this one cannot, and the intervals take the wider of the two
-    steady = bread @ (_modelled_middle(problem, jac, scaled) + information) @ bread
-    wider = np.sqrt(np.maximum(np.diag(steady), np.diag(sandwich)) / np.maximum(np.diag(sandwich), 1e-300))
-    return sandwich * np.outer(wider, wider), noise, inflation
-
-
-def _modelled_middle(problem: _Problem, jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
-    """``sum_w J_w' V J_w`` over the windows, ``V`` the covariance of the ARRs' scaled residuals over one window,
-    estimated over all of them (each ARR's variance at least 1, the predicted)."""
-    index: dict = {}  # window -> {block: row}
-    start = 0
-    for b, block in enumerate(problem.blocks):
-        for row, key in enumerate(block.keys):
-            index.setdefault(key, {})[b] = start + row
-        start += block.features.shape[0]
-    count = len(problem.blocks)
-    second, shared = np.zeros((count, count)), np.zeros((count, count))
-    for rows in index.values():
-        blocks = list(rows)
-        values = residual[[rows[b] for b in blocks]]
-        second[np.ix_(blocks, blocks)] += np.outer(values, values)
-        shared[np.ix_(blocks, blocks)] += 1.0
-    covariance = second / np.maximum(shared, 1.0)
-    spread = np.sqrt(np.maximum(np.diag(covariance), 1e-300))
-    correlation = np.clip(covariance / np.outer(spread, spread), -1.0, 1.0)
-    level = np.maximum(spread, 1.0)
-    covariance = correlation * np.outer(level, level)
-    middle = np.zeros((jac.shape[1], jac.shape[1]))
-    for rows in index.values():
-        blocks = list(rows)
-        block = jac[[rows[b] for b in blocks]]
-        middle += block.T @ covariance[np.ix_(blocks, blocks)] @ block
-    return middle
-
-
-def _window_scores(jac: np.ndarray, residual: np.ndarray, keys: list, inverse: np.ndarray) -> dict:
-    """Window -> its score ``J_w' (I - H_w)^(-1/2) u_w``: the rows of every ARR over that window, their residuals
-    scaled up by their leverage ``H_w = J_w (J'J)^-1 J_w'`` (Bell and McCaffrey's small-sample correction).  A
-    window that pulls the fit towards itself leaves a residual smaller than its noise; with few windows per
-    parameter the plain scores would make the intervals too narrow."""
-    rows: dict = {}
-    for index, key in enumerate(keys):
-        rows.setdefault(key, []).append(index)
-    scores = {}
-    for key, index in rows.items():
-        block = jac[index]
-        values, vectors = np.linalg.eigh(np.eye(len(index)) - block @ inverse @ block.T)
-        # a leverage of 1 (a window that alone fixes a direction) would divide by zero: cap its correction
-        root = (vectors / np.sqrt(np.clip(values, 0.01, 1.0))) @ vectors.T
-        scores[key] = block.T @ (root @ residual[index])
-    return scores
-
-
-def _hessian(problem: _Problem, x: np.ndarray, jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
-    """Half the Hessian of the sum of squared residuals, by central differences of its gradient.  Its
-    Gauss-Newton part alone, ``J'J``, counts the regressors' noise as information (it holds their noisy
-    Gram matrix), which the curvature of the noise scaling takes back; where the difference is not positive
-    definite (a flat direction), ``J'J``."""
-    gauss_newton = jac.T @ jac
-    step = 1e-6
-    columns = []
-    for k in range(x.size):
-        dx = np.zeros(x.size)
-        dx[k] = step * max(abs(x[k]), 1.0)
-        up = problem.jacobian(x + dx).T @ problem.residual(x + dx)
-        down = problem.jacobian(x - dx).T @ problem.residual(x - dx)
-        columns.append((up - down) / (2.0 * dx[k]))
-    hessian = 0.5 * (np.column_stack(columns) + np.column_stack(columns).T)
-    if not np.all(np.isfinite(hessian)) or np.linalg.eigvalsh(hessian).min() <= 1e-9 * np.abs(hessian).max():
-        return gauss_newton
-    return hessian
-
-
-def _newey_west(scores: np.ndarray) -> np.ndarray:
-    """``sum_t g_t g_t' + sum_l (1 - l/(L+1)) sum_t (g_t g_{t-l}' + g_{t-l} g_t')`` over consecutive rows."""
-    middle = scores.T @ scores
-    for lag in range(1, min(LAGS, len(scores) - 1) + 1):
-        cross = scores[lag:].T @ scores[:-lag]
-        middle = middle + (1.0 - lag / (LAGS + 1)) * (cross + cross.T)
-    return middle
 
 
 def _bounds(bg, names: list, nominal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -144,7 +144,7 @@ def test_a_law_with_its_parameter_inside_a_modulus_is_fitted():
 def test_a_gas_law_is_fitted_through_its_numerator():
     """p = R_a Q + p_0 V/(V_a - V): its denominator mixes a parameter and a signal; the relation times
     (V_a - V) holds where it does and is linear in V_a, R_a V_a, R_a and p_0."""
-    from diagnosis.parameter_estimation import _terms
+    from diagnosis._windowed_residuals import split_terms as _terms
 
     p, q, v = sp.symbols("p q v")
     R_a, V_a, p_0 = sp.symbols("R_a V_a p_0")
