@@ -101,8 +101,6 @@ FAULT = 0.3
 BLIND = 1.0
 #: Significant digits of the figures printed.
 DIGITS = 4
-#: A box cut to its parameter's domain stops this share short of the domain's edge.
-CUT = 1e-3
 
 # --------------------------------------------------------------------------------------------- the DC motor
 
@@ -208,22 +206,6 @@ def _symmetry(arrs, direction: dict) -> dict:
     return {m: float(q) for m, q in powers.items()}
 
 
-def inside_domains(boxes: dict, values: dict, domains: dict) -> tuple[dict, list]:
-    """The boxes, each cut to its parameter's physical domain (a 95 % interval of a poorly seen positive
-    parameter may reach below zero, which a model refuses), and the parameters whose box was cut."""
-    out, cut = {}, []
-    for p, (lo, hi) in boxes.items():
-        a, b = domains.get(p, (-math.inf, math.inf))
-        value = values[p]
-        floor, ceiling = sorted((a / value - 1.0, b / value - 1.0)) if value else (-math.inf, math.inf)
-        keep = (max(lo, floor + CUT * abs(floor) if math.isfinite(floor) else floor),
-                min(hi, ceiling - CUT * abs(ceiling) if math.isfinite(ceiling) else ceiling))
-        out[p] = keep
-        if keep != (lo, hi):
-            cut.append(p)
-    return out, cut
-
-
 def detection(bg, record, until: float | None = None) -> dict:
     """Detection on ``record`` with margins from ``t <= until`` (default: the library's stretch): whether it
     raised a false alarm, the ARRs in alarm, the smallest detectable changes."""
@@ -276,7 +258,11 @@ def one_seed(case: ZooCase, seed: int, fit_only: str = "all") -> dict:
             else bool((fit.values[p] - goal) * (fit.datasheet[p] - goal) > 0)}
     row["combinations"] = [f"{g['expression']} (kept {g['kept']})" for g in fit.identifiability.combinations]
     row["unseen"] = list(fit.identifiability.unseen)
-    boxes, row["cut"] = inside_domains(uncertainty_boxes(fit), fit.values, sheet.domains)
+    raw = uncertainty_boxes(fit)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        boxes = uncertainty_boxes(fit, model=sheet)  # each cut to its parameter's domain
+    row["cut"] = [p for p in raw if raw[p] != boxes[p]]
     calibrated = fit.model(sheet, boxes)
     until = float(training.t[-1])
     for name, model in (("before", sheet), ("after", calibrated)):

@@ -3,9 +3,11 @@ from the physics with scipy's solve_ivp, never the library's own simulate."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import numpy as np
-import sympy as sp
 import pytest
+import sympy as sp
 from scipy.integrate import solve_ivp
 
 from bondgraph import SettingError
@@ -199,3 +201,12 @@ def test_a_weakly_seen_parameter_held_at_its_datasheet_passes_its_uncertainty_on
     assert hi - lo > 5 * (given_hi - given_lo)
     boxes = uncertainty_boxes(fit)
     assert boxes["R_a"][1] == pytest.approx(given_hi / fit.values["R_a"] - 1.0)
+
+
+def test_boxes_are_cut_to_the_parameters_domains_with_a_warning():
+    fit = ParameterEstimate({"L": 1e-3, "R": 2.0}, {"L": 1e-3, "R": 2.0},
+                            intervals={"L": (-3e-3, 5e-3), "R": (1.8, 2.4)}, std={"L": 2e-3, "R": 0.1})
+    with pytest.warns(UserWarning, match="uncertainty box of L cut to its domain"):
+        boxes = uncertainty_boxes(fit, model=SimpleNamespace(domains={"L": (0.0, np.inf), "R": (0.0, np.inf)}))
+    assert boxes["R"] == pytest.approx((-0.1, 0.2)) and boxes["L"][1] == pytest.approx(4.0)
+    assert -1.0 < boxes["L"][0] < -0.99

@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import importlib.util
 import json
-import math
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -89,10 +88,3 @@ def test_a_combination_carrier_is_scored_against_the_value_that_gives_the_combin
     aim = bench_calibration.targets(fit({"C": 1.0, "R": 2.0}, [ladder]), {"C": 1.2, "R": 2.5},
                                     [arr("C*dx + x/R")])
     assert aim["C"] == pytest.approx(1.2 * 2.5 / 2.0)  # R held 20 % low: C carries the product C*R = 3
-
-
-def test_boxes_are_cut_to_the_parameters_domains():
-    boxes, cut = bench_calibration.inside_domains({"L": (-4.0, 4.0), "R": (-0.1, 0.2)}, {"L": 1e-3, "R": 2.0},
-                                                  {"L": (0.0, math.inf), "R": (0.0, math.inf)})
-    assert cut == ["L"] and boxes["R"] == (-0.1, 0.2)
-    assert -1.0 < boxes["L"][0] < -0.99 and boxes["L"][1] == 4.0
