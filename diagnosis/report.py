@@ -329,8 +329,9 @@ def _fault(fault: str) -> tuple:
 
 def _signature_table(s: SignatureMatrix) -> tuple[list, list]:
     header = [("fault",), *[(_Code(str(c)),) for c in s.columns], ("Mb",), ("Ib",)]
-    rows = [[_fault(r), *[(str(v),) for v in s.matrix[i].tolist()], (str(s.detectable[i]),), (str(s.isolable[i]),)]
-            for i, r in enumerate(s.rows)]
+    detectable, isolable = s.detectable.tolist(), s.isolable.tolist()  # once: each is a pass over the matrix
+    rows = [[_fault(r), *[(str(v),) for v in values], (str(detectable[i]),), (str(isolable[i]),)]
+            for i, (r, values) in enumerate(zip(s.rows, s.matrix.tolist()))]
     return header, rows
 
 

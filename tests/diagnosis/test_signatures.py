@@ -26,3 +26,20 @@ def test_signature_matrix_matches_the_structure_of_the_bond_graph():
     signatures = {tuple(valves.row(v).values()) for v in valves.rows}
     assert len(signatures) == 3 and all(any(s) for s in signatures)  # detectable, and pairwise distinct
     assert valves.detectable.tolist() == [1, 1, 1] and valves.isolable.tolist() == [1, 1, 1]
+
+
+def test_isolability_is_a_signature_no_other_detectable_row_shares():
+    """Ib by definition (a detectable row whose signature is unique), written out pairwise, against the
+    matrix's own grouping on random matrices of every shape, the empty ones too."""
+    import numpy as np
+
+    from diagnosis.signatures import SignatureMatrix
+
+    rng = np.random.default_rng(36)
+    for rows, columns in [(0, 3), (4, 0), (1, 1), *[(int(r), int(c)) for r, c in rng.integers(1, 12, (40, 2))]]:
+        matrix = (rng.random((rows, columns)) < rng.uniform(0.1, 0.6)).astype(int)
+        expected = [int(matrix[i].any() and not any(np.array_equal(matrix[i], matrix[j])
+                                                       for j in range(rows) if j != i)) for i in range(rows)]
+        signatures = SignatureMatrix(tuple(f"f{i}" for i in range(rows)), tuple(f"a{j}" for j in range(columns)),
+                                     matrix)
+        assert signatures.isolable.tolist() == expected, (rows, columns)
