@@ -33,10 +33,13 @@ sensor omega        1        1          1          0   1   1
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import sparse
+from scipy.optimize import Bounds, LinearConstraint, milp
 
 from .structural import sensor_fault
 
@@ -89,6 +92,30 @@ class SignatureMatrix:
         _, group, count = np.unique(self.matrix, axis=0, return_inverse=True, return_counts=True)
         return ((count[group.reshape(-1)] == 1) & self.matrix.any(axis=1)).astype(int)
 
+    def fewest_tests(self) -> SignatureMatrix:
+        """The same rows over the fewest columns (ARRs) that keep what all of them achieve: every detectable
+        fault still seen by one, every pair of faults with different signatures still told apart by one.
+
+        A set cover solved exactly as an integer program (scipy's HiGHS): a column per ARR, a constraint per
+        detectable row and per pair of distinct signatures.  Among equally few, HiGHS's choice.
+
+        >>> m = SignatureMatrix(("a", "b", "c"), ("r1", "r2", "r3"), np.array([[1, 1, 0], [1, 0, 1], [0, 1, 1]]))
+        >>> m.fewest_tests().columns   # two ARRs give three distinct nonzero signatures
+        ('r1', 'r2')
+        """
+        needs = _covering_needs(self.matrix)
+        if not needs.shape[0]:
+            return SignatureMatrix(self.rows, (), self.matrix[:, :0])
+        columns = self.matrix.shape[1]
+        found = milp(c=np.ones(columns), constraints=LinearConstraint(needs, lb=1, ub=np.inf),
+                     integrality=np.ones(columns), bounds=Bounds(0, 1))
+        if found.x is None:  # never for a feasible cover (all the columns are one); say so rather than guess
+            warnings.warn(f"fewest_tests: the integer program stopped ({found.message}); every ARR kept",
+                          stacklevel=2)
+            return self
+        chosen = np.flatnonzero(np.round(found.x) > 0)
+        return SignatureMatrix(self.rows, tuple(self.columns[j] for j in chosen), self.matrix[:, chosen])
+
     def row(self, name: str) -> dict:
         """The signature of one parameter: ARR name -> 0/1."""
         return dict(zip(self.columns, self.matrix[self.rows.index(name)].tolist()))
@@ -106,6 +133,19 @@ class SignatureMatrix:
         for name, values in zip(self.rows, table):
             lines.append(f"{str(name):<{width}}" + "".join(f"  {v:>{max(len(c), 2)}}" for c, v in zip(columns, values)))
         return "\n".join(lines)
+
+
+def _covering_needs(matrix: np.ndarray):
+    """A sparse 0/1 matrix, a row per need and a column per ARR: the ARRs that see a detectable fault, and
+    those that tell apart two distinct signatures (pairs of distinct rows, duplicates counted once)."""
+    detectable = matrix[matrix.any(axis=1)]
+    distinct = np.unique(matrix, axis=0)
+    first, second = np.triu_indices(distinct.shape[0], k=1)
+    needs = [sparse.csr_matrix(detectable)]
+    for start in range(0, first.size, 20_000):  # in blocks: a 200-stage chain has some 300,000 pairs
+        part = slice(start, start + 20_000)
+        needs.append(sparse.csr_matrix((distinct[first[part]] != distinct[second[part]]).astype(int)))
+    return sparse.vstack(needs, format="csr")
 
 
 def signature_matrix(arrs: Sequence, rows: Sequence[str] | None = None, *, sensor_faults: bool = True

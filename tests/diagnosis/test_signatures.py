@@ -1,6 +1,7 @@
 """Fault signature matrix against the structure of the bond graph: the three tanks of Du et al."""
 
 import networkx as nx
+import pytest
 
 from bondgraph.library import three_tank
 from diagnosis import derive_arrs, signature_matrix
@@ -43,3 +44,45 @@ def test_isolability_is_a_signature_no_other_detectable_row_shares():
         signatures = SignatureMatrix(tuple(f"f{i}" for i in range(rows)), tuple(f"a{j}" for j in range(columns)),
                                      matrix)
         assert signatures.isolable.tolist() == expected, (rows, columns)
+
+
+def _keeps(matrix, chosen) -> bool:
+    """Whether the columns ``chosen`` see every detectable row and tell apart every two distinct rows."""
+    import numpy as np
+
+    sub = matrix[:, list(chosen)]
+    rows = range(matrix.shape[0])
+    return (all(sub[i].any() for i in rows if matrix[i].any())
+            and all(not np.array_equal(sub[i], sub[k]) for i in rows for k in rows
+                    if not np.array_equal(matrix[i], matrix[k])))
+
+
+def test_the_fewest_tests_are_as_few_as_a_brute_force_search_finds_and_keep_everything():
+    """Against every subset of columns, smallest first, on random matrices up to 7 ARRs."""
+    from itertools import combinations
+
+    import numpy as np
+
+    from diagnosis.signatures import SignatureMatrix
+
+    rng = np.random.default_rng(6)
+    for _ in range(60):
+        rows, columns = int(rng.integers(1, 9)), int(rng.integers(1, 8))
+        matrix = (rng.random((rows, columns)) < rng.uniform(0.2, 0.7)).astype(int)
+        full = SignatureMatrix(tuple(f"f{i}" for i in range(rows)), tuple(f"a{j}" for j in range(columns)), matrix)
+        fewest = full.fewest_tests()
+        chosen = [full.columns.index(c) for c in fewest.columns]
+        assert _keeps(matrix, chosen)
+        assert fewest.detectable.tolist() == full.detectable.tolist()
+        assert fewest.isolable.tolist() == full.isolable.tolist()
+        smallest = next(size for size in range(columns + 1)
+                        if any(_keeps(matrix, subset) for subset in combinations(range(columns), size)))
+        assert len(chosen) == smallest
+
+
+@pytest.mark.slow
+def test_the_fewest_tests_of_the_three_tanks_complete_arrs_keep_their_isolability():
+    full = signature_matrix(derive_arrs(three_tank()))
+    fewest = full.fewest_tests()
+    assert len(fewest.columns) < len(full.columns)
+    assert fewest.isolable.tolist() == full.isolable.tolist() and fewest.detectable.tolist() == full.detectable.tolist()
