@@ -232,6 +232,7 @@ def _calibrate_options(p: argparse.ArgumentParser) -> None:
     import inspect
 
     from diagnosis import estimate_parameters
+    from diagnosis.parameter_estimation import INTEGRATION_WINDOW, QUADRATURES
 
     ESTIMATION = {k: v.default for k, v in inspect.signature(estimate_parameters).parameters.items()}  # its defaults
     p.add_argument("model", metavar="MODEL", help=MODEL_HELP)
@@ -257,6 +258,12 @@ def _calibrate_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--prior", type=_prior, default=ESTIMATION["prior"], metavar="S",
                    help="the datasheet's relative standard deviation: a parameter the records barely see stays near "
                         f"its datasheet value (default {ESTIMATION['prior']:g}; none: the records alone)")
+    p.add_argument("--window", type=_window, default=None, metavar="N",
+                   help="samples each row integrates the ARRs over (default "
+                        f"{INTEGRATION_WINDOW}; shorter for records of a few hundred samples)")
+    p.add_argument("--quadrature", choices=QUADRATURES, default=ESTIMATION["quadrature"],
+                   help="the window integral of a feature's samples: trapezoid (default, a continuous machine) or "
+                        "euler (the left rectangle rule, exact for records of an explicit-Euler model)")
     p.add_argument("--report", metavar="FILE.html", help="the offline report (default: --out with .html)")
     p.add_argument("--force", action="store_true", help="replace existing --out and report files (never an input)")
 
@@ -267,6 +274,17 @@ def _prior(text: str) -> float | None:
 
 
 _prior.__name__ = "prior"  # argparse names the type in its message: "invalid prior value: 'x'"
+
+
+def _window(text: str) -> int:
+    """``--window``: a whole number of samples, at least 2."""
+    value = int(text)
+    if value < 2:
+        raise ValueError(text)
+    return value
+
+
+_window.__name__ = "window (a whole number of samples >= 2)"
 
 
 def _prognose_options(p: argparse.ArgumentParser) -> None:

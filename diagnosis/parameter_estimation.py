@@ -72,7 +72,8 @@ from .derivation import derive_arrs
 from .records import as_record
 from .set_membership import set_membership_boxes
 
-__all__ = ["Identifiability", "ParameterEstimate", "estimate_parameters", "identifiability", "uncertainty_boxes"]
+__all__ = ["INTEGRATION_WINDOW", "PRIOR", "QUADRATURES", "Identifiability", "ParameterEstimate", "estimate_parameters",
+           "identifiability", "uncertainty_boxes"]
 
 #: A direction of relative parameter changes whose singular value is below this share of the largest is not
 #: identified by the records (it would need a relative precision beyond what double precision and filtered

@@ -151,7 +151,8 @@ def _estimate(model, arrs, training: list, plan: Plan, args, progress: Progress)
     """The pooled estimate over the training records and the boxes (``--boxes``)."""
     from diagnosis import estimate_parameters, uncertainty_boxes
 
-    options = {"arrs": arrs, "level": args.level, "prior": args.prior}
+    options = {"arrs": arrs, "level": args.level, "prior": args.prior, "window": args.window,
+               "quadrature": args.quadrature}
     progress(f"estimating {', '.join(args.parameters) if args.parameters else 'the parameters'} on "
              f"{len(training)} training record(s)")
     fit = _estimated(lambda: estimate_parameters(model, training, args.parameters, **options), plan.training)
@@ -274,7 +275,8 @@ def calibration_block(args, plan: Plan, spec, fit, boxes: dict, validation, trai
         "datasheet": {"model": spec.model.name, "source": source, "sha256": model_sha256(spec.model)},
         "records": records,
         "method": {"estimator": ESTIMATOR, "parameters": args.parameters, "level": fit.level, "prior": args.prior,
-                   "boxes": args.boxes, "samples": fit.samples},
+                   "boxes": args.boxes, "window": args.window, "quadrature": args.quadrature,
+                   "samples": fit.samples},
         "estimates": summary["parameters"], "boxes": {p: list(b) for p, b in boxes.items()},
         "combinations": summary["combinations"], "unseen": summary["unseen"], "condition": summary["condition"],
         "residual_std": summary["residual_std"],

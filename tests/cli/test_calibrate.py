@@ -214,6 +214,20 @@ def test_a_parameter_the_record_tells_less_well_than_the_datasheet_is_named_and_
     assert "Told less well by the records than by the datasheet" in (tmp_path / "s.html").read_text()
 
 
+def test_window_and_quadrature_reach_the_fit_and_the_provenance(bench, tmp_path):
+    out = tmp_path / "wq.json"
+    code, _, stderr = run("--quiet", "calibrate", "dc-motor", bench / "a.csv", "--parameters", "J", "b",
+                          "--window", "20", "--quadrature", "euler", "--hold-out", "0", "--out", out)
+    assert code == 0, stderr
+    method = load_model(out).calibration["method"]
+    assert (method["window"], method["quadrature"]) == (20, "euler")
+    default = tmp_path / "default.json"
+    assert run("--quiet", "calibrate", "dc-motor", bench / "a.csv", "--parameters", "J", "b", "--hold-out", "0",
+               "--out", default)[0] == 0
+    # 21-sample windows: more rows than the default's 51 (2001 samples), and another estimate
+    assert load_model(out).calibration["method"]["samples"] > 2 * load_model(default).calibration["method"]["samples"]
+
+
 def test_validate_and_report_and_force(bench, tmp_path):
     out, report = tmp_path / "v.json", tmp_path / "pages" / "calibration.html"
     argv = ["--quiet", "calibrate", bench / "sheet.json", bench / "a.csv", bench / "b.csv", "--validate",
@@ -271,6 +285,10 @@ def bad_records(bench):
     (["--prior", "-1"], ["--prior", "> 0"]),
     (["--prior", "wide"], ["--prior", "invalid prior value: 'wide'"]),
     (["--boxes", "spread"], ["--boxes", "invalid choice"]),
+    (["--window", "1"], ["--window", "invalid window (a whole number of samples >= 2) value: '1'"]),
+    (["--window", "ten"], ["--window", "invalid window"]),
+    (["--quadrature", "simpson"], ["--quadrature", "invalid choice"]),
+    (["--window", "5000"], ["HEALTHY.csv", "no window of 5001 usable samples"]),
 ])
 def test_bad_options_exit_2_in_one_line(bench, tmp_path, extra, words):
     extra = [e.format(a=bench / "a.csv", d=bench / "d.csv") for e in extra]
