@@ -24,6 +24,7 @@ from .csv_reading import read_csv
 from .records import (Record, RecordError, RecordWarning, SensorFault, add_noise, add_sensor_faults, as_record,
                       check_signals)
 from .uniform_grid import resample
+from .sensor_placement import SensorPlacement, place_sensors
 from .signatures import SignatureMatrix, signature_matrix
 from .streaming import StreamChunk, StreamingEvaluation
 from .structural import StructuralLimitError, StructuralModel, structural_model
@@ -31,11 +32,11 @@ from .structural import StructuralLimitError, StructuralModel, structural_model
 __all__ = [
     "ARR", "ARRError", "ARRWarning", "Calibration", "Detectability", "Detection", "DetectionSettings", "Evaluation",
     "Identifiability", "Interval", "IntervalArray", "IntervalWarning", "ModelFigures", "ModelValidation",
-    "POOLED_RECORDS", "ParameterEstimate", "Record", "RecordError", "RecordWarning", "SensorFault", "SignatureMatrix",
-    "StreamChunk", "StreamingEvaluation", "StructuralLimitError", "StructuralModel", "Whiteness", "add_noise",
-    "add_sensor_faults", "affine_range", "as_record", "calibrate", "calibration_end", "check_signals",
+    "POOLED_RECORDS", "ParameterEstimate", "Record", "RecordError", "RecordWarning", "SensorFault", "SensorPlacement",
+    "SignatureMatrix", "StreamChunk", "StreamingEvaluation", "StructuralLimitError", "StructuralModel", "Whiteness",
+    "add_noise", "add_sensor_faults", "affine_range", "as_record", "calibrate", "calibration_end", "check_signals",
     "compile_interval", "consistent_faults", "delta", "derive_arrs", "detect", "detectability", "estimate_parameters",
-    "evaluable", "evaluate", "held_out_figures", "identifiability", "noise_margin", "pooled_calibration", "read_csv",
-    "resample", "residual_whiteness", "robust_std", "signature_matrix", "structural_arrs", "structural_model",
-    "uncertainty_boxes", "unreached", "validate_calibration",
+    "evaluable", "evaluate", "held_out_figures", "identifiability", "noise_margin", "place_sensors",
+    "pooled_calibration", "read_csv", "resample", "residual_whiteness", "robust_std", "signature_matrix",
+    "structural_arrs", "structural_model", "uncertainty_boxes", "unreached", "validate_calibration",
 ]

@@ -1,0 +1,87 @@
+"""Sensor placement (diagnosis.sensor_placement): minimal sets that reach the structural goal, checked by the
+ARRs, on library models and zoo models it was not designed around."""
+
+from __future__ import annotations
+
+import pytest
+
+from bondgraph import BondGraph, SettingError
+from bondgraph.library import dc_motor, three_tank, torsion_bar
+from diagnosis import structural_model
+from diagnosis.sensor_placement import junction_detectors, place_sensors, with_sensors
+from tests.zoo.chain import cases
+
+
+def reach(bg, sensors, goal="isolate"):
+    """What the structure of ``bg`` with ``sensors`` (fallible) detects and tells apart, written out here."""
+    model = structural_model(with_sensors(bg, sensors))
+    detects = model.detectable()
+    pairs = {(a, b) for a in detects for b in model.faults if a != b and model.isolable(a, b)}
+    return detects, pairs if goal == "isolate" else set()
+
+
+def assert_minimal_and_reaching(bg, placements, goal):
+    everything = reach(bg, junction_detectors(bg), goal)
+    for placement in placements:
+        sensors = placement.sensors
+        own = {f"sensor {'e' if s.startswith('De') else 'f'}_{s.split(' ', 1)[1]}" for s in sensors}
+        detects, pairs = reach(bg, sensors, goal)
+        faults = set(structural_model(bg).faults) | own
+        assert {f for f in everything[0] if f in faults} <= detects
+        assert {(a, b) for a, b in everything[1] if a in faults and b in faults} <= pairs
+        for dropped in sensors:  # minimal: no sensor can be dropped
+            fewer = tuple(s for s in sensors if s != dropped)
+            fewer_own = own - {f"sensor {'e' if dropped.startswith('De') else 'f'}_{dropped.split(' ', 1)[1]}"}
+            d, p = reach(bg, fewer, goal)
+            aims = set(structural_model(bg).faults) | fewer_own
+            assert not ({f for f in everything[0] if f in aims} <= d
+                        and {(a, b) for a, b in everything[1] if a in aims and b in aims} <= p), (bg.name, dropped)
+
+
+@pytest.mark.slow
+def test_the_torsion_bar_gets_minimal_sets_checked_by_its_arrs():
+    placements = place_sensors(torsion_bar(), goal="isolate")
+    assert placements and all(len(p.sensors) == 2 for p in placements)
+    assert_minimal_and_reaching(torsion_bar(), placements, "isolate")
+    for placement in placements:  # the ARRs reach no more than the structure allows, and see every fault it does
+        assert placement.derived["isolates"] <= placement.isolates
+        assert placement.derived["detects"] == placement.detects
+
+
+def test_a_motor_with_its_speed_sensor_only_gets_the_current():
+    graph = dc_motor().graph.copy()
+    graph.remove_node("i")
+    bg = BondGraph(graph, name="speed only")
+    (placement,) = place_sensors(bg, goal="isolate")
+    assert placement.sensors == ("Df 1_e",) and placement.cost == 1.0
+    assert len(placement.isolates) > len(reach(bg, ())[1])
+    assert place_sensors(dc_motor(), goal="isolate") == []  # the bench motor has it already
+
+
+@pytest.mark.parametrize("name", ["rc_ladder2", "quarter_car", "gear_belt_drivetrain", "wheatstone_rc",
+                                  "throttle_body"])
+def test_zoo_placements_are_minimal(name):
+    case = next(c for c in cases() if c.name == name)
+    bg = case.build()
+    assert place_sensors(bg, goal="isolate", check=False)  # each of these gains from a detector
+    for goal in ("detect", "isolate"):
+        assert_minimal_and_reaching(bg, place_sensors(bg, goal=goal, check=False), goal)
+
+
+def test_costs_order_the_alternatives():
+    bg = torsion_bar()
+    cheap = place_sensors(bg, goal="isolate", cost={"Df 1_Md": 0.5}, check=False)
+    assert cheap[0].sensors == ("Df 1_e", "Df 1_Md") and cheap[0].cost == 1.5
+    assert [p.cost for p in cheap] == sorted(p.cost for p in cheap)
+
+
+@pytest.mark.parametrize("options, setting, words", [
+    ({"goal": "locate"}, "goal", "detect, isolate"),
+    ({"cost": {"De 9_9": 1.0}}, "cost", "'De 9_9' is not a detector"),
+    ({"faults": ["R_x"]}, "faults", "no fault 'R_x'"),
+    ({"max_sensors": 0}, "max_sensors", ">= 1"),
+])
+def test_bad_settings_name_the_setting(options, setting, words):
+    with pytest.raises(SettingError, match=words) as error:
+        place_sensors(three_tank(), **options)
+    assert error.value.setting == setting
