@@ -67,6 +67,8 @@ COMMANDS = {
     "detect": "residuals, robust thresholds and alarms on recorded data",
     "calibrate": "parameters from healthy records, validated on held-out ones: the calibrated model (JSON, with "
                  "its provenance) and a report",
+    "sensors": "where to add sensors: the cheapest minimal sets of junction detectors that reach a detection or "
+               "isolation goal, checked by re-deriving the ARRs",
     "prognose": "estimate a degrading parameter and predict the RUL from recorded data",
     "fleet": "monitor a fleet: records of many assets to Parquet tables of alarms, estimates, RULs and residuals, "
              "on Dask workers, and an overview page (index.html)",
@@ -94,7 +96,7 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser(commands: Collection[str] | None = None) -> argparse.ArgumentParser:
     """The ``bgphm`` argument parser: ``--quiet``, ``--debug``, ``--version`` and the commands arr, simulate, detect,
-    calibrate, prognose, fleet, demo.
+    calibrate, sensors, prognose, fleet, demo.
 
     ``commands`` are those whose options are built (the others are listed with their help line); :func:`main`
     builds the one on the line alone, or none for ``bgphm --help``: a command's defaults are the library's, and
@@ -287,6 +289,33 @@ def _window(text: str) -> int:
 _window.__name__ = "window (a whole number of samples >= 2)"
 
 
+def _sensors_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("model", metavar="MODEL", help=MODEL_HELP)
+    p.add_argument("--goal", choices=("detect", "isolate"), default="isolate",
+                   help="what every candidate detector together would give: every fault detected, or moreover "
+                        "every pair told apart (default isolate)")
+    p.add_argument("--max-sensors", type=int, default=3, metavar="N", help="the most detectors a set adds "
+                   "(default 3)")
+    p.add_argument("--cost", nargs="+", action="extend", type=_detector_cost, metavar="DETECTOR=COST",
+                   help="a detector's cost, e.g. 'Df 1_e=2' (default 1 each)")
+    p.add_argument("--healthy-sensors", action="store_true", help="sensors cannot fail (their faults not counted)")
+    p.add_argument("--no-check", action="store_true", help="judge by the structure alone, without re-deriving "
+                   "the ARRs of each set")
+    p.add_argument("--out", metavar="FILE.json", help="the alternatives as JSON")
+    p.add_argument("--force", action="store_true", help="replace an existing --out file (never an input)")
+
+
+def _detector_cost(text: str) -> tuple[str, float]:
+    """``--cost``: ``DETECTOR=COST``."""
+    name, _, value = text.rpartition("=")
+    if not name.strip():
+        raise ValueError(text)
+    return name.strip(), float(value)
+
+
+_detector_cost.__name__ = "DETECTOR=COST"
+
+
 def _prognose_options(p: argparse.ArgumentParser) -> None:
     from prognosis import IsolationSettings
 
@@ -413,17 +442,17 @@ def _fleet_options(p: argparse.ArgumentParser) -> None:
 
 #: Each command's options.
 OPTIONS_OF = {"arr": _arr_options, "simulate": _simulate_options, "detect": _detect_options,
-              "calibrate": _calibrate_options, "prognose": _prognose_options, "fleet": _fleet_options,
-              "demo": _demo_options}
+              "calibrate": _calibrate_options, "sensors": _sensors_options, "prognose": _prognose_options,
+              "fleet": _fleet_options, "demo": _demo_options}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``bgphm`` console script; returns the exit code.
 
-    Commands: ``arr`` (the ARR report), ``simulate``, ``detect``, ``calibrate``, ``prognose``, ``fleet`` and
-    ``demo``; ``bgphm COMMAND --help`` lists each one's options.  Exit codes: 0 success, 2 bad usage or bad input (one
-    line on stderr naming the file, line, column, node or parameter), 1 anything else, including an
-    interrupted run.  Progress goes to stderr unless ``--quiet``.
+    Commands: ``arr`` (the ARR report), ``simulate``, ``detect``, ``calibrate``, ``sensors``, ``prognose``,
+    ``fleet`` and ``demo``; ``bgphm COMMAND --help`` lists each one's options.  Exit codes: 0 success, 2 bad
+    usage or bad input (one line on stderr naming the file, line, column, node or parameter), 1 anything else,
+    including an interrupted run.  Progress goes to stderr unless ``--quiet``.
 
     Examples
     --------
