@@ -101,7 +101,8 @@ def place_sensors(bg, *, goal: str = "isolate", faults: Sequence[str] | None = N
     Raises
     ------
     SettingError
-        An unknown goal, fault or detector, or ``max_sensors`` below 1.
+        An unknown goal, fault or detector, ``max_sensors`` below 1, or no set of at most ``max_sensors``
+        detectors that reaches the goal.
     """
     if goal not in GOALS:
         raise SettingError("goal", f"{{setting}} must be one of {', '.join(GOALS)}, got {goal!r}")
@@ -134,6 +135,9 @@ def place_sensors(bg, *, goal: str = "isolate", faults: Sequence[str] | None = N
                                              frozenset(isolates)))
     if any(not f.sensors for f in found):
         return []  # the model as it is reaches the goal
+    if not found:
+        raise SettingError("max_sensors", f"{{setting}}: no set of at most {max_sensors} of the {len(candidates)} "
+                                          f"detectors the model lacks reaches the goal ({goal}); allow more")
     found.sort(key=lambda f: (f.cost, len(f.sensors), f.sensors))
     return [_checked(bg, f, fallible) for f in found] if check else found
 

@@ -85,3 +85,9 @@ def test_bad_settings_name_the_setting(options, setting, words):
     with pytest.raises(SettingError, match=words) as error:
         place_sensors(three_tank(), **options)
     assert error.value.setting == setting
+
+
+def test_too_few_sensors_allowed_is_said_not_taken_for_nothing_to_add():
+    with pytest.raises(SettingError, match="no set of at most 1 of the 4 detectors") as error:
+        place_sensors(torsion_bar(), goal="isolate", max_sensors=1, check=False)
+    assert error.value.setting == "max_sensors"
