@@ -1,6 +1,7 @@
-"""Scale benchmark: the ARRs and the fault signatures of an n-stage mass-spring-damper chain.
+"""Scale benchmark: the ARRs and the fault signatures of an n-stage mass-spring-damper chain or RC ladder.
 
-For each n, builds the chain (a velocity sensor on every mass), derives its ARRs
+For each n, builds the chain (a velocity sensor on every mass; ``--model ladder``: an RC ladder, a voltage
+sensor on every capacitor, whose ARRs come from the minimal-set search, not the junctions), derives its ARRs
 (``diagnosis.derive_arrs``: one per sensor junction, nominal and uncertain parts split
 term by term) and the signature matrix.  Prints the times and the growth exponent (slope
 of log time against log n).  Baseline, in the same process and on the same chain: the
@@ -9,6 +10,7 @@ factor of.
 
     python benchmarks/bench_arrs.py            # table
     python benchmarks/bench_arrs.py --json     # {"n": [...], "seconds": [...], "growth_exponent": ...}
+    python benchmarks/bench_arrs.py --model ladder --sizes 50 200
 
 Target: n = 200 in under 5 s, growth exponent under 1.3.  Beside them, the time of the HTML ARR report
 (``diagnosis.report.arr_report``, what ``bgphm arr`` adds) over the derivation's (``report_over_derive``:
@@ -24,34 +26,58 @@ import time
 import numpy as np
 from sympy.core.cache import clear_cache
 
+from bondgraph import BondGraph
 from bondgraph.library import mass_spring_chain
 from diagnosis import derive_arrs, signature_matrix
 from diagnosis.report import arr_report
 
 
-def time_stages(n: int) -> dict:
+def rc_ladder(n: int) -> BondGraph:
+    """``n`` RC sections, ``U -> 1_i (R_i) -> 0_i (C_i, De v_i) -> 1_(i+1) ...``: every capacitor's voltage
+    measured, no current."""
+    bg = BondGraph(name=f"{n}-section RC ladder")
+    bg.add("U", "Se", unit="V")
+    previous = "U"
+    for i in range(1, n + 1):
+        bg.add(f"1_{i}", "1")
+        bg.add(f"R{i}", "R", value=100.0, uncertainty=(-0.05, 0.05), unit="Ohm")
+        bg.add(f"0_{i}", "0")
+        bg.add(f"C{i}", "C", value=1e-3, uncertainty=(-0.1, 0.1), unit="F")
+        bg.add(f"v{i}", "De", unit="V")
+        for tail, head in [(previous, f"1_{i}"), (f"1_{i}", f"R{i}"), (f"1_{i}", f"0_{i}"), (f"0_{i}", f"C{i}"),
+                           (f"0_{i}", f"v{i}")]:
+            bg.bond(tail, head)
+        previous = f"0_{i}"
+    return bg
+
+
+#: The models measured (``--model``).
+MODELS = {"chain": mass_spring_chain, "ladder": rc_ladder}
+
+
+def time_stages(n: int, build=mass_spring_chain) -> dict:
     """Seconds spent building the chain, deriving its ARRs and their signature matrix.
 
     sympy's cache is cleared first, so that a size is not helped by the previous one.
     """
     clear_cache()
     start = time.perf_counter()
-    bg = mass_spring_chain(n)
+    bg = build(n)
     built = time.perf_counter()
     arrs = derive_arrs(bg)
     derived = time.perf_counter()
     signatures = signature_matrix(arrs)
     signed = time.perf_counter()
-    assert len(arrs) == n and signatures.matrix.shape[1] == n   # no fault the junction ARRs miss
+    assert signatures.detectable.all(), "a fault no ARR sees"
     arr_report(bg, "html", arrs=arrs)  # what `bgphm arr` adds to the derivation (its signature table was cubic)
     reported = time.perf_counter()
     return {"build": built - start, "arrs": derived - built, "signatures": signed - derived, "total": signed - start,
             "report": reported - signed}
 
 
-def state_equation_seconds(n: int) -> float:
-    """Baseline: the state equations of the same chain (integral causality), from a clear cache."""
-    bg = mass_spring_chain(n)
+def state_equation_seconds(n: int, build=mass_spring_chain) -> float:
+    """Baseline: the state equations of the same model (integral causality), from a clear cache."""
+    bg = build(n)
     clear_cache()
     start = time.perf_counter()
     bg.state_equations()
@@ -63,16 +89,20 @@ def main() -> None:
     parser.add_argument("--json", action="store_true", help="print one JSON object")
     parser.add_argument("--sizes", type=int, nargs="+", default=[50, 200, 400])
     parser.add_argument("--repeat", type=int, default=1, help="best of this many runs per size")
+    parser.add_argument("--model", choices=sorted(MODELS), default="chain")
     args = parser.parse_args()
+    build = MODELS[args.model]
 
     # warm sympy's caches so the first size is not charged for them; 16 stages have 64 fault candidates,
     # over diagnosis.elimination.ISOLATION_LIMIT like every size measured
-    time_stages(16)
-    rows = [min((time_stages(n) for _ in range(args.repeat)), key=lambda row: row["total"]) for n in args.sizes]
+    time_stages(16, build)
+    rows = [min((time_stages(n, build) for _ in range(args.repeat)), key=lambda row: row["total"])
+            for n in args.sizes]
     seconds = [row["total"] for row in rows]
     slope = float(np.polyfit(np.log(args.sizes), np.log(seconds), 1)[0])
-    baselines = [state_equation_seconds(n) for n in args.sizes]
+    baselines = [state_equation_seconds(n, build) for n in args.sizes]
     figures = {
+        "model": args.model,
         "n": args.sizes,
         "seconds": [round(s, 4) for s in seconds],
         "growth_exponent": round(slope, 3),
