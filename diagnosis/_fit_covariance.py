@@ -31,13 +31,11 @@ def fit_covariance(problem: Problem, x: np.ndarray, prior: float = math.inf) -> 
     information = np.eye(x.size) / prior ** 2  # the prior's own share
     bread = np.linalg.pinv(_hessian(problem, x, jac, scaled) + information)
     noise, inflation, start = {}, {}, 0
-    keys = []
     meat = information.copy()
     for block in problem.blocks:
         size = block.features.shape[0]
         rows, residual = jac[start:start + size], scaled[start:start + size]
         start += size
-        keys.extend(block.keys)
         scores = rows * residual[:, None]
         noise[block.name] = float(robust_std(per_arr[block.name]))
         spread = robust_std(residual)
@@ -45,7 +43,8 @@ def fit_covariance(problem: Problem, x: np.ndarray, prior: float = math.inf) -> 
             meat += (1.0 - spread ** 2) * rows.T @ rows
         own = _newey_west(scores)
         inflation[block.name] = float(np.trace(own) / np.trace(scores.T @ scores)) if np.any(scores) else 1.0
-    windows = _window_scores(jac, scaled, keys, np.linalg.pinv(jac.T @ jac + information))
+    index = _rows_by_window(problem)
+    windows = _window_scores(jac, scaled, index, np.linalg.pinv(jac.T @ jac + information))
     for record in sorted({r for r, _ in windows}):
         meat += _newey_west(np.array([windows[k] for k in sorted(k for k in windows if k[0] == record)]))
     sandwich = bread @ meat @ bread
@@ -53,21 +52,26 @@ def fit_covariance(problem: Problem, x: np.ndarray, prior: float = math.inf) -> 
     # the predicted) and the ARRs' correlations (redundant ARRs share their sensors' noise).  The plain middle
     # squares the scores of the few windows that hold most of a parameter's information, and on some records it
     # comes out far too small; this one cannot, and the intervals take the wider of the two
-    steady = bread @ (_modelled_middle(problem, jac, scaled) + information) @ bread
+    steady = bread @ (_modelled_middle(index, len(problem.blocks), jac, scaled) + information) @ bread
     wider = np.sqrt(np.maximum(np.diag(steady), np.diag(sandwich)) / np.maximum(np.diag(sandwich), 1e-300))
     return sandwich * np.outer(wider, wider), noise, inflation
 
 
-def _modelled_middle(problem: Problem, jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
-    """``sum_w J_w' V J_w`` over the windows, ``V`` the covariance of the ARRs' scaled residuals over one window,
-    estimated over all of them (each ARR's variance at least 1, the predicted)."""
-    index: dict = {}  # window -> {block: row}
+def _rows_by_window(problem: Problem) -> dict:
+    """Window (record, first sample) -> {ARR's block number: its row in the stacked residuals}."""
+    index: dict = {}
     start = 0
     for b, block in enumerate(problem.blocks):
         for row, key in enumerate(block.keys):
             index.setdefault(key, {})[b] = start + row
         start += block.features.shape[0]
-    count = len(problem.blocks)
+    return index
+
+
+def _modelled_middle(index: dict, count: int, jac: np.ndarray, residual: np.ndarray) -> np.ndarray:
+    """``sum_w J_w' V J_w`` over the windows (``index``: :func:`_rows_by_window`), ``V`` the covariance of the
+    ``count`` ARRs' scaled residuals over one window, estimated over all of them (each ARR's variance at least
+    1, the predicted)."""
     second, shared = np.zeros((count, count)), np.zeros((count, count))
     for rows in index.values():
         blocks = list(rows)
@@ -87,21 +91,19 @@ def _modelled_middle(problem: Problem, jac: np.ndarray, residual: np.ndarray) ->
     return middle
 
 
-def _window_scores(jac: np.ndarray, residual: np.ndarray, keys: list, inverse: np.ndarray) -> dict:
+def _window_scores(jac: np.ndarray, residual: np.ndarray, index: dict, inverse: np.ndarray) -> dict:
     """Window -> its score ``J_w' (I - H_w)^(-1/2) u_w``: the rows of every ARR over that window, their residuals
     scaled up by their leverage ``H_w = J_w (J'J)^-1 J_w'`` (Bell and McCaffrey's small-sample correction).  A
     window that pulls the fit towards itself leaves a residual smaller than its noise; with few windows per
     parameter the plain scores would make the intervals too narrow."""
-    rows: dict = {}
-    for index, key in enumerate(keys):
-        rows.setdefault(key, []).append(index)
     scores = {}
-    for key, index in rows.items():
-        block = jac[index]
-        values, vectors = np.linalg.eigh(np.eye(len(index)) - block @ inverse @ block.T)
+    for key, rows in index.items():
+        at = list(rows.values())
+        block = jac[at]
+        values, vectors = np.linalg.eigh(np.eye(len(at)) - block @ inverse @ block.T)
         # a leverage of 1 (a window that alone fixes a direction) would divide by zero: cap its correction
         root = (vectors / np.sqrt(np.clip(values, 0.01, 1.0))) @ vectors.T
-        scores[key] = block.T @ (root @ residual[index])
+        scores[key] = block.T @ (root @ residual[at])
     return scores
 
 

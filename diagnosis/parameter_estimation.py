@@ -67,6 +67,7 @@ from scipy import optimize, stats
 from bondgraph.errors import SettingError
 
 from ._fit_covariance import fit_covariance
+from ._revalued import revalued
 from ._windowed_residuals import INTEGRATION_WINDOW, QUADRATURES, Problem, windowed_problem
 from .derivation import derive_arrs
 from .records import as_record
@@ -159,27 +160,7 @@ class ParameterEstimate:
 
     def model(self, bg, boxes: Mapping | None = None):
         """A copy of ``bg`` with the estimated values (and, with ``boxes``, those uncertainty boxes)."""
-        from bondgraph import BondGraph
-
-        graph = bg.graph.copy()
-        for name, data in graph.nodes(data=True):
-            param = data.get("param", name) if data.get("kind") in ("C", "I", "R", "TF", "GY", "MTF", "MGY") else None
-            if param in self.intervals and "stiffness" in data:
-                data["stiffness"] = self.values[param]
-            elif param in self.intervals:
-                data["value"] = self.values[param]
-            if param in (boxes or {}):
-                data["uncertainty"] = tuple(boxes[param])
-            constants = dict(data.get("params") or {})
-            for constant in constants:
-                if constant in self.intervals:
-                    constants[constant] = self.values[constant]
-            if constants:
-                data["params"] = constants
-                if boxes:
-                    data["uncertainties"] = {**(data.get("uncertainties") or {}),
-                                             **{c: tuple(boxes[c]) for c in constants if c in boxes}}
-        return BondGraph(graph, name=bg.name)
+        return revalued(bg, {p: self.values[p] for p in self.intervals}, boxes)
 
     def as_dict(self) -> dict:
         ident = self.identifiability
@@ -315,10 +296,16 @@ def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = No
     ['R_a', 'L_a', 'k_m', 'J', 'b']
     """
     arrs = list(arrs) if arrs is not None else derive_arrs(bg)
-    records = [as_record(r) for r in records]
+    return _identified(bg, arrs, [as_record(r) for r in records], parameters, window, quadrature, prior)[0]
+
+
+def _identified(bg, arrs: list, records: list, parameters: Sequence[str] | None, window: int | None,
+                quadrature: str, prior: float | None) -> tuple[Identifiability, Problem | None]:
+    """:func:`identifiability`, and the windowed problem of every parameter chosen (None without one): the
+    fit's own when the records identify each of them."""
     names, unseen = _choose(bg, arrs, parameters)
     if not names:
-        return Identifiability([], [], unseen, [])
+        return Identifiability([], [], unseen, []), None
     if prior is not None and not (math.isfinite(prior) and prior > 0):
         raise SettingError("prior", f"{{setting}} must be a relative standard deviation > 0, or None, got {prior!r}")
     if quadrature not in QUADRATURES:
@@ -334,7 +321,7 @@ def identifiability(bg, records: Sequence, parameters: Sequence[str] | None = No
     combinations = [{"parameters": members, "kept": kept, "direction": along, "weak": weak,
                      "expression": _weakly_seen(members) if weak else _combination(arrs, members, kept, along)}
                     for members, kept, along, weak in groups]
-    return Identifiability(identified, combinations, unseen, singular.tolist())
+    return Identifiability(identified, combinations, unseen, singular.tolist()), problem
 
 
 # ------------------------------------------------------------------------------------------- estimation
@@ -384,12 +371,13 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
     arrs = list(arrs) if arrs is not None else derive_arrs(bg)
     records = [as_record(r) for r in records]
     datasheet = dict(bg.parameters)
-    ident = identifiability(bg, records, parameters, arrs=arrs, window=window, quadrature=quadrature, prior=prior)
+    ident, problem = _identified(bg, arrs, records, parameters, window, quadrature, prior)
     names = ident.identified
     if not names:
         return ParameterEstimate(dict(datasheet), datasheet, identifiability=ident, level=level)
     values = dict(datasheet)
-    problem, x, covariance, noise, correlation, ident = _settled(bg, arrs, records, ident, window, quadrature, prior)
+    problem, x, covariance, noise, correlation, ident = _settled(bg, arrs, records, ident, window, quadrature, prior,
+                                                                 problem)
     names = ident.identified
     conditional = covariance
     kept = [g["kept"] for g in ident.combinations if g.get("weak")]
@@ -415,15 +403,17 @@ def estimate_parameters(bg, records: Sequence, parameters: Sequence[str] | None 
 
 
 def _settled(bg, arrs: Sequence, records: Sequence, ident: Identifiability, window: int | None, quadrature: str,
-             prior: float | None) -> tuple:
+             prior: float | None, problem: Problem | None = None) -> tuple:
     """The fit of the identified parameters, refitted without the one whose interval tells least while any
     tells less than the prior (judged at the fit: at a datasheet far off, the Jacobian promises more than the
     fit gives).  The problem, the relative estimates, their covariance, each ARR's noise and inflation, and
-    the identifiability with the parameters held."""
+    the identifiability with the parameters held.  ``problem``: one already built, used if it holds exactly
+    the identified parameters."""
     spread = math.inf if prior is None else prior
     while True:
         names = ident.identified
-        problem = windowed_problem(arrs, records, names, bg.parameters, window, bg.domains, quadrature)
+        if problem is None or problem.names != names:
+            problem = windowed_problem(arrs, records, names, bg.parameters, window, bg.domains, quadrature)
         if not sum(b.features.shape[0] for b in problem.blocks):
             raise SettingError("records", "{setting}: no sample where every signal and derivative of the ARRs is "
                                           "known")

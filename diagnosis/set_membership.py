@@ -24,9 +24,9 @@ import numpy as np
 import sympy as sp
 from scipy.optimize import linprog
 
-from bondgraph import BondGraph
 from bondgraph.errors import SettingError
 
+from ._revalued import revalued
 from .calibration import START_SHARE, DetectionSettings, calibration_end
 from .deltas import delta, delta_parameter
 from .derivation import derive_arrs
@@ -146,7 +146,7 @@ def set_membership_boxes(bg, records: Sequence, parameters: Sequence[str], *, ar
     sized = _checked_parameters(bg, parameters)
     if arrs is None:
         declared = bg.uncertainties
-        arrs = derive_arrs(_with_boxes(bg, {p: declared.get(p, (0.0, 0.0)) for p in sized}))
+        arrs = derive_arrs(revalued(bg, boxes={p: declared.get(p, (0.0, 0.0)) for p in sized}))
     # the record's columns as detect reads them: every ARR's signals and the inputs (whose steps it looks for)
     names = list(dict.fromkeys(s for arr in arrs for s in arr.signals))
     arrs = [arr for arr in arrs if set(arr.compiled.terms) & set(sized)]  # the thresholds these boxes widen
@@ -190,18 +190,6 @@ def _checked_parameters(bg, parameters: Sequence[str]) -> list:
         raise SettingError("parameters", f"{{setting}}: the model has no parameter {unknown[0]!r} (parameters: "
                                          f"{', '.join(values)})")
     return sized
-
-
-def _with_boxes(bg, boxes: dict) -> BondGraph:
-    """A copy of ``bg`` whose parameters in ``boxes`` have those uncertainty boxes (law constants too)."""
-    graph = bg.graph.copy()
-    for name, data in graph.nodes(data=True):
-        if data.get("kind") in ("C", "I", "R", "TF", "GY", "MTF", "MGY") and data.get("param", name) in boxes:
-            data["uncertainty"] = tuple(boxes[data.get("param", name)])
-        constants = [c for c in (data.get("params") or {}) if c in boxes]
-        if constants:
-            data["uncertainties"] = {**(data.get("uncertainties") or {}), **{c: tuple(boxes[c]) for c in constants}}
-    return BondGraph(graph, name=bg.name)
 
 
 def _constraints(arr, data: Record, k: int, sized: list, bg, settings: DetectionSettings):
