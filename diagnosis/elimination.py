@@ -305,8 +305,8 @@ class _Shared:
 
     @cached_property
     def signals(self) -> set:
-        return {f.func.__name__ for m in self.model.equations if m.role in ("source", "sensor")
-                for f in m.equation.atoms(AppliedUndef)}
+        """The known signals: inputs (sources and the modulation of MTF/MGY two-ports) and measured ones."""
+        return set(self.structure.inputs) | set(self.structure.outputs)
 
     @cached_property
     def unknowns(self) -> set:
