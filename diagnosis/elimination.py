@@ -53,6 +53,8 @@ from bondgraph.structure import T, require_model
 from .junctions import junction_arrs
 from .arr import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
                        parameter_intervals, split_relation, uncertain_structure, written_without_integrals)
+from ._operator_elimination import operator_order, operator_residual
+from .deltas import delta_parameter
 from .structural import StructuralLimitError, StructuralModel, sensor_fault, structural_model
 
 __all__ = [
@@ -358,6 +360,9 @@ class _Shared:
         model = self.model
         found = _residual(self, rows)
         if found is None:
+            linear = self._by_operators(rows, name)
+            if linear is not None:
+                return linear
             raise ValueError(f"{_short(model, rows)}: every balance leaves a loop through a state (only an ODE "
                              "closes it) or an unknown no law gives explicitly")
         residual, assigned, r_n = found
@@ -372,6 +377,29 @@ class _Shared:
         return split_relation(name, model.equations[residual].node, None, r_n, r_true, (), self.structure,
                               candidate_parameters(self.structure), parameter_intervals(self.structure),
                               origin=tuple(model.describe(rows)), form=form)
+
+    def _by_operators(self, rows: frozenset, name: str) -> ARR | None:
+        """The ARR of a set linear in its unknowns with constant coefficients, by operator elimination
+        (:mod:`diagnosis._operator_elimination`); None when the set is not of that kind."""
+        model = self.model
+        r_true = operator_residual(*self._operator_problem(rows))
+        if r_true is None:
+            return None
+        r_n = r_true.xreplace({d: 0 for d in r_true.free_symbols if delta_parameter(d) is not None})
+        if r_n == 0 or not _in_known_signals(r_n, self.signals, self.unknowns):
+            return None
+        residual = _balances(model, rows)[0]
+        return split_relation(name, model.equations[residual].node, None, r_n, r_true, (), self.structure,
+                              candidate_parameters(self.structure), parameter_intervals(self.structure),
+                              origin=tuple(model.describe(rows)), form="elimination")
+
+    @cached_property
+    def _plain_symbols(self) -> dict:
+        """Structural unknown name -> its sympy object in the plain (model) equations."""
+        found = {}
+        for equation in self._plain_true:
+            found.update(_symbols_of(equation))
+        return found
 
     def weight(self, row: int, unknown: str) -> int:
         """1 if equation ``row`` can be solved explicitly for ``unknown``, 10 if only as a last resort."""
@@ -389,11 +417,20 @@ class _Shared:
     def estimated_order(self, rows: frozenset) -> int | None:
         """The derivative order the elimination of ``rows`` would need, from its matching alone (no algebra).
 
-        None when every balance leaves a loop through a state (the elimination would have to retry).
+        When every balance leaves a loop through a state, the order of the operator elimination of a linear
+        set (:func:`~diagnosis._operator_elimination.operator_order`, numeric, cheap); None if it has none.
         """
         orders = [_structural_order(self.model, _matching(self, rows - {r}), r) for r in _balances(self.model, rows)]
         orders = [o for o in orders if o is not None]
-        return min(orders) if orders else None
+        if orders:
+            return min(orders)
+        return operator_order(*self._operator_problem(rows))   # a linear set the operators close, if any
+
+    def _operator_problem(self, rows: frozenset) -> tuple[list, list]:
+        """The equations (with theta (1 + delta_theta)) and unknowns of ``rows`` for the operator elimination."""
+        order = sorted(rows)
+        unknowns = sorted(set().union(*(self.model.unknowns[i] for i in order)))
+        return [self._plain_true[i] for i in order], [self._plain_symbols[x] for x in unknowns]
 
 
 class _OutOfBudget(Exception):
