@@ -1025,6 +1025,8 @@ _C_HEADER = '''/* Residuals, interval thresholds and alarms of {count} ARR(s), s
 #ifndef {guard}
 #define {guard}
 
+#include <stddef.h>
+
 #define {upper}_DT {dt}
 #define {upper}_MARGIN {margin}
 #define {upper}_PERSISTENCE {persistence}
@@ -1061,15 +1063,15 @@ _C_ENGINE = '''
 #define BG_RTOL {rtol}
 
 /* Outward rounding: one ulp down (up) after a correctly rounded operation; NaN gives the sound -inf (+inf). */
-static double bg_down(double x) {{ return nextafter(fmax(x, -INFINITY), -INFINITY); }}
-static double bg_up(double x) {{ return nextafter(fmin(x, INFINITY), INFINITY); }}
+static inline double bg_down(double x) {{ return nextafter(fmax(x, -INFINITY), -INFINITY); }}
+static inline double bg_up(double x) {{ return nextafter(fmin(x, INFINITY), INFINITY); }}
 /* numpy's minimum and maximum: NaN wins (fmin and fmax, where NaN loses, are libm's). */
-static double bg_mn(double a, double b) {{ return (a != a || b != b) ? NAN : (a <= b ? a : b); }}
-static double bg_mx(double a, double b) {{ return (a != a || b != b) ? NAN : (a >= b ? a : b); }}
-static double bg_sign(double x) {{ return x != x ? x : (x > 0 ? 1.0 : (x < 0 ? -1.0 : 0.0)); }}
+static inline double bg_mn(double a, double b) {{ return (a != a || b != b) ? NAN : (a <= b ? a : b); }}
+static inline double bg_mx(double a, double b) {{ return (a != a || b != b) ? NAN : (a >= b ? a : b); }}
+static inline double bg_sign(double x) {{ return x != x ? x : (x > 0 ? 1.0 : (x < 0 ? -1.0 : 0.0)); }}
 /* a transcendental result widened by the library's margin for libm's error */
-static double bg_dt(double x) {{ x = bg_mn(x, DBL_MAX); return x - (fabs(x) * BG_TREL + BG_TSUB); }}
-static double bg_ut(double x) {{ x = bg_mx(x, -DBL_MAX); return x + (fabs(x) * BG_TREL + BG_TSUB); }}
+static inline double bg_dt(double x) {{ x = bg_mn(x, DBL_MAX); return x - (fabs(x) * BG_TREL + BG_TSUB); }}
+static inline double bg_ut(double x) {{ x = bg_mx(x, -DBL_MAX); return x + (fabs(x) * BG_TREL + BG_TSUB); }}
 
 typedef struct {{
     int ncols, npoints, keep, window, half, lag, ready_at, uniform, nsig, nder, nint;
@@ -1216,6 +1218,7 @@ typedef struct {{
     double integrand[{nint}];
 }} {prefix}_{ident}_state;
 void {prefix}_{ident}_init({prefix}_{ident}_state *s);
+size_t {prefix}_{ident}_size(void); /* sizeof the state, for callers that allocate it (ctypes) */
 int {prefix}_{ident}_push({prefix}_{ident}_state *s, double t, const double *x, {prefix}_sample *out);
 int {prefix}_{ident}_flush({prefix}_{ident}_state *s, {prefix}_sample *out);
 /* A whole record: n samples (t[k], x[k * NCOLS + column]), pushed one by one, then flushed if flush != 0; the
@@ -1237,7 +1240,8 @@ static const double bg_{k}_divisor[] = {{{divisor}}};
 static const int bg_{k}_ipoint[] = {{{ipoint}}};
 
 static double bg_{k}_integrand(int m, const double *p) {{
-{integrand_unpack}{integrand_body}    (void)p;
+{integrand_unpack}{integrand_body}    (void)m;
+    (void)p;
     return NAN;
 }}
 
@@ -1253,6 +1257,8 @@ static const bg_spec bg_{k}_spec = {{{ncols}, {npoints}, {keep}, {window}, {half
     bg_{k}_divisor, bg_{k}_ipoint, bg_{k}_integrand, bg_{k}_evaluate}};
 
 void {prefix}_{ident}_init({prefix}_{ident}_state *s) {{ bg_init(&s->core); }}
+
+size_t {prefix}_{ident}_size(void) {{ return sizeof({prefix}_{ident}_state); }}
 
 int {prefix}_{ident}_push({prefix}_{ident}_state *s, double t, const double *x, {prefix}_sample *out) {{
     return bg_push(&bg_{k}_spec, &s->core, s->t, s->x, s->integral, s->integrand, t, x, out);
