@@ -200,3 +200,20 @@ def test_names_become_identifiers_and_collisions_are_refused(tmp_path):
     assert got["residual"].tolist() == [0.0, 1.0, 2.0]
     python = load_python(write(generate_code([odd], "python", dt=0.1, name="m"), tmp_path / "py"), "m")
     assert python.Monitor().signals == ("w", "é*/\"")
+
+
+@pytest.mark.slow
+def test_the_benchmark_runs_and_reports_agreement(capsys):
+    """benchmarks/bench_codegen.py on a few samples: its JSON and agreement figures (its speed is not asserted)."""
+    import json
+    import runpy
+
+    from pathlib import Path
+
+    bench = runpy.run_path(str(Path(__file__).resolve().parents[2] / "benchmarks" / "bench_codegen.py"),
+                           run_name="bench_codegen")
+    assert bench["main"](["--json", "--samples", "20", "--repeat", "1", "rc_ladder2"]) == 0
+    (row,) = json.loads(capsys.readouterr().out)["models"]
+    assert row["model"] == "rc_ladder2" and row["alarms_equal"]
+    assert row["residual_rel"] <= 1e-12 and row["bounds_rel"] <= 1e-12
+    assert {"library_us", "python_us", "c_us", "speedup"} <= set(row)
