@@ -16,6 +16,8 @@
                 [--workers N] [--particles N] [--dt S] [--rul-every K] [--seed S] [--on-bad-record stop|skip]
                 [--force] [--resume] [--no-page]
     bgphm demo [dc-motor|torsion-bar|three-tank] [--out DIR] [--seed N]
+    bgphm codegen MODEL --lang python|c --dt DT --out DIR [--window N] [--polyorder N] [--margin M]
+                  [--persistence K] [--force]
 
 MODEL is a JSON file (networkx node-link form), a Python file defining ``model``, or a built-in example
 name (see :func:`bondgraph.io.load_model`).  DATA.csv has a header row with a time column ``t`` and one
@@ -28,6 +30,10 @@ by :func:`bondgraph.scenarios.parse_degradation`), a sensor's bias, drift and ga
 same draws for the same ``--seed``); its inputs may be expressions of ``t`` (``--input U='12*step(t - 0.5)'``,
 :class:`bondgraph.inputs.InputExpression`, never evaluated) or samples from a CSV file (``--inputs``,
 :class:`bondgraph.inputs.TabulatedInput`).
+
+``codegen`` writes a standalone module evaluating the model's ARRs sample by sample (residuals, interval
+thresholds rounded outward, alarms), in Python (``math`` alone) or C99 (``libm`` alone), with a
+``manifest.json`` and a README (:func:`diagnosis.generate_code`).
 
 ``calibrate`` estimates the model's parameters from healthy records through its ARRs
 (:func:`diagnosis.estimate_parameters`), gives the estimated ones uncertainty boxes (their confidence intervals,
@@ -73,6 +79,8 @@ COMMANDS = {
     "fleet": "monitor a fleet: records of many assets to Parquet tables of alarms, estimates, RULs and residuals, "
              "on Dask workers, and an overview page (index.html)",
     "demo": "run the whole chain on a built-in example and write every output",
+    "codegen": "standalone Python or C code evaluating the ARRs sample by sample: residuals, interval thresholds, "
+               "alarms",
 }
 
 
@@ -96,7 +104,7 @@ class _Parser(argparse.ArgumentParser):
 
 def build_parser(commands: Collection[str] | None = None) -> argparse.ArgumentParser:
     """The ``bgphm`` argument parser: ``--quiet``, ``--debug``, ``--version`` and the commands arr, simulate, detect,
-    calibrate, sensors, prognose, fleet, demo.
+    calibrate, sensors, prognose, fleet, demo, codegen.
 
     ``commands`` are those whose options are built (the others are listed with their help line); :func:`main`
     builds the one on the line alone, or none for ``bgphm --help``: a command's defaults are the library's, and
@@ -440,19 +448,39 @@ def _fleet_options(p: argparse.ArgumentParser) -> None:
     p.set_defaults(margin=None, direction=None)
 
 
+def _codegen_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("model", metavar="MODEL", help=MODEL_HELP)
+    p.add_argument("--lang", required=True, choices=("python", "c"), help="the language of the module")
+    p.add_argument("--dt", required=True, type=float, metavar="DT",
+                   help="the sampling step in seconds (the derivative filters are computed for it)")
+    p.add_argument("--out", required=True, metavar="DIR", help="output directory (new or empty, unless --force)")
+    p.add_argument("--method", choices=("savgol", "central"), default="savgol",
+                   help="derivative estimator (default savgol; central only for ARRs without derivatives)")
+    p.add_argument("--window", type=int, default=None, metavar="N",
+                   help="Savitzky-Golay window, odd (default: 11, or more for a high polyorder)")
+    p.add_argument("--polyorder", type=int, default=None, metavar="N",
+                   help="Savitzky-Golay polynomial order (default 3, or the ARR's highest derivative order)")
+    p.add_argument("--margin", type=float, default=0.0, metavar="M", help="noise margin added to the thresholds "
+                   "(default 0)")
+    p.add_argument("--persistence", type=int, default=1, metavar="K",
+                   help="consecutive violations before an alarm (default 1)")
+    p.add_argument("--force", action="store_true",
+                   help="write into a non-empty --out directory, replacing files of the same names")
+
+
 #: Each command's options.
 OPTIONS_OF = {"arr": _arr_options, "simulate": _simulate_options, "detect": _detect_options,
               "calibrate": _calibrate_options, "sensors": _sensors_options, "prognose": _prognose_options,
-              "fleet": _fleet_options, "demo": _demo_options}
+              "fleet": _fleet_options, "demo": _demo_options, "codegen": _codegen_options}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``bgphm`` console script; returns the exit code.
 
     Commands: ``arr`` (the ARR report), ``simulate``, ``detect``, ``calibrate``, ``sensors``, ``prognose``,
-    ``fleet`` and ``demo``; ``bgphm COMMAND --help`` lists each one's options.  Exit codes: 0 success, 2 bad
-    usage or bad input (one line on stderr naming the file, line, column, node or parameter), 1 anything else,
-    including an interrupted run.  Progress goes to stderr unless ``--quiet``.
+    ``fleet``, ``demo`` and ``codegen``; ``bgphm COMMAND --help`` lists each one's options.  Exit codes: 0 success,
+    2 bad usage or bad input (one line on stderr naming the file, line, column, node or parameter), 1 anything
+    else, including an interrupted run.  Progress goes to stderr unless ``--quiet``.
 
     Examples
     --------

@@ -11,6 +11,7 @@ from .arr import ARR, ARRWarning
 from .residuals import ARRError
 from .deltas import delta
 from .detection import Evaluation, evaluate, noise_margin, robust_std
+from .codegen import CodegenError, generate_code
 from .calibration import POOLED_RECORDS, Calibration, DetectionSettings, calibrate, calibration_end, pooled_calibration
 from .detectability import Detectability, detectability
 from .monitoring import Detection, consistent_faults, detect
@@ -30,13 +31,13 @@ from .streaming import StreamChunk, StreamingEvaluation
 from .structural import StructuralLimitError, StructuralModel, structural_model
 
 __all__ = [
-    "ARR", "ARRError", "ARRWarning", "Calibration", "Detectability", "Detection", "DetectionSettings", "Evaluation",
-    "Identifiability", "Interval", "IntervalArray", "IntervalWarning", "ModelFigures", "ModelValidation",
+    "ARR", "ARRError", "ARRWarning", "Calibration", "CodegenError", "Detectability", "Detection", "DetectionSettings",
+    "Evaluation", "Identifiability", "Interval", "IntervalArray", "IntervalWarning", "ModelFigures", "ModelValidation",
     "POOLED_RECORDS", "ParameterEstimate", "Record", "RecordError", "RecordWarning", "SensorFault", "SensorPlacement",
     "SignatureMatrix", "StreamChunk", "StreamingEvaluation", "StructuralLimitError", "StructuralModel", "Whiteness",
     "add_noise", "add_sensor_faults", "affine_range", "as_record", "calibrate", "calibration_end", "check_signals",
     "compile_interval", "consistent_faults", "delta", "derive_arrs", "detect", "detectability", "estimate_parameters",
-    "evaluable", "evaluate", "held_out_figures", "identifiability", "noise_margin", "place_sensors",
+    "evaluable", "evaluate", "generate_code", "held_out_figures", "identifiability", "noise_margin", "place_sensors",
     "pooled_calibration", "read_csv", "resample", "residual_whiteness", "robust_std", "signature_matrix",
     "structural_arrs", "structural_model", "uncertainty_boxes", "unreached", "validate_calibration",
 ]
