@@ -59,7 +59,7 @@ from .structural import StructuralLimitError, StructuralModel, sensor_fault, str
 
 __all__ = [
     "ISOLATION_LIMIT", "MAX_ELIMINATIONS", "MAX_OPERATIONS", "MAX_ORDER", "MAX_SEARCHES",
-    "MAX_SEARCH_EQUATIONS", "arr_from_set", "faults_of_arr", "structural_arrs", "unreached",
+    "MAX_SEARCH_EQUATIONS", "arr_from_set", "distinct_operations", "faults_of_arr", "structural_arrs", "unreached",
 ]
 
 #: The default bound on the derivatives an ARR added for isolation may need: as high as the ARRs the model
@@ -84,8 +84,10 @@ MAX_SEARCHES = 60
 #: subset explored counts its size: a matching over it).
 MAX_SEARCH_EQUATIONS = 12000
 
-#: An eliminated relation larger than this (sympy operations) is not kept: nested inverses of non-linear
-#: laws grow without bound, and a residual nobody can read or evaluate tightly helps no diagnosis.
+#: An eliminated relation larger than this is not kept: nested inverses of non-linear laws grow without
+#: bound.  Counted as distinct operations (a subexpression repeated counts once: the evaluation computes it
+#: once, sympy's common subexpressions), so a chain of orifice inversions, whose tree repeats each inner
+#: level many times, is kept while its evaluation stays small.
 MAX_OPERATIONS = 400
 
 
@@ -366,7 +368,7 @@ class _Shared:
             raise ValueError(f"{_short(model, rows)}: every balance leaves a loop through a state (only an ODE "
                              "closes it) or an unknown no law gives explicitly")
         residual, assigned, r_n = found
-        size = sp.count_ops(r_n)
+        size = distinct_operations(r_n)
         if size > MAX_OPERATIONS:
             raise ValueError(f"{_short(model, rows)}: the residual takes {size} operations "
                              f"(more than {MAX_OPERATIONS})")
@@ -563,11 +565,29 @@ def _eliminate(model: StructuralModel, equations: list, assigned: dict, residual
                 raise ValueError(f"{model.describe(members)}: no unique solution for {targets}")
             found = found[0]
         for target, value in found.items():  # stop before nested inverses grow without bound
-            if sp.count_ops(value) > MAX_OPERATIONS:
+            if distinct_operations(value) > MAX_OPERATIONS:
                 raise ValueError(f"{_short(model, assigned)}: {target} takes more than {MAX_OPERATIONS} operations")
         solution.update(found)
     equation = _substituted(equations[residual], solution)
     return equation.lhs - equation.rhs
+
+
+def distinct_operations(expression: sp.Expr) -> int:
+    """The operations of ``expression`` with each repeated subexpression counted once.
+
+    >>> x, y = sp.symbols("x y")
+    >>> inner = sp.sqrt(x + y)
+    >>> distinct_operations(inner * (inner + 1) / (inner + 2)), sp.count_ops(inner * (inner + 1) / (inner + 2))
+    (7, 13)
+    """
+    nodes, stack = set(), [expression]
+    while stack:   # a signal and its derivatives are read from the record: no operation, nothing below
+        node = stack.pop()
+        if node.is_Atom or isinstance(node, (AppliedUndef, sp.Derivative)) or node in nodes:
+            continue
+        nodes.add(node)
+        stack.extend(node.args)
+    return sum(max(len(node.args) - 1, 1) for node in nodes)
 
 
 def _solve_one(equation: sp.Eq, target, where: str) -> sp.Expr:
