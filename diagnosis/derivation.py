@@ -126,8 +126,8 @@ def _derive(bg, complete: bool, sensor_faults: bool, max_order, integrals: str, 
 def _key(bg, *options):
     """The model's content, the options and the search budgets: everything the derivation depends on."""
     budgets = (elimination.MAX_ELIMINATIONS, elimination.MAX_SEARCHES, elimination.MAX_SEARCH_EQUATIONS,
-               elimination.MAX_OPERATIONS, elimination.ISOLATION_LIMIT, structural.MSO_SEARCH_LIMIT,
-               arr_module.TIDY_LIMIT)
+               elimination.MAX_OPERATIONS, elimination.ISOLATION_LIMIT, elimination.REACHES,
+               structural.MSO_SEARCH_LIMIT, arr_module.TIDY_LIMIT)
     return content_key(("derive_arrs", type(bg).__name__, getattr(bg, "name", None), bg.structure(), options,
                         budgets))
 

@@ -59,7 +59,8 @@ from .structural import StructuralLimitError, StructuralModel, sensor_fault, str
 
 __all__ = [
     "ISOLATION_LIMIT", "MAX_ELIMINATIONS", "MAX_OPERATIONS", "MAX_ORDER", "MAX_SEARCHES",
-    "MAX_SEARCH_EQUATIONS", "arr_from_set", "distinct_operations", "faults_of_arr", "structural_arrs", "unreached",
+    "MAX_SEARCH_EQUATIONS", "REACHES", "arr_from_set", "distinct_operations", "faults_of_arr", "structural_arrs",
+    "unreached",
 ]
 
 #: The default bound on the derivatives an ARR added for isolation may need: as high as the ARRs the model
@@ -260,31 +261,58 @@ def _told_apart(supports: list, fault: str, other: str | None) -> bool:
     return any(fault in s and (other is None or other not in s) for s in supports)
 
 
+#: How far past the first overdetermined neighbourhood of a fault the searches for a closing set look, in
+#: turn: the nearest sets first; farther ones when every near one is closed only by an ODE (a tank between
+#: two unmeasured ones is told through the chain of orifices to a measured flow).
+REACHES = (1, 2)
+
+
 def _closing_arr(shared: _Shared, fault: str, other: str | None, max_order: int | None, unrealizable: set,
                  name: str) -> ARR | None:
     """The ARR of the lowest order, then the smallest set, that sees ``fault`` and not ``other``."""
     model = shared.model
     removed = model.faults[other] if other is not None else frozenset()
     shared.spend("searches", MAX_SEARCHES, "gap searches")
-    try:
-        candidates = model.msos_through(model.faults[fault], removed, budget=shared.search)
-    except StructuralLimitError as exc:   # too many sets near this fault: the gap stays open, named at the end
-        if shared.search["equations"] < 0:
-            raise _OutOfBudget(f"the searches visited {MAX_SEARCH_EQUATIONS} equations "
-                               "(diagnosis.elimination.MAX_SEARCH_EQUATIONS)") from None
-        unrealizable.add(f"near {fault}: {exc}")
-        return None
+    tried: set = set()
+    for reach in REACHES:
+        try:
+            candidates = model.msos_through(model.faults[fault], removed, budget=shared.search, reach=reach)
+        except StructuralLimitError as exc:   # too many sets near this fault: the gap stays open, named at the end
+            if shared.search["equations"] < 0:
+                raise _OutOfBudget(f"the searches visited {MAX_SEARCH_EQUATIONS} equations "
+                                   "(diagnosis.elimination.MAX_SEARCH_EQUATIONS)") from None
+            unrealizable.add(f"near {fault}: {exc}")
+            return None
+        fresh = [rows for rows in candidates if rows not in tried]
+        tried.update(fresh)
+        arr, higher = _first_closing(shared, fresh, fault, other, max_order, unrealizable)
+        if arr is not None:
+            return dataclasses.replace(arr, name=name)
+        if higher:
+            return None   # a set closes the gap, above max_order: a wider search would only find longer ones
+    return None
+
+
+def _first_closing(shared: _Shared, candidates: list, fault: str, other: str | None, max_order: int | None,
+                   unrealizable: set) -> tuple[ARR | None, bool]:
+    """(the ARR of the lowest order, then the smallest set, that closes the gap; whether a set was passed
+    over for its order).  A set no elimination can close (its loops through states stay loops in either
+    causality and it is not linear) is named in ``unrealizable`` without being tried."""
+    model = shared.model
     estimates = {rows: shared.estimated_order(rows) for rows in candidates}
-    for rows in sorted(candidates, key=lambda rows: (estimates[rows] is None, estimates[rows] or 0, len(rows))):
-        if max_order is not None and estimates[rows] is not None and estimates[rows] > max_order:
-            break   # the sets are sorted by their estimate: every other one needs more
+    for rows in [rows for rows in candidates if estimates[rows] is None]:
+        unrealizable.add(f"{_short(model, rows)}: a loop through a state in either causality and a non-linear "
+                         "law: only an ODE of the set closes it")
+    for rows in sorted((r for r in candidates if estimates[r] is not None), key=lambda r: (estimates[r], len(r))):
+        if max_order is not None and estimates[rows] > max_order:
+            return None, True   # the sets are sorted by their estimate: every other one needs more
         arr = shared.cached(rows, unrealizable)
         if arr is None or (max_order is not None and arr.order > max_order):
             continue
         support = faults_of_arr(model, arr)
         if fault in support and (other is None or other not in support):
-            return dataclasses.replace(arr, name=name)
-    return None
+            return arr, False
+    return None, False
 
 
 class _Shared:
@@ -294,6 +322,7 @@ class _Shared:
         self.bg, self.model, self.avoid_integrals = bg, model, avoid_integrals
         self.weights: dict = {}
         self.results: dict = {}
+        self.estimates: dict = {}
         self.spent = {"searches": 0, "eliminations": 0}
         self.search = {"equations": MAX_SEARCH_EQUATIONS}
 
@@ -417,13 +446,27 @@ class _Shared:
         return self.weights[key]
 
     def estimated_order(self, rows: frozenset) -> int | None:
+        if rows not in self.estimates:
+            self.estimates[rows] = self._estimated_order(rows)
+        return self.estimates[rows]
+
+    def _estimated_order(self, rows: frozenset) -> int | None:
         """The derivative order the elimination of ``rows`` would need, from its matching alone (no algebra).
 
         When every balance leaves a loop through a state, the order of the operator elimination of a linear
         set (:func:`~diagnosis._operator_elimination.operator_order`, numeric, cheap); None if it has none.
         """
-        orders = [_structural_order(self.model, _matching(self, rows - {r}), r) for r in _balances(self.model, rows)]
-        orders = [o for o in orders if o is not None]
+        orders = []
+        for residual in _balances(self.model, rows):
+            integral: frozenset = frozenset()
+            for _ in range(_ATTEMPTS):   # as the elimination does: a looped state retried in integral causality
+                found = _structural_order(self.model, _matching(self, rows - {residual}, integral), residual)
+                if isinstance(found, int):
+                    orders.append(found)
+                    break
+                if found <= integral:
+                    break
+                integral |= found
         if orders:
             return min(orders)
         return operator_order(*self._operator_problem(rows))   # a linear set the operators close, if any
@@ -456,7 +499,11 @@ def _balances(model: StructuralModel, rows: frozenset) -> list:
     return [i for i in sorted(rows) if model.equations[i].role == "balance"] or sorted(rows)
 
 
-def _residual(shared: _Shared, rows: frozenset, attempts: int = 4):
+#: How often an elimination retries a set with the states of a loop taken in integral causality.
+_ATTEMPTS = 4
+
+
+def _residual(shared: _Shared, rows: frozenset, attempts: int = _ATTEMPTS):
     """(residual row, matching, nominal residual) for the first junction balance that leaves known signals only.
 
     A state that ends up in a loop of the matching is tried again in integral causality (from its storage
@@ -515,20 +562,23 @@ def _blocks(model: StructuralModel, assigned: dict) -> list[list[int]]:
     return [sorted(blocks.nodes[b]["members"]) for b in nx.topological_sort(blocks)]
 
 
-def _structural_order(model: StructuralModel, assigned: dict, residual: int) -> int | None:
+def _structural_order(model: StructuralModel, assigned: dict, residual: int) -> int | frozenset:
     """The highest derivative of a known signal the residual would need, following the matching.
 
     A storage equation solved for its rate differentiates its state (one order up), solved for its
     state integrates the rate (one down); any other equation passes on the highest order of its inputs.
-    None when a block holds a state (a loop the elimination cannot close as it stands).
+    When a block holds a state (a loop the elimination cannot close as it stands): the states of the
+    loop, by element name, as :class:`_DifferentialLoop` names them.
     """
     order: dict = {}
     for members in _blocks(model, assigned):
         inputs = {x for i in members for x in model.unknowns[i]} - {assigned[i] for i in members}
         level = max((order[x] for x in inputs), default=0)
         if len(members) > 1:
-            if any(assigned[i].startswith("state ") or model.equations[i].role == "storage" for i in members):
-                return None
+            looped = frozenset(model.equations[i].node for i in members
+                               if assigned[i].startswith("state ") or model.equations[i].role == "storage")
+            if looped:
+                return looped
             order.update((assigned[i], level) for i in members)
             continue
         (i,) = members

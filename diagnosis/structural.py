@@ -231,23 +231,24 @@ class StructuralModel:
         return graph
 
     def msos_through(self, rows: frozenset, removed: frozenset = frozenset(), limit: int = 200,
-                     budget: dict | None = None) -> list[frozenset]:
+                     budget: dict | None = None, reach: int = 1) -> list[frozenset]:
         """Minimal overdetermined sets that hold one of ``rows`` and none of ``removed``, found near ``rows``.
 
         The search looks in the equations within a growing distance of ``rows`` until one of them is
-        overdetermined there, then one step further, and reduces that neighbourhood to minimal sets
+        overdetermined there, then ``reach`` steps further, and reduces that neighbourhood to minimal sets
         keeping one of ``rows`` (at most ``limit`` subsets explored, and ``budget`` as in :meth:`mso_sets`).
         Smallest sets first.
         """
         rows = frozenset(rows) - removed
-        ball, found = set(rows), False
+        ball, found, past = set(rows), False, 0
         while True:
             found = found or bool(self.overdetermined(ball) & rows)
             wider = {e for r in ball for x in self.unknowns[r] for e in self._holders[x]} - removed
             if wider <= ball:
                 break
             ball |= wider
-            if found:   # one step past the first neighbourhood where a row is overdetermined
+            past += found
+            if past >= reach:   # ``reach`` steps past the first neighbourhood where a row is overdetermined
                 break
         part = self.overdetermined(ball)
         return self.mso_sets(part, keep=rows, limit=limit, budget=budget) if part & rows else []
