@@ -42,7 +42,7 @@ __all__ = ["ARR", "ARRError", "ARRWarning", "derive_arrs", "evaluable"]
 
 def derive_arrs(bg: BondGraph, *, complete: bool = True, sensor_faults: bool = True,
                 max_order: int | str | None = MAX_ORDER, integrals: str = "avoid",
-                isolation: bool | None = None) -> list[ARR]:
+                isolation: bool = True) -> list[ARR]:
     """Derive the I-ARRs of a bond graph with detectors.
 
     Parameters
@@ -62,9 +62,9 @@ def derive_arrs(bg: BondGraph, *, complete: bool = True, sensor_faults: bool = T
         ``"avoid"`` writes a relation that would integrate measured signals in its differentiated form
         when that removes the integrals; ``"keep"`` keeps the integrals (the form of Jha et al.
         (2016), eq. 45).
-    isolation : bool or None
-        Complete isolation as well as detection; None (default): for models with at most
-        :data:`~diagnosis.elimination.ISOLATION_LIMIT` fault candidates.
+    isolation : bool
+        Complete isolation as well as detection (default), within the work budgets of
+        :mod:`diagnosis.elimination` (which grow with the model's fault candidates); False: detection only.
 
     Returns
     -------
@@ -126,7 +126,7 @@ def _derive(bg, complete: bool, sensor_faults: bool, max_order, integrals: str, 
 def _key(bg, *options):
     """The model's content, the options and the search budgets: everything the derivation depends on."""
     budgets = (elimination.MAX_ELIMINATIONS, elimination.MAX_SEARCHES, elimination.MAX_SEARCH_EQUATIONS,
-               elimination.MAX_OPERATIONS, elimination.ISOLATION_LIMIT, elimination.REACHES,
+               elimination.MAX_OPERATIONS, elimination.BUDGET_FAULTS, elimination.REACHES,
                structural.MSO_SEARCH_LIMIT, arr_module.TIDY_LIMIT)
     return content_key(("derive_arrs", type(bg).__name__, getattr(bg, "name", None), bg.structure(), options,
                         budgets))

@@ -54,13 +54,14 @@ from .junctions import junction_arrs
 from .arr import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
                        parameter_intervals, split_relation, uncertain_structure, written_without_integrals)
 from ._operator_elimination import operator_order, operator_residual
+from ._set_shapes import SetShape, Shapes
 from .deltas import delta_parameter
 from .structural import StructuralLimitError, StructuralModel, sensor_fault, structural_model
 
 __all__ = [
-    "ISOLATION_LIMIT", "MAX_ELIMINATIONS", "MAX_OPERATIONS", "MAX_ORDER", "MAX_SEARCHES",
-    "MAX_SEARCH_EQUATIONS", "REACHES", "arr_from_set", "distinct_operations", "faults_of_arr", "structural_arrs",
-    "unreached",
+    "BUDGET_FAULTS", "MAX_ELIMINATIONS", "MAX_OPERATIONS", "MAX_ORDER", "MAX_SEARCHES",
+    "MAX_SEARCH_EQUATIONS", "REACHES", "EXPLAINED", "arr_from_set", "distinct_operations", "faults_of_arr",
+    "structural_arrs", "unreached",
 ]
 
 #: The default bound on the derivatives an ARR added for isolation may need: as high as the ARRs the model
@@ -69,21 +70,20 @@ __all__ = [
 #: asks more of the data than detection does would trade false alarms for isolation.
 MAX_ORDER = "auto"
 
-#: Above this many fault candidates the isolation search is not run unless asked for (``isolation=True``):
-#: each pair of faults the ARRs cannot tell apart costs a search and an elimination, about a second on a
-#: chain of mass-spring stages, where the detection gaps cost one matching for the whole model.
-ISOLATION_LIMIT = 60
-
 #: The work one derivation spends on added ARRs, counted (not timed, so that the outcome does not depend
-#: on the machine): equations of the sets it tries to eliminate (a sympy elimination costs about a
-#: second per fifty equations of a long chain, and more as the derivatives it needs grow with the set)
-#: and gaps searched for minimal sets (each a structural search near the fault).  Past either, the ARRs
-#: found so far are returned and an ARRWarning names the faults left undetected.
-MAX_ELIMINATIONS = 300
+#: on the machine), for a model of :data:`BUDGET_FAULTS` fault candidates and in proportion to the fault
+#: candidates of a larger one: equations of the sets it eliminates (a sympy elimination costs about a
+#: second per fifty equations of a long chain, and more as the derivatives it needs grow with the set; a
+#: set of the same shape as one eliminated before costs nothing, :mod:`diagnosis._set_shapes`) and gaps
+#: searched for minimal sets (each a structural search near the fault).  Past either, the ARRs found so
+#: far are returned and an ARRWarning says where the search stopped.
+MAX_ELIMINATIONS = 1000
 MAX_SEARCHES = 60
 #: The equations the searches for minimal sets of one derivation may visit together (each overdetermined
 #: subset explored counts its size: a matching over it).
 MAX_SEARCH_EQUATIONS = 12000
+#: The model size the budgets above are for.
+BUDGET_FAULTS = 30
 
 #: An eliminated relation larger than this is not kept: nested inverses of non-linear laws grow without
 #: bound.  Counted as distinct operations (a subexpression repeated counts once: the evaluation computes it
@@ -104,7 +104,7 @@ class _StructureOnly:
 
 def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults: bool = True,
                     max_order: int | str | None = MAX_ORDER, integrals: str = "avoid",
-                    isolation: bool | None = None) -> list[ARR]:
+                    isolation: bool = True, spent: dict | None = None) -> list[ARR]:
     """ARRs from minimal overdetermined sets that add detectability or isolability to ``existing``.
 
     Parameters
@@ -121,9 +121,12 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
         ARRs in hand.
     integrals : {"avoid", "keep"}
         As in :func:`~diagnosis.junctions.junction_arrs`, for the integrals an elimination leaves.
-    isolation : bool or None
-        Add ARRs for isolation as well as for detection; None (default): when the model has at most
-        :data:`ISOLATION_LIMIT` fault candidates.  :func:`unreached` says what is left either way.
+    isolation : bool
+        Add ARRs for isolation as well as for detection (default).  :func:`unreached` says what is left
+        either way.
+    spent : dict, optional
+        Filled with the work the search spent (:meth:`_Shared.cost`): ``searches``, ``search_equations``,
+        ``eliminated_sets``, ``eliminated_equations``, ``reused_sets``.
 
     Returns
     -------
@@ -149,8 +152,6 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
     structure = bg.structure()
     faults = set(candidate_parameters(structure))
     faults |= {sensor_fault(s) for s in measured_signals(structure)} if sensor_faults else set()
-    if isolation is None:
-        isolation = len(faults) <= ISOLATION_LIMIT
     if not isolation and faults <= set().union(*(_seen(arr, faults) for arr in existing)):
         return []   # every fault detected and no isolation asked: the structure has nothing to add
     model = structural_model(bg, sensor_faults=sensor_faults)
@@ -172,6 +173,8 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
             supports.append(faults_of_arr(model, arr))
             added.append(arr)
     _warn_left(bg.name, model, supports, unrealizable, stopped)
+    if spent is not None:
+        spent.update(shared.cost())
     return added
 
 
@@ -195,23 +198,40 @@ def _warn_left(name: str, model: StructuralModel, supports: list, unrealizable: 
     warnings.warn("".join(parts), ARRWarning, stacklevel=3)
 
 
-def unreached(bg, arrs: Sequence[ARR], *, sensor_faults: bool = True) -> dict:
-    """What the structure of ``bg`` allows and ``arrs`` do not reach.
+#: At most this many unreached faults and pairs are explained by :func:`unreached` (a search each).
+EXPLAINED = 200
+
+
+def unreached(bg, arrs: Sequence[ARR], *, sensor_faults: bool = True, explain: bool = False) -> dict:
+    """What the structure of ``bg`` allows and ``arrs`` do not reach, and why.
+
+    Parameters
+    ----------
+    bg : BondGraph
+    arrs : sequence of ARR
+    sensor_faults : bool
+        Count a fault per sensor (as the derivation does by default).
+    explain : bool
+        Also say why each is left (the first :data:`EXPLAINED`): the lowest derivative order of the minimal
+        sets near the fault that would reach it, or that every such set is closed only by an ODE of its
+        own, or that no minimal set was found near the fault.
 
     Returns
     -------
     dict
         ``"detect"``: the faults the structure can detect and no ARR sees; ``"isolate"``: the ordered
         pairs ``(a, b)`` the structure can tell apart and the ARRs cannot (every ARR that sees ``a``
-        sees ``b``).
+        sees ``b``); with ``explain``, ``"reasons"``: fault or pair -> one line.
 
     Examples
     --------
     >>> from bondgraph.library import dc_motor
     >>> from diagnosis import derive_arrs
-    >>> left = unreached(dc_motor(), derive_arrs(dc_motor()))
-    >>> left["detect"], ("k_m", "sensor i") in left["isolate"]   # that one needs a second derivative
+    >>> left = unreached(dc_motor(), derive_arrs(dc_motor()), explain=True)
+    >>> left["detect"], ("k_m", "sensor i") in left["isolate"]
     ([], True)
+    >>> left["reasons"][("k_m", "sensor i")]
+    'the minimal sets that would tell them apart need derivatives of order 2 (the ARRs go to order 1)'
     >>> unreached(dc_motor(), derive_arrs(dc_motor(), max_order=2))["isolate"]
     []
     """
@@ -219,7 +239,35 @@ def unreached(bg, arrs: Sequence[ARR], *, sensor_faults: bool = True) -> dict:
     model = structural_model(bg, sensor_faults=sensor_faults)
     supports = [faults_of_arr(model, arr) for arr in arrs]
     gaps = list(_gaps(model, supports))
-    return {"detect": [a for a, b in gaps if b is None], "isolate": [(a, b) for a, b in gaps if b is not None]}
+    left = {"detect": [a for a, b in gaps if b is None], "isolate": [(a, b) for a, b in gaps if b is not None]}
+    if explain:
+        shared = _Shared(bg, model, True)
+        order = max((arr.order for arr in arrs), default=0)
+        left["reasons"] = {gap if gap[1] is not None else gap[0]: _reason(shared, *gap, order)
+                           for gap in gaps[:EXPLAINED]}
+    return left
+
+
+def _reason(shared: _Shared, fault: str, other: str | None, order: int) -> str:
+    """Why no ARR reaches a gap, from the minimal sets near ``fault`` that avoid ``other`` (no elimination)."""
+    removed = shared.model.faults[other] if other is not None else frozenset()
+    ignored: set = set()
+    candidates = [rows for rows in shared.near(fault, ignored) if not rows & removed]
+    for reach in REACHES:
+        if candidates:
+            break
+        candidates = shared.searched(fault, removed, reach, ignored)
+    what = "see it" if other is None else "tell them apart"
+    if not candidates:
+        return f"no minimal set that would {what} was found near {fault} ({ignored.pop() if ignored else 'reach'})"
+    estimates = [e for e in (shared.estimated_order(rows) for rows in candidates) if e is not None]
+    if not estimates:
+        return f"every minimal set near {fault} that would {what} is closed only by an ODE of its own"
+    if min(estimates) > order:
+        return (f"the minimal sets that would {what} need derivatives of order {min(estimates)} "
+                f"(the ARRs go to order {order})")
+    return (f"the minimal sets that would {what} (order {min(estimates)}) have no closed form: a law without explicit "
+            f"inverse or a relation over MAX_OPERATIONS, or the search stopped on its budget")
 
 
 def arr_from_set(bg, rows, *, model: StructuralModel | None = None, name: str = "ARR_MSO") -> ARR:
@@ -269,20 +317,21 @@ REACHES = (1, 2)
 
 def _closing_arr(shared: _Shared, fault: str, other: str | None, max_order: int | None, unrealizable: set,
                  name: str) -> ARR | None:
-    """The ARR of the lowest order, then the smallest set, that sees ``fault`` and not ``other``."""
+    """The ARR of the lowest order, then the smallest set, that sees ``fault`` and not ``other``.
+
+    The sets near ``fault`` are sought once for all its gaps (those avoiding ``other`` serve this one); only
+    when none of them closes the gap is a search made that avoids ``other`` from the start, then a wider one.
+    """
     model = shared.model
     removed = model.faults[other] if other is not None else frozenset()
-    shared.spend("searches", MAX_SEARCHES, "gap searches")
-    tried: set = set()
+    near = [rows for rows in shared.near(fault, unrealizable) if not rows & removed]
+    arr, higher = _first_closing(shared, near, fault, other, max_order, unrealizable)
+    if arr is not None or higher:   # a set above max_order closes it: searches avoiding ``other`` find no lower
+        return None if arr is None else dataclasses.replace(arr, name=name)
+    shared.spend("searches", "gap searches")
+    tried: set = set(near)
     for reach in REACHES:
-        try:
-            candidates = model.msos_through(model.faults[fault], removed, budget=shared.search, reach=reach)
-        except StructuralLimitError as exc:   # too many sets near this fault: the gap stays open, named at the end
-            if shared.search["equations"] < 0:
-                raise _OutOfBudget(f"the searches visited {MAX_SEARCH_EQUATIONS} equations "
-                                   "(diagnosis.elimination.MAX_SEARCH_EQUATIONS)") from None
-            unrealizable.add(f"near {fault}: {exc}")
-            return None
+        candidates = shared.searched(fault, removed, reach, unrealizable)
         fresh = [rows for rows in candidates if rows not in tried]
         tried.update(fresh)
         arr, higher = _first_closing(shared, fresh, fault, other, max_order, unrealizable)
@@ -322,14 +371,49 @@ class _Shared:
         self.bg, self.model, self.avoid_integrals = bg, model, avoid_integrals
         self.weights: dict = {}
         self.results: dict = {}
+        self.templates: dict = {}   # set shape -> (the set eliminated, its ARR or None)
+        self.reused: dict = {}      # set -> whether its ARR is another set's, renamed
+        self._near: dict = {}       # fault -> the minimal sets near it
         self.estimates: dict = {}
         self.spent = {"searches": 0, "eliminations": 0}
-        self.search = {"equations": MAX_SEARCH_EQUATIONS}
+        scale = max(1.0, len(model.faults) / BUDGET_FAULTS)
+        self.limits = {"searches": round(MAX_SEARCHES * scale), "eliminations": round(MAX_ELIMINATIONS * scale),
+                       "search_equations": round(MAX_SEARCH_EQUATIONS * scale)}
+        self.search = {"equations": self.limits["search_equations"]}
 
-    def spend(self, what: str, limit: int, label: str, amount: int = 1) -> None:
-        """Count ``amount`` units of work; raise :class:`_OutOfBudget` rather than go over ``limit``."""
+    def near(self, fault: str, unrealizable: set) -> list:
+        """The minimal sets near ``fault`` (:meth:`~diagnosis.structural.StructuralModel.msos_through`), once."""
+        if fault not in self._near:
+            self.spend("searches", "gap searches")
+            self._near[fault] = self.searched(fault, frozenset(), REACHES[-1], unrealizable)
+        return self._near[fault]
+
+    def searched(self, fault: str, removed: frozenset, reach: int, unrealizable: set) -> list:
+        """The minimal sets near ``fault`` avoiding ``removed``; none (the set named) when there are too many."""
+        try:
+            return self.model.msos_through(self.model.faults[fault], removed, budget=self.search, reach=reach)
+        except StructuralLimitError as exc:   # too many sets near this fault: the gap stays open, named at the end
+            if self.search["equations"] < 0:
+                raise _OutOfBudget(f"the searches visited {self.limits['search_equations']} equations "
+                                   "(diagnosis.elimination.MAX_SEARCH_EQUATIONS, per BUDGET_FAULTS faults)") from None
+            unrealizable.add(f"near {fault}: {exc}")
+            return []
+
+    def cost(self) -> dict:
+        """The work spent: gap searches, equations the searches visited, sets eliminated and their equations,
+        sets that took the ARR of a set of the same shape."""
+        fresh = [rows for rows in self.results if not self.reused.get(rows)]
+        return {"searches": self.spent["searches"],
+                "search_equations": self.limits["search_equations"] - self.search["equations"],
+                "eliminated_sets": len(fresh), "eliminated_equations": self.spent["eliminations"],
+                "reused_sets": sum(self.reused.values())}
+
+    def spend(self, what: str, label: str, amount: int = 1) -> None:
+        """Count ``amount`` units of work; raise :class:`_OutOfBudget` rather than go over the limit."""
+        limit = self.limits[what]
         if self.spent[what] + amount > limit:
-            raise _OutOfBudget(f"{label} would go over {limit} (diagnosis.elimination.MAX_{what.upper()})")
+            raise _OutOfBudget(f"{label} would go over {limit} (diagnosis.elimination.MAX_{what.upper()}, "
+                               "per BUDGET_FAULTS faults)")
         self.spent[what] += amount
 
     @cached_property
@@ -377,15 +461,61 @@ class _Shared:
         return {v: k for k, v in self._real.items()}
 
     def cached(self, rows: frozenset, unrealizable: set) -> ARR | None:
-        """The ARR of ``rows``, made once; None (and the set described in ``unrealizable``) if it has none."""
-        if rows not in self.results:
-            self.spend("eliminations", MAX_ELIMINATIONS, "the equations eliminated", len(rows))
-            try:
-                self.results[rows] = self.arr(rows, "ARR_MSO")
-            except (NotImplementedError, ValueError) as exc:
-                self.results[rows] = None
-                unrealizable.add(str(exc))
+        """The ARR of ``rows``, made once; None (and the set described in ``unrealizable``) if it has none.
+
+        A set of the same shape as one eliminated before (:mod:`diagnosis._set_shapes`: the same equations
+        up to renaming, another stage of a chain) takes that one's ARR renamed, at no cost to the budget.
+        """
+        if rows in self.results:
+            return self.results[rows]
+        shape = self.shapes.shape(rows)
+        if shape is not None and shape.key in self.templates:
+            first, arr = self.templates[shape.key]
+            if arr is None:
+                unrealizable.add(f"{_short(self.model, rows)}: the equations of {_short(self.model, first.rows)} "
+                                 "renamed, which give none")
+            self.results[rows] = None if arr is None else self._renamed(arr, first, shape)
+            self.reused[rows] = True
+            return self.results[rows]
+        self.spend("eliminations", "the equations eliminated", len(rows))
+        try:
+            self.results[rows] = self.arr(rows, "ARR_MSO")
+        except (NotImplementedError, ValueError) as exc:
+            self.results[rows] = None
+            unrealizable.add(str(exc))
+        if shape is not None:
+            self.templates[shape.key] = (shape, self.results[rows])
         return self.results[rows]
+
+    @cached_property
+    def shapes(self) -> Shapes:
+        return Shapes(self._plain_true, [m.role for m in self.model.equations], self._kind)
+
+    def _kind(self, atom) -> str:
+        """What a symbol of the equations stands for (the colour :mod:`diagnosis._set_shapes` starts from)."""
+        if isinstance(atom, AppliedUndef):
+            return "signal" if atom.func.__name__ in self.signals else "state"
+        if delta_parameter(atom) is not None:
+            return "delta"
+        return "parameter" if atom.name in self.structure.parameters else "bond"
+
+    def _renamed(self, arr: ARR, first: SetShape, second: SetShape) -> ARR:
+        """``arr``, the ARR of the set ``first``, with its symbols renamed to those of ``second`` (same shape)."""
+        mapping = dict(zip(first.atoms, second.atoms))
+        names = {a.name: b.name for a, b in mapping.items() if isinstance(a, sp.Symbol)}
+        rows = dict(zip(first.rows, second.rows))
+        residual = next(i for i in first.rows if self.model.equations[i].role == "balance"
+                        and self.model.equations[i].node == arr.junction)
+        nominal = arr.nominal.xreplace(mapping)
+        terms = {names[p]: term.xreplace(mapping) for p, term in arr.terms.items()}
+        symbols = {x.name for x in nominal.free_symbols}
+        intervals = parameter_intervals(self.structure)
+        return dataclasses.replace(
+            arr, junction=self.model.equations[rows[residual]].node, nominal=nominal,
+            uncertain=arr.uncertain.xreplace(mapping), terms=terms,
+            parameters=frozenset(names[p] for p in arr.parameters),
+            values={p: v for p, v in self.structure.parameters.items() if p in symbols or p in terms},
+            uncertainties={p: intervals[p] for p in terms}, origin=tuple(self.model.describe(second.rows)))
 
     def arr(self, rows: frozenset, name: str) -> ARR:
         model = self.model
@@ -446,8 +576,13 @@ class _Shared:
         return self.weights[key]
 
     def estimated_order(self, rows: frozenset) -> int | None:
+        """The derivative order the elimination of ``rows`` would need (:meth:`_estimated_order`), once per shape."""
         if rows not in self.estimates:
-            self.estimates[rows] = self._estimated_order(rows)
+            shape = self.shapes.shape(rows)
+            key = rows if shape is None else shape.key
+            if key not in self.estimates:
+                self.estimates[key] = self._estimated_order(rows)
+            self.estimates[rows] = self.estimates[key]
         return self.estimates[rows]
 
     def _estimated_order(self, rows: frozenset) -> int | None:

@@ -60,7 +60,7 @@ from bondgraph.structure import Element, require_model
 
 from .derivation import ARR, ARRWarning, derive_arrs
 from .deltas import latex, mathml, summands
-from .elimination import unreached
+from .elimination import EXPLAINED, unreached
 from .signatures import SignatureMatrix, signature_matrix
 
 __all__ = ["arr_report", "ELEMENT_COLUMNS", "FORMATS", "LINE_WIDTH", "DRAWING_SCALE"]
@@ -336,14 +336,19 @@ def _signature_table(s: SignatureMatrix) -> tuple[list, list]:
 
 
 def _unreached_lines(bg: BondGraph, arrs: list) -> list[tuple]:
+    """What the structure allows beyond ``arrs``, grouped by the reason :func:`unreached` gives."""
     if not arrs:
         return []
-    left = unreached(bg, arrs)
-    lines = [("Detectable by the structure, seen by no ARR: ", *_fault(fault)) for fault in left["detect"]]
-    pairs = [(*_fault(a), " from ", *_fault(b)) for a, b in left["isolate"]]
-    if pairs:
-        lines.append((f"Isolable by the structure, not by these ARRs ({len(pairs)} ordered pairs; higher "
-                      "derivatives, max_order, or an ODE would be needed): ", *_join(pairs)))
+    left = unreached(bg, arrs, explain=True)
+    reasons = left["reasons"]
+    lines = [("Detectable by the structure, seen by no ARR: ", *_fault(fault),
+              f" ({reasons.get(fault, 'not examined')})") for fault in left["detect"]]
+    groups: dict = {}
+    for a, b in left["isolate"]:
+        groups.setdefault(reasons.get((a, b), f"not examined (more than {EXPLAINED} gaps)"), []).append((a, b))
+    for reason, pairs in groups.items():
+        lines.append((f"Isolable by the structure, not by these ARRs ({len(pairs)} ordered pairs; {reason}): ",
+                      *_join([(*_fault(a), " from ", *_fault(b)) for a, b in pairs])))
     return lines
 
 

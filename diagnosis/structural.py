@@ -90,20 +90,48 @@ class StructuralModel:
     def overdetermined(self, equations: Iterable[int] | None = None) -> frozenset:
         """``M+``: the structurally overdetermined part of ``equations`` (all of them by default)."""
         equations = self.all if equations is None else frozenset(equations)
-        graph = self._bipartite(equations)
-        rows = [("equation", i) for i in equations]
-        matching = nx.bipartite.hopcroft_karp_matching(graph, top_nodes=rows)
+        owner: dict = {}   # unknown -> the equation matched to it
+        spare = [i for i in sorted(equations) if not self._matched(i, owner)]
         # alternating paths from the unmatched equations: any edge to an unknown, the matched edge back
-        reached = {row for row in rows if row not in matching}
-        frontier = list(reached)
+        reached, frontier = set(spare), list(spare)
         while frontier:
             row = frontier.pop()
-            for unknown in graph[row]:
-                partner = matching.get(unknown)
+            for unknown in self.unknowns[row]:
+                partner = owner.get(unknown)
                 if partner is not None and partner not in reached:
                     reached.add(partner)
                     frontier.append(partner)
-        return frozenset(i for _, i in reached)
+        return frozenset(reached)
+
+    def _matched(self, root: int, owner: dict) -> bool:
+        """Match equation ``root`` to an unknown of its own, by an augmenting path if need be (Kuhn's method,
+        iterative); ``owner`` (unknown -> equation) is updated.  False if no path frees an unknown for it.
+
+        M+ does not depend on which maximum matching is found, so the order unknowns are tried in is free.
+        """
+        free = next((x for x in self.unknowns[root] if x not in owner), None)
+        if free is not None:
+            owner[free] = root
+            return True
+        visited: set = set()
+        stack, path = [(root, iter(self.unknowns[root]))], []
+        while stack:
+            row, untried = stack[-1]
+            for x in untried:
+                if x in visited:
+                    continue
+                visited.add(x)
+                path.append((row, x))
+                if x not in owner:   # each equation on the path takes the unknown it was left by
+                    owner.update({u: r for r, u in path})
+                    return True
+                stack.append((owner[x], iter(self.unknowns[owner[x]])))
+                break
+            else:
+                stack.pop()
+                if path:
+                    path.pop()
+        return False
 
     def redundancy(self, equations: Iterable[int] | None = None) -> int:
         """Equations minus unknowns of the overdetermined part of ``equations``: how many ARRs are independent."""
