@@ -73,7 +73,7 @@ COMMANDS = {
     "detect": "residuals, robust thresholds and alarms on recorded data",
     "calibrate": "parameters from healthy records, validated on held-out ones: the calibrated model (JSON, with "
                  "its provenance) and a report",
-    "sensors": "where to add sensors: the cheapest minimal sets of junction detectors that reach a detection or "
+    "sensors": "where to add sensors: the cheapest minimal sets of detectors that reach a detection or "
                "isolation goal, checked by re-deriving the ARRs",
     "prognose": "estimate a degrading parameter and predict the RUL from recorded data",
     "fleet": "monitor a fleet: records of many assets to Parquet tables of alarms, estimates, RULs and residuals, "
@@ -307,6 +307,8 @@ def _sensors_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--cost", nargs="+", action="extend", type=_detector_cost, metavar="DETECTOR=COST",
                    help="a detector's cost, e.g. 'Df 1_e=2' (default 1 each)")
     p.add_argument("--healthy-sensors", action="store_true", help="sensors cannot fail (their faults not counted)")
+    p.add_argument("--inside-elements", action="store_true", help="also try detectors inside an element's bond "
+                   "(the flow of one valve, the torque of one friction), on an inserted junction")
     p.add_argument("--no-check", action="store_true", help="judge by the structure alone, without re-deriving "
                    "the ARRs of each set")
     p.add_argument("--out", metavar="FILE.json", help="the alternatives as JSON")

@@ -745,7 +745,10 @@ def _eliminate(model: StructuralModel, equations: list, assigned: dict, residual
         if len(members) == 1:
             found = {targets[0]: _solve_one(equations_here[0], targets[0], model.describe(members)[0])}
         else:
-            found = sp.solve([e.lhs - e.rhs for e in equations_here], targets, dict=True)
+            try:
+                found = sp.solve([e.lhs - e.rhs for e in equations_here], targets, dict=True)
+            except (TypeError, ZeroDivisionError) as exc:   # sympy gives up inside a piecewise or sign law
+                raise ValueError(f"{model.describe(members)}: sympy cannot solve the loop ({exc})") from None
             if len(found) != 1:
                 raise ValueError(f"{model.describe(members)}: no unique solution for {targets}")
             found = found[0]

@@ -1,11 +1,12 @@
-"""Where to add sensors: the cheapest sets of junction detectors that reach a diagnosis goal.
+"""Where to add sensors: the cheapest sets of detectors that reach a diagnosis goal.
 
-A sensor on a bond graph is an effort detector on a 0-junction (its common effort) or a flow detector
-on a 1-junction (its common flow).  :func:`place_sensors` tries the detectors the model lacks, alone and
-together, judges each set by the structure of the model with them (:func:`~diagnosis.structural_model`:
-which faults some overdetermined part reaches, which pairs it tells apart), and returns the minimal sets
-(no sensor can be dropped) that reach the goal, cheapest first, each checked by deriving the ARRs of the
-model with its sensors.
+A sensor on a bond graph is an effort detector on a 0-junction (its common effort) or a flow detector on a
+1-junction (its common flow); the flow of one element on a 0-junction, or the effort across one on a
+1-junction, is measured by a junction of the other kind inserted into the element's bond.
+:func:`place_sensors` tries the detectors the model lacks, alone and together, judges each set by the
+structure of the model with them (:func:`~diagnosis.structural_model`: which faults some overdetermined part
+reaches, which pairs it tells apart), and returns the minimal sets (no sensor can be dropped) that reach the
+goal, cheapest first, each checked by deriving the ARRs of the model with its sensors.
 
 The goal is what every candidate together would give: ``"detect"``, every fault they would let some ARR
 see; ``"isolate"``, moreover every ordered pair of faults they would tell apart.  With ``fallible=True``
@@ -36,7 +37,7 @@ from .derivation import derive_arrs
 from .signatures import signature_matrix
 from .structural import sensor_fault, structural_model
 
-__all__ = ["GOALS", "SensorPlacement", "place_sensors"]
+__all__ = ["GOALS", "SensorPlacement", "element_detectors", "junction_detectors", "place_sensors", "with_sensors"]
 
 #: The goals :func:`place_sensors` can reach.
 GOALS = ("detect", "isolate")
@@ -73,8 +74,9 @@ class SensorPlacement:
 
 def place_sensors(bg, *, goal: str = "isolate", faults: Sequence[str] | None = None,
                   cost: Mapping[str, float] | None = None, fallible: bool = True, max_sensors: int = 3,
-                  check: bool = True) -> list[SensorPlacement]:
-    """The minimal sets of junction detectors, cheapest first, that reach ``goal``.
+                  check: bool = True, max_order: int | str | None = None,
+                  inside_elements: bool = False) -> list[SensorPlacement]:
+    """The minimal sets of detectors, cheapest first, that reach ``goal``.
 
     Parameters
     ----------
@@ -92,6 +94,13 @@ def place_sensors(bg, *, goal: str = "isolate", faults: Sequence[str] | None = N
         The most detectors a set may add.
     check : bool
         Derive the ARRs of the model with each returned set and record what they achieve.
+    max_order : int, "auto" or None
+        The derivative bound of that derivation (:func:`~diagnosis.derive_arrs`); default None, no bound: the
+        check asks whether every structural promise has an ARR, whatever its order.
+    inside_elements : bool
+        Also try detectors inside elements' bonds (:func:`element_detectors`): the flow through one valve of a
+        tank, the torque of one friction.  Off by default: a junction detector is a sensor on a shared
+        variable, the kind a plant already has taps for.
 
     Returns
     -------
@@ -108,7 +117,7 @@ def place_sensors(bg, *, goal: str = "isolate", faults: Sequence[str] | None = N
         raise SettingError("goal", f"{{setting}} must be one of {', '.join(GOALS)}, got {goal!r}")
     if not (isinstance(max_sensors, int) and max_sensors >= 1):
         raise SettingError("max_sensors", f"{{setting}} must be a whole number >= 1, got {max_sensors!r}")
-    candidates = junction_detectors(bg)
+    candidates = junction_detectors(bg) + (element_detectors(bg) if inside_elements else [])
     prices = {c: 1.0 for c in candidates}
     for name, value in (cost or {}).items():
         if name not in prices:
@@ -128,8 +137,10 @@ def place_sensors(bg, *, goal: str = "isolate", faults: Sequence[str] | None = N
                 continue  # a superset of a set that reaches the goal is not minimal
             aims = wanted | _own_faults(chosen, fallible)
             detects, isolates = _reach(with_sensors(bg, chosen), aims, goal)
+            # the model's faults told apart as far as every candidate would, and from the added sensors'
+            # faults; an added sensor's own fault need only be detected
             target_detects = best[0] & aims
-            target_isolates = {(a, b) for a, b in best[1] if a in aims and b in aims}
+            target_isolates = {(a, b) for a, b in best[1] if a in wanted and b in aims}
             if target_detects <= detects and target_isolates <= isolates:
                 found.append(SensorPlacement(chosen, sum(prices[c] for c in chosen), frozenset(detects),
                                              frozenset(isolates)))
@@ -139,7 +150,7 @@ def place_sensors(bg, *, goal: str = "isolate", faults: Sequence[str] | None = N
         raise SettingError("max_sensors", f"{{setting}}: no set of at most {max_sensors} of the {len(candidates)} "
                                           f"detectors the model lacks reaches the goal ({goal}); allow more")
     found.sort(key=lambda f: (f.cost, len(f.sensors), f.sensors))
-    return [_checked(bg, f, fallible) for f in found] if check else found
+    return [_checked(bg, f, fallible, max_order) for f in found] if check else found
 
 
 def junction_detectors(bg) -> list[str]:
@@ -154,20 +165,59 @@ def junction_detectors(bg) -> list[str]:
     return lacking
 
 
+def element_detectors(bg) -> list[str]:
+    """Detectors inside the bond of a one-port element (R, C, I) that no junction detector can be: the flow
+    of an element on a 0-junction (``"Df az2"``), the effort across one on a 1-junction (``"De R_a"``).
+
+    :func:`with_sensors` places one by inserting a junction of the other kind into the element's bond.
+    """
+    graph = bg.graph
+    kinds = {n: str(d.get("kind")) for n, d in graph.nodes(data=True)}
+    found = []
+    for element, kind in kinds.items():
+        if kind not in ("R", "C", "I"):
+            continue
+        (neighbour, *more) = [*graph.predecessors(element), *graph.successors(element)] or [None]
+        wanted = {"0": "Df", "1": "De"}.get(kinds.get(neighbour))
+        if wanted and not more:
+            found.append(f"{wanted} {element}")
+    return found
+
+
 def with_sensors(bg, sensors: Sequence[str]) -> BondGraph:
-    """A copy of ``bg`` with the detectors ``sensors`` (``"De 0_2"``) bonded to their junctions."""
+    """A copy of ``bg`` with the detectors ``sensors``: on a junction (``"De 0_2"``) bonded to it, in an
+    element's bond (``"Df az2"``) on a junction inserted into that bond (``1_az2``, power in the bond's
+    direction)."""
     model = BondGraph(bg.graph.copy(), name=bg.name)
     for sensor in sensors:
-        kind, junction = sensor.split(" ", 1)
+        kind, node = sensor.split(" ", 1)
         name = _signal(sensor)
+        if str(model.graph.nodes[node].get("kind")) not in ("0", "1"):
+            node = _inserted_junction(model, node, "1" if kind == "Df" else "0")
         model.add(name, kind)
-        model.bond(junction, name)
+        model.bond(node, name)
     return model
 
 
+def _inserted_junction(model: BondGraph, element: str, kind: str) -> str:
+    """A ``kind`` junction put into the one bond of ``element``, keeping the bond's direction; its name."""
+    graph = model.graph
+    junction = f"{kind}_{element}"
+    if junction in graph:
+        raise SettingError("sensors", f"{{setting}}: a node {junction!r} exists already; cannot insert a junction "
+                                      f"into the bond of {element!r}")
+    tail, head = next(iter([*graph.in_edges(element), *graph.out_edges(element)]))
+    attributes = dict(graph.edges[tail, head])
+    graph.remove_edge(tail, head)
+    model.add(junction, kind)
+    model.bond(tail, junction, **attributes)   # the original bond keeps its label, on its tail's side
+    model.bond(junction, head)
+    return junction
+
+
 def _signal(sensor: str) -> str:
-    kind, junction = sensor.split(" ", 1)
-    return f"{'e' if kind == 'De' else 'f'}_{junction}"
+    kind, node = sensor.split(" ", 1)
+    return f"{'e' if kind == 'De' else 'f'}_{node}"
 
 
 def _own_faults(sensors, fallible: bool) -> set:
@@ -186,9 +236,10 @@ def _reach(model: BondGraph, faults: set, goal: str) -> tuple[set, set]:
     return detects, isolates
 
 
-def _checked(bg, placement: SensorPlacement, fallible: bool) -> SensorPlacement:
+def _checked(bg, placement: SensorPlacement, fallible: bool, max_order) -> SensorPlacement:
     """``placement`` with what the ARRs of the model with its sensors achieve."""
-    signatures = signature_matrix(derive_arrs(with_sensors(bg, placement.sensors)), sensor_faults=fallible)
+    arrs = derive_arrs(with_sensors(bg, placement.sensors), max_order=max_order, sensor_faults=fallible)
+    signatures = signature_matrix(arrs, sensor_faults=fallible)
     seen = {row: {c for c, v in zip(signatures.columns, signatures.matrix[i]) if v}
             for i, row in enumerate(signatures.rows)}
     detects = {f for f, arrs in seen.items() if arrs}

@@ -14,7 +14,7 @@ __all__ = ["run"]
 
 
 def run(args, progress: Progress) -> int:
-    """``bgphm sensors``: the minimal sets of junction detectors reaching ``args.goal``, cheapest first, as a
+    """``bgphm sensors``: the minimal sets of detectors reaching ``args.goal``, cheapest first, as a
     table on stdout and, with ``--out``, as JSON; returns 0."""
     from diagnosis import place_sensors
 
@@ -23,7 +23,7 @@ def run(args, progress: Progress) -> int:
     progress(f"trying the detectors {spec.model.name!r} lacks, up to {args.max_sensors} at a time")
     placements = place_sensors(spec.model, goal=args.goal, cost=dict(args.cost or []),
                                fallible=not args.healthy_sensors, max_sensors=args.max_sensors,
-                               check=not args.no_check)
+                               check=not args.no_check, inside_elements=args.inside_elements)
     print("\n".join(_lines(placements, args.goal)))
     if out is not None:
         emit(json.dumps({"model": spec.model.name, "goal": args.goal, "alternatives": [

@@ -56,3 +56,15 @@ def test_an_existing_out_file_is_kept_without_force(speed_only, tmp_path):
     assert code == 2 and "--force" in stderr and out.read_text() == "mine"
     assert run("--quiet", "sensors", speed_only, "--no-check", "--out", out, "--force")[0] == 0
     assert json.loads(out.read_text())["alternatives"][0]["derived"] is None
+
+
+def test_a_sensor_inside_a_valve_bond_is_offered_when_asked(tmp_path):
+    from bondgraph.library import three_tank
+
+    model = tmp_path / "three_tank.json"
+    model.write_text(to_json(three_tank()))
+    out = tmp_path / "placements.json"
+    code, _, err = run("sensors", str(model), "--inside-elements", "--no-check", "--out", str(out))
+    assert code == 0, err
+    alternatives = json.loads(out.read_text())["alternatives"]
+    assert [a["sensors"] for a in alternatives] == [["Df A_2"], ["Df az2"]]

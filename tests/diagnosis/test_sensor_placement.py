@@ -8,7 +8,7 @@ import pytest
 from bondgraph import BondGraph, SettingError
 from bondgraph.library import dc_motor, three_tank, torsion_bar
 from diagnosis import structural_model
-from diagnosis.sensor_placement import junction_detectors, place_sensors, with_sensors
+from diagnosis.sensor_placement import element_detectors, junction_detectors, place_sensors, with_sensors
 from tests.zoo.chain import cases
 
 
@@ -26,16 +26,18 @@ def assert_minimal_and_reaching(bg, placements, goal):
         sensors = placement.sensors
         own = {f"sensor {'e' if s.startswith('De') else 'f'}_{s.split(' ', 1)[1]}" for s in sensors}
         detects, pairs = reach(bg, sensors, goal)
-        faults = set(structural_model(bg).faults) | own
+        base = set(structural_model(bg).faults)
+        faults = base | own
         assert {f for f in everything[0] if f in faults} <= detects
-        assert {(a, b) for a, b in everything[1] if a in faults and b in faults} <= pairs
+        # the model's faults told from every fault; an added sensor's own fault need only be detected
+        assert {(a, b) for a, b in everything[1] if a in base and b in faults} <= pairs
         for dropped in sensors:  # minimal: no sensor can be dropped
             fewer = tuple(s for s in sensors if s != dropped)
             fewer_own = own - {f"sensor {'e' if dropped.startswith('De') else 'f'}_{dropped.split(' ', 1)[1]}"}
             d, p = reach(bg, fewer, goal)
             aims = set(structural_model(bg).faults) | fewer_own
             assert not ({f for f in everything[0] if f in aims} <= d
-                        and {(a, b) for a, b in everything[1] if a in aims and b in aims} <= p), (bg.name, dropped)
+                        and {(a, b) for a, b in everything[1] if a in base and b in aims} <= p), (bg.name, dropped)
 
 
 @pytest.mark.slow
@@ -91,3 +93,30 @@ def test_too_few_sensors_allowed_is_said_not_taken_for_nothing_to_add():
     with pytest.raises(SettingError, match="no set of at most 1 of the 4 detectors") as error:
         place_sensors(torsion_bar(), goal="isolate", max_sensors=1, check=False)
     assert error.value.setting == "max_sensors"
+
+
+def test_a_sensor_inside_an_element_bond_changes_no_dynamics_and_reads_the_elements_flow():
+    bg = three_tank()
+    assert "Df az2" in element_detectors(bg) and "Df az2" not in junction_detectors(bg)
+    before = str(bg.state_equations()).splitlines()
+    after = str(with_sensors(bg, ["Df az2"]).state_equations()).splitlines()
+    assert after[:len(before)] == before   # the same state equations and outputs
+    (reading,) = after[len(before):]
+    outflow = before[1].split(" = ")[1].split(" + ")[0]   # tank 2's balance: its valve's outflow, negated
+    assert reading == f"f_az2 = {outflow.removeprefix('-')}"
+
+
+def test_the_three_tanks_reach_full_isolability_with_one_flow_inside_a_valve_or_tank_bond():
+    bg = three_tank()
+    assert place_sensors(bg, goal="isolate", check=False) == []   # junction detectors add nothing
+    placements = place_sensors(bg, goal="isolate", inside_elements=True, check=False)
+    assert [p.sensors for p in placements] == [("Df A_2",), ("Df az2",)]
+    faults = len(structural_model(bg).faults) + 1
+    assert all(len(p.isolates) == faults * (faults - 1) for p in placements)   # every ordered pair
+
+
+@pytest.mark.slow
+def test_the_three_tanks_full_isolability_is_realised_by_the_arrs_of_the_valve_flow():
+    (tank, valve) = place_sensors(three_tank(), goal="isolate", inside_elements=True)
+    assert valve.derived["isolates"] == valve.isolates   # every ordered pair, by the ARRs themselves
+    assert tank.derived["isolates"] <= tank.isolates and tank.derived["detects"] == tank.detects
