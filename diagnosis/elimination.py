@@ -89,7 +89,7 @@ BUDGET_FAULTS = 30
 #: bound.  Counted as distinct operations (a subexpression repeated counts once: the evaluation computes it
 #: once, sympy's common subexpressions), so a chain of orifice inversions, whose tree repeats each inner
 #: level many times, is kept while its evaluation stays small.
-MAX_OPERATIONS = 400
+MAX_OPERATIONS = 500
 
 
 class _StructureOnly:
