@@ -25,7 +25,8 @@ from tests.zoo.reference import simulate_reference
 LOOPED = ["quarter_car", "two_mass_drive", "torque_sensor_shaft", "power_module_thermal", "pneumatic_line"]
 
 
-@pytest.mark.parametrize("name", [LOOPED[0], *(pytest.param(n, marks=pytest.mark.slow) for n in LOOPED[1:])])
+@pytest.mark.slow
+@pytest.mark.parametrize("name", LOOPED)
 def test_every_isolable_pair_is_reached_and_every_arr_holds_on_the_physics(name):
     case = load_case(name)
     bg = case.build()
