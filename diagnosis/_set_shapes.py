@@ -4,7 +4,7 @@ A chain of stages, a ladder or a cascade gives the same minimal set at every sta
 for ``m2``, ``v4`` for ``v3``).  The elimination of a set is a sympy computation that only the form of its
 equations decides, so the ARR of one set, renamed, is the ARR of every set of the same shape.
 
-The shape of a set is found by colour refinement (Weisfeiler-Lehman) on the graph of its equations and
+The shape of a set is found by colour refinement (Weisfeiler and Leman (1968)) on the graph of its equations and
 the symbols they hold: an equation starts with its role and its law written with every symbol replaced by
 its kind (parameter, uncertainty, bond variable, state, signal), a symbol with its kind; each round a node
 takes the colours of its neighbours.  When every node ends with a colour of its own, sorting by colour

@@ -12,7 +12,7 @@ every part.  The Dulmage-Mendelsohn decomposition of the bipartite graph of equa
 gives the overdetermined part ``M+`` of any set (the equations reachable from an unmatched equation
 by alternating paths of a maximum matching), and its redundancy ``|M+| - |unknowns of M+|``.
 Every ARR a model allows comes from an overdetermined set; the *minimal* ones (MSO sets, redundancy
-one; Krysander, Aslund and Nyberg 2008) are the smallest ARRs, and together they reach every
+one; Krysander et al. (2008)) are the smallest ARRs, and together they reach every
 detectability and isolability the structure allows:
 
 * a fault is detectable when one of its equations lies in ``M+`` of the whole model;
@@ -104,7 +104,7 @@ class StructuralModel:
         return frozenset(reached)
 
     def _matched(self, root: int, owner: dict) -> bool:
-        """Match equation ``root`` to an unknown of its own, by an augmenting path if need be (Kuhn's method,
+        """Match equation ``root`` to an unknown of its own, by an augmenting path if need be (Kuhn (1955),
         iterative); ``owner`` (unknown -> equation) is updated.  False if no path frees an unknown for it.
 
         M+ does not depend on which maximum matching is found, so the order unknowns are tried in is free.
