@@ -8,7 +8,7 @@ import math
 import numpy as np
 import sympy as sp
 
-from ..intervals import compile_interval, enclose, kernels, rounding
+from ..intervals import compile_interval, enclose, kernels, product_parts, rounding
 from ._errors import CodegenError
 from ._plan import Plan
 
@@ -293,16 +293,7 @@ class _IntervalEmitter:
             which = "mn" if isinstance(expr, sp.Min) else "mx"
             return self.fold(lambda a, b: self.extreme(which, a, b), [self.compile(a) for a in expr.args])
         if expr.is_Mul:
-            numer, denom = [], []
-            for factor in expr.args:
-                if factor.is_Rational and not factor.is_Integer:
-                    numer.append(sp.Integer(factor.p))
-                    denom.append(sp.Integer(factor.q))
-                elif factor.is_Pow and factor.exp.is_Integer and factor.exp < 0:
-                    denom.append(sp.Pow(factor.base, -factor.exp))
-                else:
-                    numer.append(factor)
-            numer = [f for f in numer if f != 1] or [sp.Integer(1)]
+            numer, denom = product_parts(expr)   # as the library's compiler splits it: the same roundings
             numer.sort(key=self.varies)
             top = self.fold(self.mul, [self.compile(f) for f in numer])
             if not denom:

@@ -65,7 +65,7 @@ Interval(-2.0000000000000004, 2.0000000000000004)
 Interval(0.3, 0.3000000000000001)
 """
 
-from .compiler import affine_range, compile_interval, enclose
+from .compiler import affine_range, compile_interval, enclose, product_parts
 from .functions import absolute, cos, exp, log, maximum, minimum, power, sign, sin, sqrt, tanh
 from .interval import Interval, IntervalArray
 from .rounding import TRANSCENDENTAL_ULPS, IntervalWarning
@@ -85,6 +85,7 @@ __all__ = [
     "maximum",
     "minimum",
     "power",
+    "product_parts",
     "sign",
     "sin",
     "sqrt",

@@ -21,7 +21,7 @@ from . import interval, kernels, rounding
 from .interval import Interval, IntervalArray
 from .kernels import Pair
 
-__all__ = ["EXPAND_LIMIT", "Node", "affine_range", "compile_interval", "enclose"]
+__all__ = ["EXPAND_LIMIT", "Node", "affine_range", "compile_interval", "enclose", "product_parts"]
 
 Node = Callable[[Sequence[np.ndarray]], Pair]
 
@@ -124,8 +124,14 @@ def _unary(kernel, child: Node) -> Node:
     return lambda values: kernel(child(values))
 
 
-def _compile_mul(expr: sp.Mul, env: _Env) -> Node:
-    """Product as one division ``numerator / denominator``: fewer roundings than reciprocals."""
+def product_parts(expr: sp.Mul) -> tuple[list, list]:
+    """A product's factors as ``(numerator, denominator)``: a fraction split, a negative integer power
+    moved below; the numerator never empty.  One division then rounds once, where reciprocals round each.
+
+    >>> x, y = sp.symbols("x y")
+    >>> product_parts(sp.Rational(3, 4) * x / y**2)
+    ([3, x], [4, y**2])
+    """
     numer, denom = [], []
     for factor in expr.args:
         if factor.is_Rational and not factor.is_Integer:
@@ -135,7 +141,12 @@ def _compile_mul(expr: sp.Mul, env: _Env) -> Node:
             denom.append(sp.Pow(factor.base, -factor.exp))
         else:
             numer.append(factor)
-    numer = [f for f in numer if f != 1] or [sp.Integer(1)]
+    return [f for f in numer if f != 1] or [sp.Integer(1)], denom
+
+
+def _compile_mul(expr: sp.Mul, env: _Env) -> Node:
+    """Product as one division ``numerator / denominator``: fewer roundings than reciprocals."""
+    numer, denom = product_parts(expr)
     # constant factors (numbers, interval symbols) first: their product stays a scalar
     numer.sort(key=env.varies)
     top = _fold(kernels.mul, [_compile(f, env) for f in numer])
