@@ -36,6 +36,7 @@ gyrator, with the current taken from the mechanical balance:
 from __future__ import annotations
 
 import dataclasses
+import math
 import warnings
 from collections.abc import Sequence
 from functools import cached_property
@@ -240,8 +241,10 @@ def unreached(bg, arrs: Sequence[ARR], *, sensor_faults: bool = True, explain: b
     supports = [faults_of_arr(model, arr) for arr in arrs]
     gaps = list(_gaps(model, supports))
     left = {"detect": [a for a, b in gaps if b is None], "isolate": [(a, b) for a, b in gaps if b is not None]}
-    if explain:
+    if explain:   # bounded by EXPLAINED, not by the derivation's budgets
         shared = _Shared(bg, model, True)
+        shared.limits = dict.fromkeys(shared.limits, math.inf)
+        shared.search["equations"] = math.inf
         order = max((arr.order for arr in arrs), default=0)
         left["reasons"] = {gap if gap[1] is not None else gap[0]: _reason(shared, *gap, order)
                            for gap in gaps[:EXPLAINED]}
