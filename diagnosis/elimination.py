@@ -78,13 +78,13 @@ MAX_ORDER = "auto"
 #: set of the same shape as one eliminated before costs nothing, :mod:`diagnosis._set_shapes`) and gaps
 #: searched for minimal sets (each a structural search near the fault).  Past either, the ARRs found so
 #: far are returned and an ARRWarning says where the search stopped.
-MAX_ELIMINATIONS = 1000
+MAX_ELIMINATIONS = 500
 MAX_SEARCHES = 60
 #: The equations the searches for minimal sets of one derivation may visit together (each overdetermined
 #: subset explored counts its size: a matching over it).
 MAX_SEARCH_EQUATIONS = 12000
 #: The model size the budgets above are for.
-BUDGET_FAULTS = 30
+BUDGET_FAULTS = 60
 
 #: An eliminated relation larger than this is not kept: nested inverses of non-linear laws grow without
 #: bound.  Counted as distinct operations (a subexpression repeated counts once: the evaluation computes it
@@ -327,10 +327,14 @@ def _closing_arr(shared: _Shared, fault: str, other: str | None, max_order: int 
     """
     model = shared.model
     removed = model.faults[other] if other is not None else frozenset()
-    near = [rows for rows in shared.near(fault, unrealizable) if not rows & removed]
+    around = shared.near(fault, unrealizable)
+    near = [rows for rows in around if not rows & removed]
     arr, higher = _first_closing(shared, near, fault, other, max_order, unrealizable)
     if arr is not None or higher:   # a set above max_order closes it: searches avoiding ``other`` find no lower
         return None if arr is None else dataclasses.replace(arr, name=name)
+    orders = [o for o in map(shared.estimated_order, around) if o is not None]
+    if max_order is not None and orders and min(orders) > max_order:
+        return None   # every set near the fault is above the bound: one avoiding ``other`` is not sought
     shared.spend("searches", "gap searches")
     tried: set = set(near)
     for reach in REACHES:
@@ -388,7 +392,7 @@ class _Shared:
         """The minimal sets near ``fault`` (:meth:`~diagnosis.structural.StructuralModel.msos_through`), once."""
         if fault not in self._near:
             self.spend("searches", "gap searches")
-            self._near[fault] = self.searched(fault, frozenset(), REACHES[-1], unrealizable)
+            self._near[fault] = self.searched(fault, frozenset(), REACHES[0], unrealizable)
         return self._near[fault]
 
     def searched(self, fault: str, removed: frozenset, reach: int, unrealizable: set) -> list:
