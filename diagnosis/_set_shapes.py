@@ -16,16 +16,15 @@ shape and is eliminated on its own.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import re
+from dataclasses import dataclass
 
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
 from bondgraph.structure import T
 
-__all__ = ["SetShape", "Shapes"]
+__all__ = ["SetShape", "Shapes", "rewritten"]
 
 #: A symbol's mark in an equation's template.
 _MARK = re.compile(r"__(\d+)__")
@@ -97,7 +96,7 @@ class Shapes:
         if row not in self._templates:
             atoms = sorted(self.atoms_of(row), key=sp.srepr)
             marked = {a: _placeholder(f"__{k}__", a) for k, a in enumerate(atoms)}
-            self._templates[row] = (f"{self.roles[row]}: {sp.srepr(_renamed(self.equations[row], marked))}", atoms)
+            self._templates[row] = (f"{self.roles[row]}: {sp.srepr(rewritten(self.equations[row], marked))}", atoms)
         return self._templates[row]
 
     def atoms_of(self, row: int) -> frozenset:
@@ -111,7 +110,7 @@ class Shapes:
         """An equation's role and law with every symbol replaced by its kind."""
         if row not in self._labels:
             kinds = {a: _placeholder(self.kind(a), a) for a in self.atoms_of(row)}
-            self._labels[row] = f"{self.roles[row]}: {sp.srepr(_renamed(self.equations[row], kinds))}"
+            self._labels[row] = f"{self.roles[row]}: {sp.srepr(rewritten(self.equations[row], kinds))}"
         return self._labels[row]
 
     def _refined(self, colour: dict, node: tuple, neighbours: list) -> int:
@@ -127,5 +126,10 @@ def _placeholder(name: str, atom) -> sp.Basic:
     return sp.Function(name)(T) if isinstance(atom, AppliedUndef) else sp.Symbol(name)
 
 
-def _renamed(equation: sp.Eq, mapping: dict) -> sp.Eq:
+def rewritten(equation: sp.Eq, mapping: dict) -> sp.Eq:
+    """``equation`` with ``mapping`` applied to each side, left unevaluated.
+
+    ``Eq.xreplace`` evaluates the new equality, and a law sympy can decide (``e/0 - f``, a ``zoo`` times a
+    variable) becomes ``False``, which is no equation to solve.
+    """
     return sp.Eq(equation.lhs.xreplace(mapping), equation.rhs.xreplace(mapping), evaluate=False)

@@ -55,7 +55,7 @@ from .junctions import junction_arrs
 from .arr import (ARR, ARRWarning, candidate_parameters, check_integral_form, measured_signals,
                        parameter_intervals, split_relation, uncertain_structure, written_without_integrals)
 from ._operator_elimination import operator_order, operator_residual
-from ._set_shapes import SetShape, Shapes
+from ._set_shapes import SetShape, Shapes, rewritten
 from .deltas import delta_parameter
 from .structural import StructuralLimitError, StructuralModel, sensor_fault, structural_model
 
@@ -457,11 +457,11 @@ class _Shared:
 
     @cached_property
     def nominal(self) -> list:
-        return [_rewritten(e, self._real) for e in self._plain_nominal]
+        return [rewritten(e, self._real) for e in self._plain_nominal]
 
     @cached_property
     def true(self) -> list:
-        return [_rewritten(e, self._real) for e in self._plain_true]
+        return [rewritten(e, self._real) for e in self._plain_true]
 
     @cached_property
     def plain(self) -> dict:
@@ -822,16 +822,7 @@ def _substituted(equation: sp.Eq, solution: dict) -> sp.Eq:
     """``equation`` with solved unknowns replaced, a state's derivative by the derivative of its value."""
     derivatives = {d: _time_derivative(solution[d.expr], d.derivative_count)
                    for d in equation.atoms(sp.Derivative) if d.expr in solution}
-    return _rewritten(_rewritten(equation, derivatives), solution)
-
-
-def _rewritten(equation: sp.Eq, mapping: dict) -> sp.Eq:
-    """``equation`` with ``mapping`` applied to each side, left unevaluated.
-
-    ``Eq.xreplace`` evaluates the new equality, and a law sympy can decide (``e/0 - f``, a ``zoo`` times a
-    variable) becomes ``False``, which is no equation to solve.
-    """
-    return sp.Eq(equation.lhs.xreplace(mapping), equation.rhs.xreplace(mapping), evaluate=False)
+    return rewritten(rewritten(equation, derivatives), solution)
 
 
 def _check_finite(model: StructuralModel, equations: list, rows) -> None:

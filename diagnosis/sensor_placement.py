@@ -10,7 +10,8 @@ goal, cheapest first, each checked by deriving the ARRs of the model with its se
 
 The goal is what every candidate together would give: ``"detect"``, every fault they would let some ARR
 see; ``"isolate"``, moreover every ordered pair of faults they would tell apart.  With ``fallible=True``
-(the default) a sensor can fail too: its own fault is one of the faults to detect and isolate.
+(the default) a sensor can fail too: the faults of the added sensors must be detected, and the model's faults
+told apart from them.
 
 Example
 -------
