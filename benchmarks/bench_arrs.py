@@ -34,7 +34,7 @@ import numpy as np
 from sympy.core.cache import clear_cache
 
 from bondgraph import BondGraph
-from bondgraph.library import mass_spring_chain
+from bondgraph.library import mass_spring_chain, tank_cascade
 from diagnosis import derive_arrs, signature_matrix
 from diagnosis.elimination import unreached
 from diagnosis.report import arr_report
@@ -57,43 +57,6 @@ def rc_ladder(n: int) -> BondGraph:
                            (f"0_{i}", f"v{i}")]:
             bg.bond(tail, head)
         previous = f"0_{i}"
-    return bg
-
-
-#: Tank areas (m^2) and orifice constants a = c_d A_o sqrt(2 g) (m^(5/2)/s) of the tank cascade: a laboratory
-#: rig's values, as in the zoo's orifice_tanks.
-TANK_AREA, ORIFICE = 0.05, 2.0e-3
-
-
-def tank_cascade(n: int, *, every: int = 1) -> BondGraph:
-    """``n`` gravity-drained tanks in series: ``q_in -> 0_1 (C:T1, De h1) -> 1_12 (R:O1) -> 0_2 ... -> 0_n (R:On)``.
-
-    Each tank is a C element of its area (effort: the level), each orifice a non-linear R element with the
-    signed square-root (Torricelli) law ``q = a sign(dh) sqrt|dh|``; tank ``i`` drains into tank ``i + 1``,
-    the last to the atmosphere.  A level sensor on every ``every``-th tank, from the first (and always on the
-    last, so that the last orifice is in a redundant set): with ``every=2``, the levels between two sensors are
-    found only by inverting an orifice law.
-    """
-    bg = BondGraph(name=f"{n}-tank cascade" + ("" if every == 1 else f", a level sensor every {every} tanks"))
-    bg.add("q_in", "Sf", unit="m^3/s")
-    previous = "q_in"
-    for i in range(1, n + 1):
-        bg.add(f"0_{i}", "0")
-        bg.add(f"T{i}", "C", param=f"A{i}", value=TANK_AREA, uncertainty=(-0.02, 0.02), unit="m^2")
-        bg.add(f"O{i}", "R", param=f"a{i}", value=ORIFICE, uncertainty=(-0.1, 0.1),
-               law=f"f - a{i}*sign(e)*sqrt(Abs(e))", unit="m^(5/2)/s")
-        bonds = [(previous, f"0_{i}"), (f"0_{i}", f"T{i}")]
-        if (i - 1) % every == 0 or i == n:
-            bg.add(f"h{i}", "De", unit="m")
-            bonds.append((f"0_{i}", f"h{i}"))
-        if i < n:   # the orifice between tank i and tank i + 1 sees the difference of their levels
-            bg.add(f"1_{i}{i + 1}", "1")
-            bonds += [(f"0_{i}", f"1_{i}{i + 1}"), (f"1_{i}{i + 1}", f"O{i}")]
-            previous = f"1_{i}{i + 1}"
-        else:        # the last drains to the atmosphere: its level is the head across the orifice
-            bonds.append((f"0_{i}", f"O{i}"))
-        for tail, head in bonds:
-            bg.bond(tail, head)
     return bg
 
 

@@ -158,6 +158,7 @@ MODEL_HELP = "JSON (node-link) or Python model file, or a built-in example (dc-m
 def _arr_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("model", metavar="MODEL", help=MODEL_HELP)
     p.add_argument("--format", choices=("md", "html", "tex"), default="md", help="report format (default md)")
+    p.add_argument("--simulated", action="store_true", help=SIMULATED_HELP)
     p.add_argument("--out", help="output file (default: stdout)")
     p.add_argument("--force", action="store_true", help="replace an existing --out file (never an input)")
 
@@ -197,8 +198,13 @@ def _simulate_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true", help="replace an existing --out file (never an input)")
 
 
+SIMULATED_HELP = ("fill the gaps no closed-form ARR fills with simulation residuals: the states of the set "
+                  "integrated from the record, which must start at rest")
+
+
 def _detect_options(p: argparse.ArgumentParser) -> None:
     _record_options(p, "detect")
+    p.add_argument("--simulated", action="store_true", help=SIMULATED_HELP)
 
 
 def _record_options(p: argparse.ArgumentParser, command: str) -> None:

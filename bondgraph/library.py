@@ -26,9 +26,10 @@ from .control import PIController
 from .model import BondGraph
 
 __all__ = [
-    "MASS_LOAD", "MU_UNCERTAINTY", "OMEGA_M_REF", "THREE_TANK", "TORSION_BAR", "TORSION_BAR_UNITS", "U_MAX", "Example",
-    "dc_motor", "example", "friction_drive", "mass_spring_chain", "rlc_circuit", "three_tank", "torsion_bar",
-    "torsion_bar_controller", "torsion_bar_monitorable", "torsion_bar_with_load", "with_suspended_load",
+    "MASS_LOAD", "MU_UNCERTAINTY", "OMEGA_M_REF", "ORIFICE", "TANK_AREA", "THREE_TANK", "TORSION_BAR",
+    "TORSION_BAR_UNITS", "U_MAX", "Example", "dc_motor", "example", "friction_drive", "mass_spring_chain",
+    "rlc_circuit", "tank_cascade", "three_tank", "torsion_bar", "torsion_bar_controller", "torsion_bar_monitorable",
+    "torsion_bar_with_load", "with_suspended_load",
 ]
 
 
@@ -307,6 +308,47 @@ def mass_spring_chain(n: int, mass: float = 1.0, stiffness: float = 100.0, dampi
                            (f"1_{i}", f"0_{i}"), (f"0_{i}", f"c{i}")]:
             bg.bond(tail, head)
         previous = f"0_{i}"
+    return bg
+
+
+#: Tank areas (m^2) and orifice constants a = c_d A_o sqrt(2 g) (m^(5/2)/s) of :func:`tank_cascade`: a laboratory
+#: rig's values.
+TANK_AREA, ORIFICE = 0.05, 2.0e-3
+
+
+def tank_cascade(n: int, *, every: int = 1, area: float = TANK_AREA, orifice: float = ORIFICE) -> BondGraph:
+    """``n`` gravity-drained tanks in series: ``q_in -> 0_1 (C:T1, De h1) -> 1_12 (R:O1) -> 0_2 ... -> 0_n (R:On)``.
+
+    Each tank is a C element of its area (effort: the level, state: the volume ``q_Ti``), each orifice a
+    non-linear R element with the signed square-root (Torricelli) law ``q = a sign(dh) sqrt|dh|``; tank ``i``
+    drains into tank ``i + 1``, the last to the atmosphere.  A level sensor on every ``every``-th tank, from
+    the first, and always on the last: with ``every=2`` the levels between two sensors are known only through
+    the orifice laws, and some redundancy only through the tanks' dynamics.
+
+    >>> bg = tank_cascade(3, every=2)
+    >>> sorted(name for name, e in bg.structure().elements.items() if e.kind == "De")
+    ['h1', 'h3']
+    """
+    bg = BondGraph(name=f"{n}-tank cascade" + ("" if every == 1 else f", a level sensor every {every} tanks"))
+    bg.add("q_in", "Sf", unit="m^3/s")
+    previous = "q_in"
+    for i in range(1, n + 1):
+        bg.add(f"0_{i}", "0")
+        bg.add(f"T{i}", "C", param=f"A{i}", value=area, uncertainty=(-0.02, 0.02), unit="m^2")
+        bg.add(f"O{i}", "R", param=f"a{i}", value=orifice, uncertainty=(-0.1, 0.1),
+               law=f"f - a{i}*sign(e)*sqrt(Abs(e))", unit="m^(5/2)/s")
+        bonds = [(previous, f"0_{i}"), (f"0_{i}", f"T{i}")]
+        if (i - 1) % every == 0 or i == n:
+            bg.add(f"h{i}", "De", unit="m")
+            bonds.append((f"0_{i}", f"h{i}"))
+        if i < n:   # the orifice between tank i and tank i + 1 sees the difference of their levels
+            bg.add(f"1_{i}{i + 1}", "1")
+            bonds += [(f"0_{i}", f"1_{i}{i + 1}"), (f"1_{i}{i + 1}", f"O{i}")]
+            previous = f"1_{i}{i + 1}"
+        else:        # the last drains to the atmosphere: its level is the head across the orifice
+            bonds.append((f"0_{i}", f"O{i}"))
+        for tail, head in bonds:
+            bg.bond(tail, head)
     return bg
 
 

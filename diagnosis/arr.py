@@ -29,7 +29,8 @@ from bondgraph.structure import Structure, T
 from .deltas import delta, delta_parameter, latex
 from .detection import Evaluation, evaluate
 from .integral_forms import factor_out_of_integrals
-from .residuals import CompiledARR, compile_arr
+from .records import Record
+from .residuals import CompiledARR, compile_arr, read_record
 
 __all__ = [
     "ARR", "INTEGRAL_FORMS", "TIDY_LIMIT", "ARRWarning", "candidate_parameters", "check_integral_form",
@@ -116,6 +117,10 @@ class ARR:
     form: str = "balance"
     _compiled: CompiledARR | None = field(default=None, init=False, repr=False, compare=False)
 
+    #: Whether the relation reads states it simulates (:class:`~diagnosis.simulation_residuals.SimulationARR`):
+    #: such a relation has no closed form for a consumer that compiles ``nominal`` alone.
+    simulation = False
+
     @property
     def signals(self) -> list[str]:
         """Names of the measured and input signals the relation uses."""
@@ -172,7 +177,7 @@ class ARR:
         The compiled ARR points back to this one; followed, the cycle made ``dask.base.tokenize``
         (and so ``Client.submit(f, arr)``) recurse without end.
         """
-        fields = (f.name for f in dataclasses.fields(self) if f.name != "_compiled")
+        fields = (f.name for f in dataclasses.fields(self) if not f.name.startswith("_"))
         return (type(self).__name__, *(getattr(self, name) for name in fields))
 
     def latex(self) -> str:
@@ -198,6 +203,21 @@ class ARR:
         if self._compiled is None:
             self._compiled = compile_arr(self)
         return self._compiled
+
+    def prepared(self, record, *, extra: tuple = (), **estimator) -> tuple[Record, None]:
+        """The record validated for this relation, and no band of its own (the band is Psi_2's range).
+
+        A :class:`~diagnosis.simulation_residuals.SimulationARR` adds its simulated states to the record and
+        returns its band; :func:`~diagnosis.detection.evaluate` asks every relation the same way.
+
+        >>> from bondgraph.library import rlc_circuit
+        >>> from diagnosis import derive_arrs
+        >>> data, band = derive_arrs(rlc_circuit())[1].prepared({"t": [0.0, 0.1, 0.2], "i": [0, 1, 2],
+        ...                                                      "v_C": [0, 0, 1]})
+        >>> sorted(data.columns), band
+        (['i', 'v_C'], None)
+        """
+        return read_record(self, record, extra=extra), None
 
     def evaluate(self, record, **options) -> Evaluation:
         """Residual, thresholds and alarms over a record; see :func:`diagnosis.detection.evaluate`."""

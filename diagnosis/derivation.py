@@ -42,7 +42,7 @@ __all__ = ["ARR", "ARRError", "ARRWarning", "derive_arrs", "evaluable"]
 
 def derive_arrs(bg: BondGraph, *, complete: bool = True, sensor_faults: bool = True,
                 max_order: int | str | None = MAX_ORDER, integrals: str = "avoid",
-                isolation: bool = True) -> list[ARR]:
+                isolation: bool = True, simulated: bool = False) -> list[ARR]:
     """Derive the I-ARRs of a bond graph with detectors.
 
     Parameters
@@ -65,6 +65,10 @@ def derive_arrs(bg: BondGraph, *, complete: bool = True, sensor_faults: bool = T
     isolation : bool
         Complete isolation as well as detection (default), within the work budgets of
         :mod:`diagnosis.elimination` (which grow with the model's fault candidates); False: detection only.
+    simulated : bool
+        Fill the gaps no closed form fills with simulation residuals (:mod:`diagnosis.simulation_residuals`):
+        the set's states integrated from the record, the band enclosing them over the parameters' box.  Off
+        by default (they need an initial state; streaming, code generation and prognosis refuse them).
 
     Returns
     -------
@@ -101,8 +105,9 @@ def derive_arrs(bg: BondGraph, *, complete: bool = True, sensor_faults: bool = T
     (True, False, True)
     """
     require_model(bg, "derive_arrs")
-    key = _key(bg, complete, sensor_faults, max_order, integrals, isolation)
-    arrs = _REMEMBERED.get(key, lambda: _derive(bg, complete, sensor_faults, max_order, integrals, isolation))
+    key = _key(bg, complete, sensor_faults, max_order, integrals, isolation, simulated)
+    arrs = _REMEMBERED.get(key, lambda: _derive(bg, complete, sensor_faults, max_order, integrals, isolation,
+                                                simulated))
     return [_copy(arr) for arr in arrs]
 
 
@@ -111,7 +116,8 @@ REMEMBERED = 64
 _REMEMBERED = ContentCache(REMEMBERED)
 
 
-def _derive(bg, complete: bool, sensor_faults: bool, max_order, integrals: str, isolation) -> list[ARR]:
+def _derive(bg, complete: bool, sensor_faults: bool, max_order, integrals: str, isolation,
+            simulated: bool = False) -> list[ARR]:
     if not complete:
         return evaluable(junction_arrs(bg, integrals=integrals))
     with warnings.catch_warnings():
@@ -120,7 +126,7 @@ def _derive(bg, complete: bool, sensor_faults: bool, max_order, integrals: str, 
         warnings.simplefilter("ignore", ARRWarning)
         arrs = evaluable(junction_arrs(bg, integrals=integrals), warn=False)
     return arrs + evaluable(structural_arrs(bg, existing=arrs, sensor_faults=sensor_faults, max_order=max_order,
-                                            integrals=integrals, isolation=isolation))
+                                            integrals=integrals, isolation=isolation, simulated=simulated))
 
 
 def _key(bg, *options):

@@ -38,15 +38,15 @@ import numpy as np
 
 from bondgraph.optional import pandas_for
 
-from .residuals import read_record
+from .residuals import ARRError, read_record
 from .derivatives import default_window
 from .records import RecordError, has_column
 from .steps import step_mask
 from .thresholds import bglft_threshold, interval_threshold
 
 __all__ = [
-    "CalibrationError", "Evaluation", "check_arr", "check_options", "evaluate", "fitting_order", "judge",
-    "noise_margin", "persistent", "robust_std",
+    "CalibrationError", "Evaluation", "check_arr", "check_closed_form", "check_options", "evaluate", "fitting_order",
+    "judge", "noise_margin", "persistent", "robust_std",
 ]
 
 
@@ -148,7 +148,7 @@ class Evaluation:
 def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, polyorder: int | None = None,
              exact_derivatives: Mapping | None = None, antiderivatives: Mapping | None = None,
              margin: float = 0.0, persistence: int = 1, threshold: str = "interval",
-             steps: bool | Iterable[str] = True, ends: bool = False) -> Evaluation:
+             steps: bool | Iterable[str] = True, ends: bool = False, initial="rest") -> Evaluation:
     """Residual, thresholds and alarms of one ARR over a record.
 
     Parameters
@@ -178,6 +178,9 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     ends : bool
         Leave undecided as well the samples as close to either end of the record, where the estimate
         extrapolates a one-sided fit (:func:`diagnosis.detect` does; a stream cannot know its end).
+    initial : "rest" or mapping
+        For a simulation residual (:mod:`diagnosis.simulation_residuals`), its states' initial values or
+        ``(lo, hi)`` boxes by name, or ``"rest"`` (default): at rest at the first sample.  Other ARRs ignore it.
 
     Returns
     -------
@@ -204,15 +207,20 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
     check_options(arr, "evaluate", method=method, antiderivatives=antiderivatives, margin=margin,
                   persistence=persistence, threshold=threshold)
     polyorder = fitting_order(arr, polyorder)
-    data = read_record(arr, record, extra=tuple((antiderivatives or {}).values()))
+    data, band = arr.prepared(record, extra=tuple((antiderivatives or {}).values()), method=method, window=window,
+                              polyorder=polyorder, exact=exact_derivatives, initial=initial)
     compiled = arr.compiled
     points = compiled.point_values(data, method=method, window=window, polyorder=polyorder,
                                    exact=exact_derivatives, antiderivatives=antiderivatives)
-    masked = _across_steps(arr, data, _step_columns(arr, record, steps), method, window, polyorder,
+    masked = _across_steps(arr, data, _step_columns(arr, data, steps), method, window, polyorder,
                            exact_derivatives, ends)
     if masked.any():
         points = [np.where(masked, np.nan, p) for p in points]
     residual, lower, upper, bglft, violation = judge(compiled, points, margin, threshold)
+    if band is not None:   # a simulation residual: its band encloses the simulated states' uncertainty too
+        lower, upper = band(residual)
+        bglft = np.maximum(np.abs(lower), np.abs(upper))
+        violation = _outside(residual, lower, upper, bglft, margin, threshold)
     alarm = persistent(violation, persistence)
     return Evaluation(arr.name, data.t, residual, lower, upper, bglft, float(margin), int(persistence), violation,
                       alarm, points, masked=masked)
@@ -231,7 +239,7 @@ def _step_columns(arr, record, steps) -> dict:
     present = [n for n in names if n in arr.signals or has_column(record, n)]
     if not present:
         return {}
-    data = read_record(arr, record, extra=tuple(n for n in present if n not in arr.signals))
+    data = read_record(arr, record, extra=tuple(n for n in present if n not in arr.compiled.signals))
     return {n: data[n] for n in present}
 
 
@@ -331,10 +339,30 @@ def judge(compiled, points: list[np.ndarray], margin: float, threshold: str, bot
     else:
         lower, upper = undecided, undecided.copy()
     bglft = bglft_threshold(compiled, points) if both or threshold != "interval" else undecided.copy()
+    return residual, lower, upper, bglft, _outside(residual, lower, upper, bglft, margin, threshold)
+
+
+def _outside(residual, lower, upper, bglft, margin: float, threshold: str) -> np.ndarray:
+    """Where ``-r_n`` leaves the band of ``threshold`` widened by ``margin`` (a NaN is undecided, not outside)."""
     lo, hi = (lower, upper) if threshold == "interval" else (-bglft, bglft)
     with np.errstate(invalid="ignore"):
-        violation = (-residual < lo - margin) | (-residual > hi + margin)
-    return residual, lower, upper, bglft, violation
+        return (-residual < lo - margin) | (-residual > hi + margin)
+
+
+def check_closed_form(arr, caller: str) -> None:
+    """Raise an ARRError naming ``caller`` when ``arr`` is a simulation residual, which has no closed form.
+
+    Its states are integrated over the whole record (:mod:`diagnosis.simulation_residuals`), so a consumer that
+    compiles ``nominal`` alone (a stream, generated code, a parameter box or a prognoser) cannot use it.
+
+    >>> from bondgraph.library import rlc_circuit
+    >>> from diagnosis import derive_arrs
+    >>> check_closed_form(derive_arrs(rlc_circuit())[0], "StreamingEvaluation")   # a closed form: nothing said
+    """
+    if getattr(arr, "simulation", False):
+        raise ARRError(f"{caller}: {arr.name} is a simulation residual (its states {', '.join(arr.states)} are "
+                       "integrated over the record) with no closed form; use evaluate or detect for it, or derive "
+                       "the ARRs without simulated=True")
 
 
 def check_arr(arr: object, caller: str) -> None:

@@ -57,6 +57,7 @@ from .arr import (ARR, ARRWarning, candidate_parameters, check_integral_form, me
 from ._operator_elimination import operator_order, operator_residual
 from ._set_shapes import SetShape, Shapes, rewritten
 from .deltas import delta_parameter
+from .simulation_residuals import SimulationARR
 from .structural import StructuralLimitError, StructuralModel, sensor_fault, structural_model
 
 __all__ = [
@@ -105,7 +106,7 @@ class _StructureOnly:
 
 def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults: bool = True,
                     max_order: int | str | None = MAX_ORDER, integrals: str = "avoid",
-                    isolation: bool = True, spent: dict | None = None) -> list[ARR]:
+                    isolation: bool = True, spent: dict | None = None, simulated: bool = False) -> list[ARR]:
     """ARRs from minimal overdetermined sets that add detectability or isolability to ``existing``.
 
     Parameters
@@ -128,6 +129,12 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
     spent : dict, optional
         Filled with the work the search spent (:meth:`_Shared.cost`): ``searches``, ``search_equations``,
         ``eliminated_sets``, ``eliminated_equations``, ``reused_sets``.
+    simulated : bool
+        Realise a set with no closed form (a loop only its own ODE closes, a law without explicit inverse, a
+        relation over :data:`MAX_OPERATIONS`) as a simulation residual
+        (:class:`~diagnosis.simulation_residuals.SimulationARR`, ``ARR_MSO_<k>`` with form ``"simulation"``).
+        Off by default: such a residual needs its initial state, and the consumers that compile a closed form
+        (streaming, code generation, prognosis) do not take it.
 
     Returns
     -------
@@ -156,7 +163,7 @@ def structural_arrs(bg, *, existing: Sequence[ARR] | None = None, sensor_faults:
     if not isolation and faults <= set().union(*(_seen(arr, faults) for arr in existing)):
         return []   # every fault detected and no isolation asked: the structure has nothing to add
     model = structural_model(bg, sensor_faults=sensor_faults)
-    shared = _Shared(bg, model, integrals == "avoid")   # lazy: built for the first gap
+    shared = _Shared(bg, model, integrals == "avoid", simulated)   # lazy: built for the first gap
     supports = [faults_of_arr(model, arr) for arr in existing]
     added, unrealizable, stopped = [], set(), None
     for fault, other in _gaps(model, supports, isolation=isolation):
@@ -273,10 +280,13 @@ def _reason(shared: _Shared, fault: str, other: str | None, order: int) -> str:
             f"inverse or a relation over MAX_OPERATIONS, or the search stopped on its budget")
 
 
-def arr_from_set(bg, rows, *, model: StructuralModel | None = None, name: str = "ARR_MSO") -> ARR:
-    """The ARR of one overdetermined set of equations of ``bg`` (indices into ``model.equations``)."""
+def arr_from_set(bg, rows, *, model: StructuralModel | None = None, name: str = "ARR_MSO",
+                 simulated: bool = False) -> ARR:
+    """The ARR of one minimal overdetermined set of equations of ``bg`` (indices into ``model.equations``): its
+    closed form, or with ``simulated`` its simulation residual (:mod:`diagnosis.simulation_residuals`)."""
     model = structural_model(bg) if model is None else model
-    return _Shared(bg, model, True).arr(frozenset(rows), name)
+    shared = _Shared(bg, model, True, simulated)
+    return shared.simulated(frozenset(rows), name) if simulated else shared.arr(frozenset(rows), name)
 
 
 def faults_of_arr(model: StructuralModel, arr: ARR) -> set:
@@ -356,26 +366,40 @@ def _first_closing(shared: _Shared, candidates: list, fault: str, other: str | N
     causality and it is not linear) is named in ``unrealizable`` without being tried."""
     model = shared.model
     estimates = {rows: shared.estimated_order(rows) for rows in candidates}
-    for rows in [rows for rows in candidates if estimates[rows] is None]:
-        unrealizable.add(f"{_short(model, rows)}: a loop through a state in either causality and a non-linear "
-                         "law: only an ODE of the set closes it")
+    odes = sorted((rows for rows in candidates if estimates[rows] is None), key=len)
+    if not shared.simulate:
+        for rows in odes:
+            unrealizable.add(f"{_short(model, rows)}: a loop through a state in either causality and a non-linear "
+                             "law: only an ODE of the set closes it")
+        odes = []
+    higher = False
     for rows in sorted((r for r in candidates if estimates[r] is not None), key=lambda r: (estimates[r], len(r))):
         if max_order is not None and estimates[rows] > max_order:
-            return None, True   # the sets are sorted by their estimate: every other one needs more
-        arr = shared.cached(rows, unrealizable)
-        if arr is None or (max_order is not None and arr.order > max_order):
-            continue
-        support = faults_of_arr(model, arr)
-        if fault in support and (other is None or other not in support):
-            return arr, False
-    return None, False
+            higher = True   # the sets are sorted by their estimate: every other one needs more
+            break
+        if _closes(shared, rows, fault, other, max_order, unrealizable):
+            return shared.cached(rows, unrealizable), False
+    for rows in odes:   # a simulation residual (simulated=True) for a set only its own ODE closes
+        if _closes(shared, rows, fault, other, max_order, unrealizable):
+            return shared.cached(rows, unrealizable), False
+    return None, higher
+
+
+def _closes(shared: _Shared, rows: frozenset, fault: str, other: str | None, max_order: int | None,
+            unrealizable: set) -> bool:
+    """Whether the ARR of ``rows`` exists within ``max_order``, sees ``fault`` and not ``other``."""
+    arr = shared.cached(rows, unrealizable)
+    if arr is None or (max_order is not None and arr.order > max_order):
+        return False
+    support = faults_of_arr(shared.model, arr)
+    return fault in support and (other is None or other not in support)
 
 
 class _Shared:
     """What the eliminations of every set of one model share, computed once, on first use."""
 
-    def __init__(self, bg, model: StructuralModel, avoid_integrals: bool) -> None:
-        self.bg, self.model, self.avoid_integrals = bg, model, avoid_integrals
+    def __init__(self, bg, model: StructuralModel, avoid_integrals: bool, simulate: bool = False) -> None:
+        self.bg, self.model, self.avoid_integrals, self.simulate = bg, model, avoid_integrals, simulate
         self.weights: dict = {}
         self.results: dict = {}
         self.templates: dict = {}   # set shape -> (the set eliminated, its ARR or None)
@@ -511,31 +535,48 @@ class _Shared:
         mapping = dict(zip(first.atoms, second.atoms))
         names = {a.name: b.name for a, b in mapping.items() if isinstance(a, sp.Symbol)}
         rows = dict(zip(first.rows, second.rows))
-        residual = next(i for i in first.rows if self.model.equations[i].role == "balance"
-                        and self.model.equations[i].node == arr.junction)
+        residual = min((i for i in first.rows if self.model.equations[i].node == arr.junction),
+                       key=lambda i: self.model.equations[i].role != "balance")
         nominal = arr.nominal.xreplace(mapping)
         terms = {names[p]: term.xreplace(mapping) for p, term in arr.terms.items()}
         symbols = {x.name for x in nominal.free_symbols}
+        uncertain = set(terms)
         intervals = parameter_intervals(self.structure)
+        if arr.simulation:   # the simulated states and their rates are renamed with the rest
+            functions = {a.func.__name__: b.func.__name__ for a, b in mapping.items() if isinstance(a, AppliedUndef)}
+            rates, rates_true = (tuple(f.xreplace(mapping) for f in fs) for fs in (arr.rates, arr.rates_true))
+            symbols |= {x.name for f in rates for x in f.free_symbols}
+            uncertain |= {delta_parameter(x) for f in rates_true for x in f.free_symbols} - {None}
+            arr = dataclasses.replace(arr, states=tuple(functions[x] for x in arr.states), rates=rates,
+                                      rates_true=rates_true)
         return dataclasses.replace(
             arr, junction=self.model.equations[rows[residual]].node, nominal=nominal,
             uncertain=arr.uncertain.xreplace(mapping), terms=terms,
             parameters=frozenset(names[p] for p in arr.parameters),
-            values={p: v for p, v in self.structure.parameters.items() if p in symbols or p in terms},
-            uncertainties={p: intervals[p] for p in terms}, origin=tuple(self.model.describe(second.rows)))
+            values={p: v for p, v in self.structure.parameters.items() if p in symbols or p in uncertain},
+            uncertainties={p: intervals[p] for p in uncertain}, origin=tuple(self.model.describe(second.rows)))
 
     def arr(self, rows: frozenset, name: str) -> ARR:
         model = self.model
-        found = _residual(self, rows)
+        try:
+            found = _residual(self, rows)
+        except ValueError:
+            if not self.simulate:
+                raise
+            return self.simulated(rows, name)
         if found is None:
             linear = self._by_operators(rows, name)
             if linear is not None:
                 return linear
+            if self.simulate:
+                return self.simulated(rows, name)
             raise ValueError(f"{_short(model, rows)}: every balance leaves a loop through a state (only an ODE "
                              "closes it) or an unknown no law gives explicitly")
         residual, assigned, r_n = found
         size = distinct_operations(r_n)
         if size > MAX_OPERATIONS:
+            if self.simulate:
+                return self.simulated(rows, name)
             raise ValueError(f"{_short(model, rows)}: the residual takes {size} operations "
                              f"(more than {MAX_OPERATIONS})")
         r_true = _eliminate(model, self.true, assigned, residual)
@@ -545,6 +586,98 @@ class _Shared:
         return split_relation(name, model.equations[residual].node, None, r_n, r_true, (), self.structure,
                               candidate_parameters(self.structure), parameter_intervals(self.structure),
                               origin=tuple(model.describe(rows)), form=form)
+
+    def simulated(self, rows: frozenset, name: str) -> SimulationARR:
+        """The simulation residual of ``rows`` (:mod:`diagnosis.simulation_residuals`): every state of the set
+        integrated from its storage equation, the rest solved explicitly for the unknowns, the equation left
+        over as the residual; of the candidates that work, the one of lowest derivative order, then smallest.
+
+        Raises a ValueError saying why when no equation of the set can be left over that way.
+        """
+        model = self.model
+        every = {i: f"state {model.equations[i].node}" for i in rows if model.equations[i].role == "storage"}
+        found, why = [], None
+        # the states in loops (fewest to integrate), then every state of the set
+        for nodes in dict.fromkeys([frozenset(self._looped(rows)), frozenset(model.equations[i].node for i in every)]):
+            storage = {i: x for i, x in every.items() if model.equations[i].node in nodes}
+            if not storage:
+                continue
+            known = frozenset(storage.values())
+            kept = rows - set(storage)
+            for residual in dict.fromkeys(_balances(model, kept) + sorted(kept)):
+                try:
+                    assigned = _matching(self, kept - {residual}, known=known)
+                    nominal = self._simulated_parts(assigned, residual, storage, self.nominal, known)
+                    true = self._simulated_parts(assigned, residual, storage, self.true, known)
+                except (ValueError, NotImplementedError, _DifferentialLoop) as exc:
+                    if not isinstance(exc, _DifferentialLoop) and "left over" not in str(exc):
+                        why = why or str(exc).removeprefix(_short(model, kept - {residual}) + ": ")
+                    continue
+                order = max((d.derivative_count for e in nominal for d in e.atoms(sp.Derivative)), default=0)
+                drifting = _drifting(nominal[1:], [self._plain_symbols[x] for x in known])
+                found.append(((drifting, order, len(storage), sum(map(distinct_operations, nominal)), residual),
+                              storage, nominal, true))
+        if not found:
+            raise ValueError(f"{_short(model, rows)}: no simulation either: "
+                             f"{why or 'no equation can be left over with the others solved, its states integrated'}")
+        (*_, residual), storage, (r_n, *rates), (r_true, *rates_true) = min(found, key=lambda f: f[0])
+        arr = split_relation(name, model.equations[residual].node, None, r_n, r_true, (), self.structure,
+                             candidate_parameters(self.structure), parameter_intervals(self.structure),
+                             origin=tuple(model.describe(rows)), form="simulation")
+        every = {s.name for e in (r_n, *rates) for s in e.free_symbols}
+        deltas = {delta_parameter(s) for e in (r_true, *rates_true) for s in e.free_symbols} - {None}
+        intervals = parameter_intervals(self.structure)
+        fields = {f.name: getattr(arr, f.name) for f in dataclasses.fields(ARR) if f.init}
+        fields.update(parameters=frozenset(p for p in self.structure.parameters if p in every),
+                      values={p: v for p, v in self.structure.parameters.items() if p in every or p in deltas},
+                      uncertainties={p: intervals[p] for p in deltas})
+        states = tuple(f"{self._plain_symbols[x].func.__name__}" for x in storage.values())
+        return SimulationARR(**fields, states=states, rates=tuple(rates), rates_true=tuple(rates_true))
+
+    def _looped(self, rows: frozenset) -> set:
+        """The storage elements of ``rows`` that the matching in derivative causality leaves in a loop."""
+        looped: set = set()
+        for residual in _balances(self.model, rows):
+            try:
+                found = _structural_order(self.model, _matching(self, rows - {residual}), residual)
+            except ValueError:
+                continue
+            if not isinstance(found, int):
+                looped |= found
+        return looped
+
+    def _simulated_parts(self, assigned: dict, residual: int, storage: dict, equations: list,
+                         known: frozenset) -> list:
+        """``[g, f_1, ..., f_n]``: the residual and the rate of each integrated state, in states and signals."""
+        model = self.model
+        solution = _solved(model, equations, assigned, known)
+        residual_equation = _substituted(equations[residual], solution)
+        parts = [residual_equation.lhs - residual_equation.rhs]
+        rates = {}
+        for i in storage:
+            equation = _substituted(equations[i], solution)
+            expression = equation.lhs - equation.rhs
+            (d,) = [d for d in expression.atoms(sp.Derivative) if isinstance(d.expr, AppliedUndef)
+                    and f"state {d.expr.func.__name__[2:]}" in known][:1] or [None]
+            slope = sp.diff(expression, d) if d is not None else sp.S.Zero
+            if d is None or slope == 0 or slope.has(d):
+                raise ValueError(f"{model.describe([i])[0]}: not a rate of its state")
+            rates[d] = -expression.xreplace({d: 0}) / slope
+            parts.append(rates[d])
+        for _ in range(len(rates) + 1):   # a rate read through another state's law: its derivative, substituted
+            parts = [p.xreplace(rates) for p in parts]
+        parts = [real_parts(p.xreplace(self.plain)) for p in parts]
+        states = {self._plain_symbols[x].func.__name__ for x in known}
+        unknowns = self.unknowns - known
+        for part in parts:
+            if part.atoms(sp.Integral) or any(isinstance(d.expr, AppliedUndef) and d.expr.func.__name__ in states
+                                              for d in part.atoms(sp.Derivative)):
+                raise ValueError(f"{_short(model, assigned)}: a state's rate depends on its own derivative")
+            if not _in_known_signals(part, self.signals | states, unknowns):
+                raise ValueError(f"{_short(model, assigned)}: an unknown is left with the states integrated")
+        if parts[0] == 0:
+            raise ValueError(f"{_short(model, assigned)}: the residual vanishes")
+        return parts
 
     def _by_operators(self, rows: frozenset, name: str) -> ARR | None:
         """The ARR of a set linear in its unknowns with constant coefficients, by operator elimination
@@ -620,6 +753,17 @@ class _Shared:
         return [self._plain_true[i] for i in order], [self._plain_symbols[x] for x in unknowns]
 
 
+def _drifting(rates: list, states: list) -> int:
+    """How many of the simulated states no state feeds back on (the structural rank of the rates' Jacobian falls
+    short by that much): such a state integrates the record's noise and drifts, and has no unique rest state."""
+    graph = nx.Graph()
+    graph.add_nodes_from(("rate", i) for i in range(len(rates)))
+    graph.add_edges_from((("rate", i), ("state", j)) for i, rate in enumerate(rates)
+                         for j, x in enumerate(states) if rate.has(x))
+    matched = nx.bipartite.maximum_matching(graph, top_nodes=[("rate", i) for i in range(len(rates))])
+    return len(rates) - len(matched) // 2
+
+
 class _OutOfBudget(Exception):
     """The derivation spent its work budget: the gaps left are named, not searched."""
 
@@ -672,11 +816,12 @@ def _residual(shared: _Shared, rows: frozenset, attempts: int = _ATTEMPTS):
     return None
 
 
-def _matching(shared: _Shared, rows: frozenset, integral: frozenset = frozenset()) -> dict:
+def _matching(shared: _Shared, rows: frozenset, integral: frozenset = frozenset(),
+              known: frozenset = frozenset()) -> dict:
     """Equation -> the unknown it is solved for.
 
     A state comes from its law (derivative causality) unless it is in ``integral``; an unknown that enters
-    its equation non-linearly is matched to it only as a last resort.
+    its equation non-linearly is matched to it only as a last resort; the ``known`` ones are not matched.
     """
     model = shared.model
     graph = nx.Graph()
@@ -684,22 +829,29 @@ def _matching(shared: _Shared, rows: frozenset, integral: frozenset = frozenset(
     graph.add_nodes_from(top)
     for i in rows:
         storage = model.equations[i].role == "storage"
-        for x in model.unknowns[i]:
+        for x in model.unknowns[i] - known:
             weight = shared.weight(i, x)
             if x.startswith("state "):
                 wanted_from_storage = x[len("state "):] in integral
                 weight += 0 if storage == wanted_from_storage else 4 if wanted_from_storage else 1
             graph.add_edge(("equation", i), ("unknown", x), weight=weight)
-    matching = nx.bipartite.minimum_weight_full_matching(graph, top_nodes=top)
+    try:
+        matching = nx.bipartite.minimum_weight_full_matching(graph, top_nodes=top)
+    except ValueError:   # networkx: "cost matrix is infeasible"
+        matching = {}
+    if any(("equation", i) not in matching for i in rows):   # an equation with no unknown left to solve for
+        raise ValueError(f"{_short(model, rows)}: no equation can be left over with every other one solved")
     return {i: matching[("equation", i)][1] for i in rows}
 
 
-def _blocks(model: StructuralModel, assigned: dict) -> list[list[int]]:
-    """The equations of a matching in solving order, an algebraic loop as one block."""
+def _blocks(model: StructuralModel, assigned: dict, known: frozenset = frozenset()) -> list[list[int]]:
+    """The equations of a matching in solving order, an algebraic loop as one block (``known``: unknowns
+    given from outside the matching, the states a simulation integrates)."""
     owner = {x: i for i, x in assigned.items()}
     order = nx.DiGraph()
     order.add_nodes_from(assigned)
-    order.add_edges_from((owner[x], i) for i in assigned for x in model.unknowns[i] if x != assigned[i])
+    order.add_edges_from((owner[x], i) for i in assigned for x in model.unknowns[i]
+                         if x != assigned[i] and x not in known)
     blocks = nx.condensation(order)
     return [sorted(blocks.nodes[b]["members"]) for b in nx.topological_sort(blocks)]
 
@@ -732,9 +884,15 @@ def _structural_order(model: StructuralModel, assigned: dict, residual: int) -> 
 
 def _eliminate(model: StructuralModel, equations: list, assigned: dict, residual: int) -> sp.Expr:
     """The residual equation with every unknown of ``assigned`` replaced by its value in known signals."""
+    equation = _substituted(equations[residual], _solved(model, equations, assigned))
+    return equation.lhs - equation.rhs
+
+
+def _solved(model: StructuralModel, equations: list, assigned: dict, known: frozenset = frozenset()) -> dict:
+    """Every unknown of ``assigned`` (sympy object) -> its value in known signals (and ``known`` unknowns)."""
     symbols = _unknown_symbols(equations, assigned)
     solution: dict = {}
-    for members in _blocks(model, assigned):
+    for members in _blocks(model, assigned, known):
         targets = [symbols[assigned[i]] for i in members]
         states = frozenset(model.equations[i].node for i in members
                            if model.equations[i].role in ("storage", "law")
@@ -763,8 +921,7 @@ def _eliminate(model: StructuralModel, equations: list, assigned: dict, residual
             if distinct_operations(value) > MAX_OPERATIONS:
                 raise ValueError(f"{_short(model, assigned)}: {target} takes more than {MAX_OPERATIONS} operations")
         solution.update(found)
-    equation = _substituted(equations[residual], solution)
-    return equation.lhs - equation.rhs
+    return solution
 
 
 def distinct_operations(expression: sp.Expr) -> int:

@@ -52,6 +52,7 @@ import sympy as sp
 
 from bondgraph import BondGraph
 from bondgraph import drawing
+from bondgraph.calculus import T
 from bondgraph.causality import diagnosis_causality
 from bondgraph.errors import ModelError
 from bondgraph.names import is_name
@@ -266,6 +267,13 @@ def _section(arr: ARR, units=None) -> _Section:
     unit = arr.unit(units) if units is not None and units.declared else None
     if unit is not None:
         details.insert(1, (f"Unit of the residual: {unit}",))
+    if arr.simulation:   # the states are simulated: their rates instead of Psi_2, whose band the corners give
+        details.append(("Simulated states (integrated from the record, at rest at its start unless given): ",
+                        *_join([_name(x) for x in arr.states])))
+        details.append(("Band: the range of the residual over the simulations at the corners of the parameters' "
+                        "box",))
+        rates = [_equation(sp.Derivative(sp.Function(x)(T), T), f) for x, f in zip(arr.states, arr.rates)]
+        return _Section(arr.name, details, [_equation(sp.Symbol("r_n"), arr.nominal), *rates])
     return _Section(arr.name, details,
                     [_equation(sp.Symbol("r_n"), arr.nominal), _equation(sp.Symbol("Psi_2"), arr.uncertain)])
 

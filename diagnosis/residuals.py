@@ -34,7 +34,7 @@ from .records import Record, RecordError, as_record
 
 __all__ = [
     "NUMERIC_FUNCTIONS", "T", "ARRError", "CompiledARR", "antiderivative_integral", "compile_arr",
-    "integral_depth", "read_record", "trusted_edge",
+    "integral_depth", "read_record", "signal_derivative", "trusted_edge",
 ]
 
 
@@ -121,12 +121,8 @@ class CompiledARR:
         exact = dict(exact or {})
         values: dict = {sp.Symbol(name): record[name] for name in self.signals}
         for symbol, (name, order) in self.derivatives.items():
-            key = name if order == 1 else f"{name}:{order}"
-            if key in exact:
-                values[symbol] = derivative(record, name, order=order, method="exact", exact=exact[key], name=name)
-            else:
-                values[symbol] = _trusted(derivative(record, name, order=order, method=method, window=window,
-                                                     polyorder=polyorder, name=name), order, method, window, polyorder)
+            values[symbol] = signal_derivative(record, name, order, method=method, window=window,
+                                               polyorder=polyorder, exact=exact)
         for symbol in self.integrals:
             terms = self.antiderivative_terms(symbol, antiderivatives or {})
             if terms is not None:
@@ -197,6 +193,23 @@ def trusted_edge(order: int, method: str, window: int | None, polyorder: int) ->
     if order < 2 or method not in ("savgol", "central"):
         return 0
     return (window or default_window(polyorder)) // 2 if method == "savgol" else order
+
+
+def signal_derivative(record: Record, name: str, order: int, *, method: str = "savgol", window: int | None = None,
+                      polyorder: int = 3, exact: Mapping | None = None) -> np.ndarray:
+    """The ``order``-th derivative of signal ``name`` as an ARR reads it: given in ``exact`` (under ``"x"`` or
+    ``"x:2"``), or estimated and left undecided within :func:`trusted_edge` samples of either end.
+
+    >>> from diagnosis import as_record
+    >>> record = as_record({"t": np.arange(20) * 0.1, "x": (np.arange(20) * 0.1) ** 2})
+    >>> signal_derivative(record, "x", 1)[[0, 10]].round(6).tolist()
+    [0.0, 2.0]
+    """
+    key = name if order == 1 else f"{name}:{order}"
+    if exact and key in exact:
+        return derivative(record, name, order=order, method="exact", exact=exact[key], name=name)
+    return _trusted(derivative(record, name, order=order, method=method, window=window, polyorder=polyorder,
+                               name=name), order, method, window, polyorder)
 
 
 def _trusted(values: np.ndarray, order: int, method: str, window: int | None, polyorder: int) -> np.ndarray:

@@ -31,7 +31,7 @@ from .calibration import START_SHARE, DetectionSettings, calibration_end
 from .deltas import delta, delta_parameter
 from .derivation import derive_arrs
 from .derivatives import default_window
-from .detection import CalibrationError, noise_margin, persistent
+from .detection import CalibrationError, check_closed_form, noise_margin, persistent
 from .intervals import affine_range, compile_interval
 from .monitoring import STEPS_IN_SENSORS, WINDOWS
 from .records import Record, as_record, has_column
@@ -148,6 +148,8 @@ def set_membership_boxes(bg, records: Sequence, parameters: Sequence[str], *, ar
         declared = bg.uncertainties
         arrs = derive_arrs(revalued(bg, boxes={p: declared.get(p, (0.0, 0.0)) for p in sized}))
     # the record's columns as detect reads them: every ARR's signals and the inputs (whose steps it looks for)
+    for arr in arrs:
+        check_closed_form(arr, "set_membership_boxes")
     names = list(dict.fromkeys(s for arr in arrs for s in arr.signals))
     arrs = [arr for arr in arrs if set(arr.compiled.terms) & set(sized)]  # the thresholds these boxes widen
     unheld = [p for p in sized if not any(p in arr.compiled.terms for arr in arrs)]

@@ -66,7 +66,7 @@ from numpy.typing import ArrayLike
 from scipy.ndimage import convolve1d
 from scipy.signal import savgol_coeffs, savgol_filter
 
-from .detection import Evaluation, check_options, fitting_order, judge
+from .detection import Evaluation, check_closed_form, check_options, fitting_order, judge
 from .residuals import antiderivative_integral, trusted_edge
 from .derivatives import central_derivative, check_savgol_settings, default_window
 from .records import MAX_MAGNITUDE, RecordError, RecordWarning, TIME, UNIFORM_RTOL, as_record
@@ -196,6 +196,7 @@ class StreamingEvaluation:
                  dt: float | None = None) -> None:
         check_options(arr, "StreamingEvaluation", method=method, antiderivatives=antiderivatives, margin=margin,
                       persistence=persistence, threshold=threshold)
+        check_closed_form(arr, "StreamingEvaluation")
         if exact_derivatives:
             raise RecordError(f"{arr.name}: exact_derivatives: a stream has no exact derivative columns; its "
                               "derivatives are estimated (method='savgol' or 'central')")

@@ -25,13 +25,14 @@ __all__ = [
 ]
 
 
-def load_arrs(spec: ModelSpec, progress: Progress, name: str | None, integrals: str = "avoid") -> list:
+def load_arrs(spec: ModelSpec, progress: Progress, name: str | None, integrals: str = "avoid",
+              simulated: bool = False) -> list:
     from diagnosis.derivation import ARRWarning, derive_arrs
 
     progress(f"deriving the ARRs of {spec.model.name!r}")
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", ARRWarning)
-        arrs = derive_arrs(spec.model, integrals=integrals)
+        arrs = derive_arrs(spec.model, integrals=integrals, simulated=simulated)
     for w in caught:
         progress(f"warning: {w.message}")
     if not arrs:

@@ -17,11 +17,13 @@ def run(args, progress: Progress) -> int:
     ``args`` is the parsed command line (:func:`build_parser`); ``progress`` prints progress lines on
     stderr.
     """
+    from diagnosis import derive_arrs
     from diagnosis.report import arr_report
 
     out = output_file(args)
     spec = load_model(args.model)
     progress(f"deriving the ARRs of {spec.model.name!r}")
-    text = arr_report(spec.model, format=args.format)
+    arrs = derive_arrs(spec.model, simulated=True) if args.simulated else None
+    text = arr_report(spec.model, format=args.format, arrs=arrs)
     emit(text, out)
     return EXIT_OK

@@ -35,12 +35,13 @@ def run(args, progress: Progress) -> int:
     settings = detection_settings(args)
     out = output_directory(args)
     spec = load_model(args.model)
-    arrs = load_arrs(spec, progress, args.arr, "avoid" if args.integrals == "auto" else args.integrals)
+    arrs = load_arrs(spec, progress, args.arr, "avoid" if args.integrals == "auto" else args.integrals,
+                     simulated=args.simulated)
     record = load_record(args.data, arrs, progress, args.resample, extra=spec.model.inputs)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", RecordWarning)
         result = detect(spec.model, record, settings, integrals=args.integrals,
-                        arrs=arrs if args.arr or args.integrals != "auto" else None)
+                        arrs=arrs if args.arr or args.integrals != "auto" or args.simulated else None)
     for w in caught:
         progress(f"warning: {w.message}")
     evaluations = result.evaluations

@@ -128,6 +128,10 @@ def generate_code(arrs, lang: str = "python", *, dt: float, method: str = "savgo
     arrs = list(arrs)
     if not arrs:
         raise CodegenError("no ARR to generate code for (an empty set)")
+    for arr in arrs:
+        if getattr(arr, "simulation", False):
+            raise CodegenError(f"{arr.name}: a simulation residual (its states integrated over the record) has no "
+                               "closed form to generate code from; derive the ARRs without simulated=True")
     prefix = identifier(name, "name")
     plans = [Plan(arr, index, dt=float(dt), method=method, window=window, polyorder=polyorder, margin=margin,
                    persistence=persistence) for index, arr in enumerate(arrs)]

@@ -28,6 +28,8 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from diagnosis.detection import check_closed_form
+
 from .. import seeds
 from ..degradation import JointDegradation, PerAssetDegradation, degradation_model
 from ..errors import PrognosisError
@@ -117,6 +119,8 @@ class IsolatingMonitor:
                  healthy_until: float | None = None, domains: Mapping[str, tuple] | None = None, **changes):
         self.settings = (settings or IsolationSettings()).changed(**changes)
         self.arrs = list(arrs)
+        for arr in self.arrs:
+            check_closed_form(arr, "IsolatingMonitor")
         self.priors = Priors(self.arrs, failures, self.settings, domains)
         self.noise_std = check_noise_std(noise_std, self.arrs)
         self.detection = dict(detection or {})

@@ -21,6 +21,7 @@ def share(value) -> bool:
     return value is None or 0.0 <= value <= 1.0
 
 
+@pytest.mark.slow   # a whole benchmark line: 4 s of the fast tier's budget
 def test_one_system_over_two_seeds_gives_a_complete_line():
     case = bench_calibration.all_cases()["flywheel_speed_loop"]
     rows = [bench_calibration.one_seed(case, seed) for seed in (0, 1)]
