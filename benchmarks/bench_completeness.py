@@ -8,7 +8,9 @@ gives with the defaults and with ``max_order=None``; the ordered fault pairs the
 (``StructuralModel.isolability``) and those the ARRs of each setting reach (the structural pairs less
 ``unreached(...)["isolate"]``); the faults the structure detects and no ARR sees; the ARRWarning messages
 that say why (distinct, in the order given); and the CPU seconds (``time.process_time``) of each
-``derive_arrs``.  A model that raises, or runs over ``--timeout`` seconds, gets its error in its row.
+``derive_arrs``; where ``max_order=None`` leaves pairs, the same with ``simulated=True`` (simulation residuals
+for the sets no closed form realises).  A model that raises, or runs over ``--timeout`` seconds, gets its
+error in its row.
 
     python benchmarks/bench_completeness.py                  # a markdown table, then the warnings per model
     python benchmarks/bench_completeness.py --json           # one JSON object per model per line
@@ -37,8 +39,10 @@ from diagnosis.elimination import arr_from_set, faults_of_arr, unreached  # noqa
 from diagnosis.structural import StructuralLimitError, structural_model  # noqa: E402
 from tests.zoo.chain import cases  # noqa: E402
 
-#: The settings of derive_arrs compared: the defaults, and no bound on the derivative order.
+#: The settings of derive_arrs compared: the defaults, and no bound on the derivative order; then, where that
+#: leaves pairs, with the sets no closed form realises simulated (``simulated=True``).
 SETTINGS = {"default": {}, "max_order=None": {"max_order": None}}
+SIMULATED = {"max_order": None, "simulated": True}
 
 #: Up to this many MSO sets, each is eliminated on its own (``arr_from_set``) to say of the pairs left with
 #: ``max_order=None`` whether a closed-form MSO set tells them apart (the search missed it) or none does.
@@ -93,6 +97,12 @@ def measure(name: str, build) -> dict:
             row[setting] = {"arrs": len(arrs), "cpu_seconds": round(seconds, 3),
                             "pairs_reached": pairs - len(left["isolate"]), "undetected": left["detect"],
                             "warnings": messages}
+        if left["isolate"] or left["detect"]:   # what simulation residuals add (nothing where nothing is left)
+            arrs, seconds, left_simulated, messages = _derive(build, SIMULATED)
+            row["simulated"] = {"arrs": len(arrs), "simulation_arrs": sum(a.form == "simulation" for a in arrs),
+                                "cpu_seconds": round(seconds, 3),
+                                "pairs_reached": pairs - len(left_simulated["isolate"]),
+                                "undetected": left_simulated["detect"], "warnings": messages}
         if left["isolate"] and isinstance(row["mso_sets"], int) and row["mso_sets"] <= CLOSED_FORM_LIMIT:
             row["left_pairs"] = _left_pairs(build, left["isolate"])
     except _OverTime as exc:
@@ -131,7 +141,15 @@ def _cells(row: dict) -> list:
             setting("default", "undetected", lambda v: ", ".join(v) or "0"),
             setting("max_order=None", "undetected", lambda v: ", ".join(v) or "0"),
             setting("default", "cpu_seconds"), setting("max_order=None", "cpu_seconds"), _left_cell(row),
-            row.get("error", "")]
+            _simulated_cell(row), row.get("error", "")]
+
+
+def _simulated_cell(row: dict) -> str:
+    if "simulated" not in row:
+        return "-" if "max_order=None" not in row else "(nothing left)"
+    sim = row["simulated"]
+    return (f"{sim['pairs_reached']} pairs, {len(sim['undetected'])} undetected, {sim['simulation_arrs']} simulated "
+            f"ARRs, {sim['cpu_seconds']} s")
 
 
 def _left_cell(row: dict) -> str:
@@ -144,7 +162,7 @@ def _left_cell(row: dict) -> str:
 
 HEADER = ["model", "equations", "faults", "detectable", "MSO sets", "ARRs", "ARRs (max_order=None)", "isolable pairs",
           "pairs reached", "pairs reached (max_order=None)", "undetected", "undetected (max_order=None)", "CPU s",
-          "CPU s (max_order=None)", "pairs left (max_order=None)", "error"]
+          "CPU s (max_order=None)", "pairs left (max_order=None)", "simulated=True (max_order=None)", "error"]
 
 
 def main() -> None:

@@ -363,7 +363,9 @@ def _first_closing(shared: _Shared, candidates: list, fault: str, other: str | N
                    unrealizable: set) -> tuple[ARR | None, bool]:
     """(the ARR of the lowest order, then the smallest set, that closes the gap; whether a set was passed
     over for its order).  A set no elimination can close (its loops through states stay loops in either
-    causality and it is not linear) is named in ``unrealizable`` without being tried."""
+    causality and it is not linear) is named in ``unrealizable`` without being tried, or, with
+    ``simulated=True``, tried as a simulation residual after the closed forms, as is a set passed over for
+    its order."""
     model = shared.model
     estimates = {rows: shared.estimated_order(rows) for rows in candidates}
     odes = sorted((rows for rows in candidates if estimates[rows] is None), key=len)
@@ -372,23 +374,26 @@ def _first_closing(shared: _Shared, candidates: list, fault: str, other: str | N
             unrealizable.add(f"{_short(model, rows)}: a loop through a state in either causality and a non-linear "
                              "law: only an ODE of the set closes it")
         odes = []
-    higher = False
+    higher = []
     for rows in sorted((r for r in candidates if estimates[r] is not None), key=lambda r: (estimates[r], len(r))):
         if max_order is not None and estimates[rows] > max_order:
-            higher = True   # the sets are sorted by their estimate: every other one needs more
+            # the sets are sorted by their estimate: every other one needs more (or a simulation)
+            higher = sorted((r for r in candidates if estimates[r] is not None and estimates[r] > max_order), key=len)
             break
-        if _closes(shared, rows, fault, other, max_order, unrealizable):
-            return shared.cached(rows, unrealizable), False
-    for rows in odes:   # a simulation residual (simulated=True) for a set only its own ODE closes
-        if _closes(shared, rows, fault, other, max_order, unrealizable):
-            return shared.cached(rows, unrealizable), False
-    return None, higher
+        arr = shared.cached(rows, unrealizable)
+        if _closes(shared, arr, fault, other, max_order):
+            return arr, False
+    # with simulated=True: a set only its own ODE closes, or one whose closed form needs more derivatives than
+    # max_order, as a simulation residual (its states integrated: no high derivative of the record)
+    for rows in (odes + higher) if shared.simulate else ():
+        arr = shared.simulation(rows, unrealizable)
+        if _closes(shared, arr, fault, other, max_order):
+            return arr, False
+    return None, bool(higher)
 
 
-def _closes(shared: _Shared, rows: frozenset, fault: str, other: str | None, max_order: int | None,
-            unrealizable: set) -> bool:
-    """Whether the ARR of ``rows`` exists within ``max_order``, sees ``fault`` and not ``other``."""
-    arr = shared.cached(rows, unrealizable)
+def _closes(shared: _Shared, arr: ARR | None, fault: str, other: str | None, max_order: int | None) -> bool:
+    """Whether ``arr`` exists within ``max_order``, sees ``fault`` and not ``other``."""
     if arr is None or (max_order is not None and arr.order > max_order):
         return False
     support = faults_of_arr(shared.model, arr)
@@ -402,6 +407,7 @@ class _Shared:
         self.bg, self.model, self.avoid_integrals, self.simulate = bg, model, avoid_integrals, simulate
         self.weights: dict = {}
         self.results: dict = {}
+        self.simulations: dict = {}  # set -> its simulation residual (simulated=True), or None
         self.templates: dict = {}   # set shape -> (the set eliminated, its ARR or None)
         self.reused: dict = {}      # set -> whether its ARR is another set's, renamed
         self._near: dict = {}       # fault -> the minimal sets near it
@@ -517,6 +523,27 @@ class _Shared:
         if shape is not None:
             self.templates[shape.key] = (shape, self.results[rows])
         return self.results[rows]
+
+    def simulation(self, rows: frozenset, unrealizable: set) -> ARR | None:
+        """The simulation residual of ``rows`` (:meth:`simulated`), made once, or taken renamed from a set of the
+        same shape; None (and the set described in ``unrealizable``) if it has none."""
+        if rows in self.simulations:
+            return self.simulations[rows]
+        shape = self.shapes.shape(rows)
+        key = None if shape is None else ("simulation", shape.key)
+        if key is not None and key in self.templates:
+            first, arr = self.templates[key]
+            self.simulations[rows] = None if arr is None else self._renamed(arr, first, shape)
+            return self.simulations[rows]
+        self.spend("eliminations", "the equations eliminated", len(rows))
+        try:
+            self.simulations[rows] = self.simulated(rows, "ARR_MSO")
+        except (NotImplementedError, ValueError) as exc:
+            self.simulations[rows] = None
+            unrealizable.add(str(exc))
+        if key is not None:
+            self.templates[key] = (shape, self.simulations[rows])
+        return self.simulations[rows]
 
     @cached_property
     def shapes(self) -> Shapes:
