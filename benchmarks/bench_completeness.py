@@ -1,16 +1,16 @@
 """Acceptance table of issue 36: per model, what the structure allows and what the derived ARRs reach.
 
 For each model (the library's three_tank, torsion_bar, dc_motor and friction_drive, every zoo model, the
-tank cascades of bench_arrs at 3 and 5 tanks with a level sensor on every tank and on every other one, an
-RC ladder of 5 sections and a mass-spring chain of 5 stages): its equations, fault candidates and minimal
-structurally overdetermined (MSO) sets ("over limit" past ``MSO_SEARCH_LIMIT``); the ARRs ``derive_arrs``
-gives with the defaults and with ``max_order=None``; the ordered fault pairs the structure can isolate
-(``StructuralModel.isolability``) and those the ARRs of each setting reach (the structural pairs less
-``unreached(...)["isolate"]``); the faults the structure detects and no ARR sees; the ARRWarning messages
-that say why (distinct, in the order given); and the CPU seconds (``time.process_time``) of each
-``derive_arrs``; where ``max_order=None`` leaves pairs, the same with ``simulated=True`` (simulation residuals
-for the sets no closed form realises).  A model that raises, or runs over ``--timeout`` seconds, gets its
-error in its row.
+tank cascades of bench_arrs at 3 and 5 tanks with a level sensor on every tank and on every other one, and at 4
+tanks measured at its two ends, an RC ladder of 5 sections and a mass-spring chain of 5 stages): its equations,
+fault candidates and minimal structurally overdetermined (MSO) sets ("over limit" past ``MSO_SEARCH_LIMIT``);
+the ARRs ``derive_arrs`` gives with the defaults and with ``max_order=None``; the ordered fault pairs the
+structure can isolate (``StructuralModel.isolability``) and those the ARRs of each setting reach (the
+structural pairs less ``unreached(...)["isolate"]``); the faults the structure detects and no ARR sees; the
+ARRWarning messages that say why (distinct, in the order given); and the CPU seconds (``time.process_time``)
+of each ``derive_arrs``.  Where ``max_order=None`` leaves pairs, the same with ``simulated=True`` (simulation
+residuals for the sets no closed form realises), with no order bound and with the default one.  A model that
+raises, or runs over ``--timeout`` seconds, gets its error in its row.
 
     python benchmarks/bench_completeness.py                  # a markdown table, then the warnings per model
     python benchmarks/bench_completeness.py --json           # one JSON object per model per line
@@ -42,7 +42,7 @@ from tests.zoo.chain import cases  # noqa: E402
 #: The settings of derive_arrs compared: the defaults, and no bound on the derivative order; then, where that
 #: leaves pairs, with the sets no closed form realises simulated (``simulated=True``).
 SETTINGS = {"default": {}, "max_order=None": {"max_order": None}}
-SIMULATED = {"max_order": None, "simulated": True}
+SIMULATED = {"simulated": {"max_order": None, "simulated": True}, "simulated (default order)": {"simulated": True}}
 
 #: Up to this many MSO sets, each is eliminated on its own (``arr_from_set``) to say of the pairs left with
 #: ``max_order=None`` whether a closed-form MSO set tells them apart (the search missed it) or none does.
@@ -61,6 +61,7 @@ def models() -> dict:
     for n in (3, 5):
         found[f"cascade_{n}"] = lambda n=n: tank_cascade(n)
         found[f"cascade_sparse_{n}"] = lambda n=n: sparse_tank_cascade(n)
+    found["cascade_ends_4"] = lambda: tank_cascade(4, every=3)   # levels 1 and 4 measured
     found["rc_ladder_5"] = lambda: rc_ladder(5)
     found["chain_5"] = lambda: mass_spring_chain(5)
     return found
@@ -97,12 +98,12 @@ def measure(name: str, build) -> dict:
             row[setting] = {"arrs": len(arrs), "cpu_seconds": round(seconds, 3),
                             "pairs_reached": pairs - len(left["isolate"]), "undetected": left["detect"],
                             "warnings": messages}
-        if left["isolate"] or left["detect"]:   # what simulation residuals add (nothing where nothing is left)
-            arrs, seconds, left_simulated, messages = _derive(build, SIMULATED)
-            row["simulated"] = {"arrs": len(arrs), "simulation_arrs": sum(a.form == "simulation" for a in arrs),
-                                "cpu_seconds": round(seconds, 3),
-                                "pairs_reached": pairs - len(left_simulated["isolate"]),
-                                "undetected": left_simulated["detect"], "warnings": messages}
+        for setting, options in SIMULATED.items() if left["isolate"] or left["detect"] else ():
+            # what simulation residuals add (nothing where max_order=None leaves nothing)
+            arrs, seconds, left_simulated, messages = _derive(build, options)
+            row[setting] = {"arrs": len(arrs), "simulation_arrs": sum(a.form == "simulation" for a in arrs),
+                            "cpu_seconds": round(seconds, 3), "pairs_reached": pairs - len(left_simulated["isolate"]),
+                            "undetected": left_simulated["detect"], "warnings": messages}
         if left["isolate"] and isinstance(row["mso_sets"], int) and row["mso_sets"] <= CLOSED_FORM_LIMIT:
             row["left_pairs"] = _left_pairs(build, left["isolate"])
     except _OverTime as exc:
@@ -141,13 +142,13 @@ def _cells(row: dict) -> list:
             setting("default", "undetected", lambda v: ", ".join(v) or "0"),
             setting("max_order=None", "undetected", lambda v: ", ".join(v) or "0"),
             setting("default", "cpu_seconds"), setting("max_order=None", "cpu_seconds"), _left_cell(row),
-            _simulated_cell(row), row.get("error", "")]
+            *(_simulated_cell(row, key) for key in SIMULATED), row.get("error", "")]
 
 
-def _simulated_cell(row: dict) -> str:
-    if "simulated" not in row:
+def _simulated_cell(row: dict, key: str) -> str:
+    if key not in row:
         return "-" if "max_order=None" not in row else "(nothing left)"
-    sim = row["simulated"]
+    sim = row[key]
     return (f"{sim['pairs_reached']} pairs, {len(sim['undetected'])} undetected, {sim['simulation_arrs']} simulated "
             f"ARRs, {sim['cpu_seconds']} s")
 
@@ -162,7 +163,8 @@ def _left_cell(row: dict) -> str:
 
 HEADER = ["model", "equations", "faults", "detectable", "MSO sets", "ARRs", "ARRs (max_order=None)", "isolable pairs",
           "pairs reached", "pairs reached (max_order=None)", "undetected", "undetected (max_order=None)", "CPU s",
-          "CPU s (max_order=None)", "pairs left (max_order=None)", "simulated=True (max_order=None)", "error"]
+          "CPU s (max_order=None)", "pairs left (max_order=None)", "simulated=True (max_order=None)",
+          "simulated=True (default order)", "error"]
 
 
 def main() -> None:
