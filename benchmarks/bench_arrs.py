@@ -14,6 +14,7 @@ process and on the same model: the state equations (``bg.state_equations()``).
     python benchmarks/bench_arrs.py --sizes 200 --max-order none --pairs   # every isolable pair reached?
     python benchmarks/bench_arrs.py --model ladder --sizes 50 200
     python benchmarks/bench_arrs.py --model cascade_sparse --sizes 5 10 20 50
+    python benchmarks/bench_arrs.py --model cascade_sparse --sizes 10 --pairs --simulated   # simulation residuals
 
 Every fault must be seen by an ARR: the table (or JSON) is printed with the count of those no ARR sees, and
 the run then exits with an error naming them if there are any.  ``--pairs`` adds the structurally isolable
@@ -70,7 +71,8 @@ MODELS = {"chain": mass_spring_chain, "ladder": rc_ladder, "cascade": tank_casca
           "cascade_sparse": sparse_tank_cascade}
 
 
-def time_stages(n: int, build=mass_spring_chain, max_order="auto", pairs: bool = False) -> dict:
+def time_stages(n: int, build=mass_spring_chain, max_order="auto", pairs: bool = False,
+                simulated: bool = False) -> dict:
     """CPU seconds spent building the model, deriving its ARRs (isolation on, the default) and their signature
     matrix, and the HTML report on top; with ``pairs``, the structurally isolable ordered pairs and those the
     ARRs leave (not timed).
@@ -81,14 +83,14 @@ def time_stages(n: int, build=mass_spring_chain, max_order="auto", pairs: bool =
     start = time.process_time()
     bg = build(n)
     built = time.process_time()
-    arrs = derive_arrs(bg, max_order=max_order)
+    arrs = derive_arrs(bg, max_order=max_order, simulated=simulated)
     derived = time.process_time()
     signatures = signature_matrix(arrs)
     signed = time.process_time()
     arr_report(bg, "html", arrs=arrs)  # what `bgphm arr` adds to the derivation (its signature table was cubic)
     reported = time.process_time()
     row = {"build": built - start, "arrs": derived - built, "signatures": signed - derived, "total": signed - start,
-           "report": reported - signed, "count": len(arrs),
+           "report": reported - signed, "count": len(arrs), "simulated": sum(a.form == "simulation" for a in arrs),
            "undetected": [fault for fault, seen in zip(signatures.rows, signatures.detectable) if not seen]}
     if pairs:
         row["structural_pairs"] = sum(len(v) for v in structural_model(bg).isolability().values())
@@ -115,6 +117,8 @@ def main() -> None:
                         help="derive_arrs' max_order: 'auto' (default), 'none' (no bound) or an integer")
     parser.add_argument("--pairs", action="store_true",
                         help="count the structurally isolable ordered pairs and those left (slow on large models)")
+    parser.add_argument("--simulated", action="store_true",
+                        help="derive_arrs(simulated=True): simulation residuals where no closed form is kept")
     args = parser.parse_args()
     build = MODELS[args.model]
     max_order = {"auto": "auto", "none": None}.get(args.max_order.lower(), None)
@@ -122,7 +126,8 @@ def main() -> None:
         max_order = int(args.max_order)
 
     time_stages(4, build)   # warm sympy's caches so the first size is not charged for them
-    runs = [[time_stages(n, build, max_order, args.pairs) for _ in range(args.repeat)] for n in args.sizes]
+    runs = [[time_stages(n, build, max_order, args.pairs, args.simulated) for _ in range(args.repeat)]
+            for n in args.sizes]
     rows = [{**r[-1], **{k: float(np.mean([x[k] for x in r])) for k in ("build", "arrs", "signatures", "total",
                                                                            "report")}} for r in runs]
     seconds = [row["total"] for row in rows]
@@ -131,6 +136,7 @@ def main() -> None:
     figures = {
         "model": args.model,
         "max_order": args.max_order,
+        "simulated": args.simulated,
         "n": args.sizes,
         "cpu_seconds": [round(s, 4) for s in seconds],
         "cpu_seconds_worst": [round(max(x["total"] for x in r), 4) for r in runs],
@@ -138,6 +144,7 @@ def main() -> None:
         "breakdown": [{k: round(row[k], 4) for k in ("build", "arrs", "signatures", "total", "report")}
                       for row in rows],
         "arrs": [row["count"] for row in rows],
+        "simulation_arrs": [row["simulated"] for row in rows],
         "undetected": [row["undetected"] for row in rows],   # faults no ARR sees: the run fails on any
         "baseline": {"state_equations_seconds": [round(b, 4) for b in baselines],
                      "ratio_to_state_equations": [round(s / b, 2) for s, b in zip(seconds, baselines)]},

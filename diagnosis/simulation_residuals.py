@@ -87,7 +87,8 @@ __all__ = ["INTERIOR_SAMPLES", "MAX_CORNERS", "NEWTON_STEPS", "SimulationARR", "
 
 
 class SimulationWarning(PHMWarning):
-    """A simulation residual's band from a sample of the parameters' box's corners."""
+    """A simulation residual's band that is a sample's hull: more corners than simulated, or an interior point
+    of the parameters' box reaching past the corners."""
 
 
 class SimulationError(PHMError, ValueError):
@@ -106,7 +107,7 @@ class SimulationARR(ARR):
     rates : tuple of sympy.Expr
         ``f``, the nominal rate of each state, in states, signals (and their derivatives) and parameters.
     rates_true : tuple of sympy.Expr
-        The same with theta (1 + delta_theta), for the enclosure.
+        The same with theta (1 + delta_theta), for the band.
     """
 
     states: tuple = ()
@@ -134,13 +135,17 @@ class SimulationARR(ARR):
 
     def __str__(self) -> str:
         rates = "".join(f"\n  d{x}/dt = {f}" for x, f in zip(self.states, self.rates))
-        return f"{self.name}: r_n = {self.nominal}{rates}\n  Psi_2: the enclosure of r_n over the parameters' box"
+        return f"{self.name}: r_n = {self.nominal}{rates}\n  band: r_n over simulations at the parameters' box corners"
 
     def latex(self) -> str:
         """LaTeX of ``r_n`` and of each simulated state's rate."""
         rates = ", \\quad ".join(f"\\dot{{{sp.latex(sp.Symbol(x))}}} = {latex(f)}"
                                   for x, f in zip(self.states, self.rates))
         return f"r_{{n}} = {latex(self.nominal)}, \\quad {rates}"
+
+    def __getstate__(self) -> dict:
+        """Pickled without its numerics (numpy functions made by sympy), rebuilt on first use."""
+        return {**self.__dict__, "_simulator": None}
 
     def prepared(self, record, *, extra: tuple = (), method: str = "savgol", window: int | None = None,
                  polyorder: int = 3, exact: Mapping | None = None, initial="rest"):

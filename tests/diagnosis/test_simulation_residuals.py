@@ -6,6 +6,7 @@ tight tolerances), not from the library's simulator: ``A_i dh_i/dt = q_(i-1,i) -
 in it, a fault outside the box must leave it.
 """
 
+import pickle
 import warnings
 
 import numpy as np
@@ -161,6 +162,18 @@ def test_initial_states_are_checked_and_named(two):
         arr.evaluate(record, initial={x: (2.0, 1.0) for x in arr.states})
     with pytest.raises(SimulationError, match="initial must be 'rest'"):
         arr.evaluate(record, initial="steady")
+
+
+def test_a_simulation_residual_pickles_without_its_numerics_and_evaluates_the_same(two):
+    bg, arrs = two
+    arr = arrs[0]
+    record = reference(3, NOMINAL, samples=201, duration=100.0)
+    before = arr.evaluate(record)
+    copy = pickle.loads(pickle.dumps(arr))   # a process pool or Dask sends ARRs this way
+    assert copy == arr and copy._simulator is None
+    after = copy.evaluate(record)
+    np.testing.assert_array_equal(after.residual, before.residual)
+    np.testing.assert_array_equal(after.lower, before.lower)
 
 
 def test_consumers_that_need_a_closed_form_refuse_a_simulation_residual_by_name(two):
