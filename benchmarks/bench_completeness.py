@@ -46,7 +46,7 @@ SIMULATED = {"simulated": {"max_order": None, "simulated": True}, "simulated (de
 
 #: Up to this many MSO sets, each is eliminated on its own (``arr_from_set``) to say of the pairs left with
 #: ``max_order=None`` whether a closed-form MSO set tells them apart (the search missed it) or none does.
-CLOSED_FORM_LIMIT = 40
+CLOSED_FORM_LIMIT = 20
 
 
 class _OverTime(BaseException):   # not caught by an `except Exception` on the way

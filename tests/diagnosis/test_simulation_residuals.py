@@ -10,11 +10,12 @@ import pickle
 import warnings
 
 import numpy as np
+import sympy as sp
 import pytest
 from scipy.integrate import solve_ivp
 
 import diagnosis.elimination as elimination
-from bondgraph.library import ORIFICE, TANK_AREA, tank_cascade
+from bondgraph.library import ORIFICE, TANK_AREA, mass_spring_chain, tank_cascade
 from diagnosis import (ARRError, ARRWarning, CodegenError, StreamingEvaluation, as_record, derive_arrs, detect,
                        DetectionSettings, add_noise, generate_code, structural_model)
 from diagnosis.elimination import arr_from_set, faults_of_arr, unreached
@@ -231,3 +232,25 @@ def test_five_tanks_measured_every_other_one_reach_every_isolable_pair_with_simu
     record = reference(5, NOMINAL, measured=(1, 3, 5))
     for arr in (a for a in both if a.form == "simulation"):
         assert not arr.evaluate(record).violation.any(), arr.name
+
+
+@pytest.mark.slow
+def test_a_set_of_the_shape_of_one_simulated_takes_its_residual_renamed_and_that_is_the_sets_own():
+    """Another stage of a chain: the simulation residual of the first set, renamed, equals the set's own."""
+    bg = mass_spring_chain(6)
+    shared = elimination._Shared(bg, structural_model(bg), True, True)   # the derivation's own cache
+    renamed = []
+    for mass in range(2, 6):   # the inner stages: the same sets, renamed
+        for rows in shared.near(f"m{mass}", set()):
+            arr = shared.simulation(rows, set())
+            if shared.reused.get(rows) and arr is not None:
+                renamed.append((rows, arr))
+    assert renamed
+    rows, arr = renamed[0]
+    fresh = shared.simulated(rows, arr.name)
+    assert set(arr.states) == set(fresh.states) and arr.junction == fresh.junction   # in any order
+    assert sp.simplify(arr.nominal - fresh.nominal) == 0
+    for kind in ("rates", "rates_true"):
+        ours, own = (dict(zip(a.states, getattr(a, kind))) for a in (arr, fresh))
+        assert all(sp.simplify(ours[x] - own[x]) == 0 for x in own)
+    assert (arr.parameters, arr.values, arr.uncertainties) == (fresh.parameters, fresh.values, fresh.uncertainties)
