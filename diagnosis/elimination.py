@@ -606,9 +606,11 @@ class _Shared:
                               origin=tuple(model.describe(rows)), form=form)
 
     def simulated(self, rows: frozenset, name: str) -> SimulationARR:
-        """The simulation residual of ``rows`` (:mod:`diagnosis.simulation_residuals`): every state of the set
-        integrated from its storage equation, the rest solved explicitly for the unknowns, the equation left
-        over as the residual; of the candidates that work, the one of lowest derivative order, then smallest.
+        """The simulation residual of ``rows`` (:mod:`diagnosis.simulation_residuals`): the states in loops of
+        the matching (else every state of the set) integrated from their storage equations, the rest solved
+        explicitly for the unknowns, one equation left over as the residual.  Of the choices that work: the
+        fewest states no state feeds back on (:func:`_drifting`), then the lowest derivative order, the fewest
+        states, the fewest operations.
 
         Raises a ValueError saying why when no equation of the set can be left over that way.
         """
@@ -649,7 +651,7 @@ class _Shared:
         fields.update(parameters=frozenset(p for p in self.structure.parameters if p in every),
                       values={p: v for p, v in self.structure.parameters.items() if p in every or p in deltas},
                       uncertainties={p: intervals[p] for p in deltas})
-        states = tuple(f"{self._plain_symbols[x].func.__name__}" for x in storage.values())
+        states = tuple(self._plain_symbols[x].func.__name__ for x in storage.values())
         return SimulationARR(**fields, states=states, rates=tuple(rates), rates_true=tuple(rates_true))
 
     def _looped(self, rows: frozenset) -> set:
@@ -675,11 +677,12 @@ class _Shared:
         for i in storage:
             equation = _substituted(equations[i], solution)
             expression = equation.lhs - equation.rhs
-            (d,) = [d for d in expression.atoms(sp.Derivative) if isinstance(d.expr, AppliedUndef)
-                    and f"state {d.expr.func.__name__[2:]}" in known][:1] or [None]
-            slope = sp.diff(expression, d) if d is not None else sp.S.Zero
-            if d is None or slope == 0 or slope.has(d):
+            own = [d for d in expression.atoms(sp.Derivative)
+                   if isinstance(d.expr, AppliedUndef) and f"state {d.expr.func.__name__[2:]}" in known]
+            slope = sp.diff(expression, own[0]) if own else sp.S.Zero
+            if slope == 0 or slope.has(own[0]):
                 raise ValueError(f"{model.describe([i])[0]}: not a rate of its state")
+            d = own[0]
             rates[d] = -expression.xreplace({d: 0}) / slope
             parts.append(rates[d])
         for _ in range(len(rates) + 1):   # a rate read through another state's law: its derivative, substituted
