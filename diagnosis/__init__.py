@@ -20,6 +20,7 @@ from .model_validation import (ModelFigures, ModelValidation, Whiteness, held_ou
 from .parameter_estimation import (Identifiability, ParameterEstimate, estimate_parameters, identifiability,
                                    uncertainty_boxes)
 from .elimination import structural_arrs, unreached
+from .fdt_export import to_fdt
 from .intervals import Interval, IntervalArray, IntervalWarning, affine_range, compile_interval
 from .csv_reading import read_csv
 from .records import (Record, RecordError, RecordWarning, SensorFault, add_noise, add_sensor_faults, as_record,
@@ -39,5 +40,5 @@ __all__ = [
     "compile_interval", "consistent_faults", "delta", "derive_arrs", "detect", "detectability", "estimate_parameters",
     "evaluable", "evaluate", "generate_code", "held_out_figures", "identifiability", "noise_margin", "place_sensors",
     "pooled_calibration", "read_csv", "resample", "residual_whiteness", "robust_std", "signature_matrix",
-    "structural_arrs", "structural_model", "uncertainty_boxes", "unreached", "validate_calibration",
+    "structural_arrs", "structural_model", "to_fdt", "uncertainty_boxes", "unreached", "validate_calibration",
 ]

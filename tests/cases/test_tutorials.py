@@ -29,11 +29,13 @@ TUTORIALS = ROOT / "docs" / "tutorial"
 #: The least each tutorial must keep: lines of code, and lines of output compared (a tutorial that loses its
 #: code or stops showing what it prints fails).
 MINIMUM = {"1-model.md": (100, 50), "2-diagnosis.md": (90, 45), "3-prognosis.md": (90, 24),
-           "4-command-line.md": (75, 110), "5-calibration.md": (35, 16)}
+           "4-command-line.md": (75, 110), "5-calibration.md": (35, 16), "6-fault-diagnosis-toolbox.md": (15, 7)}
 
 #: Heavy tutorials (slow tier): tutorial 4 runs ``bgphm demo`` and twenty more commands, each in its own
 #: process.  Tutorial 1 stays in the fast tier, as does the check that every script is up to date.
-SLOW = {"2-diagnosis.md", "3-prognosis.md", "4-command-line.md", "5-calibration.md"}
+SLOW = {"2-diagnosis.md", "3-prognosis.md", "4-command-line.md", "5-calibration.md", "6-fault-diagnosis-toolbox.md"}
+#: Tutorials that need an optional interop package (the ``interop`` marker): 6 runs the Fault Diagnosis Toolbox.
+INTEROP = {"6-fault-diagnosis-toolbox.md"}
 
 #: What may differ from one run to the next, and only that: the elapsed time a ``bgphm`` progress line starts with.
 ELAPSED = re.compile(r"^\[ *\d+\.\d s\] ", re.MULTILINE)
@@ -150,7 +152,8 @@ def test_scripts_are_up_to_date():
         assert on_disk[path] == text, f"{path.name} is out of date: run `python docs/tutorial/build_scripts.py`"
 
 
-@pytest.mark.parametrize("name", [pytest.param(name, marks=pytest.mark.slow) if name in SLOW else name
+@pytest.mark.parametrize("name", [pytest.param(name, marks=[*([pytest.mark.slow] if name in SLOW else []),
+                                                               *([pytest.mark.interop] if name in INTEROP else [])])
                                   for name in sorted(MINIMUM)])
 def test_tutorial_runs_as_printed(name, tmp_path):
     path = TUTORIALS / name
@@ -158,6 +161,7 @@ def test_tutorial_runs_as_printed(name, tmp_path):
     assert not found, "\n\n".join(found)
 
 
+@pytest.mark.slow   # tutorial 1 runs cell by cell in the fast tier already
 def test_a_script_runs_as_the_readme_says(tmp_path):
     """``python docs/tutorial/scripts/1_model.py``, the whole script at once, prints every output shown."""
     path = TUTORIALS / "1-model.md"
