@@ -143,6 +143,7 @@ def _outside_imports() -> list[tuple[str, int, str, str]]:
     return found
 
 
+@pytest.mark.slow   # parses every example and benchmark: 2 s of the fast tier
 def test_bgphm_examples_and_benchmarks_use_only_public_names():
     """Each name they import from the library is declared public by the module it comes from (its ``__all__``),
     in no private module: what a user may rely on is what the application and the figures rely on."""

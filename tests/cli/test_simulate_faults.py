@@ -55,9 +55,10 @@ def motor(b, breaks=(), voltage=lambda s: U):
 
 @pytest.mark.parametrize("law, b, onset", [
     ("lin:3e-4@1", lambda s: B + 3e-4 * max(s - 1.0, 0.0), 1.0),
-    ("exp:0.8@1", lambda s: B * np.exp(0.8 * max(s - 1.0, 0.0)), 1.0),
-    ("pow:5e-4^2@1.5", lambda s: B + 5e-4 * max(s - 1.5, 0.0) ** 2, 1.5),
-    ("step:4e-4@2", lambda s: B + (4e-4 if s >= 2.0 else 0.0), 2.0),
+    # the other laws in the slow tier: each a whole simulate command (a second of the fast tier's budget)
+    pytest.param("exp:0.8@1", lambda s: B * np.exp(0.8 * max(s - 1.0, 0.0)), 1.0, marks=pytest.mark.slow),
+    pytest.param("pow:5e-4^2@1.5", lambda s: B + 5e-4 * max(s - 1.5, 0.0) ** 2, 1.5, marks=pytest.mark.slow),
+    pytest.param("step:4e-4@2", lambda s: B + (4e-4 if s >= 2.0 else 0.0), 2.0, marks=pytest.mark.slow),
 ])
 def test_a_degradation_follows_the_motors_equations(tmp_path, law, b, onset):
     record = simulated(tmp_path, "--degrade", f"b={law}")
