@@ -216,8 +216,10 @@ def evaluate(arr, record, *, method: str = "savgol", window: int | None = None, 
                            exact_derivatives, ends)
     if masked.any():
         points = [np.where(masked, np.nan, p) for p in points]
-    residual, lower, upper, bglft, violation = judge(compiled, points, margin, threshold)
-    if band is not None:   # a simulation residual: its band encloses the simulated states' uncertainty too
+    if band is None:
+        residual, lower, upper, bglft, violation = judge(compiled, points, margin, threshold)
+    else:   # a simulation residual: its band comes with the simulation, Psi_2's range is not needed
+        residual = compiled.residual(points)
         lower, upper = band(residual)
         bglft = np.maximum(np.abs(lower), np.abs(upper))
         violation = _outside(residual, lower, upper, bglft, margin, threshold)

@@ -178,7 +178,7 @@ class _Simulator:
 
     def __init__(self, arr: SimulationARR) -> None:
         self.arr = arr
-        expressions = (arr.nominal, *arr.rates, *arr.rates_true, *_true_output(arr))
+        expressions = (arr.nominal, *arr.rates, *arr.rates_true, _true_output(arr))
         state_atoms = [sp.Function(x)(T) for x in arr.states]
         self.points = sorted({a for e in expressions for a in _point_atoms(e, arr.states)}, key=str)
         self.n = len(arr.states)
@@ -195,7 +195,7 @@ class _Simulator:
             return sp.lambdify([*x, *d, *p], plain, modules="numpy", cse=True)
 
         self.rates = numeric(arr.rates_true)
-        self.output = numeric(_true_output(arr))
+        self.output = numeric([_true_output(arr)])
         box = [_delta_box(arr, s) for s in deltas]
         self.corners, self.sampled = _corners(box)
         # interior points, a fixed sample: where the residual is not monotone in a parameter they reach past the
@@ -393,8 +393,9 @@ def _outside_derivatives(expression: sp.Expr) -> set:
     return set().union(*(_outside_derivatives(a) for a in expression.args))
 
 
-def _true_output(arr: SimulationARR) -> tuple[sp.Expr]:
-    return (arr.nominal + arr.uncertain,)
+def _true_output(arr: SimulationARR) -> sp.Expr:
+    """``g`` with theta (1 + delta_theta): the nominal residual plus its uncertain part."""
+    return arr.nominal + arr.uncertain
 
 
 def _delta_box(arr: SimulationARR, delta: sp.Symbol) -> tuple[np.float64, np.float64]:
