@@ -68,6 +68,11 @@ def parse_expression(text: str, names: Mapping[str, sp.Basic], *, where: str = "
     >>> e, f, a = sp.symbols("e f a")
     >>> parse_expression("f - a*sqrt(Abs(e))", {"e": e, "f": f, "a": a})
     -a*sqrt(Abs(e)) + f
+
+    A composed model's names are paths, read as one name:
+
+    >>> parse_expression("e - motor.R_a*f", {"e": e, "f": f, "motor.R_a": sp.Symbol("motor.R_a")})
+    e - f*motor.R_a
     """
     if not isinstance(text, str):
         raise LawError(f"{where}: expected a string, got {type(text).__name__}")
@@ -114,15 +119,16 @@ def _build(node: ast.AST, names: Mapping[str, sp.Basic], where: str, functions: 
         if isinstance(value, float) and not math.isfinite(value):
             raise LawError(f"{where}: a numeric constant overflows to infinity")
         return sp.Integer(value) if isinstance(value, int) else sp.Float(value)
-    if isinstance(node, ast.Name):
-        if node.id in names:
-            return names[node.id]
-        if node.id in CONSTANTS:
-            return CONSTANTS[node.id]
-        if node.id in functions:
-            raise LawError(f"{where}: function {node.id!r} used without a call")
+    if isinstance(node, (ast.Name, ast.Attribute)) and _dotted(node) is not None:
+        name = _dotted(node)
+        if name in names:
+            return names[name]
+        if name in CONSTANTS:
+            return CONSTANTS[name]
+        if name in functions:
+            raise LawError(f"{where}: function {name!r} used without a call")
         allowed = ", ".join(sorted(names)) or "none"
-        raise LawError(f"{where}: unknown name {node.id!r} (allowed: {allowed})")
+        raise LawError(f"{where}: unknown name {name!r} (allowed: {allowed})")
     if isinstance(node, ast.UnaryOp) and isinstance(node.op, (ast.USub, ast.UAdd)):
         operand = _build(node.operand, names, where, functions)
         return -operand if isinstance(node.op, ast.USub) else operand
@@ -154,6 +160,17 @@ def _build(node: ast.AST, names: Mapping[str, sp.Basic], where: str, functions: 
         except (TypeError, ValueError) as exc:
             raise LawError(f"{where}: {ast.unparse(node)}: {exc}") from None
     raise LawError(f"{where}: {type(node).__name__} not allowed in {ast.unparse(node)!r}")
+
+
+def _dotted(node: ast.AST) -> str | None:
+    """The name ``a.b.c`` an attribute chain spells (a composed model's path, ``motor.R_a``), else None."""
+    parts = []
+    while isinstance(node, ast.Attribute):
+        parts.append(node.attr)
+        node = node.value
+    if not isinstance(node, ast.Name):
+        return None
+    return ".".join([node.id, *reversed(parts)])
 
 
 def _bits(number: sp.Number) -> int:

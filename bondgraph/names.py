@@ -3,11 +3,13 @@
 A model file is data, and its names travel far: into sympy symbols, equations, reports (HTML,
 MathML, LaTeX), drawings (SVG, TikZ) and the command line (``--fail P=V``).  So a name is a name,
 never markup: ASCII letters, digits and underscores, at most :data:`MAX_NAME_LENGTH` characters.
+A model composed of sub-models (:mod:`bondgraph.composition`) names what it took from a part by its
+path, the part's name and the element's joined by dots (:data:`PATH_SEPARATOR`): ``motor.R_a``.
 
-* Node ids and bond labels match :data:`NODE_ID_PATTERN` (``1_2`` and ``0_s`` are fine; an
-  integer id prints as its digits).
-* Parameter, law-constant and signal names match :data:`NAME_PATTERN`, a Python identifier,
-  because they are written in expressions (laws, moduli) and in ``--fail P=V``.  A parametric node
+* Node ids and bond labels match :data:`NODE_ID_PATTERN` (``1_2``, ``0_s`` and ``belt.0_s`` are fine;
+  an integer id prints as its digits).
+* Parameter, law-constant and signal names match :data:`NAME_PATTERN`, a Python identifier or a
+  dotted path of them, because they are written in expressions (laws, moduli) and in ``--fail P=V``.  A parametric node
   whose id is not an identifier (``1R``) names its parameter with ``param``.
 
 The checks run where :class:`~bondgraph.model.BondGraph` reads its elements and bonds, so JSON
@@ -33,15 +35,19 @@ from collections.abc import Hashable
 
 from .errors import ModelError
 
-__all__ = ["MAX_NAME_LENGTH", "NODE_ID_PATTERN", "NAME_PATTERN", "is_node_id", "is_name", "check_node_id",
-           "check_name"]
+__all__ = ["MAX_NAME_LENGTH", "NODE_ID_PATTERN", "NAME_PATTERN", "PATH_SEPARATOR", "is_node_id", "is_name",
+           "check_node_id", "check_name"]
 
 #: The longest name, node id or label (characters).
 MAX_NAME_LENGTH = 64
-#: Node ids and bond labels: ASCII letters, digits and underscores (integers are accepted as their digits).
-NODE_ID_PATTERN = r"[A-Za-z0-9_]+"
-#: Parameter, law-constant and signal names: ASCII identifiers, since they appear in expressions.
-NAME_PATTERN = r"[A-Za-z_][A-Za-z0-9_]*"
+#: Joins a part's name and a name inside it in a composed model: ``motor.R_a``.
+PATH_SEPARATOR = "."
+#: Node ids and bond labels: ASCII letters, digits and underscores (integers are accepted as their digits),
+#: or a path of them joined by dots.
+NODE_ID_PATTERN = r"[A-Za-z0-9_]+(?:\.[A-Za-z0-9_]+)*"
+#: Parameter, law-constant and signal names: ASCII identifiers, or a path of them joined by dots, since they
+#: appear in expressions (where ``motor.R_a`` reads as one name).
+NAME_PATTERN = r"[A-Za-z_][A-Za-z0-9_]*(?:\.[A-Za-z_][A-Za-z0-9_]*)*"
 
 _NODE_ID = re.compile(NODE_ID_PATTERN)
 _NAME = re.compile(NAME_PATTERN)
@@ -59,8 +65,10 @@ def _text(value: Hashable) -> str | None:
 def is_node_id(value: Hashable) -> bool:
     """Whether ``value`` may be a node id or bond label (:data:`NODE_ID_PATTERN`, at most 64 characters).
 
-    >>> is_node_id("0_s"), is_node_id(12), is_node_id("<img>"), is_node_id("a" * 65)
-    (True, True, False, False)
+    >>> is_node_id("0_s"), is_node_id(12), is_node_id("belt.0_s"), is_node_id("<img>"), is_node_id("a.")
+    (True, True, True, False, False)
+    >>> is_node_id("a" * 65)
+    False
     """
     text = _text(value)
     return text is not None and len(text) <= MAX_NAME_LENGTH and _NODE_ID.fullmatch(text) is not None
@@ -69,8 +77,8 @@ def is_node_id(value: Hashable) -> bool:
 def is_name(value: object) -> bool:
     """Whether ``value`` may name a parameter, law constant or signal (:data:`NAME_PATTERN`, at most 64).
 
-    >>> is_name("k_belt"), is_name("1R"), is_name("é"), is_name(3)
-    (True, False, False, False)
+    >>> is_name("k_belt"), is_name("motor.R_a"), is_name("1R"), is_name("motor.1R"), is_name("é"), is_name(3)
+    (True, True, False, False, False, False)
     """
     return isinstance(value, str) and len(value) <= MAX_NAME_LENGTH and _NAME.fullmatch(value) is not None
 
@@ -89,11 +97,11 @@ def check_node_id(value: Hashable, *, where: str = "", what: str = "node id") ->
     >>> check_node_id("J<1>", where="node 'J<1>'")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    bondgraph.errors.ModelError: node 'J<1>': node id 'J<1>' is not a name ([A-Za-z0-9_]+, ASCII, at most 64 ...)
+    bondgraph.errors.ModelError: node 'J<1>': node id 'J<1>' is not a name (ASCII letters, digits and _, ...)
     """
     if not is_node_id(value):
-        raise ModelError(f"{where + ': ' if where else ''}{what} {_shown(value)} is not a name ({NODE_ID_PATTERN}, "
-                         f"ASCII, at most {MAX_NAME_LENGTH} characters)")
+        raise ModelError(f"{where + ': ' if where else ''}{what} {_shown(value)} is not a name (ASCII letters, digits "
+                         f"and _, parts of a path joined by dots, at most {MAX_NAME_LENGTH} characters)")
     return value
 
 
@@ -106,9 +114,10 @@ def check_name(value: object, *, where: str, what: str, hint: str = "") -> str:
     >>> check_name("u-1", where="Se 'u'", what="signal")  # doctest: +ELLIPSIS
     Traceback (most recent call last):
     ...
-    bondgraph.errors.ModelError: Se 'u': signal name 'u-1' is not an identifier ([A-Za-z_][A-Za-z0-9_]*, ASCII, ...)
+    bondgraph.errors.ModelError: Se 'u': signal name 'u-1' is not an identifier (ASCII letters, digits and _, ...)
     """
     if not is_name(value):
-        raise ModelError(f"{where}: {what} name {_shown(value)} is not an identifier ({NAME_PATTERN}, ASCII, "
-                         f"at most {MAX_NAME_LENGTH} characters)" + (f"; {hint}" if hint else ""))
+        raise ModelError(f"{where}: {what} name {_shown(value)} is not an identifier (ASCII letters, digits and _, "
+                         f"not starting with a digit; parts of a path joined by dots; at most {MAX_NAME_LENGTH} "
+                         "characters)" + (f"; {hint}" if hint else ""))
     return value

@@ -45,7 +45,7 @@ def test_an_expression_survives_pickling_and_compares_by_its_expression():
 
 @pytest.mark.parametrize("text, message", [
     ("__import__('os').system('echo pwned')", "call to \"__import__('os').system\" not allowed"),
-    ("t.__class__", "Attribute not allowed"),
+    ("t.__class__", "unknown name 't.__class__'"),
     ("(lambda: 1)()", "call to 'lambda: 1' not allowed"),
     ("[1, 2][0]*t", "Subscript not allowed"),
     ("eval('1')", "call to 'eval' not allowed"),

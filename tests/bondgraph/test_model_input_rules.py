@@ -73,8 +73,26 @@ def test_a_json_node_id_that_is_not_a_name_is_refused_with_the_file_and_position
     with pytest.raises(ModelFileError) as error:
         model_from_json(json.dumps(data), where="m.json")
     message = str(error.value)
-    assert message.startswith("m.json: nodes[2]") and "'id'" in message and NODE_ID_PATTERN in message
+    assert message.startswith("m.json: nodes[2]") and "'id'" in message and "ASCII letters, digits and _" in message
     assert "\n" not in message
+
+
+@pytest.mark.parametrize("node", ["a.", ".a", "a..b", "a.<b>", "a. b"])
+def test_a_path_has_no_empty_part(node):
+    with pytest.raises(ModelError, match="node id .* is not a name"):
+        BondGraph().add(node, "0")
+
+
+def test_paths_name_nodes_parameters_and_signals_and_laws_read_them():
+    bg = BondGraph()
+    bg.add("motor.V", "Se")
+    bg.add("motor.1_e", "1")
+    bg.add("motor.R", "R", value=2.0, law="e - motor.R*f**3")
+    bg.bond("motor.V", "motor.1_e")
+    bg.bond("motor.1_e", "motor.R", label="motor.2")
+    assert bg.parameters == {"motor.R": 2.0} and bg.inputs == ["motor.V"]
+    with pytest.raises(ModelError, match="R 'R': parameter name 'motor.1R' is not an identifier"):
+        rc(param="motor.1R")
 
 
 def test_names_at_the_limits_are_accepted():
@@ -139,7 +157,9 @@ def test_bond_labels_are_names():
 
 
 def test_the_patterns_are_what_the_documentation_says():
-    assert (NODE_ID_PATTERN, NAME_PATTERN, MAX_NAME_LENGTH) == ("[A-Za-z0-9_]+", "[A-Za-z_][A-Za-z0-9_]*", 64)
+    identifier = "[A-Za-z_][A-Za-z0-9_]*"
+    assert NODE_ID_PATTERN == r"[A-Za-z0-9_]+(?:\.[A-Za-z0-9_]+)*" and MAX_NAME_LENGTH == 64
+    assert NAME_PATTERN == identifier + r"(?:\." + identifier + ")*"
     text = (Path(__file__).resolve().parents[2] / "docs" / "model.md").read_text(encoding="utf-8")
     assert NODE_ID_PATTERN in text and NAME_PATTERN in text and "64" in text
 
