@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # what the lazy names below resolve to, for type checkers and readers
     from .causality import Causality, CausalIssue, assign_causality
+    from .composition import compose
     from .control import PIController
     from .drawing import to_svg, to_tikz
     from .equations import (AlgebraicLoopError, ModelEquation, StateEquations, causal_equations, labelled_equations,
@@ -32,6 +33,7 @@ if TYPE_CHECKING:  # what the lazy names below resolve to, for type checkers and
 #: The module of each public name.
 _HOMES = {
     "causality": ("Causality", "CausalIssue", "assign_causality"),
+    "composition": ("compose",),
     "control": ("PIController",),
     "drawing": ("to_svg", "to_tikz"),
     "equations": ("AlgebraicLoopError", "ModelEquation", "StateEquations", "causal_equations", "labelled_equations",
@@ -51,7 +53,7 @@ __all__ = [  # the keys of _MODULE_OF, written out for readers and tools that do
     "AlgebraicLoopError", "Bond", "BondGraph", "CausalIssue", "Causality", "CausalityError", "Degradation", "Element",
     "EquationError", "InputExpression", "LawError", "ModelEquation", "ModelError", "PHMError", "PHMWarning",
     "PIController", "SettingError", "SimulationError", "SimulationResult", "StateEquations", "TabulatedInput",
-    "assign_causality", "causal_equations", "labelled_equations", "load_model", "model_equations",
+    "assign_causality", "causal_equations", "compose", "labelled_equations", "load_model", "model_equations",
     "parse_degradation", "signal_function", "simulate", "state_equations", "to_json", "to_svg", "to_tikz",
 ]
 

@@ -58,18 +58,22 @@ import sympy as sp
 
 from .errors import ModelError
 from .inputs import InputExpression
+from .composition import compose, path, renamed_settings
 from .model import BondGraph
 from .names import check_node_id
 from .structure import BOND_ATTRIBUTES, NODE_ATTRIBUTES, require_model
 
 __all__ = ["ModelFileError", "ModelSpec", "load_model", "model_from_json", "to_json", "MAX_FILE_BYTES", "MAX_NODES",
-           "MAX_LINKS"]
+           "MAX_LINKS", "MAX_PART_DEPTH"]
 
 #: Node attributes a JSON node may carry (anything else is refused, so a typo is not silently ignored):
 #: the model contract's node attributes and the ``id``.
 NODE_FIELDS = NODE_ATTRIBUTES | {"id"}
 LINK_FIELDS = BOND_ATTRIBUTES | {"source", "target"}
-GRAPH_FIELDS = frozenset({"name", "inputs", "t_end", "x0", "description", "calibration"})
+GRAPH_FIELDS = frozenset({"name", "inputs", "t_end", "x0", "description", "calibration", "ports", "parts",
+                          "connections"})
+#: How deep parts may nest (a part composed of parts composed of ...): a deeper file is refused.
+MAX_PART_DEPTH = 8
 
 #: The largest JSON model file (bytes; characters of a text given to :func:`model_from_json`).  A model
 #: at :data:`MAX_NODES` written by :func:`to_json` takes about 1.3 MB; parsing the limit costs about a
@@ -138,25 +142,33 @@ def load_model(source: str | Path) -> ModelSpec:
     if path.is_dir():
         raise ModelFileError(f"{path}: is a directory, not a model file")
     if path.suffix.lower() == ".json":
-        try:
-            size = path.stat().st_size
-        except OSError as exc:
-            raise ModelFileError(f"{path}: cannot be read ({exc})") from None
-        if size > MAX_FILE_BYTES:  # refused before it is read: json would take all of it into memory
-            raise ModelFileError(f"{path}: {size} bytes, larger than the limit of {MAX_FILE_BYTES} bytes for a "
-                                 "JSON model (bondgraph.io.MAX_FILE_BYTES)")
-        try:
-            content = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise ModelFileError(f"{path}: cannot be read ({exc})") from None
-        return model_from_json(content, where=str(path))
+        return _from_json_file(path, ())
     if path.suffix.lower() == ".py":
         return _from_python(path, attribute or None)
     raise ModelFileError(f"{path}: unknown model file type {path.suffix!r} (expected .json or .py)")
 
 
-def model_from_json(text: str, *, where: str = "JSON model") -> ModelSpec:
+def _from_json_file(path: Path, parents: tuple) -> ModelSpec:
+    """A JSON model file; ``parents`` are the files composing it (a part's part...), to refuse a cycle."""
+    try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise ModelFileError(f"{path}: cannot be read ({exc})") from None
+    if size > MAX_FILE_BYTES:  # refused before it is read: json would take all of it into memory
+        raise ModelFileError(f"{path}: {size} bytes, larger than the limit of {MAX_FILE_BYTES} bytes for a "
+                             "JSON model (bondgraph.io.MAX_FILE_BYTES)")
+    try:
+        content = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise ModelFileError(f"{path}: cannot be read ({exc})") from None
+    return _model_from_json(content, str(path), path.parent, (*parents, path.resolve()))
+
+
+def model_from_json(text: str, *, where: str = "JSON model", folder: str | Path | None = None) -> ModelSpec:
     """Parse a node-link JSON document into a :class:`ModelSpec` (no ``eval``; see the module docstring).
+
+    A model composed of sub-models names its parts' files relative to ``folder`` (:func:`load_model` gives
+    the file's own folder).
 
     A text longer than :data:`MAX_FILE_BYTES` characters, or with more than :data:`MAX_NODES` nodes or
     :data:`MAX_LINKS` links, is refused before the model is built.
@@ -166,6 +178,10 @@ def model_from_json(text: str, *, where: str = "JSON model") -> ModelSpec:
     ...
     bondgraph.io.ModelFileError: empty.json: 'nodes' is empty; a model needs at least one element
     """
+    return _model_from_json(text, where, None if folder is None else Path(folder), ())
+
+
+def _model_from_json(text: str, where: str, folder: Path | None, files: tuple) -> ModelSpec:
     if not isinstance(text, (str, bytes, bytearray)):
         raise TypeError(f"model_from_json: text must be a str, got {type(text).__name__}")
     if len(text) > MAX_FILE_BYTES:
@@ -194,32 +210,105 @@ def model_from_json(text: str, *, where: str = "JSON model") -> ModelSpec:
         raise ModelFileError(f"{where}: unknown field(s) {sorted(bad)} in 'graph' (allowed: {sorted(GRAPH_FIELDS)})")
     if "links" in data and "edges" in data:
         raise ModelFileError(f"{where}: give the bonds as 'links' or 'edges', not both")
-    graph = nx.DiGraph(name=str(settings.get("name", Path(where).stem if where.endswith(".json") else "bond graph")))
-    nodes = _list(data, "nodes", where)
-    links = _list(data, "links" if "links" in data else "edges", where)
+    name = str(settings.get("name", Path(where).stem if where.endswith(".json") else "bond graph"))
+    parts = _parts(settings, where, folder, files)
+    composed = _composed(parts, settings, where)
+    graph = nx.DiGraph(composed.graph) if composed is not None else nx.DiGraph()
+    graph.graph = {"name": name}
+    nodes = data.get("nodes", []) if parts and "nodes" not in data else _list(data, "nodes", where)
+    links = data.get("links", []) if parts and not ({"links", "edges"} & set(data)) else \
+        _list(data, "links" if "links" in data else "edges", where)
     for what, items, limit, constant in (("nodes", nodes, MAX_NODES, "MAX_NODES"),
                                          ("links", links, MAX_LINKS, "MAX_LINKS")):
         if len(items) > limit:  # before anything is built: validation costs time per node
             raise ModelFileError(f"{where}: {len(items)} {what}, more than the limit of {limit} "
                                  f"(bondgraph.io.{constant})")
-    if not nodes:
+    if not nodes and not parts:
         raise ModelFileError(f"{where}: 'nodes' is empty; a model needs at least one element")
     for index, node in enumerate(nodes):
         _add_node(graph, node, f"{where}: nodes[{index}]")
     for index, link in enumerate(links):
         _add_link(graph, link, f"{where}: links[{index}]")
+    if "ports" in settings:
+        graph.graph["ports"] = _ports(settings["ports"], graph, parts, where)
     try:
         model = BondGraph(graph)
     except ModelError as exc:  # keep the kind (LawError for a law) and add the file
         raise type(exc)(f"{where}: {exc}") from None
-    inputs = _input_values(settings.get("inputs", {}), f"{where}: graph.inputs")
-    x0 = _numbers(settings.get("x0", {}), f"{where}: graph.x0")
+    inputs, x0 = {}, {}
+    for part, spec in parts.items():  # the parts' run settings under their paths, then the file's own
+        part_inputs, part_x0 = renamed_settings(part, spec.model, spec.inputs, spec.x0)
+        inputs.update(part_inputs)
+        x0.update(part_x0)
+    inputs.update(_input_values(settings.get("inputs", {}), f"{where}: graph.inputs"))
+    x0.update(_numbers(settings.get("x0", {}), f"{where}: graph.x0"))
+    if settings.get("t_end") is None and any(spec.t_end for spec in parts.values()):
+        settings = {**settings, "t_end": max(spec.t_end for spec in parts.values() if spec.t_end)}
     calibration = settings.get("calibration", {})
     if not isinstance(calibration, dict):
         raise ModelFileError(f"{where}: graph.calibration must be an object, got {type(calibration).__name__}")
     spec = _spec(model, inputs, settings.get("t_end"), x0, where, "graph.")
     spec.calibration = calibration
     return spec
+
+
+def _parts(settings: Mapping, where: str, folder: Path | None, files: tuple) -> dict[str, ModelSpec]:
+    """The sub-models ``graph.parts`` names: part name -> the JSON file's model, read relative to ``folder``."""
+    parts = settings.get("parts")
+    if parts is None:
+        if "connections" in settings:
+            raise ModelFileError(f"{where}: graph.connections without graph.parts")
+        return {}
+    if not isinstance(parts, dict) or not parts:
+        raise ModelFileError(f"{where}: graph.parts must map part names to model files, got {parts!r}")
+    if folder is None:
+        raise ModelFileError(f"{where}: graph.parts names files; read the model with load_model (or give "
+                             "model_from_json a folder)")
+    if len(files) > MAX_PART_DEPTH:
+        raise ModelFileError(f"{where}: parts nest deeper than {MAX_PART_DEPTH} files (bondgraph.io.MAX_PART_DEPTH)")
+    specs = {}
+    for part, file in parts.items():
+        at = f"{where}: graph.parts[{part!r}]"
+        if not isinstance(file, str) or not file.lower().endswith(".json"):
+            raise ModelFileError(f"{at}: a part is a JSON model file (a part is data, never code), got {file!r}")
+        path = folder / file
+        if path.resolve() in files:
+            chain = " -> ".join([*(str(f.name) for f in files), path.name])
+            raise ModelFileError(f"{at}: {file} includes itself ({chain})")
+        if not path.is_file():
+            raise ModelFileError(f"{at}: no such file {str(path)!r}")
+        specs[part] = _from_json_file(path, files)
+    return specs
+
+
+def _composed(parts: Mapping[str, ModelSpec], settings: Mapping, where: str) -> BondGraph | None:
+    """The parts bonded as ``graph.connections`` says, or None without parts."""
+    if not parts:
+        return None
+    connections = settings.get("connections", [])
+    if not isinstance(connections, list):
+        raise ModelFileError(f"{where}: graph.connections must be a list of [port, port] pairs")
+    try:
+        return compose({part: spec.model for part, spec in parts.items()}, connections)
+    except ModelError as exc:
+        raise ModelFileError(f"{where}: {str(exc).replace('compose: ', 'graph.', 1)}") from None
+
+
+def _ports(ports, graph: nx.DiGraph, parts: Mapping[str, ModelSpec], where: str) -> dict:
+    """``graph.ports``: port name -> a node of the file, or ``"part.port"``, a port of one of its parts."""
+    if not isinstance(ports, dict):
+        raise ModelFileError(f"{where}: graph.ports must map port names to junction nodes, got {ports!r}")
+    resolved = {}
+    for port, target in ports.items():
+        if isinstance(target, str) and target not in graph and parts:
+            part, _, name = target.partition(".")
+            inner = parts[part].model.ports if part in parts else {}
+            if name not in inner:
+                raise ModelFileError(f"{where}: graph.ports[{port!r}]: {target!r} is neither a node nor a port "
+                                     "'part.port' of a part")
+            target = path(part, inner[name])
+        resolved[port] = target
+    return resolved
 
 
 def to_json(bg: BondGraph, *, inputs: Mapping | None = None, t_end: float | None = None, x0: Mapping | None = None,
@@ -259,6 +348,8 @@ def to_json(bg: BondGraph, *, inputs: Mapping | None = None, t_end: float | None
         graph_settings["t_end"] = float(t_end)
     if calibration is not None:
         graph_settings["calibration"] = _json_data(calibration, "to_json: calibration")
+    if bg.ports:
+        graph_settings["ports"] = bg.ports
     nodes = []
     for name, data in bg.graph.nodes(data=True):
         node = {"id": name}

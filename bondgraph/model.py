@@ -66,7 +66,7 @@ from .validation import check_model, parameter_domains
 from .dimensions import ModelUnits, check_units
 from .units import parse_unit
 
-__all__ = ["MISSPELLING", "BondGraph"]
+__all__ = ["MISSPELLING", "BondGraph", "part_ports"]
 
 
 class BondGraph:
@@ -165,6 +165,34 @@ class BondGraph:
         self._graph.add_edge(tail, head, **attributes)
         return (tail, head)
 
+    def port(self, name: str, node: Hashable) -> str:
+        """Name the junction ``node`` a port ``name``, where a model composing this one may bond to it.
+
+        A port is a 0- or 1-junction: a bond to it shares the junction's effort or flow
+        (:func:`bondgraph.composition.compose`).  Ports are kept in ``graph.graph["ports"]``.
+
+        >>> bg = BondGraph()
+        >>> _ = bg.add("1_m", "1"), bg.add("J", "I", value=0.1), bg.bond("1_m", "J")
+        >>> bg.port("shaft", "1_m"), bg.ports
+        ('shaft', {'shaft': '1_m'})
+        >>> bg.port("axle", "J")
+        Traceback (most recent call last):
+        ...
+        bondgraph.errors.ModelError: port 'axle': node 'J' (I) is not a 0- or 1-junction
+        """
+        ports = dict(self._graph.graph.get("ports") or {})
+        if name in ports:
+            raise ModelError(f"port {name!r} already exists (at node {ports[name]!r})")
+        ports[name] = node
+        _check_ports(self._graph, {name: node})
+        self._graph.graph["ports"] = ports
+        return name
+
+    @property
+    def ports(self) -> dict[str, Hashable]:
+        """The model's ports: port name -> junction node (:meth:`port`)."""
+        return part_ports(self)
+
     # -- views ------------------------------------------------------------
     def validate(self) -> None:
         """Check the whole model; raise :class:`ModelError` naming the node or bond at fault."""
@@ -176,6 +204,8 @@ class BondGraph:
         The graph may be edited between calls, so every call validates afresh.
         """
         elements = {name: _read_element(name, data) for name, data in self._graph.nodes(data=True)}
+        if self._graph.graph.get("ports"):
+            part_ports(self)
         bonds = _read_bonds(self._graph, elements)
         parameters = check_model(elements, bonds)
         at: dict[Hashable, list[Bond]] = {name: [] for name in elements}
@@ -267,6 +297,25 @@ class BondGraph:
             kinds[kind] = kinds.get(kind, 0) + 1
         summary = ", ".join(f"{n} {k}" for k, n in sorted(kinds.items()))
         return f"<BondGraph {self.name!r}: {self._graph.number_of_edges()} bonds; {summary}>"
+
+
+def part_ports(bg: BondGraph) -> dict[str, Hashable]:
+    """The ports of ``bg`` (``graph.graph["ports"]``), checked: each names an existing 0- or 1-junction."""
+    ports = bg.graph.graph.get("ports") or {}
+    if not isinstance(ports, Mapping):
+        raise ModelError(f"ports must map port names to junction nodes, got {ports!r}")
+    _check_ports(bg.graph, ports)
+    return dict(ports)
+
+
+def _check_ports(graph: nx.DiGraph, ports: Mapping) -> None:
+    for name, node in ports.items():
+        check_name(name, where=f"port {name!r}", what="port")
+        if node not in graph:
+            raise ModelError(f"port {name!r}: node {node!r} does not exist")
+        kind = el.normalize_kind(graph.nodes[node].get("kind"))
+        if kind not in el.JUNCTIONS:
+            raise ModelError(f"port {name!r}: node {node!r} ({kind}) is not a 0- or 1-junction")
 
 
 def _read_element(name: Hashable, data: Mapping, *, strict: bool = False) -> Element:
