@@ -286,8 +286,9 @@ def to_progpy_samples(rul, event: str, *, asset: int = 0, size: int | None = Non
     A censored sample (no failure within the horizon, ``inf``) becomes ``None``, ProgPy's "no event".  ProgPy's
     times of event are times (``origin + RUL``, as its predictors give them) unless ``relative``.  Weighted
     samples are resampled deterministically to ``size`` samples (default: as many as there are): the systematic
-    scheme with the offset 1/2, so sample ``i`` is repeated about ``size w_i`` times and the quantiles of the
-    result are those of the weighted samples to within one sample; equal weights keep the samples as they are.
+    scheme with the offset 1/2 over the sorted samples, so sample ``i`` is repeated about ``size w_i`` times and the
+    ``j``-th smallest draw is the weighted quantile (:meth:`RULDistribution.quantile`) at ``(j + 1/2) / size``;
+    equal weights keep the samples as they are.
 
     Parameters
     ----------
@@ -333,8 +334,10 @@ def resampled_times(rul, *, asset: int = 0, size: int | None = None, relative: b
         raise PrognosisError(f"size: need at least one sample, got {size!r}")
     if weights is not None and not np.allclose(weights, weights[0], rtol=1e-12, atol=0) or n != samples.size:
         w = np.ones(samples.size) if weights is None else weights
-        cumulative = np.cumsum(w) / np.sum(w)
-        samples = samples[np.minimum(np.searchsorted(cumulative, (np.arange(n) + 0.5) / n), samples.size - 1)]
+        order = np.argsort(samples, kind="stable")   # sorted, the j-th draw is the quantile at (j + 1/2) / n
+        cumulative = np.cumsum(w[order]) / np.sum(w)
+        picks = np.minimum(np.searchsorted(cumulative, (np.arange(n) + 0.5) / n), samples.size - 1)
+        samples = samples[order][picks]
     return samples if relative else rul.origin + samples
 
 
