@@ -1,6 +1,6 @@
 """A bond graph with a degrading parameter as a ProgPy prognostics model, and our RUL as ProgPy samples.
 
-NASA's ProgPy (Teubert et al. (2023), ``pip install progpy``, the optional extra ``progpy``) writes a
+NASA's ProgPy (Teubert et al. (2025), ``pip install progpy``, the optional extra ``progpy``) writes a
 prognostics model as states, inputs, outputs and events with ``dx``, ``output``, ``event_state`` and
 ``threshold_met``; its state estimators, predictors and metrics work on any such model.
 :func:`to_progpy` writes one from a bond graph:
