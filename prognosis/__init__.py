@@ -38,6 +38,7 @@ from .pipeline import PrognosisSettings, check_candidate, check_failures, filter
 from .observation import ObservationModel, observation_model
 from .likelihood import ResidualNoise
 from .particle_filter import ParticleFilter, StepDiagnostics, VarianceAdaptation
+from .progpy_export import ProgPyDefinition, progpy_definition, to_progpy, to_progpy_samples
 from .resample_move import ResampleMoveFilter
 from .resampling import effective_sample_size
 from .rul import RULDistribution, RULPredictor, predict_rul
@@ -46,9 +47,11 @@ __all__ = [
     "CustomDegradation", "ExponentialDegradation", "HealthMonitor", "IsolatingMonitor", "IsolationResult",
     "IsolationSettings",
     "LinearDegradation", "MAX_PARTICLES", "MonitorResult", "ObservationModel", "ParticleFilter", "PowerDegradation",
-    "PrognosisError", "PrognosisSettings", "RULDistribution", "RULPredictor", "ResampleMoveFilter", "ResidualNoise",
+    "PrognosisError", "PrognosisSettings", "ProgPyDefinition", "RULDistribution", "RULPredictor", "ResampleMoveFilter",
+    "ResidualNoise",
     "StepDiagnostics", "VarianceAdaptation", "alpha_lambda", "check_candidate", "check_failures",
     "degradation_model", "effective_sample_size", "filter_step", "observation_model", "pooled_scores", "predict_rul",
-    "prognose",
+    "prognose", "progpy_definition",
     "prognostic_horizon", "relative_accuracy", "relative_rmse", "rmad", "rul_horizon", "scores_against_truth",
+    "to_progpy", "to_progpy_samples",
 ]
