@@ -13,6 +13,7 @@
   returning one), or exactly one bond graph or one such function, and optionally ``inputs`` (a
   string among them is an expression of ``t``, as in JSON), ``t_end`` and ``x0``; ``file.py:name``
   picks the object ``name``;
+* a BondGraphTools file (``*.bg``, YAML; :func:`bondgraph.bgt_format.read_bgt`, the ``bgt`` extra);
 * the name of a built-in example (:func:`bondgraph.library.example`): ``rlc``, ``dc-motor``,
   ``torsion-bar``, ``three-tank``.
 
@@ -116,7 +117,7 @@ class ModelSpec:
 
 
 def load_model(source: str | Path) -> ModelSpec:
-    """Load a model from a JSON or Python file, or a built-in example by name (see the module docstring).
+    """Load a model from a JSON, Python or BondGraphTools file, or a built-in example by name (module docstring).
 
     Raises :class:`ModelFileError` (a ``ModelError``) naming the file and what is wrong.
 
@@ -152,7 +153,11 @@ def load_model(source: str | Path) -> ModelSpec:
         return model_from_json(content, where=str(path))
     if path.suffix.lower() == ".py":
         return _from_python(path, attribute or None)
-    raise ModelFileError(f"{path}: unknown model file type {path.suffix!r} (expected .json or .py)")
+    if path.suffix.lower() == ".bg":
+        from .bgt_format import read_bgt   # here: bgt_format builds on this module
+
+        return read_bgt(path)
+    raise ModelFileError(f"{path}: unknown model file type {path.suffix!r} (expected .json, .py or .bg)")
 
 
 def model_from_json(text: str, *, where: str = "JSON model") -> ModelSpec:
