@@ -34,12 +34,12 @@ The mapping to our model contract (docs/design.md, section 2; docs/model.md, "Bo
 * Nested models are flattened: node ids, parameter and signal names are the paths joined by ``.``
   (``load.R1``).
 * Anything else (the biochemical ``Ce``, ``Re``, port-Hamiltonian or custom components) is refused with
-  a :class:`~bondgraph.io.ModelFileError` naming the file, the model path, the component and its line.
+  a :class:`BGTFileError` naming the file, the model path, the component and its line.
 
 The file is parsed with ``yaml.safe_load`` only (PyYAML, the ``bgt`` extra): no Python object is ever
-built from it.  Before anything is built, a file larger than :data:`~bondgraph.io.MAX_FILE_BYTES` is
-refused, and so is a flattened model of more than :data:`~bondgraph.io.MAX_NODES` components or
-:data:`~bondgraph.io.MAX_LINKS` bonds (a sub-model used many times multiplies).
+built from it.  Before anything is built, a file larger than :data:`MAX_FILE_BYTES` is
+refused, and so is a flattened model of more than :data:`MAX_NODES` components or
+:data:`MAX_LINKS` bonds (a sub-model used many times multiplies).
 
 Example
 -------
@@ -83,13 +83,13 @@ import sympy as sp
 
 from . import elements as el
 from .errors import ModelError
-from .io import MAX_FILE_BYTES, MAX_LINKS, MAX_NODES, ModelFileError, ModelSpec
 from .model import BondGraph
 from .names import is_name
 from .optional import import_optional
 from .structure import require_model
 
-__all__ = ["BGT_VERSION", "BGT_KINDS", "read_bgt", "model_from_bgt", "write_bgt"]
+__all__ = ["BGT_VERSION", "BGT_KINDS", "BGTFileError", "MAX_FILE_BYTES", "MAX_NODES", "MAX_LINKS", "read_bgt",
+           "model_from_bgt", "write_bgt"]
 
 #: The file format version BondGraphTools writes and reads.
 BGT_VERSION = "0.1"
@@ -101,16 +101,27 @@ BGT_KINDS = {
 }
 #: BondGraphTools' library defaults (components/base.json), used when a file omits the value.
 _DEFAULTS = {"R": 1000.0, "C": 1000.0, "I": 2000.0, "TF": 1.0, "GY": 1.0}
+#: The largest ``.bg`` file (bytes), and the most components and bonds once sub-models are expanded: the
+#: limits of JSON model files (:mod:`bondgraph.io`, which imports this module, so they are repeated here).
+MAX_FILE_BYTES = 8 * 2**20
+MAX_NODES = 10_000
+MAX_LINKS = 20_000
 _TOP_FIELDS = frozenset({"version", "root", "models"})
 _MODEL_FIELDS = frozenset({"components", "netlist", "ports"})
 _MAX_DEPTH = 32
 _NUMBER = re.compile(r"[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?")
 
 
+
+
+class BGTFileError(ModelError):
+    """A ``.bg`` file that cannot be read: the message names the file, the model and the item at fault."""
+
+
 # ------------------------------------------------------------------------------------------- reading
 
-def read_bgt(source: str | Path, *, text: str | None = None) -> ModelSpec:
-    """Read a BondGraphTools ``.bg`` file (or its ``text``) as a :class:`~bondgraph.io.ModelSpec`.
+def read_bgt(source: str | Path, *, text: str | None = None) -> BondGraph:
+    """Read a BondGraphTools ``.bg`` file (or its ``text``) as our bond graph.
 
     Parameters
     ----------
@@ -121,12 +132,13 @@ def read_bgt(source: str | Path, *, text: str | None = None) -> ModelSpec:
 
     Returns
     -------
-    ModelSpec
-        The flattened model (module docstring) with no run settings: a ``.bg`` file has none.
+    BondGraph
+        The flattened model (module docstring).  A ``.bg`` file holds no run settings (inputs, horizon,
+        initial state); :func:`bondgraph.io.load_model` reads it as a ``ModelSpec`` without them.
 
     Raises
     ------
-    ModelFileError
+    BGTFileError
         Naming the file, the model path and the component, bond or field at fault (and its line).
     ImportError
         Without PyYAML: ``pip install 'bondgraph-phm[bgt]'``.
@@ -138,7 +150,7 @@ def read_bgt(source: str | Path, *, text: str | None = None) -> ModelSpec:
     >>> data = {"version": 0.1, "root": "RC", "models": {"/": {
     ...     "components": ["Sf base/Sf", "kcl base/0", "R1 base/R r=100", "C1 base/C 0.01"],
     ...     "netlist": ["Sf kcl", "R1 kcl", "C1 kcl"]}}}
-    >>> print(model_from_bgt(data, where="rc.bg").model.state_equations())
+    >>> print(model_from_bgt(data, where="rc.bg").state_equations())
     dq_C1/dt = Sf(t) - q_C1/(C1*R1)
     """
     where = str(source)
@@ -147,19 +159,19 @@ def read_bgt(source: str | Path, *, text: str | None = None) -> ModelSpec:
         try:
             size = path.stat().st_size
         except OSError as exc:
-            raise ModelFileError(f"{where}: cannot be read ({exc})") from None
+            raise BGTFileError(f"{where}: cannot be read ({exc})") from None
         if size > MAX_FILE_BYTES:  # refused before it is read
-            raise ModelFileError(f"{where}: {size} bytes, larger than the limit of {MAX_FILE_BYTES} bytes for a "
-                                 "model file (bondgraph.io.MAX_FILE_BYTES)")
+            raise BGTFileError(f"{where}: {size} bytes, larger than the limit of {MAX_FILE_BYTES} bytes for a "
+                                 "model file (bondgraph.bgt_format.MAX_FILE_BYTES)")
         try:
             text = path.read_text(encoding="utf-8")
         except (OSError, UnicodeDecodeError) as exc:
-            raise ModelFileError(f"{where}: cannot be read ({exc})") from None
+            raise BGTFileError(f"{where}: cannot be read ({exc})") from None
     if not isinstance(text, str):
         raise TypeError(f"read_bgt: text must be a str, got {type(text).__name__}")
     if len(text) > MAX_FILE_BYTES:
-        raise ModelFileError(f"{where}: {len(text)} characters, longer than the limit of {MAX_FILE_BYTES} for a "
-                             "model file (bondgraph.io.MAX_FILE_BYTES)")
+        raise BGTFileError(f"{where}: {len(text)} characters, longer than the limit of {MAX_FILE_BYTES} for a "
+                             "model file (bondgraph.bgt_format.MAX_FILE_BYTES)")
     yaml = import_optional("yaml", "PyYAML is needed to read BondGraphTools files: pip install 'bondgraph-phm[bgt]'")
     try:
         data = yaml.safe_load(text)   # plain data only: no tags that build Python objects
@@ -167,13 +179,13 @@ def read_bgt(source: str | Path, *, text: str | None = None) -> ModelSpec:
         mark = getattr(exc, "problem_mark", None)
         at = f" line {mark.line + 1} column {mark.column + 1}" if mark is not None else ""
         problem = getattr(exc, "problem", None) or "invalid"
-        raise ModelFileError(f"{where}{at}: not valid YAML ({problem})") from None
+        raise BGTFileError(f"{where}{at}: not valid YAML ({problem})") from None
     except RecursionError:
-        raise ModelFileError(f"{where}: YAML nested too deeply") from None
+        raise BGTFileError(f"{where}: YAML nested too deeply") from None
     return model_from_bgt(data, where=where, text=text)
 
 
-def model_from_bgt(data: object, *, where: str = "BondGraphTools model", text: str = "") -> ModelSpec:
+def model_from_bgt(data: object, *, where: str = "BondGraphTools model", text: str = "") -> BondGraph:
     """Build our model from the parsed content of a ``.bg`` file (see :func:`read_bgt`).
 
     ``text``, the file's content, only lets messages give the line of a component or bond.
@@ -181,38 +193,37 @@ def model_from_bgt(data: object, *, where: str = "BondGraphTools model", text: s
     >>> model_from_bgt({"version": 0.2, "root": "x", "models": {}}, where="x.bg")
     Traceback (most recent call last):
     ...
-    bondgraph.io.ModelFileError: x.bg: unknown BondGraphTools file version '0.2' (this reader knows 0.1)
+    bondgraph.bgt_format.BGTFileError: x.bg: unknown BondGraphTools file version '0.2' (this reader knows 0.1)
     """
     if not isinstance(data, dict):
-        raise ModelFileError(f"{where}: expected a YAML mapping with 'version', 'root' and 'models', got "
+        raise BGTFileError(f"{where}: expected a YAML mapping with 'version', 'root' and 'models', got "
                              f"{type(data).__name__}")
     unknown = set(map(str, data)) - _TOP_FIELDS
     if unknown:
-        raise ModelFileError(f"{where}: unknown top-level field(s) {sorted(unknown)} (expected version, root, models)")
+        raise BGTFileError(f"{where}: unknown top-level field(s) {sorted(unknown)} (expected version, root, models)")
     if "version" not in data:
-        raise ModelFileError(f"{where}: missing 'version' (BondGraphTools writes {BGT_VERSION})")
+        raise BGTFileError(f"{where}: missing 'version' (BondGraphTools writes {BGT_VERSION})")
     version = str(data["version"])
     if version != BGT_VERSION:
-        raise ModelFileError(f"{where}: unknown BondGraphTools file version {version!r} (this reader knows "
+        raise BGTFileError(f"{where}: unknown BondGraphTools file version {version!r} (this reader knows "
                              f"{BGT_VERSION})")
     models = data.get("models")
     if not isinstance(models, dict) or not models:
-        raise ModelFileError(f"{where}: 'models' must be a non-empty mapping of model path -> model"
+        raise BGTFileError(f"{where}: 'models' must be a non-empty mapping of model path -> model"
                              + ("" if "models" in data else " (missing)"))
     root = data.get("root", "/")
     if not isinstance(root, (str, int, float)) or isinstance(root, bool):
-        raise ModelFileError(f"{where}: 'root' must be the model's name, got {type(root).__name__}")
+        raise BGTFileError(f"{where}: 'root' must be the model's name, got {type(root).__name__}")
     top = "/" if "/" in models else str(root)   # BondGraphTools starts at '/'; its old example at 'root'
     if top not in models:
-        raise ModelFileError(f"{where}: 'models' has no '/' (the top model) and no {str(root)!r} (the root)")
+        raise BGTFileError(f"{where}: 'models' has no '/' (the top model) and no {str(root)!r} (the root)")
     flat = _Flattener({str(k): v for k, v in models.items()}, where, _Lines(text))
     flat.expand(top, "", ())
     graph = _Orienter(flat).graph(str(root))
     try:
-        model = BondGraph(graph)
+        return BondGraph(graph)
     except ModelError as exc:
-        raise ModelFileError(f"{where}: {exc}") from None
-    return ModelSpec(model, source=where)
+        raise BGTFileError(f"{where}: {exc}") from None
 
 
 @dataclass
@@ -269,15 +280,15 @@ class _Flattener:
         """Add model ``key``'s content under ``prefix``; return its ports: label -> the SS path behind it."""
         at = f"{self.file}: model {key!r}"
         if key in stack:
-            raise ModelFileError(f"{at}: contains itself (through {' -> '.join(stack + (key,))})")
+            raise BGTFileError(f"{at}: contains itself (through {' -> '.join(stack + (key,))})")
         if len(stack) >= _MAX_DEPTH:
-            raise ModelFileError(f"{at}: models nested more than {_MAX_DEPTH} deep")
+            raise BGTFileError(f"{at}: models nested more than {_MAX_DEPTH} deep")
         body = self.models[key]
         if not isinstance(body, dict):
-            raise ModelFileError(f"{at}: expected a mapping with 'components' and 'netlist', got {type(body).__name__}")
+            raise BGTFileError(f"{at}: expected a mapping with 'components' and 'netlist', got {type(body).__name__}")
         bad = set(map(str, body)) - _MODEL_FIELDS
         if bad:
-            raise ModelFileError(f"{at}: unknown field(s) {sorted(bad)} (expected components, netlist, ports)")
+            raise BGTFileError(f"{at}: unknown field(s) {sorted(bad)} (expected components, netlist, ports)")
         local: dict[str, object] = {}   # component name -> its path (atom) or its ports (sub-model)
         for line in _strings(body, "components", at, required=True):
             self._component(key, prefix, stack, line, local, at)
@@ -288,13 +299,13 @@ class _Flattener:
             where = f"{at} port {line!r}{self.lines.of(key, line)}"
             tokens = line.split()
             if len(tokens) != 2:
-                raise ModelFileError(f"{where}: expected 'component label'")
+                raise BGTFileError(f"{where}: expected 'component label'")
             name, label = tokens
             atom = self.atoms.get(local.get(name)) if isinstance(local.get(name), str) else None
             if atom is None or atom.kind != "SS":
-                raise ModelFileError(f"{where}: {name!r} is not a source-sensor (base/SS) of this model")
+                raise BGTFileError(f"{where}: {name!r} is not a source-sensor (base/SS) of this model")
             if label in ports:
-                raise ModelFileError(f"{where}: port {label!r} is exposed twice")
+                raise BGTFileError(f"{where}: port {label!r} is exposed twice")
             ports[label] = atom.path
             self.exposed.add(atom.path)
         return ports
@@ -303,25 +314,25 @@ class _Flattener:
         where = f"{at} component {line!r}{self.lines.of(key, line)}"
         tokens = line.split()
         if len(tokens) < 2:
-            raise ModelFileError(f"{where}: expected 'name template [values]'")
+            raise BGTFileError(f"{where}: expected 'name template [values]'")
         name, template, args = tokens[0], tokens[1], tokens[2:]
         if name in local:
-            raise ModelFileError(f"{where}: a second component named {name!r}")
+            raise BGTFileError(f"{where}: a second component named {name!r}")
         if "." in name:
-            raise ModelFileError(f"{where}: a component name cannot hold '.' (it separates a port)")
+            raise BGTFileError(f"{where}: a component name cannot hold '.' (it separates a port)")
         path = f"{prefix}{name}"
         if template in self.models:
             if args:
-                raise ModelFileError(f"{where}: a sub-model takes no values")
+                raise BGTFileError(f"{where}: a sub-model takes no values")
             local[name] = self.expand(template, f"{path}.", stack + (key,))
             return
         library, _, component = template.rpartition("/")
         if library != "base" or component not in BGT_KINDS:
-            raise ModelFileError(f"{where}: {template!r} is neither a model of this file nor a base component we "
+            raise BGTFileError(f"{where}: {template!r} is neither a model of this file nor a base component we "
                                  f"can represent (base/{', base/'.join(BGT_KINDS)})")
         if len(self.atoms) >= MAX_NODES:
-            raise ModelFileError(f"{where}: more than {MAX_NODES} components once sub-models are expanded "
-                                 "(bondgraph.io.MAX_NODES)")
+            raise BGTFileError(f"{where}: more than {MAX_NODES} components once sub-models are expanded "
+                                 "(bondgraph.bgt_format.MAX_NODES)")
         kind, names = BGT_KINDS[component]
         self.atoms[path] = _Atom(path, kind, _values(args, names, where), where)
         local[name] = path
@@ -330,30 +341,30 @@ class _Flattener:
         where = f"{at} bond {line!r}{self.lines.of(key, line)}"
         tokens = line.split()
         if len(tokens) != 2:
-            raise ModelFileError(f"{where}: expected 'tail head'")
+            raise BGTFileError(f"{where}: expected 'tail head'")
         if len(self.bonds) >= MAX_LINKS:
-            raise ModelFileError(f"{where}: more than {MAX_LINKS} bonds once sub-models are expanded "
-                                 "(bondgraph.io.MAX_LINKS)")
+            raise BGTFileError(f"{where}: more than {MAX_LINKS} bonds once sub-models are expanded "
+                                 "(bondgraph.bgt_format.MAX_LINKS)")
         tail, head = (self._end(token, local, where) for token in tokens)
         self.bonds.append((tail, head, where))
 
     def _end(self, token: str, local: dict, where: str) -> _End:
         name, dot, port = token.partition(".")
         if name not in local:
-            raise ModelFileError(f"{where}: no component {name!r} in this model")
+            raise BGTFileError(f"{where}: no component {name!r} in this model")
         target = local[name]
         if isinstance(target, dict):   # a sub-model: its exposed port
             if not dot and len(target) == 1:
                 port = next(iter(target))
             if port not in target:
-                raise ModelFileError(f"{where}: sub-model {name!r} has no port {port!r} (its ports: "
+                raise BGTFileError(f"{where}: sub-model {name!r} has no port {port!r} (its ports: "
                                      f"{sorted(target)})")
             return _End(target[port])
         atom = self.atoms[target]
         port = _port(atom, port if dot else None, where)
         if atom.kind not in ("0", "1"):   # a junction's ports multiply; a component's are bonded once
             if port in atom.ports_used:
-                raise ModelFileError(f"{where}: port {token!r} is bonded twice")
+                raise BGTFileError(f"{where}: port {token!r} is bonded twice")
             atom.ports_used.add(port)
         return _End(target, port)
 
@@ -362,10 +373,10 @@ def _strings(body: dict, key: str, at: str, *, required: bool = False) -> list[s
     items = body.get(key)
     if items is None:
         if required:
-            raise ModelFileError(f"{at}: missing '{key}'")
+            raise BGTFileError(f"{at}: missing '{key}'")
         return []
     if not isinstance(items, list) or not all(isinstance(i, str) for i in items):
-        raise ModelFileError(f"{at}: '{key}' must be a list of text lines")
+        raise BGTFileError(f"{at}: '{key}' must be a list of text lines")
     return items
 
 
@@ -378,21 +389,21 @@ def _values(args: list[str], names: tuple, where: str) -> dict:
         if not eq:
             key, text = next(positional, None), arg
             if key is None:
-                raise ModelFileError(f"{where}: value {arg!r} is one too many "
+                raise BGTFileError(f"{where}: value {arg!r} is one too many "
                                      f"(parameters: {', '.join(names) or 'none'})")
         elif key not in names:
-            raise ModelFileError(f"{where}: unknown parameter {key!r} (parameters: {', '.join(names) or 'none'})")
+            raise BGTFileError(f"{where}: unknown parameter {key!r} (parameters: {', '.join(names) or 'none'})")
         if key in values:
-            raise ModelFileError(f"{where}: parameter {key!r} given twice")
+            raise BGTFileError(f"{where}: parameter {key!r} given twice")
         if _NUMBER.fullmatch(text):
             number = float(text)
             if not math.isfinite(number):
-                raise ModelFileError(f"{where}: parameter {key!r} = {text} is not finite")
+                raise BGTFileError(f"{where}: parameter {key!r} = {text} is not finite")
             values[key] = number
         elif is_name(text):
             values[key] = text
         else:
-            raise ModelFileError(f"{where}: parameter {key!r} = {text!r} is neither a number nor a name")
+            raise BGTFileError(f"{where}: parameter {key!r} = {text!r} is neither a number nor a name")
     return values
 
 
@@ -400,15 +411,15 @@ def _port(atom: _Atom, port: str | None, where: str):
     """The BondGraphTools port a bond end names, checked against the component's kind."""
     if atom.kind == "1":
         if port not in ("inverting", "non_inverting"):
-            raise ModelFileError(f"{where}: a 1-junction's bond names its port: {atom.path.rpartition('.')[2]}"
+            raise BGTFileError(f"{where}: a 1-junction's bond names its port: {atom.path.rpartition('.')[2]}"
                                  ".inverting or .non_inverting")
         return port
     if atom.kind in ("TF", "GY"):
         if port not in ("0", "1"):
-            raise ModelFileError(f"{where}: a two-port's bond names its port, .0 (primary) or .1 (secondary)")
+            raise BGTFileError(f"{where}: a two-port's bond names its port, .0 (primary) or .1 (secondary)")
         return int(port)
     if port not in (None, "0") and atom.kind != "0":
-        raise ModelFileError(f"{where}: {atom.kind} {atom.path!r} has one port (0), not {port!r}")
+        raise BGTFileError(f"{where}: {atom.kind} {atom.path!r} has one port (0), not {port!r}")
     return None
 
 
@@ -432,7 +443,7 @@ class _Orienter:
             if len(indices) == 1:
                 continue   # an exposed port nobody bonds: a boundary, resolved with the other SS
             if len(indices) > 2:
-                raise ModelFileError(f"{flat.file}: port {path!r} is bonded {len(indices)} times; a port takes one "
+                raise BGTFileError(f"{flat.file}: port {path!r} is bonded {len(indices)} times; a port takes one "
                                      "bond inside its model and one outside")
             (i, j) = indices
             first, second = bonds[i], bonds[j]
@@ -496,7 +507,7 @@ class _Orienter:
     def _add(self, graph: nx.DiGraph, a: _End, b: _End, where: str) -> None:
         tail, head = self._direction(a, b)
         if graph.has_edge(tail, head) or graph.has_edge(head, tail):
-            raise ModelFileError(f"{where}: a second bond between {tail!r} and {head!r}, which our models (one bond "
+            raise BGTFileError(f"{where}: a second bond between {tail!r} and {head!r}, which our models (one bond "
                                  "per pair) cannot hold")
         graph.add_edge(tail, head)
 
@@ -531,14 +542,14 @@ class _Orienter:
                 if kind in el.DETECTORS:
                     junction = self.atoms[other.path].kind
                     if junction != el.DETECTOR_JUNCTION[kind]:
-                        raise ModelFileError(f"{atom.where}: a source-sensor with "
+                        raise BGTFileError(f"{atom.where}: a source-sensor with "
                                              f"{'f' if kind == 'De' else 'e'}=0 is our {kind}, which sits on a "
                                              f"{el.DETECTOR_JUNCTION[kind]}-junction, not on {junction} "
                                              f"{other.path!r}")
                     sensors[index] = (other.path, end.path)
         for atom in self.atoms.values():
             if atom.kind == "SS":
-                raise ModelFileError(f"{atom.where}: a source-sensor without a bond")
+                raise BGTFileError(f"{atom.where}: a source-sensor without a bond")
         return sensors
 
     def _attributes(self, atom: _Atom, sensors: Mapping) -> dict:
@@ -557,7 +568,7 @@ class _Orienter:
             return attributes
         value = values.get(BGT_KINDS[kind][1][0], _DEFAULTS[kind])
         if isinstance(value, str):
-            raise ModelFileError(f"{atom.where}: parameter {value!r} has no value, and our models need a nominal "
+            raise BGTFileError(f"{atom.where}: parameter {value!r} has no value, and our models need a nominal "
                                  "value for every parameter")
         attributes = {"kind": kind, "value": value, "param": _name(atom.path)}
         if kind in ("TF", "GY") and self._find(atom.path)[1] > 0:   # entered at port 0
@@ -569,7 +580,7 @@ def _boundary_kind(atom: _Atom) -> str:
     """What a source-sensor that is no bonded port stands for (module docstring)."""
     given = {k: v for k, v in atom.values.items() if v is not None}
     if len(given) != 1:
-        raise ModelFileError(f"{atom.where}: an open source-sensor needs exactly one of e= (an effort source; e=0: "
+        raise BGTFileError(f"{atom.where}: an open source-sensor needs exactly one of e= (an effort source; e=0: "
                              "a flow sensor) or f= (a flow source; f=0: an effort sensor)")
     (key, value), = given.items()
     if value == 0:

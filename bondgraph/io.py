@@ -154,9 +154,7 @@ def load_model(source: str | Path) -> ModelSpec:
     if path.suffix.lower() == ".py":
         return _from_python(path, attribute or None)
     if path.suffix.lower() == ".bg":
-        from .bgt_format import read_bgt   # here: bgt_format builds on this module
-
-        return read_bgt(path)
+        return _from_bgt(path)
     raise ModelFileError(f"{path}: unknown model file type {path.suffix!r} (expected .json, .py or .bg)")
 
 
@@ -444,6 +442,16 @@ def _finite_float(where: str) -> Callable:
             raise ModelFileError(f"{where}: number {text[:40]} overflows")
         return number
     return parse
+
+
+def _from_bgt(path: Path) -> ModelSpec:
+    """A BondGraphTools file: its model, no run settings (it holds none)."""
+    from .bgt_format import BGTFileError, read_bgt   # here: it needs PyYAML, which only .bg files do
+
+    try:
+        return ModelSpec(read_bgt(path), source=str(path))
+    except BGTFileError as exc:
+        raise ModelFileError(str(exc)) from None
 
 
 def _from_python(path: Path, attribute: str | None) -> ModelSpec:

@@ -9,7 +9,8 @@ import pytest
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from bondgraph.bgt_format import model_from_bgt, read_bgt, write_bgt
+from bondgraph import bgt_format, io
+from bondgraph.bgt_format import BGTFileError, model_from_bgt, read_bgt, write_bgt
 from bondgraph.io import ModelFileError, load_model
 from bondgraph.library import dc_motor, rlc_circuit
 
@@ -83,7 +84,7 @@ def same(ours: dict, expected: dict) -> bool:
 
 
 def test_a_series_rlc_has_the_equations_of_kirchhoff():
-    bg = read_bgt("rlc.bg", text=SERIES_RLC).model
+    bg = read_bgt("rlc.bg", text=SERIES_RLC)
     q, p, se = sp.symbols("q_C1 p_L1 Se")
     r, c, el = sp.symbols("R1 C1 L1")
     # one loop current p/L: dq/dt = i, dp/dt = Se - R i - q/C
@@ -97,7 +98,7 @@ def test_transformer_and_gyrator_follow_bondgraphtools_ports(tf, gy):
     # TF e1 = r e0, f0 = -r f1 and GY e1 = -R f0, e0 = R f1.  Loop currents i1 = p1/L1, i2 = p2/L2; the
     # pair is lossless, so the coupling k = R/r enters the two loops with opposite signs:
     # dp1/dt = Se - R1 i1 + k i2,  dp2/dt = -k i1 - R2 i2.  Turned round, a TF is r -> 1/r, a GY R -> -R.
-    bg = read_bgt("coupled.bg", text=two_inductors(tf, gy)).model
+    bg = read_bgt("coupled.bg", text=two_inductors(tf, gy))
     p1, p2, se, r1, l1, l2, r2, r, g = sp.symbols("p_L1 p_L2 Se R1 L1 L2 R2 T G")
     ratio = r if tf == ("0", "1") else 1 / r
     gyration = g if gy == ("0", "1") else -g
@@ -108,7 +109,7 @@ def test_transformer_and_gyrator_follow_bondgraphtools_ports(tf, gy):
 
 def test_write_bgt_reads_back_to_the_same_equations():
     for original in (rlc_circuit(), dc_motor()):
-        back = read_bgt("back.bg", text=write_bgt(original)).model
+        back = read_bgt("back.bg", text=write_bgt(original))
         values = {sp.Symbol(k): v for k, v in original.parameters.items()}
         values_back = {sp.Symbol(k): v for k, v in back.parameters.items()}
         ours, theirs = rhs_by_state(original), rhs_by_state(back)
@@ -132,7 +133,7 @@ def test_source_sensors_become_sources_or_sensors():
                        "Z base/0", "C base/C 1", "v base/SS f=0"],
         "netlist": ["u J.non_inverting", "J.inverting R", "J.inverting L", "J.inverting i", "J.inverting Z",
                     "Z C", "v Z"]}}}
-    bg = model_from_bgt(data, where="ss.bg").model
+    bg = model_from_bgt(data, where="ss.bg")
     kinds = {n: d["kind"] for n, d in bg.graph.nodes(data=True)}
     assert (kinds["u"], kinds["i"], kinds["v"]) == ("Se", "Df", "De")
     assert bg.inputs == ["V_in"] and bg.outputs == ["i", "v"]
@@ -147,14 +148,14 @@ def test_a_ring_of_junctions_no_orientation_fits_gets_a_junction_on_a_bond():
         "netlist": ["A.non_inverting B.non_inverting", "B.non_inverting C.non_inverting",
                     "C.non_inverting A.non_inverting", "Se A.non_inverting", "B.inverting L", "C.inverting R",
                     "A.inverting K"]}}}
-    graph = model_from_bgt(data, where="x.bg").model.graph
+    graph = model_from_bgt(data, where="x.bg").graph
     middle = [n for n, d in graph.nodes(data=True) if d["kind"] == "0"]
     assert middle == ["C_A"] and {("C_A", "C"), ("C_A", "A")} <= set(graph.edges)
     assert graph.number_of_edges() == 8
 
 
 def error(text: str, where: str = "bad.bg") -> str:
-    with pytest.raises(ModelFileError) as caught:
+    with pytest.raises(BGTFileError) as caught:
         read_bgt(where, text=text)
     message = str(caught.value)
     assert "\n" not in message and message.startswith(where)
@@ -185,16 +186,22 @@ def test_yaml_that_is_not_a_model_or_not_safe_is_refused(tmp_path, monkeypatch):
     assert "not valid YAML" in error("root: !!python/object/apply:os.system ['true']\n")
     assert "line 2" in error("root: x\n  : : [\n")
     assert "contains itself" in error("version: 0.1\nroot: x\nmodels:\n  /:\n    components: [a /]\n")
-    import bondgraph.bgt_format as bgt_format
     monkeypatch.setattr(bgt_format, "MAX_FILE_BYTES", 100)
     path = tmp_path / "big.bg"
     path.write_text(SERIES_RLC)
-    with pytest.raises(ModelFileError, match="larger than the limit of 100 bytes"):
+    with pytest.raises(BGTFileError, match="larger than the limit of 100 bytes"):
         read_bgt(path)
+    with pytest.raises(ModelFileError, match="big.bg: .* larger than the limit"):   # load_model keeps its error
+        load_model(path)
+
+
+def test_the_limits_are_those_of_json_model_files():
+    assert (bgt_format.MAX_FILE_BYTES, bgt_format.MAX_NODES, bgt_format.MAX_LINKS) == (
+        io.MAX_FILE_BYTES, io.MAX_NODES, io.MAX_LINKS)
 
 
 def test_an_open_source_sensor_is_refused():
     data = {"version": "0.1", "root": "x", "models": {"/": {
         "components": ["p base/SS", "Z base/0", "C base/C 1"], "netlist": ["p Z", "Z C"]}}}
-    with pytest.raises(ModelFileError, match=r"x.bg: model '/' component 'p base/SS': an open source-sensor"):
+    with pytest.raises(BGTFileError, match=r"x.bg: model '/' component 'p base/SS': an open source-sensor"):
         model_from_bgt(data, where="x.bg")

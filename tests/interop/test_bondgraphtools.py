@@ -99,7 +99,7 @@ def test_our_equations_of_their_saved_model_are_theirs(build, tmp_path):
     model = build(tools)
     path = tmp_path / "model.bg"
     tools.save(model, str(path))
-    ours, theirs = our_rates(read_bgt(path).model), their_rates(model)
+    ours, theirs = our_rates(read_bgt(path)), their_rates(model)
     assert set(ours) == set(theirs) and len(ours) >= 2
     for state in ours:
         assert sp.simplify(ours[state] - theirs[state]) == 0, state
