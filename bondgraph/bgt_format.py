@@ -246,25 +246,26 @@ class _End:
 
 
 class _Lines:
-    """Where an item is written in the file: the first line after the model's key that holds it."""
+    """Where an item is written in the file: the first line after the model's key that holds it.
+
+    The lines are indexed once, so that a file of many components costs one pass, not one per item.
+    """
 
     def __init__(self, text: str):
-        self.lines = [line.strip() for line in text.splitlines()] if text else []
+        self.keys: dict[str, int] = {}
+        self.items: dict[str, list[int]] = {}
+        for number, raw in enumerate(text.splitlines() if text else [], 1):
+            line = raw.split("#")[0].strip()
+            if line.endswith(":") and not line.startswith("-"):
+                self.keys.setdefault(line[:-1].strip().strip("'\""), number)
+            elif line.startswith("-"):
+                self.items.setdefault(" ".join(line[1:].split()).strip("'\""), []).append(number)
 
     def of(self, key: str, item: str) -> str:
-        if not self.lines:
-            return ""
-        start = 0
-        for number, line in enumerate(self.lines):
-            if line.rstrip(":").strip("'\"") == key and line.endswith(":"):
-                start = number
-                break
-        wanted = " ".join(item.split())
-        for number in range(start, len(self.lines)):
-            line = self.lines[number]
-            if line.startswith("-") and " ".join(line[1:].split("#")[0].split()).strip("'\"") == wanted:
-                return f" (line {number + 1})"
-        return ""
+        start = self.keys.get(key, 0)
+        lines = self.items.get(" ".join(item.split()), [])
+        found = next((n for n in lines if n > start), None)
+        return f" (line {found})" if found is not None else ""
 
 
 class _Flattener:
@@ -275,6 +276,7 @@ class _Flattener:
         self.atoms: dict[str, _Atom] = {}
         self.bonds: list[tuple[_End, _End, str]] = []
         self.exposed: set[str] = set()         # SS paths exposed as a port of their model
+        self.instances = 0                     # models expanded: bounded even when they hold no component
 
     def expand(self, key: str, prefix: str, stack: tuple) -> dict:
         """Add model ``key``'s content under ``prefix``; return its ports: label -> the SS path behind it."""
@@ -283,6 +285,10 @@ class _Flattener:
             raise BGTFileError(f"{at}: contains itself (through {' -> '.join(stack + (key,))})")
         if len(stack) >= _MAX_DEPTH:
             raise BGTFileError(f"{at}: models nested more than {_MAX_DEPTH} deep")
+        self.instances += 1
+        if self.instances > MAX_NODES:
+            raise BGTFileError(f"{at}: more than {MAX_NODES} model instances once sub-models are expanded "
+                               "(bondgraph.bgt_format.MAX_NODES)")
         body = self.models[key]
         if not isinstance(body, dict):
             raise BGTFileError(f"{at}: expected a mapping with 'components' and 'netlist', got {type(body).__name__}")

@@ -186,6 +186,11 @@ def test_yaml_that_is_not_a_model_or_not_safe_is_refused(tmp_path, monkeypatch):
     assert "not valid YAML" in error("root: !!python/object/apply:os.system ['true']\n")
     assert "line 2" in error("root: x\n  : : [\n")
     assert "contains itself" in error("version: 0.1\nroot: x\nmodels:\n  /:\n    components: [a /]\n")
+    # twenty levels of ten empty sub-models each would be 10^20 expansions: stopped at the limit
+    levels = "".join(f"  m{k}:\n    components: [{', '.join(f'x{j} m{k + 1}' for j in range(10))}]\n"
+                     for k in range(20))
+    nested = f"version: 0.1\nroot: x\nmodels:\n  /:\n    components: [top m0]\n{levels}  m20:\n    components: []\n"
+    assert "more than 10000 model instances" in error(nested)
     monkeypatch.setattr(bgt_format, "MAX_FILE_BYTES", 100)
     path = tmp_path / "big.bg"
     path.write_text(SERIES_RLC)
