@@ -15,6 +15,7 @@ import importlib
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:  # what the lazy names below resolve to, for type checkers and readers
+    from .bgt_format import read_bgt, write_bgt
     from .causality import Causality, CausalIssue, assign_causality
     from .composition import compose
     from .control import PIController
@@ -32,6 +33,7 @@ if TYPE_CHECKING:  # what the lazy names below resolve to, for type checkers and
 
 #: The module of each public name.
 _HOMES = {
+    "bgt_format": ("read_bgt", "write_bgt"),
     "causality": ("Causality", "CausalIssue", "assign_causality"),
     "composition": ("compose",),
     "control": ("PIController",),
@@ -54,7 +56,8 @@ __all__ = [  # the keys of _MODULE_OF, written out for readers and tools that do
     "EquationError", "InputExpression", "LawError", "ModelEquation", "ModelError", "PHMError", "PHMWarning",
     "PIController", "SettingError", "SimulationError", "SimulationResult", "StateEquations", "TabulatedInput",
     "assign_causality", "causal_equations", "compose", "labelled_equations", "load_model", "model_equations",
-    "parse_degradation", "signal_function", "simulate", "state_equations", "to_json", "to_svg", "to_tikz",
+    "parse_degradation", "read_bgt", "signal_function", "simulate", "state_equations", "to_json", "to_svg", "to_tikz",
+    "write_bgt",
 ]
 
 

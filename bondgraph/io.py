@@ -13,6 +13,7 @@
   returning one), or exactly one bond graph or one such function, and optionally ``inputs`` (a
   string among them is an expression of ``t``, as in JSON), ``t_end`` and ``x0``; ``file.py:name``
   picks the object ``name``;
+* a BondGraphTools file (``*.bg``, YAML; :func:`bondgraph.bgt_format.read_bgt`, the ``bgt`` extra);
 * the name of a built-in example (:func:`bondgraph.library.example`): ``rlc``, ``dc-motor``,
   ``torsion-bar``, ``three-tank``.
 
@@ -120,7 +121,7 @@ class ModelSpec:
 
 
 def load_model(source: str | Path) -> ModelSpec:
-    """Load a model from a JSON or Python file, or a built-in example by name (see the module docstring).
+    """Load a model from a JSON, Python or BondGraphTools file, or a built-in example by name (module docstring).
 
     Raises :class:`ModelFileError` (a ``ModelError``) naming the file and what is wrong.
 
@@ -145,7 +146,9 @@ def load_model(source: str | Path) -> ModelSpec:
         return _from_json_file(path, ())
     if path.suffix.lower() == ".py":
         return _from_python(path, attribute or None)
-    raise ModelFileError(f"{path}: unknown model file type {path.suffix!r} (expected .json or .py)")
+    if path.suffix.lower() == ".bg":
+        return _from_bgt(path)
+    raise ModelFileError(f"{path}: unknown model file type {path.suffix!r} (expected .json, .py or .bg)")
 
 
 def _from_json_file(path: Path, parents: tuple) -> ModelSpec:
@@ -530,6 +533,16 @@ def _finite_float(where: str) -> Callable:
             raise ModelFileError(f"{where}: number {text[:40]} overflows")
         return number
     return parse
+
+
+def _from_bgt(path: Path) -> ModelSpec:
+    """A BondGraphTools file: its model, no run settings (it holds none)."""
+    from .bgt_format import BGTFileError, read_bgt   # here: it needs PyYAML, which only .bg files do
+
+    try:
+        return ModelSpec(read_bgt(path), source=str(path))
+    except BGTFileError as exc:
+        raise ModelFileError(str(exc)) from None
 
 
 def _from_python(path: Path, attribute: str | None) -> ModelSpec:

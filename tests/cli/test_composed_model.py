@@ -5,7 +5,6 @@ The record is integrated here from the physics (scipy), not by the library's sim
 
 import json
 import shutil
-from pathlib import Path
 
 import numpy as np
 import pytest
