@@ -43,8 +43,9 @@ def physics_record(t: np.ndarray, onset: float, rate: float, seed: int) -> dict:
         i, w_m, x, w_L = z
         stretch = p["belt.r_d"] * w_m - p["belt.r_l"] * w_L
         tension = x / p["belt.c_b"] + p["belt.d_b"] * stretch
+        shaft = p["motor.J_m"] + p["belt.J_d"]   # the motor and the drive pulley turn as one
         return [(voltage(time) - p["motor.R_a"] * i - p["motor.k_m"] * w_m) / p["motor.L_a"],
-                (p["motor.k_m"] * i - p["motor.b_m"] * w_m - p["belt.r_d"] * tension) / (p["motor.J_m"] + p["belt.J_d"]),
+                (p["motor.k_m"] * i - p["motor.b_m"] * w_m - p["belt.r_d"] * tension) / shaft,
                 stretch,
                 (p["belt.r_l"] * tension - friction(time) * w_L - T_L) / (p["belt.J_l"] + p["load.J_L"])]
 
