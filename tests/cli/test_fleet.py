@@ -24,6 +24,7 @@ from .fleets import ONSETS, spec, without_dask, write_fleet
 
 pa = pytest.importorskip("pyarrow")
 pq = pytest.importorskip("pyarrow.parquet")
+pytestmark = pytest.mark.extras   # pyarrow (the dask extra)
 
 
 @pytest.fixture(scope="module")

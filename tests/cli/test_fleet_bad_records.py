@@ -15,6 +15,7 @@ from .fleets import spec, write_fleet
 from .test_fleet import same_tables
 
 pytest.importorskip("pyarrow")
+pytestmark = pytest.mark.extras   # pyarrow (the dask extra)
 
 GOOD = {"c0": 0.3, "c1": None, "c3": 0.5}
 

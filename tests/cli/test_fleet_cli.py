@@ -16,6 +16,7 @@ from bgphm.fleet import read_fleet
 from .fleets import without_dask, write_fleet
 
 pytest.importorskip("pyarrow")
+pytestmark = pytest.mark.extras   # pyarrow (the dask extra)
 
 ASSETS = {"c0": 0.3, "c1": None, "c2": 0.6}
 FAST = ["--degradation", "linear", "--particles", "100", "--dt", "0.05", "--rul-every", "4", "--workers", "0"]

@@ -25,7 +25,7 @@ distributed = pytest.importorskip("distributed")
 dask = pytest.importorskip("dask")
 pytest.importorskip("pyarrow")
 
-pytestmark = pytest.mark.slow
+pytestmark = [pytest.mark.slow, pytest.mark.extras]   # dask, distributed, pyarrow
 
 
 @pytest.fixture(scope="module")

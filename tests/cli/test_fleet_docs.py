@@ -48,6 +48,7 @@ def commands(bash: str) -> list[list[str]]:
     return out
 
 
+@pytest.mark.extras   # distributed, pandas
 def test_the_guide_runs(tmp_path, monkeypatch):
     pytest.importorskip("distributed")
     pytest.importorskip("pandas")

@@ -15,6 +15,7 @@ from .test_fleet import records, same_tables  # noqa: F401 (records: the fleet's
 
 pa = pytest.importorskip("pyarrow")
 pq = pytest.importorskip("pyarrow.parquet")
+pytestmark = pytest.mark.extras   # pyarrow (the dask extra)
 
 
 class Interrupt(KeyboardInterrupt):

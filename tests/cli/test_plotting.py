@@ -5,12 +5,13 @@ import re
 import subprocess
 import sys
 
-import matplotlib
+import pytest
 
+matplotlib = pytest.importorskip("matplotlib")   # the plot extra
 matplotlib.use("Agg")
+pytestmark = pytest.mark.extras
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
-import pytest  # noqa: E402
 
 from bgphm import plotting  # noqa: E402
 from bondgraph import simulate  # noqa: E402

@@ -102,6 +102,7 @@ def test_a_long_record_of_numbers_and_gaps_is_read_alike_and_by_a_fast_path(tmp_
     assert used == [] or used == ["numpy"]   # pyarrow read it, or numpy was asked (no pyarrow here)
 
 
+@pytest.mark.extras   # pyarrow
 def test_pyarrow_reads_alike_when_installed_and_a_bad_parser_is_named(tmp_path):
     pytest.importorskip("pyarrow")
     path = tmp_path / "run.csv"

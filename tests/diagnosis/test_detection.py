@@ -175,6 +175,7 @@ def test_nonlinear_uncertainty_uses_a_sound_natural_extension():
     assert np.all(result.upper[late] > 1.4 * exact_hi[late])  # natural extension overestimates (0.25 vs 0.1667)
 
 
+@pytest.mark.extras   # pandas
 def test_a_pandas_dataframe_record_gives_the_same_evaluation(rlc):
     import pandas as pd
 
@@ -239,6 +240,7 @@ def test_a_nonlinear_arr_pickles_and_evaluates_bitwise_the_same():
         assert np.array_equal(getattr(after, name), getattr(before, name), equal_nan=True), name
 
 
+@pytest.mark.extras   # dask
 def test_dask_names_a_task_holding_a_compiled_arr(rlc):
     """The compiled ARR points back to its ARR: tokenize followed the cycle without end."""
     import dataclasses

@@ -69,6 +69,7 @@ def test_duck_typed_dataframe_without_pandas():
 
 
 @pytest.mark.slow
+@pytest.mark.extras   # pandas
 def test_pandas_dataframe():
     pd = pytest.importorskip("pandas")
     frame = pd.DataFrame({"t": [0.0, 0.1, 0.2, 0.3], "x": [1.0, np.nan, 3.0, 4.0], "k": ["a", "b", "c", "d"]})
