@@ -8,9 +8,11 @@ checks the calling sequence of the specification's state machine loosely (what w
 and integrates the states over a communication step with the embedded Runge-Kutta pair of Dormand and Prince
 (1980), 5th order with a 4th-order error estimate and step-size control, the inputs held over the step.
 
-The error of a step is measured per state relative to the largest magnitude that state has reached
-(``rtol * max(|x| so far)``): the error the acceptance measures is relative to each signal's range, and a
-state's scale (a charge of microcoulombs, a momentum of kilogram metres per second) is not known in advance.
+The error of a step is measured per state against ``rtol * max(|x| so far) + 0.01 * rtol * nominal``: relative
+to the largest magnitude the state has reached, since a state's scale (a charge of microcoulombs, a momentum of
+kilogram metres per second) is not known in advance, plus the absolute tolerance the FMI 2.0 specification
+suggests from a variable's nominal value (section 2.2.7, ``nominal``), which keeps a state that starts at zero
+on a law of infinite slope there (an orifice's square root) from asking for ever smaller steps.
 """
 
 __all__ = ["HEADER", "HEADER_NAME", "RUNTIME"]
@@ -526,7 +528,8 @@ static fmi2Status bg_integrate(bg_instance *c, double t_end) {
             next[i] = stage[i];
             for (j = 0; j < 7; j++) estimate += bg_e[j] * k[j][i];
             estimate = fabs(h * estimate);
-            yardstick = c->v.rtol * fmax(c->v.scale[i], fmax(fabs(c->v.x[i]), fabs(next[i])));
+            yardstick = c->v.rtol * (fmax(c->v.scale[i], fmax(fabs(c->v.x[i]), fabs(next[i])))
+                                     + 0.01 * bg_state_nominal[i]);
             if (estimate > 0.0) error = fmax(error, yardstick > 0.0 ? estimate / yardstick : INFINITY);
         }
         factor = error > 0.0 ? 0.9 * pow(error, -0.2) : 5.0;

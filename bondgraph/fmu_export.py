@@ -21,8 +21,10 @@ from 0):
 * the measured signals (the detectors): causality ``output``, computed from the states and inputs.
 
 ``fmi2DoStep`` integrates the states with the embedded Runge-Kutta pair of Dormand and Prince (1980), 5(4)
-with error control: the error of each state is kept below ``tolerance`` times the largest magnitude the state
-has reached (``fmi2SetupExperiment``'s tolerance, when given, replaces the exported one).  FMI 3.0 is not
+with error control: the error of each state over a step is kept below ``tolerance`` times the largest
+magnitude the state has reached plus ``0.01 * tolerance`` times its nominal value (the FMI 2.0 absolute
+tolerance; the nominal value is the element's value, the state at unit effort or flow, or 1 under a law);
+``fmi2SetupExperiment``'s tolerance, when given, replaces the exported one.  FMI 3.0 is not
 written: its co-simulation differs in the instantiation, the variable types and the clocks, and no consumer
 here needs it.
 
@@ -177,6 +179,15 @@ def _number(value: object, what: str) -> float:
     return float(value)
 
 
+def _nominal(element) -> float:
+    """A state's nominal magnitude: its energy variable at unit effort or flow (a linear C's ``q = C e``, a
+    linear I's ``p = I f``), the element's value; 1 (the FMI default) for an element with a law."""
+    value = getattr(element, "value", None)
+    if element.law is None and isinstance(value, (int, float)) and math.isfinite(value) and value != 0:
+        return abs(float(value))
+    return 1.0
+
+
 class _Variables:
     """The FMU's variables in value-reference order: parameters, inputs, states, signals; their start values."""
 
@@ -198,6 +209,7 @@ class _Variables:
                      and e.kind in ("Se", "Sf", "MSe", "MSf") and e.signal}
         self.input_start = [_number(inputs.get(u, constants.get(u, 0.0)), f"input {u!r}") for u in self.inputs]
         self.state_start = [0.0] * len(self.states)
+        self.state_nominal = [_nominal(bg.elements[e]) for e in equations.elements]
         for key, value in x0.items():
             if str(key) in self.states:
                 index = self.states.index(str(key))
@@ -304,6 +316,7 @@ def _c_file(model: _Variables, code: dict, guid: str, tolerance: float) -> str:
         _c_array("bg_parameter_start", model.parameter_start),
         _c_array("bg_input_start", model.input_start),
         _c_array("bg_state_start", model.state_start),
+        _c_array("bg_state_nominal", model.state_nominal),
         _c_array("bg_variable_names", model.names, "text"), "",
         "/* sign(x), NaN for NaN (C's comparisons would give 0) */",
         "static inline double bg_sign(double x) { return x > 0.0 ? 1.0 : (x < 0.0 ? -1.0 : x); }", "",
@@ -351,8 +364,8 @@ def _model_description(title: str, identifier: str, guid: str, model: _Variables
     rows = [(p, "parameter", "tunable", "exact", v, f"parameter {p}")
             for p, v in zip(model.parameters, model.parameter_start)]
     rows += [(u, "input", "continuous", None, v, f"input signal {u}") for u, v in zip(model.inputs, model.input_start)]
-    rows += [(x, "output", "continuous", "exact", v, f"state of storage element {e}")
-             for x, e, v in zip(model.states, model.elements, model.state_start)]
+    rows += [(x, "output", "continuous", "exact", (v, n), f"state of storage element {e}")
+             for x, e, v, n in zip(model.states, model.elements, model.state_start, model.state_nominal)]
     rows += [(y, "output", "continuous", None, None, f"measured signal {y}") for y in model.signals]
     for reference, (name, causality, variability, initial, start, description) in enumerate(rows):
         attributes = {"name": name, "valueReference": str(reference), "description": description,
@@ -360,7 +373,11 @@ def _model_description(title: str, identifier: str, guid: str, model: _Variables
         if initial:
             attributes["initial"] = initial
         variable = ET.SubElement(variables, "ScalarVariable", attributes)
-        ET.SubElement(variable, "Real", {} if start is None else {"start": repr(float(start))})
+        start, nominal = start if isinstance(start, tuple) else (start, None)
+        real = {} if start is None else {"start": repr(float(start))}
+        if nominal is not None:
+            real["nominal"] = repr(float(nominal))
+        ET.SubElement(variable, "Real", real)
     structure = ET.SubElement(root, "ModelStructure")
     outputs = ET.SubElement(structure, "Outputs")
     first_output = len(model.parameters) + len(model.inputs) + 1   # ModelVariables count from 1
