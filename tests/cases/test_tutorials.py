@@ -29,13 +29,16 @@ TUTORIALS = ROOT / "docs" / "tutorial"
 #: The least each tutorial must keep: lines of code, and lines of output compared (a tutorial that loses its
 #: code or stops showing what it prints fails).
 MINIMUM = {"1-model.md": (100, 50), "2-diagnosis.md": (90, 45), "3-prognosis.md": (90, 24),
-           "4-command-line.md": (75, 110), "5-calibration.md": (35, 16), "6-fault-diagnosis-toolbox.md": (15, 7)}
+           "4-command-line.md": (75, 110), "5-calibration.md": (35, 16), "6-fault-diagnosis-toolbox.md": (15, 7),
+           "8-fmi.md": (35, 18)}
 
 #: Heavy tutorials (slow tier): tutorial 4 runs ``bgphm demo`` and twenty more commands, each in its own
 #: process.  Tutorial 1 stays in the fast tier, as does the check that every script is up to date.
-SLOW = {"2-diagnosis.md", "3-prognosis.md", "4-command-line.md", "5-calibration.md", "6-fault-diagnosis-toolbox.md"}
-#: Tutorials that need an optional interop package (the ``interop`` marker): 6 runs the Fault Diagnosis Toolbox.
-INTEROP = {"6-fault-diagnosis-toolbox.md"}
+SLOW = {"2-diagnosis.md", "3-prognosis.md", "4-command-line.md", "5-calibration.md", "6-fault-diagnosis-toolbox.md",
+        "8-fmi.md"}
+#: Tutorials that need an optional interop package (the ``interop`` marker): 6 runs the Fault Diagnosis Toolbox,
+#: 8 fmpy (and a C compiler).
+INTEROP = {"6-fault-diagnosis-toolbox.md", "8-fmi.md"}
 
 #: What may differ from one run to the next, and only that: the elapsed time a ``bgphm`` progress line starts with.
 ELAPSED = re.compile(r"^\[ *\d+\.\d s\] ", re.MULTILINE)
