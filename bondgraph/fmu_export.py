@@ -298,8 +298,8 @@ def _c_array(name: str, values: list, kind: str = "double") -> str:
     if kind == "double":
         items = [repr(float(v)) for v in values] or ["0.0"]
         return f"static const double {name}[BG_SIZE({len(values)})] = {{{', '.join(items)}}};"
-    items = [f'"{v}"' for v in values]
-    return f"static const char *const {name}[{len(values)}] = {{{', '.join(items)}}};"
+    items = [f'"{v}"' for v in values] or ['""']   # the names are identifiers: nothing to escape in C
+    return f"static const char *const {name}[BG_SIZE({len(values)})] = {{{', '.join(items)}}};"
 
 
 def _c_file(model: _Variables, code: dict, guid: str, tolerance: float) -> str:
@@ -379,10 +379,11 @@ def _model_description(title: str, identifier: str, guid: str, model: _Variables
             real["nominal"] = repr(float(nominal))
         ET.SubElement(variable, "Real", real)
     structure = ET.SubElement(root, "ModelStructure")
-    outputs = ET.SubElement(structure, "Outputs")
     first_output = len(model.parameters) + len(model.inputs) + 1   # ModelVariables count from 1
-    for k in range(len(model.states) + len(model.signals)):
-        ET.SubElement(outputs, "Unknown", {"index": str(first_output + k)})
+    if model.states or model.signals:
+        outputs = ET.SubElement(structure, "Outputs")
+        for k in range(len(model.states) + len(model.signals)):
+            ET.SubElement(outputs, "Unknown", {"index": str(first_output + k)})
     if model.signals:   # outputs computed at initialization: the signals (the states' start is exact)
         initial = ET.SubElement(structure, "InitialUnknowns")
         for k in range(len(model.signals)):

@@ -188,9 +188,13 @@ class FmuPlant:
         self._cleanup = weakref.finalize(self, shutil.rmtree, self._unpacked, True)
         self._fmu = None
         try:
-            self._fmu = fmpy.fmi2.FMU2Slave(guid=description.guid, unzipDirectory=self._unpacked,
-                                            modelIdentifier=description.coSimulation.modelIdentifier,
-                                            instanceName="plant")
+            try:
+                self._fmu = fmpy.fmi2.FMU2Slave(guid=description.guid, unzipDirectory=self._unpacked,
+                                                modelIdentifier=description.coSimulation.modelIdentifier,
+                                                instanceName="plant")
+            except Exception as error:   # no binary for this platform, or one that does not load
+                raise FmuError(f"{self._where}: its binary does not load here: "
+                               f"{str(error).strip().splitlines()[0]}") from None
             self._call("fmi2Instantiate", self._fmu.instantiate, callbacks=self._callbacks(fmpy))
             self._call("fmi2SetupExperiment", self._fmu.setupExperiment, tolerance=tolerance,
                        startTime=float(start_time))
