@@ -85,6 +85,19 @@ def simulate_fmu(path: str | os.PathLike, t: Sequence[float], inputs: Mapping | 
         Naming the FMU and what is wrong (see the module).
     ImportError
         Without fmpy: one line naming the extra.
+
+    Examples
+    --------
+    The times and the file are checked before fmpy is needed (a run: the module's example):
+
+    >>> simulate_fmu("motor.fmu", [0.0])
+    Traceback (most recent call last):
+    ...
+    bondgraph.errors.FmuError: simulate_fmu: t must be at least two finite, increasing times
+    >>> simulate_fmu("no_such_motor.fmu", [0.0, 0.1])
+    Traceback (most recent call last):
+    ...
+    bondgraph.errors.FmuError: FMU 'no_such_motor.fmu': no such file (no_such_motor.fmu)
     """
     times = np.asarray(t, dtype=float)
     if times.ndim != 1 or times.size < 2 or not np.all(np.isfinite(times)) or not np.all(np.diff(times) > 0):
@@ -166,13 +179,28 @@ class FmuPlant:
         The present communication point.
 
     Use it as a context manager, or call :meth:`close`: it frees the instance and the unpacked files.
+
+    Examples
+    --------
+    With an FMU (``tests/interop/test_fmi.py``, tutorial 8)::
+
+        with FmuPlant("dc_motor.fmu", parameters={"R_a": 1.5}) as plant:
+            readings = plant.step(1e-3, {"U": 12.0})   # {'p_L_a': ..., 'p_J': ..., 'i': ..., 'omega': ...}
+
+    A file that is no FMU is named before fmpy is needed:
+
+    >>> FmuPlant("notes.txt")
+    Traceback (most recent call last):
+    ...
+    bondgraph.errors.FmuError: FMU 'notes.txt': no such file (notes.txt)
     """
 
     def __init__(self, path: str | os.PathLike, *, parameters: Mapping | None = None, start_time: float = 0.0,
                  tolerance: float | None = None):
-        fmpy = _fmpy()
         self.path = Path(path)
         self._where = f"FMU {self.path.name!r}"
+        _check_archive(self.path)
+        fmpy = _fmpy()
         description = _description(fmpy, self.path)
         self._variables = {v.name: v for v in description.modelVariables}
         self.inputs = [v.name for v in description.modelVariables if v.causality == "input"]
@@ -316,16 +344,20 @@ class FmuPlant:
             raise FmuError(f"{self._where}: {what} failed{at}: {said}") from None
 
 
-def _description(fmpy, path: Path):
-    """The FMU's model description, validated, or an :class:`FmuError` saying why ``path`` is no usable FMU."""
-    where = f"FMU {path.name!r}"
+def _check_archive(path: Path) -> None:
+    """An :class:`FmuError` unless ``path`` is a zip holding a ``modelDescription.xml`` (no fmpy needed)."""
     if not path.is_file():
-        raise FmuError(f"{where}: no such file ({path})")
+        raise FmuError(f"FMU {path.name!r}: no such file ({path})")
     if not zipfile.is_zipfile(path):
         raise FmuError(f"{path.name!r} is not an FMU: not a zip archive")
     with zipfile.ZipFile(path) as archive:
         if "modelDescription.xml" not in archive.namelist():
             raise FmuError(f"{path.name!r} is not an FMU: it holds no modelDescription.xml")
+
+
+def _description(fmpy, path: Path):
+    """The FMU's model description, validated, or an :class:`FmuError` saying why ``path`` is no usable FMU."""
+    where = f"FMU {path.name!r}"
     try:
         description = fmpy.read_model_description(str(path), validate=True)
     except Exception as error:

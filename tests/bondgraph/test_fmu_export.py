@@ -3,6 +3,7 @@ the FMI 2.0 model description read back as XML, the C model's sizes and GUID, es
 
 import sys
 import xml.etree.ElementTree as ET
+import zipfile
 
 import pytest
 
@@ -75,7 +76,10 @@ def test_bad_paths_and_identifiers_are_named(tmp_path):
         to_fmu(rlc_circuit(), tmp_path / "missing" / "rlc.fmu")
 
 
-def test_running_an_fmu_without_fmpy_names_the_extra(monkeypatch):
+def test_running_an_fmu_without_fmpy_names_the_extra(monkeypatch, tmp_path):
     monkeypatch.setitem(sys.modules, "fmpy", None)   # as if fmpy were not installed
-    with pytest.raises(ImportError, match=r"pip install 'bondgraph-phm\[fmi\]'"):
-        FmuPlant("any.fmu")
+    archive = tmp_path / "any.fmu"
+    with zipfile.ZipFile(archive, "w") as fmu:
+        fmu.writestr("modelDescription.xml", "<fmiModelDescription/>")
+    with pytest.raises(ImportError, match=r"^running an FMU needs fmpy: pip install 'bondgraph-phm\[fmi\]'$"):
+        FmuPlant(archive)
