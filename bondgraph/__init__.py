@@ -22,8 +22,10 @@ if TYPE_CHECKING:  # what the lazy names below resolve to, for type checkers and
     from .drawing import to_svg, to_tikz
     from .equations import (AlgebraicLoopError, ModelEquation, StateEquations, causal_equations, labelled_equations,
                             model_equations, state_equations)
-    from .errors import (CausalityError, EquationError, LawError, ModelError, PHMError, PHMWarning, SettingError,
-                         SimulationError)
+    from .errors import (CausalityError, EquationError, FmuError, LawError, ModelError, PHMError, PHMWarning,
+                         SettingError, SimulationError)
+    from .fmu_export import fmu_sources, to_fmu
+    from .fmu_plant import FmuPlant, simulate_fmu
     from .inputs import InputExpression, TabulatedInput
     from .io import load_model, to_json
     from .model import BondGraph
@@ -40,8 +42,10 @@ _HOMES = {
     "drawing": ("to_svg", "to_tikz"),
     "equations": ("AlgebraicLoopError", "ModelEquation", "StateEquations", "causal_equations", "labelled_equations",
                   "model_equations", "state_equations"),
-    "errors": ("CausalityError", "EquationError", "LawError", "ModelError", "PHMError", "PHMWarning", "SettingError",
-               "SimulationError"),
+    "errors": ("CausalityError", "EquationError", "FmuError", "LawError", "ModelError", "PHMError", "PHMWarning",
+               "SettingError", "SimulationError"),
+    "fmu_export": ("fmu_sources", "to_fmu"),
+    "fmu_plant": ("FmuPlant", "simulate_fmu"),
     "inputs": ("InputExpression", "TabulatedInput"),
     "io": ("load_model", "to_json"),
     "model": ("BondGraph",),
@@ -53,11 +57,11 @@ _MODULE_OF = {name: module for module, names in _HOMES.items() for name in names
 
 __all__ = [  # the keys of _MODULE_OF, written out for readers and tools that do not run the module
     "AlgebraicLoopError", "Bond", "BondGraph", "CausalIssue", "Causality", "CausalityError", "Degradation", "Element",
-    "EquationError", "InputExpression", "LawError", "ModelEquation", "ModelError", "PHMError", "PHMWarning",
-    "PIController", "SettingError", "SimulationError", "SimulationResult", "StateEquations", "TabulatedInput",
-    "assign_causality", "causal_equations", "compose", "labelled_equations", "load_model", "model_equations",
-    "parse_degradation", "read_bgt", "signal_function", "simulate", "state_equations", "to_json", "to_svg", "to_tikz",
-    "write_bgt",
+    "EquationError", "FmuError", "FmuPlant", "InputExpression", "LawError", "ModelEquation", "ModelError", "PHMError",
+    "PHMWarning", "PIController", "SettingError", "SimulationError", "SimulationResult", "StateEquations",
+    "TabulatedInput", "assign_causality", "causal_equations", "compose", "fmu_sources", "labelled_equations",
+    "load_model", "model_equations", "parse_degradation", "read_bgt", "signal_function", "simulate", "simulate_fmu",
+    "state_equations", "to_fmu", "to_json", "to_svg", "to_tikz", "write_bgt",
 ]
 
 

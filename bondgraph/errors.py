@@ -17,7 +17,7 @@ import re
 from collections.abc import Callable
 
 __all__ = [
-    "CausalityError", "EquationError", "LawError", "ModelError", "PHMError", "PHMWarning", "SettingError",
+    "CausalityError", "EquationError", "FmuError", "LawError", "ModelError", "PHMError", "PHMWarning", "SettingError",
     "SimulationError",
 ]
 
@@ -80,6 +80,11 @@ class EquationError(PHMError, ValueError):
 
 class SimulationError(PHMError, ValueError):
     """Bad simulation input: missing signal, unknown parameter or state, wrong shape."""
+
+
+class FmuError(PHMError, ValueError):
+    """An FMU that cannot be written (:mod:`bondgraph.fmu_export`) or read and run
+    (:mod:`bondgraph.fmu_plant`): a path that is no FMU, a missing variable, a missing C compiler."""
 
 
 class SettingError(PHMError, ValueError):

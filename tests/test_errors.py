@@ -4,15 +4,15 @@ import numpy as np
 import pytest
 
 from bgphm.errors import UsageError
-from bondgraph import (AlgebraicLoopError, BondGraph, CausalityError, EquationError, LawError, ModelError, PHMError,
-                       SimulationError, simulate)
+from bondgraph import (AlgebraicLoopError, BondGraph, CausalityError, EquationError, FmuError, LawError, ModelError,
+                       PHMError, SimulationError, simulate)
 from bondgraph.io import ModelFileError, load_model
 from bondgraph.library import rlc_circuit
 from diagnosis import RecordError, as_record
 from prognosis import PrognosisError
 
 ERRORS = [ModelError, LawError, ModelFileError, CausalityError, EquationError, AlgebraicLoopError, SimulationError,
-          RecordError, UsageError, PrognosisError]
+          FmuError, RecordError, UsageError, PrognosisError]
 
 
 @pytest.mark.parametrize("error", ERRORS, ids=lambda e: e.__name__)

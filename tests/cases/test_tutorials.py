@@ -30,15 +30,16 @@ TUTORIALS = ROOT / "docs" / "tutorial"
 #: code or stops showing what it prints fails).
 MINIMUM = {"1-model.md": (100, 50), "2-diagnosis.md": (90, 45), "3-prognosis.md": (90, 24),
            "4-command-line.md": (75, 110), "5-calibration.md": (35, 16), "6-fault-diagnosis-toolbox.md": (15, 7),
-           "7-progpy.md": (50, 8), "9-bondgraphtools.md": (45, 20), "10-sub-models.md": (75, 15)}
+           "7-progpy.md": (50, 8), "8-fmi.md": (35, 18),
+           "9-bondgraphtools.md": (45, 20), "10-sub-models.md": (75, 15)}
 
 #: Heavy tutorials (slow tier): tutorial 4 runs ``bgphm demo`` and twenty more commands, each in its own
 #: process.  Tutorial 1 stays in the fast tier, as does the check that every script is up to date.
 SLOW = {"2-diagnosis.md", "3-prognosis.md", "4-command-line.md", "5-calibration.md", "6-fault-diagnosis-toolbox.md",
-        "7-progpy.md", "9-bondgraphtools.md", "10-sub-models.md"}
+        "7-progpy.md", "8-fmi.md", "9-bondgraphtools.md", "10-sub-models.md"}
 #: Tutorials that need an optional interop package (the ``interop`` marker): 6 runs the Fault Diagnosis Toolbox,
-#: 7 NASA's ProgPy, 9 reads BondGraphTools files with PyYAML.
-INTEROP = {"6-fault-diagnosis-toolbox.md", "7-progpy.md", "9-bondgraphtools.md"}
+#: 7 NASA's ProgPy, 8 fmpy (and a C compiler), 9 reads BondGraphTools files with PyYAML.
+INTEROP = {"6-fault-diagnosis-toolbox.md", "7-progpy.md", "8-fmi.md", "9-bondgraphtools.md"}
 
 #: What may differ from one run to the next, and only that: the elapsed time a ``bgphm`` progress line starts with.
 ELAPSED = re.compile(r"^\[ *\d+\.\d s\] ", re.MULTILINE)
