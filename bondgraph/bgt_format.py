@@ -31,10 +31,24 @@ The mapping to our model contract (docs/design.md, section 2; docs/model.md, "Bo
   two bonds become one.  Elsewhere it needs one value: ``f=0`` makes it an effort sensor (our ``De``,
   on the 0-junction it is bonded to), ``e=0`` a flow sensor (``Df``, on a 1-junction), another ``e`` an
   effort source and another ``f`` a flow source; with neither it is an open port and is refused.
-* Nested models are flattened: node ids, parameter and signal names are the paths joined by ``.``
-  (``load.R1``).
+* Nested models are flattened: node ids, parameter and signal names are the instance paths joined by
+  ``.`` (the instance ``sub`` of the model ``/sub`` gives ``sub.R1``, its parameter ``sub.R1``; nested twice
+  ``a.b.R1``; states ``q_a.b.C1``), as :mod:`bondgraph.composition` names what it takes from a part.  A model
+  may be used by several instances; a bond names a sub-model's port as ``sub.A``, or ``sub`` alone when it
+  has one, and may join two sub-models' ports (``a.A b.A``).
+* Why not :func:`bondgraph.composition.compose`: its ports are junctions, where a bond *to* the port shares
+  the junction's effort or flow; a BondGraphTools port is a source-sensor bonded to any component port
+  (an R, a two-port's ``.1``, a 1-junction's ``inverting``), and the two bonds through it are *one* bond.
+  Read through ``compose``, each port would need a 0-junction on each side (``<sub>.<port>``), nodes no
+  BondGraphTools model has; the orientation of a bond (above) depends on junctions and two-ports in
+  several models at once, so it is decided once over the whole flattened model; and ``compose`` prefixes
+  every part, where the top model's own components keep their names.  So a file is flattened here, into
+  the same names ``compose`` gives.
 * Anything else (the biochemical ``Ce``, ``Re``, port-Hamiltonian or custom components) is refused with
   a :class:`BGTFileError` naming the file, the model path, the component and its line.
+
+:func:`write_bgt` writes a composed model (dotted node ids) nested, one BondGraphTools model per path
+prefix, a port at every level a bond between parts leaves, so that ``read_bgt`` gives back its names.
 
 The file is parsed with ``yaml.safe_load`` only (PyYAML, the ``bgt`` extra): no Python object is ever
 built from it.  Before anything is built, a file larger than :data:`MAX_FILE_BYTES` is
