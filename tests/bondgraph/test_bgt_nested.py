@@ -10,7 +10,7 @@ import pytest
 import sympy as sp
 from sympy.core.function import AppliedUndef
 
-from bondgraph import BondGraph, compose
+from bondgraph import BondGraph, ModelError, compose
 from bondgraph.bgt_format import BGTFileError, model_from_bgt, read_bgt, write_bgt
 
 # BondGraphTools' layout (its modular models): the top model drives, through R1, the sub-model a, which
@@ -167,5 +167,5 @@ def test_write_bgt_refuses_a_node_named_like_a_part():
     graph = composed.graph.copy()
     graph.add_node("rc", kind="R", value=1.0)
     graph.add_edge("supply.out", "rc")
-    with pytest.raises(Exception, match="node 'rc' and the sub-model '/rc' would both be 'rc'"):
+    with pytest.raises(ModelError, match="node 'rc' and the sub-model '/rc' would both be 'rc'"):
         write_bgt(BondGraph(graph))
