@@ -31,10 +31,24 @@ The mapping to our model contract (docs/design.md, section 2; docs/model.md, "Bo
   two bonds become one.  Elsewhere it needs one value: ``f=0`` makes it an effort sensor (our ``De``,
   on the 0-junction it is bonded to), ``e=0`` a flow sensor (``Df``, on a 1-junction), another ``e`` an
   effort source and another ``f`` a flow source; with neither it is an open port and is refused.
-* Nested models are flattened: node ids, parameter and signal names are the paths joined by ``.``
-  (``load.R1``).
+* Nested models are flattened: node ids, parameter and signal names are the instance paths joined by
+  ``.`` (the instance ``sub`` of the model ``/sub`` gives ``sub.R1``, its parameter ``sub.R1``; nested twice
+  ``a.b.R1``; states ``q_a.b.C1``), as :mod:`bondgraph.composition` names what it takes from a part.  A model
+  may be used by several instances; a bond names a sub-model's port as ``sub.A``, or ``sub`` alone when it
+  has one, and may join two sub-models' ports (``a.A b.A``).
+* Why not :func:`bondgraph.composition.compose`: its ports are junctions, where a bond *to* the port shares
+  the junction's effort or flow; a BondGraphTools port is a source-sensor bonded to any component port
+  (an R, a two-port's ``.1``, a 1-junction's ``inverting``), and the two bonds through it are *one* bond.
+  Read through ``compose``, each port would need a 0-junction on each side (``<sub>.<port>``), nodes no
+  BondGraphTools model has; the orientation of a bond (above) depends on junctions and two-ports in
+  several models at once, so it is decided once over the whole flattened model; and ``compose`` prefixes
+  every part, where the top model's own components keep their names.  So a file is flattened here, into
+  the same names ``compose`` gives.
 * Anything else (the biochemical ``Ce``, ``Re``, port-Hamiltonian or custom components) is refused with
   a :class:`BGTFileError` naming the file, the model path, the component and its line.
+
+:func:`write_bgt` writes a composed model (dotted node ids) nested, one BondGraphTools model per path
+prefix, a port at every level a bond between parts leaves, so that ``read_bgt`` gives back its names.
 
 The file is parsed with ``yaml.safe_load`` only (PyYAML, the ``bgt`` extra): no Python object is ever
 built from it.  Before anything is built, a file larger than :data:`MAX_FILE_BYTES` is
@@ -84,7 +98,7 @@ import sympy as sp
 from . import elements as el
 from .errors import ModelError
 from .model import BondGraph
-from .names import is_name
+from .names import PATH_SEPARATOR, is_name
 from .optional import import_optional
 from .structure import require_model
 
@@ -280,7 +294,7 @@ class _Flattener:
 
     def expand(self, key: str, prefix: str, stack: tuple) -> dict:
         """Add model ``key``'s content under ``prefix``; return its ports: label -> the SS path behind it."""
-        at = f"{self.file}: model {key!r}"
+        at = f"{self.file}: model {key!r}" + (f" (as {prefix[:-1]!r})" if prefix else "")   # a model may be reused
         if key in stack:
             raise BGTFileError(f"{at}: contains itself (through {' -> '.join(stack + (key,))})")
         if len(stack) >= _MAX_DEPTH:
@@ -438,7 +452,11 @@ class _Orienter:
         self.parent: dict[str, tuple[str, int]] = {}   # parity union-find over 1-junctions and two-ports
 
     def _splice(self, flat: _Flattener) -> list:
-        """Bonds through an exposed, bonded source-sensor joined into one."""
+        """Bonds through an exposed, bonded source-sensor joined into one.
+
+        A bond may hold two such ports (``a.A b.A``: two sub-models bonded port to port), so the bonds a
+        port touches are followed as they merge: the merged bond keeps the first index.
+        """
         at_ss: dict[str, list[int]] = {}
         for index, (a, b, _) in enumerate(flat.bonds):
             for end in (a, b):
@@ -451,12 +469,16 @@ class _Orienter:
             if len(indices) > 2:
                 raise BGTFileError(f"{flat.file}: port {path!r} is bonded {len(indices)} times; a port takes one "
                                      "bond inside its model and one outside")
-            (i, j) = indices
+            i, j = indices
             first, second = bonds[i], bonds[j]
             inner = first[1] if first[0].path == path else first[0]
             outer = second[1] if second[0].path == path else second[0]
+            if inner.path == outer.path:
+                raise BGTFileError(f"{second[2]}: port {path!r} is bonded to itself through a ring of ports")
             bonds[i] = (inner, outer, first[2])
             bonds[j] = None
+            if outer.path in at_ss:   # the outer end is another port: its bond j is now bond i
+                at_ss[outer.path] = [i if k == j else k for k in at_ss[outer.path]]
             del self.atoms[path]
         return [b for b in bonds if b is not None]
 
@@ -609,8 +631,13 @@ def write_bgt(bg: BondGraph) -> str:
     R, C, I, Se, Sf, TF, GY, the junctions and the detectors (a source-sensor with ``f=0`` or ``e=0``)
     are written; modulated elements and laws have no BondGraphTools base component and are refused, as
     are a TF or GY modulus other than the parameter (or ``1/p``, ``-p``).  What BondGraphTools cannot
-    hold (uncertainties, units, parameter names other than the element's) is left out: a parameter is
-    read back under its element's name.
+    hold (uncertainties, units, parameter names other than the element's, bond labels, the model's own
+    ports) is left out: a parameter is read back under its element's name.
+
+    A model composed of parts (:func:`bondgraph.composition.compose`, node ids ``motor.R_a``) is written
+    nested: each path prefix is a BondGraphTools model (``/motor``, ``/drive/motor``) holding the
+    elements under it, and a bond between two parts goes through a source-sensor ``SS_<port>`` exposed
+    as the port ``<port>`` of each model it leaves, which :func:`read_bgt` splices back into one bond.
 
     No YAML library is needed: the lines are plain ``name template value`` texts.
 
@@ -620,50 +647,173 @@ def write_bgt(bg: BondGraph) -> str:
     >>> text = write_bgt(dc_motor())
     >>> [line.strip() for line in text.splitlines() if "GY" in line]
     ['- GY base/GY R=0.0389', '- 1_e.inverting GY.1', '- GY.0 1_m.non_inverting']
+
+    A composed model: the part ``rc`` is the model ``/rc``, bonded through its port ``in``:
+
+    >>> from bondgraph import BondGraph, compose
+    >>> load = BondGraph(name="load")
+    >>> _ = load.add("in", "0"), load.add("C", "C", value=1e-3), load.add("R", "R", value=50.0)
+    >>> _ = load.bond("in", "C"), load.bond("in", "R"), load.port("in", "in")
+    >>> source = BondGraph(name="source")
+    >>> _ = source.add("U", "Se"), source.add("out", "1"), source.add("R", "R", value=1.0)
+    >>> _ = source.bond("U", "out"), source.bond("out", "R"), source.port("out", "out")
+    >>> print(write_bgt(compose({"supply": source, "rc": load}, [("supply.out", "rc.in")], name="RC")))
+    ... # doctest: +NORMALIZE_WHITESPACE
+    version: '0.1'
+    root: RC
+    models:
+      /:
+        components:
+        - supply /supply
+        - rc /rc
+        netlist:
+        - supply.out rc.in
+      /supply:
+        components:
+        - U base/Se
+        - out base/1
+        - R base/R r=1.0
+        - SS_out base/SS
+        netlist:
+        - U out.non_inverting
+        - out.inverting R
+        - out.inverting SS_out
+        ports:
+        - SS_out out
+      /rc:
+        components:
+        - in base/0
+        - C base/C C=0.001
+        - R base/R r=50.0
+        - SS_in base/SS
+        netlist:
+        - SS_in in
+        - in C
+        - in R
+        ports:
+        - SS_in in
+    <BLANKLINE>
     """
     require_model(bg, "write_bgt")
     structure = bg.structure()
-    components, netlist = [], []
     power = {name: [b for b in structure.at[name] if not b.is_signal] for name in structure.elements}
     ports: dict[tuple, str] = {}
     kinds = {name: element.kind for name, element in structure.elements.items()}
+    tree = _ModelTree()
     for name, element in structure.elements.items():
-        components.append(_component_line(name, element, power[name], ports))
+        key, leaf = _place(name)
+        tree.add(key, leaf, _component_line(name, leaf, element, power[name], ports), name)
     for bond in structure.bonds:
-        tail, head = bond.tail, bond.head
-        if bond.is_signal:
-            netlist.append(f"{_token(tail, bond, kinds, ports)} {head}")   # the sensor's flow (or effort) is 0
-        else:
-            netlist.append(f"{_token(tail, bond, kinds, ports)} {_token(head, bond, kinds, ports)}")
-    lines = [f"version: '{BGT_VERSION}'", f"root: {_quoted(bg.name)}", "models:", "  /:", "    components:"]
-    lines += [f"    - {line}" for line in components]
-    if netlist:
-        lines += ["    netlist:"] + [f"    - {line}" for line in netlist]
+        ends = [(node, _place(node)[0], _token(node, bond, kinds, ports)) for node in (bond.tail, bond.head)]
+        common = _common(ends[0][1], ends[1][1])
+        tokens = [tree.reach(key, token, common, leaving=node == bond.tail, node=node) for node, key, token in ends]
+        tree.models[common]["netlist"].append(f"{tokens[0]} {tokens[1]}")
+    lines = [f"version: '{BGT_VERSION}'", f"root: {_quoted(bg.name)}", "models:"]
+    for key, body in tree.models.items():
+        lines.append(f"  {key}:")
+        for field_name in ("components", "netlist", "ports"):
+            if body[field_name]:
+                lines += [f"    {field_name}:"] + [f"    - {line}" for line in body[field_name]]
     return "\n".join(lines) + "\n"
 
 
-def _component_line(name, element, bonds: list, ports: dict) -> str:
+def _place(node) -> tuple[str, str]:
+    """The BondGraphTools model holding a node and its name there: ``a.b.R1`` -> (``/a/b``, ``R1``)."""
+    *parts, leaf = str(node).split(PATH_SEPARATOR)
+    return "/" + "/".join(parts), leaf
+
+
+def _common(a: str, b: str) -> str:
+    """The innermost model holding both models ``a`` and ``b``: where a bond between them is written."""
+    shared = []
+    for x, y in zip(a.strip("/").split("/"), b.strip("/").split("/")):
+        if x != y or not x:
+            break
+        shared.append(x)
+    return "/" + "/".join(shared)
+
+
+class _ModelTree:
+    """The nested models :func:`write_bgt` writes: model key -> components, netlist and ports lines."""
+
+    def __init__(self):
+        self.models: dict[str, dict[str, list[str]]] = {}
+        self.names: dict[str, dict[str, str]] = {}    # model key -> component name -> what holds it
+
+    def model(self, key: str) -> dict[str, list[str]]:
+        """The model ``key``, created with its parents (each a component of the one above) if new."""
+        if key not in self.models:
+            if key != "/":
+                parent, _, name = key.rpartition("/")
+                self._name(parent or "/", name, f"the sub-model {key!r}")
+                self.model(parent or "/")["components"].append(f"{name} {key}")
+            self.models[key] = {"components": [], "netlist": [], "ports": []}
+            self.names[key] = {}
+        return self.models[key]
+
+    def _name(self, key: str, name: str, holder: str) -> None:
+        self.model(key)
+        taken = self.names[key].get(name)
+        if taken is not None and taken != holder:
+            raise ModelError(f"write_bgt: {holder} and {taken} would both be {name!r} in the BondGraphTools "
+                             f"model {key!r}")
+        self.names[key][name] = holder
+
+    def add(self, key: str, leaf: str, line: str, node) -> None:
+        self._name(key, leaf, f"node {node!r}")
+        self.model(key)["components"].append(line)
+
+    def reach(self, key: str, token: str, target: str, *, leaving: bool, node) -> str:
+        """``token`` of model ``key`` as seen from its ancestor ``target``, through one port per level.
+
+        Each level gets a source-sensor bonded to the token (``leaving``: power flows from the token into
+        it) and exposed as a port named after the node, so the bond keeps its direction across levels.
+        """
+        while key != target:
+            body = self.model(key)
+            label = _free(str(node).split(PATH_SEPARATOR)[-1], {p.split()[1] for p in body["ports"]})
+            sensor = _free(f"SS_{label}", self.names[key])
+            self._name(key, sensor, f"the port {label!r} of node {node!r}")
+            body["components"].append(f"{sensor} base/SS")
+            body["netlist"].append(f"{token} {sensor}" if leaving else f"{sensor} {token}")
+            body["ports"].append(f"{sensor} {label}")
+            parent, _, name = key.rpartition("/")
+            key, token = parent or "/", f"{name}.{label}"
+        return token
+
+
+def _free(wanted: str, taken) -> str:
+    """``wanted``, or ``wanted_2``, ``wanted_3``... if taken; never all digits (BondGraphTools reads those as
+    port numbers)."""
+    wanted = f"port_{wanted}" if wanted.isdigit() else wanted
+    candidate, number = wanted, 1
+    while candidate in taken:
+        number += 1
+        candidate = f"{wanted}_{number}"
+    return candidate
+
+
+def _component_line(name, leaf: str, element, bonds: list, ports: dict) -> str:
     kind, where = element.kind, f"write_bgt: {element.kind} {name!r}"
-    if "." in str(name) or " " in str(name):
-        raise ModelError(f"{where}: BondGraphTools names hold no '.' or space")
+    if " " in str(name):
+        raise ModelError(f"{where}: BondGraphTools names hold no space")
     if element.law is not None:
         raise ModelError(f"{where}: a law has no BondGraphTools base component (only linear R, C, I)")
     if kind in el.MODULATED_TWO_PORTS or kind in ("MSe", "MSf"):
         raise ModelError(f"{where}: modulated elements have no BondGraphTools base component")
     if kind in ("0", "1"):
-        return f"{name} base/{kind}"
+        return f"{leaf} base/{kind}"
     if kind in el.DETECTORS:
-        return f"{name} base/SS {'f' if kind == 'De' else 'e'}=0"
+        return f"{leaf} base/SS {'f' if kind == 'De' else 'e'}=0"
     if kind in el.SOURCES:
         key = "e" if kind == "Se" else "f"
         value = element.value if element.value is not None else (element.signal if element.signal != name else None)
-        return f"{name} base/{kind}" + (f" {key}={_number(value)}" if value is not None else "")
+        return f"{leaf} base/{kind}" + (f" {key}={_number(value)}" if value is not None else "")
     value = element.value
     key = BGT_KINDS[kind][1][0]
     if kind in ("TF", "GY"):
         ports.update(_two_port_ports(name, element, bonds, where))
-        return f"{name} base/{kind} {key}={_number(value)}"
-    return f"{name} base/{kind} {key}={_number(value)}"
+    return f"{leaf} base/{kind} {key}={_number(value)}"
 
 
 def _two_port_ports(name, element, bonds: list, where: str) -> dict:
@@ -682,12 +832,14 @@ def _two_port_ports(name, element, bonds: list, where: str) -> dict:
 
 
 def _token(node, bond, kinds: Mapping, ports: dict) -> str:
+    """A bond's end in the netlist of the node's own model: its name there, and its port if it has several."""
+    leaf = _place(node)[1]
     key = (node, bond.label)
     if key in ports:
-        return f"{node}.{ports[key]}"
+        return f"{leaf}.{ports[key]}"
     if kinds[node] == "1":
-        return f"{node}.{'non_inverting' if node == bond.head else 'inverting'}"
-    return str(node)
+        return f"{leaf}.{'non_inverting' if node == bond.head else 'inverting'}"
+    return leaf
 
 
 def _number(value) -> str:
