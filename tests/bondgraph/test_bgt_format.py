@@ -14,6 +14,8 @@ from bondgraph.bgt_format import BGTFileError, model_from_bgt, read_bgt, write_b
 from bondgraph.io import ModelFileError, load_model
 from bondgraph.library import dc_motor, rlc_circuit
 
+pytestmark = pytest.mark.extras   # .bg files are YAML: PyYAML, the bgt extra
+
 # BondGraphTools' test/files/rlc_parallel.bg, the layout of its own files: a series RLC on a 1-junction
 SERIES_RLC = """\
 # Base Model Definition

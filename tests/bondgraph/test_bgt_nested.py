@@ -13,6 +13,8 @@ from sympy.core.function import AppliedUndef
 from bondgraph import BondGraph, ModelError, compose
 from bondgraph.bgt_format import BGTFileError, model_from_bgt, read_bgt, write_bgt
 
+pytestmark = pytest.mark.extras   # .bg files are YAML: PyYAML, the bgt extra
+
 # BondGraphTools' layout (its modular models): the top model drives, through R1, the sub-model a, which
 # holds a capacitor on a 0-junction and two instances of the series RC cell /cell.  a is bonded at its
 # port B by name, a.sub by its only port, a.sub2 by name.
