@@ -39,7 +39,7 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 from bondgraph.errors import SettingError
 
-from .detection import Evaluation, noise_margin, robust_std
+from .detection import CalibrationError, Evaluation, noise_margin, robust_std
 from .derivatives import default_window
 from .records import Record
 
@@ -115,12 +115,14 @@ class DetectionSettings:
 
 @dataclass
 class Calibration:
-    """What a healthy stretch gave: its end, each ARR's evaluation, residual noise and margin (by ARR name)."""
+    """What a healthy stretch gave: its end, each ARR's evaluation, residual noise and margin (by ARR name), and
+    the ARRs it gave no residual to calibrate on (``undecided``: name -> why), left out of the rest."""
 
     until: float
     evaluations: list = field(default_factory=list)
     noise_std: dict = field(default_factory=dict)
     margin: dict = field(default_factory=dict)
+    undecided: dict = field(default_factory=dict)
 
     def options(self, settings: DetectionSettings) -> dict:
         """ARR name -> the options of :func:`~diagnosis.evaluate` that judge its residual: its margin and the
@@ -249,21 +251,31 @@ def calibrate(arrs: Sequence, record: Record, settings: DetectionSettings | None
 
     The margin is ``settings.margin``, or ``k`` robust standard deviations of the residual on the
     stretch, which is then checked (:func:`check_healthy`); the noise, the residual's robust standard
-    deviation there, is measured either way (a filter weighs the residuals by it).
+    deviation there, is measured either way (a filter weighs the residuals by it).  An ARR the stretch gives
+    no residual for (a derivative estimate undecided throughout, say) is left out, named in ``undecided``,
+    as :func:`~diagnosis.detect` leaves it out; a :class:`~diagnosis.detection.CalibrationError` says when
+    none is left.
     """
     settings = settings or DetectionSettings()
     until = calibration_end(record, settings.calibrate)
     healthy, options = record.between(end=until), settings.options()
     result = Calibration(until)
     for arr in arrs:
-        margin = settings.margin if settings.margin is not None else noise_margin(arr, healthy, k=settings.k,
-                                                                                  **options)
+        try:
+            margin = settings.margin if settings.margin is not None else noise_margin(arr, healthy, k=settings.k,
+                                                                                      **options)
+        except CalibrationError as error:
+            result.undecided[arr.name] = str(error).removeprefix(f"{arr.name}: ")
+            continue
         evaluation = arr.evaluate(record, margin=margin, **options)
         if settings.margin is None:
             check_healthy(arr, record, evaluation, until, settings)
         result.evaluations.append(evaluation)
         result.margin[arr.name] = float(margin)
         result.noise_std[arr.name] = max(robust_std(evaluation.residual[record.t <= until]), NOISE_FLOOR)
+    if arrs and not result.margin:
+        reasons = "; ".join(f"{name}: {why}" for name, why in result.undecided.items())
+        raise CalibrationError(f"no ARR gives a residual on the healthy stretch to calibrate on ({reasons})")
     return result
 
 
@@ -283,13 +295,14 @@ def pooled_calibration(arrs: Sequence, records: Iterable[tuple[object, Record]],
                 one = calibrate(arrs, record, settings)
             except SettingError as exc:
                 raise exc.within(f"asset {asset!r}: ") from None
-        for name in noise:
+        for name in one.margin:
             noise[name].append(one.noise_std[name])
             margins[name].append(one.margin[name])
         first = record if first is None else first
         assets.append(asset)
     if first is None:
         raise SettingError("calibrate", "{setting}: no record to calibrate on")
-    pooled = Calibration(settings.calibrate, [], {n: float(np.median(v)) for n, v in noise.items()},
-                         {n: float(np.median(v)) for n, v in margins.items()})
+    pooled = Calibration(settings.calibrate, [], {n: float(np.median(v)) for n, v in noise.items() if v},
+                         {n: float(np.median(v)) for n, v in margins.items() if v},
+                         {n: "no calibration record gives it a residual" for n, v in noise.items() if not v})
     return pooled, first

@@ -196,6 +196,7 @@ def prognose(arrs: Sequence, record, failures: Mapping[str, float], settings: Pr
     record = as_record(record, list(dict.fromkeys(s for a in arrs for s in a.signals)))
     detection = settings.detection
     healthy = calibrate(arrs, record, detection)
+    arrs = [arr for arr in arrs if arr.name not in healthy.undecided]   # no residual to weigh: left out, named
     dt = filter_step(record, detection.window, chosen.dt)
     horizon = rul_horizon(dt, chosen.horizon, chosen.n_particles, len(failures) * len(chosen.laws))
     monitor = IsolatingMonitor(arrs, failures, noise_std=healthy.noise_std,
@@ -205,5 +206,6 @@ def prognose(arrs: Sequence, record, failures: Mapping[str, float], settings: Pr
     result.settings = {"failure_values": dict(failures), "calibration_end": healthy.until, "filter_step": dt,
                        "horizon": horizon, "filter": chosen.method, "particles_per_hypothesis": chosen.n_particles,
                        "residual_noise_std": dict(healthy.noise_std), "margins": dict(healthy.margin),
+                       "undecided": dict(healthy.undecided),
                        "seed": chosen.seed if isinstance(chosen.seed, int) else str(chosen.seed)}
     return result

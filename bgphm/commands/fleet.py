@@ -62,12 +62,14 @@ def run(args, progress: Progress) -> int:
         raise exc.within("records: ") if exc.setting == "calibrate" else exc from None
     calibration = {"assets": list(calibrated), "until": args.calibrate, "noise_std": pooled.noise_std,
                    "margin": pooled.margin}
+    for name, why in pooled.undecided.items():
+        progress(f"{name}: undecided, left out ({why})")
     for name in pooled.noise_std:
         progress(f"{name}: residual noise {pooled.noise_std[name]:.3g}, margin {pooled.margin[name]:.3g} (median "
                  f"over {len(calibrated)} record(s), t <= {args.calibrate:g} s)")
     detection = pooled.options(detection)
     job = FleetSpec(model_reference(args.model), failures, noise_std=calibration["noise_std"], detection=detection,
-                    laws=laws, candidates=candidates, arrs=None if args.arr is None else [args.arr],
+                    laws=laws, candidates=candidates, arrs=decided_arrs(args.arr, arrs, pooled.undecided),
                     integrals=args.integrals, dt=dt, n_particles=args.particles, rul_every=args.rul_every,
                     horizon=args.horizon, healthy_until=args.calibrate, seed=args.seed)
     where = args.scheduler or ("this process" if args.workers == 0 else f"a local cluster of {args.workers} workers")
@@ -107,3 +109,11 @@ def fleet_truth_line(scored: dict) -> str:
             f"worst {fmt(pooled['asset_worst_mean_relative_accuracy'])}), the 5-95 % band holds the truth at "
             f"{100 * pooled['coverage_90']:.0f} %, the median within 20 % at "
             f"{100 * pooled['within_alpha_share']:.0f} %{extra}")
+
+
+def decided_arrs(chosen: str | None, arrs: list, undecided: dict) -> list | None:
+    """The ARR names the assets are monitored with: the one chosen, or all (None) but those the calibration left
+    out."""
+    if chosen is not None:
+        return [chosen]
+    return [arr.name for arr in arrs if arr.name not in undecided] if undecided else None

@@ -69,6 +69,8 @@ def run(args, progress: Progress) -> int:
     for name, margin in summary["margins"].items():
         progress(f"{name}: margin {margin:.3g}, residual noise {summary['residual_noise_std'][name]:.3g} (t <= "
                  f"{summary['calibration_end']:g} s), filter step {summary['filter_step']:g} s")
+    for name, why in summary.get("undecided", {}).items():   # as detect says it, even with --quiet
+        print(f"{name}: undecided, left out ({why})")
     # said even with --quiet: no answer, or no wear left but a sensor's offset (a wrong failure value?)
     if result.decision is not None and result.decision.status == "rejected":
         print(f"bgphm: warning: every hypothesis was rejected: {'; '.join(first_reasons(result))}", file=sys.stderr)

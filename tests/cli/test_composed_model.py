@@ -15,7 +15,7 @@ from bondgraph import load_model
 from diagnosis import derive_arrs
 from tests.bondgraph.test_composition import DRIVE, PARTS, flat_drive
 
-pytestmark = pytest.mark.slow   # two derivations and a detection: 8 s
+pytestmark = pytest.mark.slow   # derivations, detections and a prognosis: 40 s
 
 
 def test_the_composed_model_has_the_arrs_of_the_flat_one():
@@ -72,3 +72,19 @@ def test_detect_on_the_composing_file_names_the_load_friction_by_its_path(tmp_pa
     assert alarming and all(summary["arrs"][name]["detection_time"] > 3.0 for name in alarming)
     assert "load.b_L" in summary["candidates"] and "motor.R_a" not in summary["candidates"]
     assert "load.b_L" in (out / "report.html").read_text()
+
+
+def test_prognose_on_the_composing_file_finds_the_wearing_friction_by_its_path(tmp_path, capsys):
+    for file in [*PARTS.values(), "drive.json"]:
+        shutil.copy(DRIVE / file, tmp_path / file)
+    record = physics_record(np.arange(0.0, 6.0, 2e-3), onset=3.0, rate=1.0, seed=7)
+    data = tmp_path / "drive.csv"
+    np.savetxt(data, np.column_stack(list(record.values())), delimiter=",", header=",".join(record), comments="")
+    out = tmp_path / "out"
+    assert main(["--quiet", "prognose", str(tmp_path / "drive.json"), str(data), "--fail", "load.b_L=0.02",
+                 "--calibrate", "2.5", "--particles", "200", "--out", str(out)]) == 0
+    summary = json.loads((out / "prognosis.json").read_text())
+    assert summary["detection_time"] > 3.0
+    # the friction, or the inertias its signature cannot be told from on these sensors, said so
+    assert summary["candidate"] == "load.b_L" or "load.b_L" in summary["same_signature"]
+    assert summary["margins"] and not set(summary["undecided"]) & set(summary["margins"])   # left out, not weighed

@@ -6,6 +6,7 @@ import pytest
 from bondgraph import SettingError, simulate
 from bondgraph.library import rlc_circuit
 from diagnosis.calibration import stays_in_alarm
+from diagnosis.detection import CalibrationError
 from diagnosis import (DetectionSettings, add_noise, as_record, calibrate, calibration_end, derive_arrs,
                        pooled_calibration)
 
@@ -94,3 +95,22 @@ def test_only_an_alarm_that_stays_marks_a_fault():
     assert stays_in_alarm(np.zeros(10, bool), t) is None
     assert stays_in_alarm(np.array([1, 1, 1, 0, 0, 0, 0, 0, 0, 0], bool), t) is None  # a transient that ends
     assert stays_in_alarm(np.array([0, 0, 0, 0, 0, 0, 1, 1, 1, 1], bool), t) == 6.0  # a fault that stays
+
+
+def test_an_arr_the_stretch_gives_no_residual_for_is_left_out_and_named(arrs):
+    """The source voltage's logger starts only after the stretch: the ARR reading it cannot be calibrated, so it
+    is left out (as detect leaves it out), the other calibrated as before."""
+    record = rlc_record(4)
+    late = record.columns["V"].copy()
+    late[record.t <= 0.8] = np.nan
+    waking = as_record({"t": record.t, **{**record.columns, "V": late}})
+    reading = {a.name for a in arrs if "V" in a.signals}
+    assert reading and reading != {a.name for a in arrs}
+    healthy = calibrate(arrs, waking, DetectionSettings(calibrate=0.8))
+    assert set(healthy.undecided) == reading and set(healthy.margin) == {a.name for a in arrs} - reading
+    assert all("fewer than 2 finite residual values" in why for why in healthy.undecided.values())
+    pooled, _ = pooled_calibration(arrs, [("a1", waking), ("a2", waking)], DetectionSettings(calibrate=0.8))
+    assert set(pooled.undecided) == reading and set(pooled.noise_std) == set(healthy.noise_std)
+    dead = as_record({"t": record.t, **{name: np.full(record.t.size, np.nan) for name in record.columns}})
+    with pytest.raises(CalibrationError, match="no ARR gives a residual on the healthy stretch"):
+        calibrate(arrs, dead, DetectionSettings(calibrate=0.8))
