@@ -97,6 +97,7 @@ import sympy as sp
 
 from . import elements as el
 from .errors import ModelError
+from .file_text import read_limited
 from .model import BondGraph
 from .names import PATH_SEPARATOR, is_name
 from .optional import import_optional
@@ -169,18 +170,8 @@ def read_bgt(source: str | Path, *, text: str | None = None) -> BondGraph:
     """
     where = str(source)
     if text is None:
-        path = Path(source)
-        try:
-            size = path.stat().st_size
-        except OSError as exc:
-            raise BGTFileError(f"{where}: cannot be read ({exc})") from None
-        if size > MAX_FILE_BYTES:  # refused before it is read
-            raise BGTFileError(f"{where}: {size} bytes, larger than the limit of {MAX_FILE_BYTES} bytes for a "
-                                 "model file (bondgraph.bgt_format.MAX_FILE_BYTES)")
-        try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise BGTFileError(f"{where}: cannot be read ({exc})") from None
+        text = read_limited(Path(source), limit=MAX_FILE_BYTES, error=BGTFileError, what="model file",
+                            constant="bondgraph.bgt_format.MAX_FILE_BYTES")
     if not isinstance(text, str):
         raise TypeError(f"read_bgt: text must be a str, got {type(text).__name__}")
     if len(text) > MAX_FILE_BYTES:

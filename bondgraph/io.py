@@ -60,6 +60,7 @@ import sympy as sp
 from .errors import ModelError
 from .inputs import InputExpression
 from .composition import compose, path, renamed_settings
+from .file_text import read_limited
 from .model import BondGraph
 from .names import check_node_id
 from .structure import BOND_ATTRIBUTES, NODE_ATTRIBUTES, require_model
@@ -153,17 +154,8 @@ def load_model(source: str | Path) -> ModelSpec:
 
 def _from_json_file(path: Path, parents: tuple) -> ModelSpec:
     """A JSON model file; ``parents`` are the files composing it (a part's part...), to refuse a cycle."""
-    try:
-        size = path.stat().st_size
-    except OSError as exc:
-        raise ModelFileError(f"{path}: cannot be read ({exc})") from None
-    if size > MAX_FILE_BYTES:  # refused before it is read: json would take all of it into memory
-        raise ModelFileError(f"{path}: {size} bytes, larger than the limit of {MAX_FILE_BYTES} bytes for a "
-                             "JSON model (bondgraph.io.MAX_FILE_BYTES)")
-    try:
-        content = path.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise ModelFileError(f"{path}: cannot be read ({exc})") from None
+    content = read_limited(path, limit=MAX_FILE_BYTES, error=ModelFileError, what="JSON model",
+                           constant="bondgraph.io.MAX_FILE_BYTES")
     return _model_from_json(content, str(path), path.parent, (*parents, path.resolve()))
 
 

@@ -71,14 +71,26 @@ def plain(expression) -> sp.Expr:
     return sp.sympify(expression).replace(lambda e: isinstance(e, AppliedUndef), lambda e: sp.Symbol(e.func.__name__))
 
 
+def leaf(model, variable: str, table: str) -> tuple[str, str]:
+    """A state (``table="state_vars"``) or control variable of ``model`` followed down its sub-models:
+    (our path of the component, its own variable)."""
+    component, own = getattr(model, table)[variable]
+    if hasattr(component, "components"):   # a sub-model: its own variable, one level down
+        path, own = leaf(component, own, table)
+        return f"{component.name}.{path}", own
+    return component.name, own
+
+
 def their_rates(model) -> dict:
-    """BondGraphTools' constitutive relations solved for each state's rate, in our names: {q_C1: rhs}."""
+    """BondGraphTools' constitutive relations solved for each state's rate, in our names: {q_C1: rhs}, and
+    {q_a.sub.C1: rhs} in a sub-model."""
     names = {}
-    for x, (component, var) in model.state_vars.items():
-        names[sp.Symbol(x)] = sp.Symbol(f"{var[0]}_{component.name}")
-        names[sp.Symbol(f"d{x}")] = sp.Symbol(f"d{var[0]}_{component.name}")
-    for u, (component, _) in model.control_vars.items():
-        names[sp.Symbol(u)] = sp.Symbol(component.name)
+    for x in model.state_vars:
+        path, own = leaf(model, x, "state_vars")
+        names[sp.Symbol(x)] = sp.Symbol(f"{own[0]}_{path}")
+        names[sp.Symbol(f"d{x}")] = sp.Symbol(f"d{own[0]}_{path}")
+    for u in model.control_vars:
+        names[sp.Symbol(u)] = sp.Symbol(leaf(model, u, "control_vars")[0])
     relations = [sp.sympify(r).xreplace(names) for r in model.constitutive_relations]
     rates = [names[sp.Symbol(f"d{x}")] for x in model.state_vars]
     solution = sp.solve(relations, rates, dict=True)

@@ -7,18 +7,12 @@ from __future__ import annotations
 
 import pytest
 import sympy as sp
-from sympy.core.function import AppliedUndef
 
 from bondgraph import BondGraph, compose
 from bondgraph.bgt_format import read_bgt, write_bgt
+from tests.interop.test_bondgraphtools import bondgraphtools, our_rates, their_rates
 
 pytestmark = [pytest.mark.interop, pytest.mark.slow]   # BondGraphTools imports matplotlib: seconds
-
-
-def bondgraphtools():
-    from bondgraph.optional import import_optional
-
-    return import_optional("BondGraphTools", "pip install BondGraphTools (the test extra pins it)")
 
 
 def rc_cell(tools, name: str, r: float, c: float, port: str):
@@ -55,42 +49,6 @@ def modular(tools):
     tools.connect(loop.inverting, (gyrator, 1))
     tools.connect((gyrator, 0), inner)
     return top
-
-
-def plain(expression) -> sp.Expr:
-    return sp.sympify(expression).replace(lambda e: isinstance(e, AppliedUndef), lambda e: sp.Symbol(e.func.__name__))
-
-
-def leaf(model, variable: str, table: str) -> tuple[str, str]:
-    """A state (``table="state_vars"``) or control variable of ``model`` followed down its sub-models:
-    (our path of the component, its own variable)."""
-    component, own = getattr(model, table)[variable]
-    if hasattr(component, "components"):   # a sub-model: its own variable, one level down
-        path, own = leaf(component, own, table)
-        return f"{component.name}.{path}", own
-    return component.name, own
-
-
-def their_rates(model) -> dict:
-    """BondGraphTools' constitutive relations solved for each state's rate, in our names: {q_a.sub.C1: rhs}."""
-    names = {}
-    for x in model.state_vars:
-        path, own = leaf(model, x, "state_vars")
-        names[sp.Symbol(x)] = sp.Symbol(f"{own[0]}_{path}")
-        names[sp.Symbol(f"d{x}")] = sp.Symbol(f"d{own[0]}_{path}")
-    for u in model.control_vars:
-        names[sp.Symbol(u)] = sp.Symbol(leaf(model, u, "control_vars")[0])
-    relations = [sp.sympify(r).xreplace(names) for r in model.constitutive_relations]
-    rates = [names[sp.Symbol(f"d{x}")] for x in model.state_vars]
-    solution = sp.solve(relations, rates, dict=True)
-    assert len(solution) == 1
-    return {str(rate)[1:]: solution[0][rate] for rate in rates}
-
-
-def our_rates(bg) -> dict:
-    eqs = bg.state_equations()
-    values = {sp.Symbol(k): sp.nsimplify(v) for k, v in bg.parameters.items()}
-    return {str(plain(x)): plain(rhs).subs(values) for x, rhs in zip(eqs.states, eqs.rhs)}
 
 
 def assert_same(ours: dict, theirs: dict) -> None:
