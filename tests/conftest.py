@@ -22,9 +22,11 @@ EXTRA_DOCTESTS = {
 
 
 def pytest_collection_modifyitems(config, items):
-    """Mark ``extras`` every interop test and every doctest of :data:`EXTRA_DOCTESTS`."""
+    """Mark ``extras`` every interop test, every browser test (playwright) and every doctest of
+    :data:`EXTRA_DOCTESTS`."""
     for item in items:
-        if item.get_closest_marker("interop") or item.name in EXTRA_DOCTESTS:
+        browser = item.nodeid.startswith("tests/browser/")
+        if item.get_closest_marker("interop") or item.name in EXTRA_DOCTESTS or browser:
             item.add_marker(pytest.mark.extras)
 
 

@@ -60,6 +60,7 @@ def test_elm_forecasts_track_the_levels(seed0):
     assert all(a < b for a, b in zip(rmse, rmse[1:]))  # errors grow with the horizon
 
 
+@pytest.mark.extras   # the plots: matplotlib, the plot extra
 def test_main_writes_the_table_and_plots(tank, tmp_path, capsys):
     summary = tank.main(["--seeds", "2", "--methods", "SCKF", "STSCKF", "STUKF", "PF", "--workers", "1", "--quiet",
                          "--out", str(tmp_path)])

@@ -86,6 +86,7 @@ def test_mass_cases_simulate_the_load_and_estimate_it(example, case, law):
     assert r.arr.uncertainties["mu"] == (-0.1, 0.1)  # Table VI's mu enters the thresholds
 
 
+@pytest.mark.extras   # the plots: matplotlib, the plot extra
 def test_main_writes_results_csv_and_plots_over_runs(example, tmp_path, capsys):
     figures = example.main(["--case", "mass-exponential", "--runs", "2", "--particles", "30", "--workers", "1",
                             "--out", str(tmp_path)])

@@ -40,6 +40,8 @@ SLOW = {"2-diagnosis.md", "3-prognosis.md", "4-command-line.md", "5-calibration.
 #: Tutorials that need an optional interop package (the ``interop`` marker): 6 runs the Fault Diagnosis Toolbox,
 #: 7 NASA's ProgPy, 8 fmpy (and a C compiler), 9 reads BondGraphTools files with PyYAML.
 INTEROP = {"6-fault-diagnosis-toolbox.md", "7-progpy.md", "8-fmi.md", "9-bondgraphtools.md"}
+#: Tutorials that draw with matplotlib (the plot extra; ``bgphm demo`` in 4 prints the figures it writes).
+PLOTS = {"2-diagnosis.md", "3-prognosis.md", "4-command-line.md"}
 
 #: What may differ from one run to the next, and only that: the elapsed time a ``bgphm`` progress line starts with.
 ELAPSED = re.compile(r"^\[ *\d+\.\d s\] ", re.MULTILINE)
@@ -157,7 +159,8 @@ def test_scripts_are_up_to_date():
 
 
 @pytest.mark.parametrize("name", [pytest.param(name, marks=[*([pytest.mark.slow] if name in SLOW else []),
-                                                               *([pytest.mark.interop] if name in INTEROP else [])])
+                                                               *([pytest.mark.interop] if name in INTEROP else []),
+                                                               *([pytest.mark.extras] if name in PLOTS else [])])
                                   for name in sorted(MINIMUM)])
 def test_tutorial_runs_as_printed(name, tmp_path):
     path = TUTORIALS / name

@@ -9,16 +9,17 @@ import sys
 import textwrap
 import zipfile
 
-import fmpy
 import numpy as np
 import pytest
-from fmpy.validation import validate_fmu
 from scipy.integrate import solve_ivp
 
 from bondgraph import FmuError, FmuPlant, simulate, simulate_fmu, to_fmu
 from bondgraph.library import dc_motor
 from tests.zoo.chain import cases
 from tests.zoo.reference import simulate_reference
+
+fmpy = pytest.importorskip("fmpy")   # the fmi extra
+validate_fmu = pytest.importorskip("fmpy.validation").validate_fmu
 
 pytestmark = [pytest.mark.interop, pytest.mark.slow]   # a C compilation per FMU, fmpy, pythonfmu: seconds
 
