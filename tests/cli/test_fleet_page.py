@@ -131,6 +131,7 @@ def test_asset_ids_and_names_cannot_break_out_of_the_page():
     assert data["model"] == summary["spec"]["model"] and data["records"] == "<i>r</i>"
 
 
+@pytest.mark.slow   # a second of CPU: the fast tier stays under a minute
 def test_a_thousand_assets_fit_a_tenth_of_the_bound_and_the_bound_holds():
     result, summary, assets = synthetic_fleet(1000)
     text = fleet_page(result, summary, assets=assets, units=SYNTHETIC_UNITS, horizon=SYNTHETIC_HORIZON)

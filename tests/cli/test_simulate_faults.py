@@ -71,6 +71,7 @@ def test_a_degradation_follows_the_motors_equations(tmp_path, law, b, onset):
     np.testing.assert_allclose(record["omega"][before], healthy[before], rtol=1e-6, atol=1e-6 * omega.max())
 
 
+@pytest.mark.slow   # a second of CPU: the fast tier stays under a minute
 def test_degradations_of_two_parameters_act_together(tmp_path):
     record = simulated(tmp_path, "--degrade", "b=exp:0.5@1", "--degrade", "R_a=lin:0.1@2")
     i, omega = motor(lambda s: B * np.exp(0.5 * max(s - 1.0, 0.0)), breaks=(1.0, 2.0))

@@ -116,6 +116,7 @@ def test_records_too_short_for_a_window_are_refused_naming_the_records():
     assert error.value.setting == "records" and "no window of 51 usable samples" in str(error.value)
 
 
+@pytest.mark.slow   # a second of CPU: the fast tier stays under a minute
 def test_parameters_in_no_arr_are_reported_unseen_not_fitted():
     from bondgraph.library import torsion_bar_with_load
 

@@ -92,6 +92,7 @@ def test_without_boxes_the_same_records_raise_alarms():
     assert "ARR_1_m" in fired(boxed(OFF, dict.fromkeys(TRUE, (0.0, 0.0))), record(TRAINING[0]))
 
 
+@pytest.mark.slow   # a second of CPU: the fast tier stays under a minute
 def test_held_out_records_of_the_same_machine_raise_few_alarms():
     """The boxes are the smallest for the training noise: another draw may leave them now and then, but its own
     calibrated margin covers its noise.  At most one of six held-out records in alarm."""

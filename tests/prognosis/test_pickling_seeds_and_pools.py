@@ -153,6 +153,7 @@ def test_a_discrete_model_pickles_and_computes_the_same():
     assert all(np.array_equal(a, b) for a, b in zip(got, expected))
 
 
+@pytest.mark.slow   # a second of CPU: the fast tier stays under a minute
 def test_an_isolating_monitor_pickles_and_gives_the_same_decision_and_rul(rlc_arrs):
     arrs, record = rlc_arrs
     monitor = IsolatingMonitor(arrs, {"R": 20.0, "L": 2.0}, noise_std={a.name: 1e-3 for a in arrs}, dt=0.01,

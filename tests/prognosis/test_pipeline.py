@@ -31,6 +31,7 @@ def files(tmp_path_factory):
     return bg, model, data
 
 
+@pytest.mark.slow   # a second of CPU: the fast tier stays under a minute
 def test_the_library_and_the_command_line_give_the_same_numbers(files, tmp_path):
     bg, model, data = files
     out = tmp_path / "out"
