@@ -13,6 +13,8 @@ plant is made; without it the rest of the toolkit works as before.
 Errors name the FMU file and the variable: a path that is no FMU, an FMU without co-simulation, an output,
 input or parameter it does not have, a call the FMU refuses (with the FMU's own logged message).
 
+An FMU's binary is native code, loaded into this process: like a Python model file, run only FMUs you trust.
+
 Examples
 --------
 Without fmpy nothing here runs; with it (``tests/interop/test_fmi.py``), on an FMU :func:`~bondgraph.to_fmu`

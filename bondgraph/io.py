@@ -8,7 +8,10 @@
   an optional ``name`` and the run settings ``inputs`` (signal -> a number, or the text of an expression
   of the time ``t`` such as ``"12*step(t - 0.5)"``: :class:`~bondgraph.inputs.InputExpression`),
   ``t_end`` and ``x0``, and an optional ``calibration`` object (what ``bgphm calibrate`` writes: where the
-  values came from), kept as read in :attr:`ModelSpec.calibration`;
+  values came from), kept as read in :attr:`ModelSpec.calibration`; ``graph.ports`` names the junctions
+  where another model may bond (:meth:`BondGraph.port <bondgraph.model.BondGraph.port>`), and a file
+  composed of sub-models names them in ``graph.parts`` (part -> JSON file, relative to it) and bonds their
+  ports in ``graph.connections`` (``["motor.shaft", "belt.drive"]``; :mod:`bondgraph.composition`);
 * a Python file (``*.py``) that defines ``model`` (a :class:`~bondgraph.model.BondGraph` or a function
   returning one), or exactly one bond graph or one such function, and optionally ``inputs`` (a
   string among them is an expression of ``t``, as in JSON), ``t_end`` and ``x0``; ``file.py:name``

@@ -63,7 +63,8 @@ load.port("shaft", "1_L")
 print(belt.state_equations())
 
 # %% Three parts with named ports
-folder = Path(tempfile.mkdtemp())
+workdir = tempfile.TemporaryDirectory()            # scratch space for the files below
+folder = Path(workdir.name)
 (folder / "motor.json").write_text(to_json(motor, inputs={"U": 24.0}))
 (folder / "belt.json").write_text(to_json(belt))
 (folder / "load.json").write_text(to_json(load, inputs={"T_L": 0.05}))
@@ -112,3 +113,4 @@ plant = compose({"drive": drive_with_port, "brake": brake}, [("drive.output", "b
 result = simulate(plant, (0.0, 2.0), {"drive.motor.U": 24.0, "drive.load.T_L": 0.05})
 print("parameters:", len(plant.parameters), "e.g.", list(plant.parameters)[:3])
 print(f"load speed at 2 s: {result['drive.load.omega_L'][-1]:.2f} rad/s")
+workdir.cleanup()
