@@ -186,7 +186,8 @@ def prognose(arrs: Sequence, record, failures: Mapping[str, float], settings: Pr
     -------
     IsolationResult
         With ``settings``: what the run decided from the record (``calibration_end``,
-        ``filter_step``, ``horizon``, ``residual_noise_std``, ``margins``) beside the settings given.
+        ``filter_step``, ``horizon``, ``residual_noise_std``, ``margins``, and ``undecided``: the ARRs the
+        healthy stretch gave no residual for, left out) beside the settings given.
     """
     settings = settings or PrognosisSettings()
     chosen = settings.isolation
