@@ -20,6 +20,12 @@ from 0):
   state, settable before initialization);
 * the measured signals (the detectors): causality ``output``, computed from the states and inputs.
 
+Each variable carries its unit where the model declares or implies one (a state's is its bond's effort, for an
+I, or flow, for a C, times a second), defined in ``UnitDefinitions`` by its SI base exponents (and ``rad``);
+a unit with a fractional exponent or a solid angle, which FMI 2.0 cannot write, is left out.  Each output
+lists the inputs it reads at once (``ModelStructure``: none for a state; a sensor across a source reads it),
+so that an importer knows which outputs feed through and which loops are algebraic.
+
 ``fmi2DoStep`` integrates the states with the embedded Runge-Kutta pair of Dormand and Prince (1980), 5(4)
 with error control: the error of each state over a step is kept below ``tolerance`` times the largest
 magnitude the state has reached plus ``0.01 * tolerance`` times its nominal value (the FMI 2.0 absolute
@@ -54,6 +60,7 @@ import tempfile
 import xml.etree.ElementTree as ET
 import zipfile
 from collections.abc import Mapping
+from fractions import Fraction
 from pathlib import Path
 
 import sympy as sp
@@ -63,6 +70,7 @@ from ._fmi2_c import HEADER, HEADER_NAME, RUNTIME
 from .equations import StateEquations
 from .errors import FmuError
 from .structure import T, require_model, signal_function
+from .units import BASE, SECOND, Unit
 
 __all__ = ["DEFAULT_STEP", "DEFAULT_TOLERANCE", "fmu_sources", "to_fmu"]
 
@@ -227,6 +235,35 @@ class _Variables:
                                "state or signal); rename one")
             seen.add(name)
         self.names = names
+        self.units = _units(bg, equations, self)
+        self.feedthrough = [[i for i, u in enumerate(self.inputs) if expression.has(signal_function(u))]
+                            for expression in map(sp.sympify, equations.outputs.values())]
+
+
+def _units(bg, equations: StateEquations, model: _Variables) -> dict[str, Unit]:
+    """Each variable's unit, where the model declares or implies one: a parameter's and a signal's, and a
+    state's, its bond's effort (I) or flow (C) times a second."""
+    units = bg.units
+    found = {name: units.parameters[name] for name in model.parameters if name in units.parameters}
+    found.update({name: units.signals[name] for name in [*model.inputs, *model.signals] if name in units.signals})
+    bond_of = {str(end): bond for bond in bg.bonds if not bond.is_signal for end in (bond.tail, bond.head)}
+    for state, element in zip(model.states, equations.elements):
+        bond = bond_of.get(str(element))   # a storage element has one bond
+        rate = None if bond is None else (units.efforts if state.startswith("p_") else units.flows).get(
+            (bond.tail, bond.head))
+        if rate is not None:
+            found[state] = rate * SECOND
+    return found
+
+
+def _base_units(unit: Unit) -> dict[str, str] | None:
+    """FMI 2.0's ``BaseUnit`` exponents of ``unit`` (SI bases and ``rad``), None when one is not an integer or
+    the unit has a solid angle (FMI 2.0 has no ``sr``)."""
+    exponents = dict(zip(BASE, unit.dimension))
+    exponents["rad"] = sum((power for symbol, power in unit.factors if symbol == "rad"), Fraction(0))
+    if any(symbol == "sr" for symbol, _ in unit.factors) or any(e.denominator != 1 for e in exponents.values()):
+        return None
+    return {name: str(int(e)) for name, e in exponents.items() if e != 0}
 
 
 # ------------------------------------------------------------------------------------------------ C code
@@ -356,6 +393,14 @@ def _model_description(title: str, identifier: str, guid: str, model: _Variables
         "providesDirectionalDerivative": "false"})
     sources = ET.SubElement(cs, "SourceFiles")
     ET.SubElement(sources, "File", {"name": f"{identifier}.c"})
+    written = {}   # unit text -> its base-unit exponents, for the units FMI 2.0 can write
+    for unit in model.units.values():
+        if str(unit) not in written and _base_units(unit) is not None:
+            written[str(unit)] = _base_units(unit)
+    if written:
+        definitions = ET.SubElement(root, "UnitDefinitions")
+        for text, exponents in written.items():
+            ET.SubElement(ET.SubElement(definitions, "Unit", {"name": text}), "BaseUnit", exponents)
     categories = ET.SubElement(root, "LogCategories")
     ET.SubElement(categories, "Category", {"name": "logError", "description": "errors (always logged)"})
     ET.SubElement(root, "DefaultExperiment", {"startTime": "0.0", "stepSize": repr(float(step)),
@@ -375,6 +420,8 @@ def _model_description(title: str, identifier: str, guid: str, model: _Variables
         variable = ET.SubElement(variables, "ScalarVariable", attributes)
         start, nominal = start if isinstance(start, tuple) else (start, None)
         real = {} if start is None else {"start": repr(float(start))}
+        if name in model.units and str(model.units[name]) in written:
+            real["unit"] = str(model.units[name])
         if nominal is not None:
             real["nominal"] = repr(float(nominal))
         ET.SubElement(variable, "Real", real)
@@ -382,8 +429,13 @@ def _model_description(title: str, identifier: str, guid: str, model: _Variables
     first_output = len(model.parameters) + len(model.inputs) + 1   # ModelVariables count from 1
     if model.states or model.signals:
         outputs = ET.SubElement(structure, "Outputs")
-        for k in range(len(model.states) + len(model.signals)):
-            ET.SubElement(outputs, "Unknown", {"index": str(first_output + k)})
+        first_input = len(model.parameters) + 1
+        # the inputs each output reads at once (none for a state; for a signal, those in its expression): an
+        # importer sees which outputs feed through, and which loops are algebraic
+        feedthrough = [[]] * len(model.states) + model.feedthrough
+        for k, inputs in enumerate(feedthrough):
+            ET.SubElement(outputs, "Unknown", {"index": str(first_output + k),
+                                               "dependencies": " ".join(str(first_input + i) for i in inputs)})
     if model.signals:   # outputs computed at initialization: the signals (the states' start is exact)
         initial = ET.SubElement(structure, "InitialUnknowns")
         for k in range(len(model.signals)):

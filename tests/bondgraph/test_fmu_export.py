@@ -83,3 +83,35 @@ def test_running_an_fmu_without_fmpy_names_the_extra(monkeypatch, tmp_path):
         fmu.writestr("modelDescription.xml", "<fmiModelDescription/>")
     with pytest.raises(ImportError, match=r"^running an FMU needs fmpy: pip install 'bondgraph-phm\[fmi\]'$"):
         FmuPlant(archive)
+
+
+def test_units_are_written_in_si_base_units_and_states_take_their_bonds_times_a_second():
+    from bondgraph.library import dc_motor
+
+    root = ET.fromstring(fmu_sources(dc_motor(), "dc_motor")["modelDescription.xml"])
+    bases = {unit.get("name"): unit.find("BaseUnit").attrib for unit in root.iter("Unit")}
+    units = {v.get("name"): v.find("Real").get("unit") for v in root.iter("ScalarVariable")}
+    assert units == {"R_a": "Ohm", "L_a": "H", "k_m": "N*m/A", "J": "kg*m^2", "b": "N*m*s/rad", "U": "V",
+                     "p_L_a": "V*s", "p_J": "N*m*s", "i": "A", "omega": "rad/s"}
+    assert bases["Ohm"] == {"kg": "1", "m": "2", "s": "-3", "A": "-2"} and bases["rad/s"] == {"s": "-1", "rad": "1"}
+    assert [child.tag for child in root][:3] == ["CoSimulation", "UnitDefinitions", "LogCategories"]   # schema order
+
+
+def test_an_output_lists_the_inputs_it_reads_at_once():
+    """A voltage sensor across the source reads the input itself; the current through the coil, its state."""
+    bg = BondGraph(name="source, load and coil")
+    bg.add("V", "Se")
+    bg.add("0_a", "0")
+    bg.add("R", "R", value=10.0)
+    bg.add("v", "De")
+    bg.add("1_b", "1")
+    bg.add("L", "I", value=0.1)
+    bg.add("R_2", "R", value=1.0)
+    bg.add("i", "Df")
+    for tail, head in [("V", "0_a"), ("0_a", "R"), ("0_a", "v"), ("0_a", "1_b"), ("1_b", "L"), ("1_b", "R_2"),
+                       ("1_b", "i")]:
+        bg.bond(tail, head)
+    root = ET.fromstring(fmu_sources(bg, "rl")["modelDescription.xml"])
+    index = {v.get("name"): str(k) for k, v in enumerate(root.iter("ScalarVariable"), start=1)}
+    dependencies = {u.get("index"): u.get("dependencies") for u in root.find("ModelStructure/Outputs")}
+    assert dependencies == {index["p_L"]: "", index["v"]: index["V"], index["i"]: ""}
