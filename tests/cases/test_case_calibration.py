@@ -49,6 +49,7 @@ def test_wrong_datasheets_are_fixed_and_the_simulations_keep_the_truth(example, 
         tank.chain("datasheet")
 
 
+@pytest.mark.slow   # a second of CPU: the fast tier stays under a minute
 def test_the_calibration_sees_only_the_healthy_calibration_record(example, monkeypatch):
     """``--datasheet wrong`` fits on the calibration record, never on the degraded one, and finds b_Md."""
     case = example.CASES["b-md"]

@@ -24,6 +24,7 @@ def _near_sets(model, n: int) -> list:
     return [rows for i in range(1, n + 1) for rows in model.msos_through(model.faults[f"m{i}"])]
 
 
+@pytest.mark.slow   # a second of CPU: the fast tier stays under a minute
 def test_a_set_of_the_shape_of_one_eliminated_takes_its_arr_renamed_and_that_is_the_sets_own_arr():
     bg = mass_spring_chain(9)
     shared = _shared(bg)

@@ -128,6 +128,7 @@ def test_parameters_in_no_arr_are_reported_unseen_not_fitted():
     assert fit.estimated == [] and fit.values["g"] == bg.parameters["g"]
 
 
+@pytest.mark.slow   # a second of CPU: the fast tier stays under a minute
 def test_a_law_with_its_parameter_inside_a_modulus_is_fitted():
     """A tank's orifice, Q = a sqrt|p| sign p, reaches the ARRs as Abs(Q/a)/a: a positive a comes out of
     the modulus.  Records from the zoo's own physics (scipy), never the library's simulate."""

@@ -12,6 +12,7 @@ from tests.wear.run import SYSTEMS, Scenario, fault_of, laws, record, run, same_
 PAIR = Scenario("pump_drive", "R_a + c_p", "linear + exponential", "noisy")
 
 
+@pytest.mark.slow   # a second of CPU: the fast tier stays under a minute
 def test_the_concurrent_scenario_wears_both_parameters_each_to_its_failure_at_its_own_end_of_life():
     facts = SYSTEMS["pump_drive"]
     theta = laws(PAIR)
