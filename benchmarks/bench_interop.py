@@ -43,6 +43,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bondgraph import Degradation, simulate, simulate_fmu, to_fmu  # noqa: E402
 from bondgraph.library import dc_motor  # noqa: E402
 from prognosis import to_progpy  # noqa: E402
+from tests.interop.progpy_wear import progpy_filter_run  # noqa: E402
 from tests.zoo.chain import cases  # noqa: E402
 
 SAMPLES = 201
@@ -99,38 +100,10 @@ def progpy_row(build, inputs: dict, horizon: float, faults) -> dict:
 
 def progpy_filter_row(seed: int) -> dict:
     """ProgPy's particle filter and Monte Carlo predictor on the wearing motor, for one seed (see the module)."""
-    from progpy.predictors import MonteCarlo
-    from progpy.state_estimators import ParticleFilter
-    from progpy.uncertain_data import UnweightedSamples
-
-    bg, b_n, b_fail, n = dc_motor(), 1e-4, 2e-3, 400
-    law = Degradation("exponential", 0.8, onset=1.0)
-    t = np.linspace(0.0, 3.5, 3501)
-    bench = simulate(bg, (0.0, 3.5), {"U": 12.0}, parameters={"b": law.truth(b_n)}, t_eval=t)
-    rng = np.random.default_rng(100 + seed)
-    measured = {"i": bench["i"] + rng.normal(0.0, 0.01, t.size),
-                "omega": bench["omega"] + rng.normal(0.0, 0.5, t.size)}
     started = time.process_time()
-    model = to_progpy(bg, degradation={"b": "exponential"}, failures={"b": b_fail},
-                      process_noise={"p_L_a": 1e-3, "p_J": 1e-2, "b": 2e-4, "b_rate": 2.0})
-    np.random.seed(1000 + seed)   # ProgPy and filterpy draw from numpy's global generator
-    start = 1700                  # the alarm of tutorial 3, t = 1.7 s
-    x0 = UnweightedSamples({"p_L_a": np.full(n, 1.34e-3 * measured["i"][start]),
-                            "p_J": np.full(n, 1e-4 * measured["omega"][start]),
-                            "b": np.random.uniform(1.0, 4.0, n) * b_n, "b_rate": np.random.uniform(0.0, 2.0, n)},
-                           _type=model.StateContainer)
-    pf = ParticleFilter(model, x0, num_particles=n, t0=t[start], dt=1e-3, measurement_noise={"i": 0.02, "omega": 1.0})
-    for k in range(start + 10, t.size, 10):
-        pf.estimate(t[k], {"U": 12.0}, {"i": measured["i"][k], "omega": measured["omega"][k]})
-    predictor = to_progpy(bg, degradation={"b": "exponential"}, failures={"b": b_fail})   # the rate held
-    prediction = MonteCarlo(predictor).predict(pf.x, lambda time, x=None: predictor.InputContainer({"U": 12.0}),
-                                               dt=2.5e-3, n_samples=20, t0=t[-1], events=["b failure"],
-                                               save_freq=10.0)
-    eol = law.onset + np.log(b_fail / b_n) / law.rate
-    rul = np.median(prediction.time_of_event.key("b failure")) - t[-1]
-    return {"seed": seed, "b_rel": abs(float(np.mean(pf.particles["b"])) / law.truth(b_n)(t[-1]) - 1.0),
-            "rate_abs": abs(float(np.mean(pf.particles["b_rate"])) - law.rate),
-            "rul_rel": abs(float(rul) / (eol - t[-1]) - 1.0), "cpu_s": time.process_time() - started}
+    run = progpy_filter_run(noise_seed=100 + seed, filter_seed=1000 + seed)
+    return {"seed": seed, "b_rel": abs(run["b"] / run["b_true"] - 1.0), "rate_abs": abs(run["rate"] - run["rate_true"]),
+            "rul_rel": abs(run["rul"] / run["rul_true"] - 1.0), "cpu_s": time.process_time() - started}
 
 
 def guarded(function, *args) -> dict:

@@ -8,8 +8,9 @@ import numpy as np
 import pytest
 
 from bondgraph import Degradation, simulate
-from bondgraph.library import dc_motor, torsion_bar
+from bondgraph.library import torsion_bar
 from prognosis import ExponentialDegradation, RULDistribution, alpha_lambda, predict_rul, to_progpy, to_progpy_samples
+from tests.interop.progpy_wear import progpy_filter_run
 
 pytestmark = [pytest.mark.interop, pytest.mark.slow]   # ProgPy imports pandas and matplotlib; runs take seconds
 
@@ -70,47 +71,11 @@ def test_an_output_of_an_input_reads_the_input_last_given():
     assert np.max(np.abs(np.array(heat) - ours["q_i"])) <= 2e-3 * np.ptp(ours["q_i"])
 
 
-@pytest.fixture(scope="module")
-def wearing_motor():
-    """The DC motor of tutorial 3: b grows as b_n exp(0.8 (t - 1)) and fails at 20 b_n; noisy i and omega."""
-    bg, b_n = dc_motor(), 1e-4
-    law = Degradation("exponential", 0.8, onset=1.0)
-    t = np.linspace(0.0, 3.5, 3501)
-    bench = simulate(bg, (0.0, 3.5), {"U": 12.0}, parameters={"b": law.truth(b_n)}, t_eval=t)
-    rng = np.random.default_rng(0)
-    measured = {"i": bench["i"] + rng.normal(0.0, 0.01, t.size), "omega": bench["omega"] + rng.normal(0.0, 0.5, t.size)}
-    return bg, law, t, measured
-
-
-def test_progpy_particle_filter_and_monte_carlo_find_the_wear(wearing_motor):
-    from progpy.predictors import MonteCarlo
-    from progpy.state_estimators import ParticleFilter
-    from progpy.uncertain_data import UnweightedSamples
-
-    bg, law, t, measured = wearing_motor
-    b_n, b_fail, n = 1e-4, 2e-3, 400
-    model = to_progpy(bg, degradation={"b": "exponential"}, failures={"b": b_fail},
-                      process_noise={"p_L_a": 1e-3, "p_J": 1e-2, "b": 2e-4, "b_rate": 2.0})
-    np.random.seed(1)                         # ProgPy and filterpy draw from numpy's global generator
-    start = 1700                              # the alarm of tutorial 3, t = 1.7 s
-    x0 = UnweightedSamples({"p_L_a": np.full(n, 1.34e-3 * measured["i"][start]),
-                            "p_J": np.full(n, 1e-4 * measured["omega"][start]),
-                            "b": np.random.uniform(1.0, 4.0, n) * b_n, "b_rate": np.random.uniform(0.0, 2.0, n)},
-                           _type=model.StateContainer)
-    pf = ParticleFilter(model, x0, num_particles=n, t0=t[start], dt=1e-3,
-                        measurement_noise={"i": 0.02, "omega": 1.0})
-    for k in range(start + 10, t.size, 10):
-        pf.estimate(t[k], {"U": 12.0}, {"i": measured["i"][k], "omega": measured["omega"][k]})
-    b_true = law.truth(b_n)(t[-1])
-    assert abs(np.mean(pf.particles["b"]) / b_true - 1.0) < 0.03
-    assert abs(np.mean(pf.particles["b_rate"]) - law.rate) < 0.05
-    predictor = to_progpy(bg, degradation={"b": "exponential"}, failures={"b": b_fail})   # the rate held
-    prediction = MonteCarlo(predictor).predict(pf.x, lambda time, x=None: predictor.InputContainer({"U": 12.0}),
-                                               dt=2.5e-3, n_samples=20, t0=t[-1], events=["b failure"],
-                                               save_freq=10.0)
-    eol = law.onset + np.log(b_fail / b_n) / law.rate
-    median_rul = np.median(prediction.time_of_event.key("b failure")) - t[-1]
-    assert abs(median_rul / (eol - t[-1]) - 1.0) < 0.1
+def test_progpy_particle_filter_and_monte_carlo_find_the_wear():
+    run = progpy_filter_run(noise_seed=0, filter_seed=1)
+    assert abs(run["b"] / run["b_true"] - 1.0) < 0.03
+    assert abs(run["rate"] - run["rate_true"]) < 0.05
+    assert abs(run["rul"] / run["rul_true"] - 1.0) < 0.1
 
 
 @pytest.fixture(scope="module")
