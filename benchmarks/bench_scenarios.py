@@ -111,7 +111,8 @@ def main() -> int:
                         help="bgphm prognose --filter")
     parser.add_argument("--pairs", action="store_true",
                         help="bgphm prognose --pairs: weigh two parameters wearing at once (with resample-move)")
-    parser.add_argument("--degradation", action="append", default=[], choices=("linear", "exponential", "power"),
+    parser.add_argument("--degradation", action="append", default=[],
+                        choices=("linear", "exponential", "power", "saturating"),
                         help="bgphm prognose --degradation (repeatable; default the command's laws)")
     args = parser.parse_args()
     chosen = [s for s in scenarios() if (not args.names or s.name in args.names)

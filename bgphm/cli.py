@@ -341,9 +341,10 @@ def _prognose_options(p: argparse.ArgumentParser) -> None:
                    help="failure value of a parameter that can fail (repeatable); the candidates are those whose "
                         "signature matches the ARRs that fired")
     p.add_argument("--candidate", help="only this candidate (it needs a failure value; a bare --fail VALUE is its)")
-    p.add_argument("--degradation", choices=("exponential", "linear", "power"), action="append",
+    p.add_argument("--degradation", choices=("exponential", "linear", "power", "saturating"), action="append",
                    help="a law that competes (repeatable; default: linear, exponential and power compete on "
-                        "evidence); power: a power of the time since onset, its exponent estimated too")
+                        "evidence); power: a power of the time since onset, its exponent estimated too; "
+                        "saturating: that power law levelling off (fouling, a sigmoid wear)")
     p.add_argument("--sensors", action=argparse.BooleanOptionalAction, default=True,
                    help="weigh a bias, drift or gain of each sensor consistent with the ARRs that fired too "
                         "(default; --no-sensors: the sensors are healthy)")

@@ -8,6 +8,8 @@ A model maps ``theta_{k-1}`` and the degradation progression parameters
 * :class:`PowerDegradation` ``theta = origin + span (a tau)^q``, tau the time since onset: a power law in
   time whose exponent ``q`` is estimated with the rate ``a`` (gamma = (a, q)); it holds the linear law
   (q = 1) and bends either way, the flexible law that takes over when the data contradict the others
+* :class:`SaturatingDegradation` ``u = (1 - exp(-c (a tau)^q)) / c``: the power law levelling off toward
+  ``1 / c`` of the way to failure (gamma = (a, q, c)), for a wear that accelerates then slows
 * :class:`CustomDegradation` ``theta_k = g(theta_{k-1}, gamma, dt) + v``
 
 Arrays are vectorized over assets and particles: ``theta`` has shape
@@ -30,9 +32,9 @@ import numpy as np
 from .errors import PrognosisError
 
 __all__ = [
-    "MODELS", "POWER_EXPONENTS", "CustomDegradation", "ExponentialDegradation", "JointDegradation",
-    "LinearDegradation", "PerAssetDegradation", "PowerDegradation", "degradation_model", "prefix_sum",
-    "stepped_path", "trajectory",
+    "MODELS", "POWER_EXPONENTS", "SATURATIONS", "SHAPED", "CustomDegradation", "ExponentialDegradation",
+    "JointDegradation", "LinearDegradation", "PerAssetDegradation", "PowerDegradation", "SaturatingDegradation",
+    "degradation_model", "prefix_sum", "stepped_path", "trajectory",
 ]
 
 
@@ -221,6 +223,82 @@ class PowerDegradation:
             with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
                 clock = (share ** (1.0 / exponent))[..., None] + dt * np.cumsum(gamma[..., 0], axis=-1)
                 return self.origin + self.span * np.maximum(clock, 0.0) ** exponent[..., None]
+        return stepped_path(self, theta, gamma, noise, dt)
+
+
+#: the saturating law's ``c``, one over the level its wear tends to (as a share of the way from nominal to
+#: failure), log-uniform: from a saturation at 20 times the way (a power law to within 1 % of the life) to
+#: one just beyond the failure value, so that every path still reaches it
+SATURATIONS = (0.05, 0.99)
+
+
+@dataclass(frozen=True)
+class SaturatingDegradation:
+    """``theta = origin + span u``, ``u = (1 - exp(-c w)) / c``, ``w = (a tau)^q``: a power law that saturates.
+
+    Early on (``c w`` small) ``u`` is the power law ``(a tau)^q`` of :class:`PowerDegradation`; then it
+    slows toward ``1 / c`` of the way from ``origin`` (the nominal value) to ``origin + span`` (the
+    failure value): a wear that accelerates, then levels off, as fouling that tends to an asymptote
+    (``q = 1``: Kern and Seaton's law) or a sigmoid wear (``q > 1``).  ``c`` below 1 puts the level beyond
+    the failure value, so the failure is reached at ``w = -log(1 - c) / c``.  The law is stepped from
+    the current theta as the power law is: ``w`` follows from ``u``, and ``w^(1/q)`` grows by ``a dt``.
+    gamma is ``(a, q, c)``.
+
+    >>> import numpy as np
+    >>> model = SaturatingDegradation(origin=0.0, span=1.0)
+    >>> gamma = np.array([[0.1, 1.0, 0.5]])              # w = tau / 10, levelling off at twice the way
+    >>> theta = np.array([0.0])
+    >>> for _ in range(10):
+    ...     theta = model.step(theta, gamma, dt=1.0)
+    >>> round(float(theta[0]), 6), round(float((1 - np.exp(-0.5)) / 0.5), 6)   # w = 1 after 10 s
+    (0.786939, 0.786939)
+    >>> round(float(model.crossing(np.array([0.0]), gamma, 1.0)[0]), 4)   # w = log(2) / 0.5 = 1.3863
+    13.8629
+    """
+
+    origin: float
+    span: float
+    process_noise: float = 0.0
+    n_gamma: int = 3
+
+    def __post_init__(self):
+        if not (np.isfinite(self.origin) and np.isfinite(self.span) and self.span != 0):
+            raise PrognosisError(f"a saturating law needs a finite origin and a nonzero span, got origin "
+                                 f"{self.origin}, span {self.span}")
+
+    def _clock(self, theta: np.ndarray, exponent: np.ndarray, level: np.ndarray) -> np.ndarray:
+        """``w^(1/q)`` of theta: the power law's clock ``a tau`` (inf at or beyond the level)."""
+        share = np.maximum((theta - self.origin) / self.span, 0.0)
+        with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+            power = -np.log1p(-np.minimum(level * share, 1.0)) / level
+            return power ** (1.0 / exponent)
+
+    def _share(self, clock: np.ndarray, exponent: np.ndarray, level: np.ndarray) -> np.ndarray:
+        with np.errstate(over="ignore", invalid="ignore"):
+            return -np.expm1(-level * np.maximum(clock, 0.0) ** exponent) / level
+
+    def step(self, theta: np.ndarray, gamma: np.ndarray, dt: float) -> np.ndarray:
+        """One step: the clock ``w^(1/q)`` grows by ``a dt``; ``a, q, c = gamma[..., 0], [..., 1], [..., 2]``."""
+        return self.trajectory(theta, gamma, 1, 2, dt)[..., 0]
+
+    def trajectory(self, theta: np.ndarray, gamma: np.ndarray, start: int, stop: int, dt: float) -> np.ndarray:
+        """theta after ``j`` deterministic steps, for ``j`` in ``start..stop`` (..., N, stop - start)."""
+        rate, exponent, level = (gamma[..., g][..., None] for g in range(3))
+        clock = self._clock(theta[..., None], exponent, level) + rate * dt * np.arange(start, stop)
+        # a theta at or beyond this particle's level stays where it is: the law never gets there
+        return np.where(np.isfinite(clock), self.origin + self.span * self._share(clock, exponent, level),
+                        theta[..., None])
+
+    def crossing(self, theta: np.ndarray, gamma: np.ndarray, theta_fail: float) -> np.ndarray:
+        """Time (s) until the deterministic path from ``theta`` (...) reaches ``theta_fail``; inf if it never does
+        (the failure value at or beyond the level ``1 / c``)."""
+        rate, exponent, level = gamma[..., 0], gamma[..., 1], gamma[..., 2]
+        goal = self._clock(np.broadcast_to(np.asarray(theta_fail, float), np.shape(theta)), exponent, level)
+        with np.errstate(invalid="ignore"):
+            return _ahead((goal - self._clock(theta, exponent, level)) / rate)
+
+    def path(self, theta: np.ndarray, gamma: np.ndarray, noise: np.ndarray, dt: float) -> np.ndarray:
+        """theta over a horizon, one step at a time: ``gamma`` (..., N, H, 3), ``noise`` (..., N, H)."""
         return stepped_path(self, theta, gamma, noise, dt)
 
 
@@ -428,24 +506,28 @@ def prefix_sum(x: np.ndarray) -> np.ndarray:
     return blocks.reshape(rows, h)
 
 
-MODELS = {"linear": LinearDegradation, "exponential": ExponentialDegradation, "power": PowerDegradation}
+MODELS = {"linear": LinearDegradation, "exponential": ExponentialDegradation, "power": PowerDegradation,
+          "saturating": SaturatingDegradation}
+#: the built-in laws that run between the nominal and the failure value and carry more than a rate
+SHAPED = ("power", "saturating")
 
 
 def degradation_model(name: str, process_noise: float = 0.0, *, nominal: float | None = None,
                       failure: float | None = None):
-    """A built-in model by name: ``"linear"``, ``"exponential"`` or ``"power"``.
+    """A built-in model by name: ``"linear"``, ``"exponential"``, ``"power"`` or ``"saturating"``.
 
     Parameters
     ----------
-    name : {"linear", "exponential", "power"}
+    name : {"linear", "exponential", "power", "saturating"}
     process_noise : float
         Standard deviation of the additive process noise ``v``.
     nominal, failure : float
-        ``"power"`` only: the parameter's nominal and failure values, between which the law runs.
+        ``"power"`` and ``"saturating"`` only: the parameter's nominal and failure values, between which the
+        law runs.
 
     Returns
     -------
-    LinearDegradation, ExponentialDegradation or PowerDegradation
+    LinearDegradation, ExponentialDegradation, PowerDegradation or SaturatingDegradation
 
     Examples
     --------
@@ -463,8 +545,9 @@ def degradation_model(name: str, process_noise: float = 0.0, *, nominal: float |
     if name not in MODELS:
         raise PrognosisError(f"unknown degradation model {name!r}; choose from {sorted(MODELS)} "
                              "or use CustomDegradation(g)")
-    if name == "power":
+    if name in SHAPED:
         if nominal is None or failure is None:
-            raise PrognosisError("the power law runs from the nominal to the failure value: give nominal= and failure=")
-        return PowerDegradation(float(nominal), float(failure) - float(nominal), process_noise=process_noise)
+            raise PrognosisError(f"the {name} law runs from the nominal to the failure value: give nominal= and "
+                                 "failure=")
+        return MODELS[name](float(nominal), float(failure) - float(nominal), process_noise=process_noise)
     return MODELS[name](process_noise=process_noise)

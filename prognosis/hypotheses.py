@@ -234,7 +234,7 @@ def law_distance(hypothesis: Hypothesis) -> float:
     """
     if hypothesis.law == "exponential" and hypothesis.failure * hypothesis.nominal > 0:
         return math.log(hypothesis.failure / hypothesis.nominal)
-    if hypothesis.law == "power":
+    if hypothesis.law in ("power", "saturating"):
         return 1.0
     return hypothesis.failure - hypothesis.nominal
 

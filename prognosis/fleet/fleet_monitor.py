@@ -30,6 +30,7 @@ from ..hypotheses import indistinguishable_groups, same_signature, signature_can
 from ..isolation import (DRIFT_AWAY_STEPS, FLEET_LAWS, FLEET_SETTINGS, MIXTURE_FLOOR, IsolationSettings, Priors,
                          check_noise_std, decide, detection_options)
 from ..health_monitor import filter_stride
+from ..degradation import SHAPED
 from ..observation import observation_model
 from .. import seeds
 from ..rul import RULPredictor
@@ -129,7 +130,7 @@ class FleetMonitor:
             raise SettingError("sensors", "{setting}: the fleet weighs parameters only; give sensors=False "
                                           "(as FLEET_SETTINGS)")
         for name, model in s.law_models.items():  # the fleet filter carries one gamma per particle: a rate
-            if (model is None and name == "power") or (model is not None and model.n_gamma != 1):
+            if (model is None and name in SHAPED) or (model is not None and model.n_gamma != 1):
                 raise SettingError("laws", f"{{setting}}: the fleet filter weighs laws with one rate; {name!r} has "
                                            "more gammas")
         self.priors = Priors(arrs, failures, s, domains)

@@ -14,7 +14,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from ..degradation import POWER_EXPONENTS, degradation_model
+from ..degradation import POWER_EXPONENTS, SATURATIONS, SHAPED, degradation_model
 from ..errors import PrognosisError
 from ..hypotheses import (SENSOR_LAWS, Hypothesis, JointHypothesis, candidate_model, law_distance, rate_prior, sees,
                           sensitivity, sensor_signal)
@@ -151,9 +151,10 @@ class Priors:
         The rate: the ``rate`` interval, or the rates of the prior on the life (the life from
         nominal to failure in ``life`` filter steps gives the rate ``distance / (T dt)``, with the
         distance ``failure - nominal`` (linear and other laws), ``log(failure / nominal)``
-        (exponential) or 1 (power: ``a`` is one over the life), as
-        :func:`~prognosis.hypotheses.rate_prior` draws it).  The power law's exponent spans
-        :data:`~prognosis.degradation.POWER_EXPONENTS`; a gamma the law does not have is fixed at 1.
+        (exponential) or 1 (power and saturating: ``a`` is one over the power law's life), as
+        :func:`~prognosis.hypotheses.rate_prior` draws it).  The power and saturating laws' exponent spans
+        :data:`~prognosis.degradation.POWER_EXPONENTS`, the saturating law's ``c``
+        :data:`~prognosis.degradation.SATURATIONS`; a gamma the law does not have is fixed at 1.
 
         A sensor's bias has the rate 0; its drift (its gain's error) goes from 0 to ``offset`` (the far
         end of its start interval) in a life on the same prior, so its rate has that sign.
@@ -163,18 +164,20 @@ class Priors:
                     sorted(offset / (steps * self.settings.dt) for steps in self.settings.life))
             return [ends[0]] + [1.0] * (count - 1), [ends[1]] + [1.0] * (count - 1)
         if self.settings.rate is not None:
-            ends = sorted(float(r) / (h.failure - h.nominal if h.law == "power" else 1.0) for r in self.settings.rate)
+            ends = sorted(float(r) / (h.failure - h.nominal if h.law in SHAPED else 1.0) for r in self.settings.rate)
         else:
             ends = sorted(law_distance(h) / (steps * self.settings.dt) for steps in self.settings.life)
         lo, hi = [ends[0]] + [1.0] * (count - 1), [ends[1]] + [1.0] * (count - 1)
-        if h.law == "power" and self.laws[h.law] is None:
+        if h.law in SHAPED and self.laws[h.law] is None:
             lo[1], hi[1] = POWER_EXPONENTS
+        if h.law == "saturating" and self.laws[h.law] is None:
+            lo[2], hi[2] = SATURATIONS
         return lo, hi
 
     def rate_particles(self, h: Hypothesis, rng: np.random.Generator, count: int = 1,
                        offset: float = 0.0) -> np.ndarray:
         """Initial gamma particles (N, ``count``) of a hypothesis: the rate from the ``rate`` interval or the
-        prior on the life, the power law's exponent log-uniform, other gammas 1 (:meth:`gamma_bounds`;
+        prior on the life, the shaped laws' other gammas log-uniform, a gamma the law has not 1 (:meth:`gamma_bounds`;
         ``offset``: a sensor's offset at the alarm)."""
         lo, hi = self.gamma_bounds(h, count, offset)
         n = self.settings.n_particles
@@ -185,8 +188,9 @@ class Priors:
         else:
             gamma[:, 0] = (rng.uniform(lo[0], hi[0], n) if self.settings.rate is not None
                            else rate_prior(h, self.settings.dt, n, rng, self.settings.life))
-        if count > 1 and lo[1] < hi[1]:
-            gamma[:, 1] = np.exp(rng.uniform(math.log(lo[1]), math.log(hi[1]), n))
+        for g in range(1, count):  # a law's shape (the exponent, the saturation), log-uniform
+            if lo[g] < hi[g]:
+                gamma[:, g] = np.exp(rng.uniform(math.log(lo[g]), math.log(hi[g]), n))
         return gamma
 
 
