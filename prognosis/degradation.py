@@ -176,9 +176,7 @@ class PowerDegradation:
     n_gamma: int = 2
 
     def __post_init__(self):
-        if not (np.isfinite(self.origin) and np.isfinite(self.span) and self.span != 0):
-            raise PrognosisError(f"a power law needs a finite origin and a nonzero span, got origin {self.origin}, "
-                                 f"span {self.span}")
+        _check_ends("power", self.origin, self.span)
 
     def step(self, theta: np.ndarray, gamma: np.ndarray, dt: float) -> np.ndarray:
         """``u_{k+1} = (u_k^(1/q) + a dt)^q`` with ``a, q = gamma[..., 0], gamma[..., 1]``."""
@@ -262,9 +260,7 @@ class SaturatingDegradation:
     n_gamma: int = 3
 
     def __post_init__(self):
-        if not (np.isfinite(self.origin) and np.isfinite(self.span) and self.span != 0):
-            raise PrognosisError(f"a saturating law needs a finite origin and a nonzero span, got origin "
-                                 f"{self.origin}, span {self.span}")
+        _check_ends("saturating", self.origin, self.span)
 
     def _clock(self, theta: np.ndarray, exponent: np.ndarray, level: np.ndarray) -> np.ndarray:
         """``w^(1/q)`` of theta: the power law's clock ``a tau`` (inf at or beyond the level)."""
@@ -439,6 +435,12 @@ class JointDegradation:
         """Deterministic step of each component with its row's law."""
         return np.stack([bank.step(theta[..., c], gamma[..., start:start + bank.n_gamma], dt)
                          for c, (bank, start) in enumerate(zip(self.banks, self.offsets))], axis=-1)
+
+
+def _check_ends(law: str, origin: float, span: float) -> None:
+    """A PrognosisError unless a law between two values has a finite origin and a nonzero span."""
+    if not (np.isfinite(origin) and np.isfinite(span) and span != 0):
+        raise PrognosisError(f"a {law} law needs a finite origin and a nonzero span, got origin {origin}, span {span}")
 
 
 def _ahead(time: np.ndarray) -> np.ndarray:
