@@ -1,7 +1,8 @@
 """Prognosis scenarios: wear laws simulated from the physics, run through ``bgphm prognose``.
 
     python benchmarks/bench_scenarios.py [--json] [--seeds 10] [--particles 300] [--rul-every 10]
-                                         [--jobs 2] [--filter sir|resample-move] [--pairs] [--system NAME]
+                                         [--jobs 2] [--filter sir|resample-move] [--pairs | --no-pairs]
+                                         [--system NAME]
                                          [--degradation LAW ...] [NAME ...]
 
 Each scenario (tests/wear/run.py) is a parameter wearing by a law (linear, exponential, power,
@@ -17,8 +18,10 @@ the truth.
 A sensor scenario offsets one encoder's reading of the torsion bar (a bias, a drift), the machine
 healthy: the sensor and its law must be named, and no RUL is due.  A concurrent scenario wears two
 parameters at once (the pump's brushes and impeller, the pipe's strainer and the tank's outlet), the
-second failing first: both must be named (``"R_a + c_p"``) and the RUL is the first failure's; pairs
-are weighed only with ``--filter resample-move --pairs`` (then in every scenario).
+second failing first: both must be named (``"R_a + c_p"``) and the RUL is the first failure's.  Pairs
+are weighed as ``bgphm prognose`` weighs them by default: when no single fault explains the residuals,
+on the whole record again (``pairs_weighed``: the share of runs where that happened); ``--pairs`` weighs
+them from the alarm in every scenario, ``--no-pairs`` never.
 
 Per scenario, over the seeds: the share of runs that name the degrading parameter or the faulty
 sensor (or an honest indistinguishable group holding it), the share whose most probable hypothesis
@@ -55,7 +58,8 @@ def one(arguments: tuple) -> dict:
     started = time.process_time()
     figures = score(scenario, run(scenario, seed, particles=particles, rul_every=rul_every, method=method,
                                   degradation=laws, pairs=pairs))
-    return {**figures, "seed": seed, "filter": method, "pairs": pairs, "cpu_s": round(time.process_time() - started, 1)}
+    return {**figures, "seed": seed, "filter": method, "pairs": pairs,
+            "cpu_s": round(time.process_time() - started, 1)}
 
 
 def pooled(name: str, rows: list[dict]) -> dict:
@@ -67,6 +71,7 @@ def pooled(name: str, rows: list[dict]) -> dict:
     return {
         "scenario": name, "seeds": len(rows), "filter": rows[0]["filter"] if rows else None,
         "pairs": rows[0]["pairs"] if rows else None,
+        "pairs_weighed": float(np.mean([str(r.get("pairs_weighed", "")).startswith("weighed") for r in rows])),
         "found": float(np.mean([r["found"] for r in rows])),
         "statuses": dict(Counter(str(r.get("status")) for r in rows)),
         "laws": dict(Counter(str(r.get("degradation")) for r in rows)),
@@ -109,8 +114,10 @@ def main() -> int:
     parser.add_argument("--jobs", type=int, default=1)
     parser.add_argument("--filter", choices=("resample-move", "sir"), default="resample-move",
                         help="bgphm prognose --filter")
-    parser.add_argument("--pairs", action="store_true",
-                        help="bgphm prognose --pairs: weigh two parameters wearing at once (with resample-move)")
+    parser.add_argument("--pairs", action=argparse.BooleanOptionalAction, default=None,
+                        help="bgphm prognose --pairs: weigh two parameters wearing at once from the alarm (with "
+                             "resample-move); --no-pairs: never (default: the command's, when no single fault "
+                             "explains the residuals)")
     parser.add_argument("--degradation", action="append", default=[],
                         choices=("linear", "exponential", "power", "saturating"),
                         help="bgphm prognose --degradation (repeatable; default the command's laws)")

@@ -348,9 +348,10 @@ def _prognose_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--sensors", action=argparse.BooleanOptionalAction, default=True,
                    help="weigh a bias, drift or gain of each sensor consistent with the ARRs that fired too "
                         "(default; --no-sensors: the sensors are healthy)")
-    p.add_argument("--pairs", action=argparse.BooleanOptionalAction, default=False,
-                   help="weigh two parameters wearing at once too (the resample-move filter only), declared only when "
-                        "the data demand two faults; the RUL is the first failure's (default: one fault)")
+    p.add_argument("--pairs", action=argparse.BooleanOptionalAction, default=None,
+                   help="weigh two parameters wearing at once too, from the first alarm (the resample-move filter "
+                        "only), declared only when the data demand two faults; the RUL is the first failure's "
+                        "(default: weighed only when no single fault explains the residuals; --no-pairs: never)")
     p.add_argument("--direction", choices=("up", "down"), help="check that --candidate's failure value lies on "
                    "this side of nominal")
     p.add_argument("--rate", type=float, nargs=2, metavar=("LO", "HI"),

@@ -40,7 +40,9 @@ def run(args, progress: Progress) -> int:
     ``--fail PARAM=VALUE`` (repeatable) gives the failure value of each parameter that can fail; the
     candidates are those whose fault signature matches the ARRs that fired, each with each law
     (linear, exponential, power), weighed in one particle filter from the first alarm
-    (:class:`~prognosis.isolation.IsolatingMonitor`).  ``--candidate`` and ``--degradation`` restrict
+    (:class:`~prognosis.isolation.IsolatingMonitor`); when none explains the residuals, two parameters
+    wearing at once are weighed too, on the record again (``--pairs``: from the start; ``--no-pairs``:
+    never).  ``--candidate`` and ``--degradation`` restrict
     them.  Prints the decision and the last RUL; with ``--out`` writes ``prognosis.json``,
     ``estimates.csv``, ``rul.csv`` and plots.  Returns 0.
     """
@@ -65,6 +67,8 @@ def run(args, progress: Progress) -> int:
     for w in caught:
         progress(f"warning: {w.message}")
     summary = result.as_dict()
+    if summary.get("pairs", "").startswith("weighed:"):
+        progress(f"two parameters wearing at once {summary['pairs']} (the filter ran again with them)")
     summary["units"] = units_of(spec.model, arrs)
     for name, margin in summary["margins"].items():
         progress(f"{name}: margin {margin:.3g}, residual noise {summary['residual_noise_std'][name]:.3g} (t <= "

@@ -206,6 +206,25 @@ class IsolationResult:
                           self.same_signature)
         return self.revised(decision, time, held)
 
+    @property
+    def contradicted(self) -> bool:
+        """No fault weighed explains the residuals: at the end the most probable hypothesis not rejected is
+        contradicted by the data (inadequate), or every one was rejected.
+
+        The most probable, not every one: a hypothesis far behind in evidence is weighed on but no longer
+        moved, so it is not judged either, and it explains the record no better for that.
+
+        >>> IsolationResult(None).contradicted   # nothing weighed (no alarm): nothing contradicted
+        False
+        """
+        if not self.hypotheses or self.log_evidence.size == 0:
+            return False
+        standing = [i for i, h in enumerate(self.hypotheses) if h.name not in self.rejected]
+        if not standing:
+            return True
+        best = max(standing, key=lambda i: self.log_evidence[-1][i])
+        return self.hypotheses[best].name in self.inadequate
+
     def revised(self, decision: Decision, time: float, held: Mapping = {}) -> Decision:
         """``decision`` at ``time`` with what the evidence alone does not say: the ARRs fired late that no
         candidate sees (:meth:`unexplained`), and no claim when the data contradict every hypothesis.

@@ -86,9 +86,12 @@ class IsolationSettings:
     sensors : bool
         Weigh the faults of the sensors whose signature holds the fired ARRs too (on by default), by
         the laws :data:`~prognosis.hypotheses.SENSOR_LAWS`.
-    pairs : bool
+    pairs : bool or None
         Weigh two parameters degrading at once too (``method="resample-move"`` and no ``candidates``
-        only; off by default: :class:`~prognosis.isolation.IsolatingMonitor`).
+        only: :class:`~prognosis.isolation.IsolatingMonitor`): True from the first alarm, False never;
+        None (default): :func:`prognosis.prognose` weighs them when no single fault explains the
+        residuals (every hypothesis ends rejected or inadequate), running the record again with
+        them; a monitor alone weighs them only when True.
     method : {"resample-move", "sir"}
         The filter (:class:`~prognosis.isolation.IsolatingMonitor`); a fleet's is ``"sir"``.
     dt : float, optional
@@ -121,7 +124,7 @@ class IsolationSettings:
     laws: tuple | Mapping = LAWS
     candidates: tuple | None = None
     sensors: bool = True
-    pairs: bool = False
+    pairs: bool | None = None
     method: str = "resample-move"
     dt: float | None = None
     n_particles: int = 500
@@ -152,7 +155,7 @@ class IsolationSettings:
                 raise SettingError("candidates", f"{{setting}}: give a sequence of names, e.g. ({self.candidates!r},)")
             keep("candidates", tuple(self.candidates))
         keep("sensors", bool(self.sensors))
-        keep("pairs", bool(self.pairs))
+        keep("pairs", None if self.pairs is None else bool(self.pairs))
         for name, what in (("dt", "number of seconds"), ("horizon", "number of seconds"), ("inflation", "number")):
             if getattr(self, name) is not None:  # None: chosen (see the parameters)
                 keep(name, _positive(getattr(self, name), name, what))

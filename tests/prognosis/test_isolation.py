@@ -233,6 +233,28 @@ def test_the_models_domains_decide_what_is_rejected():
     assert monitor.priors.domains == {"R": (0.0, 50.0)}
 
 
+def test_a_result_is_contradicted_when_its_best_hypothesis_is():
+    """The most probable hypothesis not rejected is inadequate (or all are rejected): no fault weighed explains
+    the residuals, and prognose then weighs two at once; a less probable one inadequate, or nothing weighed,
+    is not that."""
+    from prognosis.isolation import IsolationResult
+
+    hypotheses = [Hypothesis("R", "linear", 20.0, 10.0), Hypothesis("R", "exponential", 20.0, 10.0),
+                  Hypothesis("L", "linear", 2.0, 1.0)]
+    evidence = np.array([[0.0, 0.0, 0.0], [-3.0, -1.0, -9.0]])   # R/exponential the most probable at the end
+    result = IsolationResult(1.0, hypotheses=hypotheses, log_evidence=evidence, inadequate={"R/linear": "drifts"})
+    assert not result.contradicted
+    result.inadequate["R/exponential"] = "drifts"
+    assert result.contradicted
+    result.rejected = {"R/exponential": "left its domain"}      # then R/linear is the best standing: inadequate
+    assert result.contradicted
+    result.inadequate = {}
+    assert not result.contradicted
+    result.rejected = {h.name: "left its domain" for h in hypotheses}
+    assert result.contradicted
+    assert not IsolationResult(None, hypotheses=hypotheses).contradicted   # no filter step yet
+
+
 @pytest.mark.slow  # simulates the torsion bar under its PI loop (tests/wear) and runs bgphm prognose
 def test_resample_move_follows_a_clean_linear_wear_that_collapsed_the_random_walk_filter():
     """A wear scenario of tests/wear: noise on the speeds only, the alarm within a filter step of the onset."""
@@ -242,6 +264,7 @@ def test_resample_move_follows_a_clean_linear_wear_that_collapsed_the_random_wal
     answer = wear.run(scenario, seed=20261127, particles=150, rul_every=40, method="resample-move")
     figures = wear.score(scenario, answer)
     assert figures["found"] and figures["degradation"] == "linear"
+    assert answer["pairs"] == "not weighed"   # a single fault explains the residuals: no second run
     assert figures["within_20pct_second_half"] >= 0.8
     assert figures["ra"] >= 0.9
     # the band is never narrower than the filter step the record resolves, and then it holds the truth
@@ -260,7 +283,7 @@ def test_a_law_the_data_contradict_is_inadequate_and_gives_no_rul(law, flagged):
 
     scenario = wear.Scenario("torsion_bar", "b_Md", law, "noisy")
     answer = wear.run(scenario, seed=20261128, particles=150, rul_every=40, method="resample-move",
-                      degradation="linear")
+                      degradation="linear", pairs=False)   # the single faults' verdict, not the pairs' after it
     inadequate = answer["evidence"]["b_Md/linear"]["inadequate"]
     withheld = [p["withheld"] for p in answer["predictions"] if p.get("withheld")]
     if flagged:
@@ -296,7 +319,7 @@ def test_a_wear_in_bursts_fails_every_law_s_forecast(seed):
     from tests.wear import run as wear
 
     scenario = wear.Scenario("pump_drive", "R_a", "intermittent", "clean")
-    answer = wear.run(scenario, seed=seed, particles=150, rul_every=40, method="resample-move")
+    answer = wear.run(scenario, seed=seed, particles=150, rul_every=40, method="resample-move", pairs=False)
     assert answer["status"] != "isolated" and wear.score(scenario, answer)["found"]
     for law in ("linear", "exponential", "power"):
         assert "the data contradict the law's forecast" in (answer["evidence"][f"R_a/{law}"]["inadequate"] or ""), law

@@ -45,8 +45,9 @@ def test_the_library_and_the_command_line_give_the_same_numbers(files, tmp_path)
     python = json.loads(json.dumps(result.as_dict(), default=float))
     assert python["candidate"] == cli["candidate"] == "R" and python["status"] == cli["status"]
     assert python["predictions"] and python["predictions"] == cli["predictions"]  # every figure, to the last bit
-    for key in ("filter_step", "residual_noise_std", "margins", "calibration_end", "evidence", "decisions"):
+    for key in ("filter_step", "residual_noise_std", "margins", "calibration_end", "evidence", "decisions", "pairs"):
         assert python[key] == cli[key], key
+    assert cli["pairs"] == "not weighed"   # R explains the residuals
     assert 1.0 < python["detection_time"] == cli["detection_time"] < 2.0  # R drifts from t = 1 s
 
 

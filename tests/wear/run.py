@@ -226,12 +226,14 @@ def record(scenario: Scenario, seed: int, *, noise: Mapping | None = None) -> di
 
 
 def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int = 10, method: str = "sir",
-        degradation: str | tuple = (), sensors: bool = True, pairs: bool = False) -> dict:
+        degradation: str | tuple = (), sensors: bool = True, pairs: bool | None = None) -> dict:
     """``prognosis.json`` of ``bgphm prognose`` on the scenario's record (exit code under ``"exit"``).
 
     ``degradation``: the competing laws (``--degradation``, a name or several; default the command's);
     ``sensors=False``: the sensors' faults are not weighed (``--no-sensors``); ``pairs=True``: two
-    parameters wearing at once are (``--pairs``, with ``method="resample-move"``).
+    parameters wearing at once are, from the first alarm (``--pairs``, with ``method="resample-move"``),
+    ``False``: never (``--no-pairs``), None: the command's default (when no single fault explains the
+    residuals).
     """
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -243,7 +245,7 @@ def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int =
                 "--calibrate", f"{facts.calibrate:g}", "--particles", str(particles), "--rul-every", str(rul_every),
                 "--seed", str(seed), "--filter", method, "--out", str(folder / "out"),
                 *(f"--degradation={law}" for law in ([degradation] if isinstance(degradation, str) else degradation)),
-                *([] if sensors else ["--no-sensors"]), *(["--pairs"] if pairs else [])]
+                *([] if sensors else ["--no-sensors"]), *({True: ["--pairs"], False: ["--no-pairs"]}.get(pairs, []))]
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
             code = bgphm(argv)
         if code != 0:
@@ -269,6 +271,7 @@ def score(scenario: Scenario, answer: dict) -> dict:
     figures = {"found": bool(found), "candidate": named, "status": answer.get("status"),
                "degradation": answer.get("degradation"), "detection_time": answer.get("detection_time"),
                "predictions": len(predictions), "withheld": len(given) - len(predictions),
+               "pairs_weighed": answer.get("pairs"),
                # the most probable hypothesis at the end: the faulty parameter or sensor itself, and its law
                "top": _top(answer)}
     if not predictions or scenario.sensor:  # a sensor fault has no end of life: any RUL given is counted, not scored
