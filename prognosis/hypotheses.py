@@ -33,6 +33,7 @@ import sympy as sp
 from bondgraph.memo import ContentCache, content_key
 from diagnosis import signature_matrix
 
+from .degradation import SHAPED
 from .observation import SENSOR, observation_model, sensor_model
 from .errors import PrognosisError
 
@@ -234,7 +235,7 @@ def law_distance(hypothesis: Hypothesis) -> float:
     """
     if hypothesis.law == "exponential" and hypothesis.failure * hypothesis.nominal > 0:
         return math.log(hypothesis.failure / hypothesis.nominal)
-    if hypothesis.law in ("power", "saturating"):
+    if hypothesis.law in SHAPED:   # a share of the way
         return 1.0
     return hypothesis.failure - hypothesis.nominal
 

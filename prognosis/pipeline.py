@@ -193,8 +193,9 @@ def prognose(arrs: Sequence, record, failures: Mapping[str, float], settings: Pr
     Notes
     -----
     With ``settings.isolation.pairs`` None (the default), single faults are weighed first; when none
-    stands at the end (each rejected or contradicted by the data), the record is run again with two
-    parameters degrading at once among the hypotheses, and that run is the answer.
+    explains the residuals at the end (:attr:`~prognosis.isolation.IsolationResult.contradicted`), the
+    record is run again with two parameters degrading at once among the hypotheses, and that run is
+    the answer.
     """
     settings = settings or PrognosisSettings()
     chosen = settings.isolation

@@ -177,7 +177,7 @@ class Priors:
     def rate_particles(self, h: Hypothesis, rng: np.random.Generator, count: int = 1,
                        offset: float = 0.0) -> np.ndarray:
         """Initial gamma particles (N, ``count``) of a hypothesis: the rate from the ``rate`` interval or the
-        prior on the life, the shaped laws' other gammas log-uniform, a gamma the law has not 1 (:meth:`gamma_bounds`;
+        prior on the life, the shaped laws' other gammas log-uniform, other gammas 1 (:meth:`gamma_bounds`;
         ``offset``: a sensor's offset at the alarm)."""
         lo, hi = self.gamma_bounds(h, count, offset)
         n = self.settings.n_particles

@@ -90,8 +90,9 @@ class IsolationSettings:
         Weigh two parameters degrading at once too (``method="resample-move"`` and no ``candidates``
         only: :class:`~prognosis.isolation.IsolatingMonitor`): True from the first alarm, False never;
         None (default): :func:`prognosis.prognose` weighs them when no single fault explains the
-        residuals (every hypothesis ends rejected or inadequate), running the record again with
-        them; a monitor alone weighs them only when True.
+        residuals (the most probable hypothesis ends contradicted by the data, or every one rejected:
+        :attr:`~prognosis.isolation.IsolationResult.contradicted`), running the record again with them;
+        a monitor alone weighs them only when True.
     method : {"resample-move", "sir"}
         The filter (:class:`~prognosis.isolation.IsolatingMonitor`); a fleet's is ``"sir"``.
     dt : float, optional
