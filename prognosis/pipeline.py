@@ -217,7 +217,7 @@ def prognose(arrs: Sequence, record, failures: Mapping[str, float], settings: Pr
 
     result = run(chosen.pairs)
     pairs = "weighed from the first alarm" if chosen.pairs else "not weighed"
-    if chosen.pairs is None and _pairs_possible(chosen) and result.contradicted:
+    if chosen.pairs is None and chosen.pairs_possible and result.contradicted:
         # no single fault explains the residuals: two at once compete, on the whole record from the alarm
         # (their cost is paid only here; a single fault weighed with them is not called two, isolation.held_back)
         result = run(True)
@@ -228,8 +228,3 @@ def prognose(arrs: Sequence, record, failures: Mapping[str, float], settings: Pr
                        "undecided": dict(healthy.undecided), "pairs": pairs,
                        "seed": chosen.seed if isinstance(chosen.seed, int) else str(chosen.seed)}
     return result
-
-
-def _pairs_possible(settings: IsolationSettings) -> bool:
-    """Two faults at once can be weighed: the resample-move filter, candidates from the signature."""
-    return settings.method == "resample-move" and settings.candidates is None

@@ -155,7 +155,7 @@ class IsolatingMonitor:
                              + [c for c in result.consistent if self.settings.sensors and sensor_signal(c)])
         result.unweighed = {c: why for c in result.candidates if (why := self._unmodelled(c, self.arrs))}
         result.candidates = [c for c in result.candidates if c not in result.unweighed]
-        weigh_pairs = self.settings.method != "sir" and self.settings.pairs and self.settings.candidates is None
+        weigh_pairs = bool(self.settings.pairs) and self.settings.pairs_possible
         pairs, pair_groups = self.pairs_for(result) if weigh_pairs else ([], [])
         if not result.candidates and not pairs:
             return result

@@ -186,7 +186,7 @@ class IsolationSettings:
                                        f"got {self.seed!r}")
         if not isinstance(self.seed, np.random.SeedSequence):
             keep("seed", int(self.seed))
-        if self.pairs and (self.method != "resample-move" or self.candidates is not None):
+        if self.pairs and not self.pairs_possible:
             raise SettingError("pairs", "{setting}: two faults at once are weighed with {setting:method} "
                                         "resample-move and without {setting:candidates} only")
 
@@ -200,6 +200,15 @@ class IsolationSettings:
     def law_models(self) -> dict:
         """Law name -> the user's model, or None for a built-in law (made per hypothesis)."""
         return dict(self.laws) if isinstance(self.laws, Mapping) else {name: None for name in self.laws}
+
+    @property
+    def pairs_possible(self) -> bool:
+        """Two faults at once can be weighed: the resample-move filter, candidates from the signature.
+
+        >>> IsolationSettings().pairs_possible, IsolationSettings(method="sir").pairs_possible
+        (True, False)
+        """
+        return self.method == "resample-move" and self.candidates is None
 
     @property
     def likelihood_inflation(self) -> float:
