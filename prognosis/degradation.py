@@ -280,7 +280,8 @@ class SaturatingDegradation:
     def trajectory(self, theta: np.ndarray, gamma: np.ndarray, start: int, stop: int, dt: float) -> np.ndarray:
         """theta after ``j`` deterministic steps, for ``j`` in ``start..stop`` (..., N, stop - start)."""
         rate, exponent, level = (gamma[..., g][..., None] for g in range(3))
-        clock = self._clock(theta[..., None], exponent, level) + rate * dt * np.arange(start, stop)
+        # before the onset (a step traced back past it) the clock stays at 0
+        clock = np.maximum(self._clock(theta[..., None], exponent, level) + rate * dt * np.arange(start, stop), 0.0)
         # a theta at or beyond this particle's level stays where it is: the law never gets there
         return np.where(np.isfinite(clock), self.origin + self.span * self._share(clock, exponent, level),
                         theta[..., None])
@@ -450,19 +451,21 @@ def _ahead(time: np.ndarray) -> np.ndarray:
 
 def trajectory(model, theta: np.ndarray, gamma: np.ndarray, start: int, stop: int, dt: float) -> np.ndarray:
     """theta (..., N) after ``j`` deterministic steps of ``model``, ``j`` in ``start..stop``: (..., N, stop - start);
-    in closed form where the model has one, else step by step.
+    in closed form where the model has one, else step by step, and then held at ``theta`` for ``j < 0`` (a
+    law known only by its step cannot be traced back).
 
-    >>> trajectory(CustomDegradation(lambda theta, gamma, dt: theta + 1.0), np.zeros(1), np.zeros((1, 1)), 0, 3,
+    >>> trajectory(CustomDegradation(lambda theta, gamma, dt: theta + 1.0), np.zeros(1), np.zeros((1, 1)), -1, 3,
     ...            dt=1.0).tolist()
-    [[0.0, 1.0, 2.0]]
+    [[0.0, 0.0, 1.0, 2.0]]
     """
     if hasattr(model, "trajectory"):
         return model.trajectory(theta, gamma, start, stop, dt)
     out = np.empty((*np.shape(theta), stop - start))
-    for j in range(stop):
+    for j in range(min(start, 0), stop):
         if j >= start:
             out[..., j - start] = theta
-        theta = model.step(theta, gamma, dt)
+        if j >= 0:
+            theta = model.step(theta, gamma, dt)
     return out
 
 

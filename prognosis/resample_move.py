@@ -36,6 +36,7 @@ The contract is the :class:`~prognosis.particle_filter.ParticleFilter`'s: ``init
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -68,6 +69,9 @@ class Prior:
     log: np.ndarray  # (A, G) bool
     sign: np.ndarray  # (A, G)
     width: int = 1  # the first coordinates are theta_0's: one, or one per parameter of a joint hypothesis
+    #: (A,) theta's value before its change began, when the record before the first step is weighed; the
+    #: last coordinate is then the onset: how many steps before the first the change began
+    nominal: np.ndarray | None = None
 
     def draw(self, n: int, rng: np.random.Generator) -> np.ndarray:
         shape = (self.lo.shape[0], n, self.lo.shape[1])
@@ -80,7 +84,8 @@ class Prior:
 
     def rows(self, index: np.ndarray) -> "Prior":
         """The prior of the rows (assets) ``index`` alone."""
-        return Prior(self.lo[index], self.hi[index], self.log[index], self.sign[index], self.width)
+        return Prior(self.lo[index], self.hi[index], self.log[index], self.sign[index], self.width,
+                     None if self.nominal is None else self.nominal[index])
 
     def inside(self, z: np.ndarray) -> np.ndarray:
         return np.all((z >= self.lo[:, None, :]) & (z <= self.hi[:, None, :]), axis=-1)
@@ -89,8 +94,21 @@ class Prior:
         """theta_0 of particles ``z``: (A, N), or (A, N, C) for ``components`` C."""
         return z[..., 0] if components is None else z[..., :components]
 
+    def before_onset(self, path: np.ndarray, z: np.ndarray, steps: np.ndarray) -> np.ndarray:
+        """theta's ``path`` (A, N, K) at ``steps`` (K,) from the first (negative: before it) with the onset of
+        particles ``z``: the nominal value before the onset; between it and the first step the law's path
+        traced back, stopped at the nominal value (a wear does not come from beyond it)."""
+        if self.nominal is None or not np.any(steps < 0):
+            return path
+        nominal = self.nominal[:, None, None]
+        side = np.sign(z[..., :1] - nominal)  # (A, N, 1): the side of the nominal value theta_0 lies on
+        traced = nominal + side * np.maximum(side * (path - nominal), 0.0)
+        started = steps[None, None, :] >= -z[..., -1:]
+        before = steps[None, None, :] < 0
+        return np.where(before, np.where(started, traced, nominal), path)
+
     def gamma(self, z: np.ndarray) -> np.ndarray:
-        u = z[..., self.width:]
+        u = z[..., self.width:self.width + self.log.shape[1]]
         log = self.log[:, None, :]
         return np.where(log, self.sign[:, None, :] * np.exp(np.where(log, u, 0.0)), u)
 
@@ -159,6 +177,7 @@ class ResampleMoveFilter:
         self.resample = get_scheme(resampling)
         self.rng = np.random.default_rng(check_seed(seed))
         self.z = self.theta = self.log_weights = self.log_evidence = None
+        self.lead = 0
         self.components = None
         self.acceptance = None
         #: assets (A,) reweighted but no longer moved: a caller's choice (an hypothesis left far behind)
@@ -166,7 +185,7 @@ class ResampleMoveFilter:
 
     # -- set-up ------------------------------------------------------------------------------
     def initialize(self, theta_bounds, gamma_bounds, assets: int = 1, log_gamma=False,
-                   components: int | None = None) -> None:
+                   components: int | None = None, before: Sequence = (), nominal=None) -> None:
         """Particles from the prior: theta_0 ~ U(theta_bounds), gamma ~ U(gamma_bounds) or log-uniform.
 
         Bounds are scalars, (A,) or, for gamma, (A, G).  ``log_gamma`` (bool, (G,) or (A, G)): draw
@@ -174,6 +193,15 @@ class ResampleMoveFilter:
         ``components``: C parameters per row degrading at once (a joint hypothesis), theta (A, N, C),
         its bounds (A, C); the model then moves (A, N, C) (a
         :class:`~prognosis.degradation.JointDegradation`) and the observation takes it.
+
+        ``before``: the measurements ``(y, points)`` of the steps just before the first, weighed too,
+        with ``nominal`` (A,) the value theta had before its change began (one parameter per row
+        only).  Each particle then also has an onset, uniform over those steps: before it theta was
+        nominal, after it theta followed the law traced back from theta_0, stopped at the nominal
+        value.  A change seen only from the first step tells a law's curvature badly (a power law's
+        exponent, an exponential's rate); its start, below the alarm thresholds, tells it, and a
+        jump at the onset (a step, then a drift; a sensor's bias) is a change that starts there.  A
+        row whose ``y`` is NaN before the first step does not weigh them.
         """
         g = self.model.n_gamma
         shape = (assets,) if components is None else (assets, int(components))
@@ -190,8 +218,16 @@ class ResampleMoveFilter:
         u_lo = np.where(log, np.log(np.abs(np.where(log, np.where(sign > 0, g_lo, g_hi), 1.0))), g_lo)
         u_hi = np.where(log, np.log(np.abs(np.where(log, np.where(sign > 0, g_hi, g_lo), 1.0))), g_hi)
         self.components = None if components is None else int(components)
-        self.prior = Prior(np.column_stack([lo, u_lo]), np.column_stack([hi, u_hi]), log, sign,
-                           1 if components is None else self.components)
+        before = list(before)
+        if before and (components is not None or nominal is None):
+            raise PrognosisError("the steps before the first are weighed for one parameter per row, with its nominal "
+                                 "value")
+        self.lead = len(before)  # steps of the history before the first
+        onset = ([np.zeros((assets, 1)), np.full((assets, 1), float(self.lead))] if before
+                 else [np.empty((assets, 0))] * 2)
+        self.prior = Prior(np.column_stack([lo, u_lo, onset[0]]), np.column_stack([hi, u_hi, onset[1]]), log, sign,
+                           1 if components is None else self.components,
+                           np.broadcast_to(np.asarray(nominal, float), (assets,)).copy() if before else None)
         self.z = self.prior.draw(self.n, self.rng)
         self.theta = self.prior.theta(self.z, self.components).copy()
         self.log_weights = np.full((assets, self.n), -np.log(self.n))
@@ -199,7 +235,7 @@ class ResampleMoveFilter:
         # sum of log p(y_j | theta_j) of each particle over the history, per whitened residual (A, N, M)
         self.past = np.zeros((assets, self.n, 1))
         self.level = None  # (A, N, M): each particle's offset predicted for the next step (whitened)
-        self.history = []  # (y, points) of every step
+        self.history = before  # (y, points) of every step, those before the first included
         self.acceptance = np.full(assets, np.nan)
         self.frozen = np.zeros(assets, bool)
         self.scale = 2.38 / np.sqrt(np.maximum(self.prior.free.sum(axis=1), 1))
@@ -230,19 +266,24 @@ class ResampleMoveFilter:
         self._initialized()
         y = np.asarray(y, float)
         y = y if y.ndim == 2 else np.broadcast_to(y, (self.assets,))
-        if self.history:
+        if len(self.history) > self.lead:
             self.theta = self.model.step(self.theta, self.prior.gamma(self.z), self.dt)
         self.history.append((y, points))
         predicted = self._observe(self.theta, points, self.z)
         innovation = self._innovation(y, predicted)
         increment, self.level = self._log_likelihood(y, predicted, self.theta, self.level)
+        first = len(self.history) == self.lead + 1
+        if first and self.lead:  # the steps before the first come in with it, each particle from its onset
+            self.past, increment, _, self.level = self._replay_rows(self.z, None)
         updated = np.isfinite(y).any(axis=1) if y.ndim == 2 else np.isfinite(y)
         increment = np.where(updated[:, None, None], increment, 0.0)
-        if len(self.history) == 1:  # the residuals' count is known now
-            self.past = np.zeros(increment.shape)
+        if first:  # the residuals' count is known now
+            self.past = np.zeros(increment.shape) if not self.lead else self.past
             self.excess = np.ones((self.assets, increment.shape[-1]))
-        # the target moves from exp(sum past / excess_before) to exp(sum (past + increment) / excess_after)
+        # the target moves from exp(sum past / excess_before) to exp(sum (past + increment) / excess_after);
+        # at the first step the weights are the prior's, whatever came before it
         before, after = 1.0 / self.excess, 1.0 / self._excess_now()
+        before = np.zeros_like(before) if first else before
         done = np.zeros(self.assets)  # the share phi of the way already in the weights
         ess_min = np.full(self.assets, float(self.n))
         moved = np.zeros(self.assets, bool)
@@ -290,12 +331,15 @@ class ResampleMoveFilter:
         every step while the history is short, then about twenty times per tenfold of history (the
         replay it takes costs as much as the history is long).
         """
-        steps = len(self.history)
+        steps = len(self.history) - self.lead
         if self.discrepancy is None or steps < MIN_STEPS or (steps - MIN_STEPS) % max(1, steps // 20):
             return self.excess
         past = self.past.sum(axis=-1)
         best = np.argmax(np.where(np.isfinite(past), past, -np.inf), axis=1)
-        excess = information_excess(self._standardized_gaps(self.z[np.arange(self.assets), best][:, None, :]))
+        # read where the law is put to the test, from the first step on: the steps before it, nominal
+        # for the most part, fit every law and would dilute a misfit the law shows once theta moves
+        gaps = self._standardized_gaps(self.z[np.arange(self.assets), best][:, None, :])
+        excess = information_excess(gaps[:, self.lead:])
         if self.discrepancy == "shared":  # rows are hypotheses of one asset: the best one's excess for all
             best = np.where(self.frozen, -np.inf, self.log_evidence)
             excess = np.broadcast_to(excess[int(np.argmax(best))], excess.shape).copy()
@@ -441,9 +485,11 @@ class ResampleMoveFilter:
         model, observation, prior = ((self.model, self.observation, self.prior) if view is None
                                      else (view[1], view[2], view[4]))
         rates = getattr(observation, "rates", False)
-        # the whole stretch at once (in closed form where the law has one), its rate from the step after each
-        path = trajectory(model, prior.theta(z, self.components), prior.gamma(z), start - lag, stop - lag + rates,
-                          self.dt)
+        # the whole stretch at once (in closed form where the law has one), its rate from the step after each;
+        # steps counted from the first, those before it (the lead) negative
+        steps = np.arange(start - lag, stop - lag + rates) - self.lead
+        path = prior.before_onset(trajectory(model, prior.theta(z, self.components), prior.gamma(z), steps[0],
+                                             steps[-1] + 1, self.dt), z, steps)
         rate = np.diff(path, axis=2) / self.dt if rates else None
         return path[:, :, :stop - start], rate
 
@@ -505,9 +551,10 @@ class ResampleMoveFilter:
         >>> miss(bend=60) < 4.0, miss(bend=35) > 4.0
         (True, True)
         """
-        stop = len(self.history)
+        stop = len(self.history) - self.lead
         if not 0 <= made < start < stop:
             raise PrognosisError(f"a forecast made at step {made} is judged on the steps {start} to {stop} after it")
+        made, start, stop = made + self.lead, start + self.lead, stop + self.lead
         mean_gap, path = self._mean_gaps(z, start, stop)
         lagged, _ = self._mean_gaps(z, start, stop, lag=1)
         weights = normalize_log_weights(log_weights)[0]

@@ -44,8 +44,8 @@ from ..rul import RULDistribution, RULPredictor
 from .decision import Decision
 from .priors import Priors, check_noise_std
 from .result import IsolationResult
-from .settings import (ADEQUACY_LIMIT, ADEQUACY_WINDOW, CONFIRM_STEPS, DRIFT_AWAY_STEPS, FORECAST_LIMIT, FREEZE_BELOW,
-                       MIXTURE_FLOOR, SPIKE, IsolationSettings)
+from .settings import (ADEQUACY_LIMIT, ADEQUACY_WINDOW, BEFORE_STEPS, CONFIRM_STEPS, DRIFT_AWAY_STEPS, FORECAST_LIMIT,
+                       FREEZE_BELOW, MIXTURE_FLOOR, SPIKE, IsolationSettings)
 
 __all__ = ["IsolatingMonitor", "detection_options"]
 
@@ -308,7 +308,7 @@ class IsolatingMonitor:
             pf.initialize(bounds, gamma0=gamma0, assets=len(hypotheses))
             models = [(m,) for m in models]
         else:
-            pf, observation, models = self._resample_move(hypotheses, starts, evaluations, arrs, stride)
+            pf, observation, models = self._resample_move(hypotheses, starts, evaluations, arrs, stride, k0)
         steps = range(k0, t.size, stride)
         information = self._information(result, observation, evaluations, noise, steps)
         every = -(-len(steps) // 100)
@@ -369,13 +369,15 @@ class IsolatingMonitor:
         result.parts = {name: {c: np.array([step[name][c] for step in steps]) for c in parts}
                         for name, parts in (steps[0].items() if steps else ())}
 
-    def _resample_move(self, hypotheses: list, starts: list, evaluations: list, arrs: list, stride: int):
+    def _resample_move(self, hypotheses: list, starts: list, evaluations: list, arrs: list, stride: int, k0: int):
         """The resample-move filter over the hypotheses' static parameters, its observation, and each row's
         models (one per parameter, for the RUL).
 
-        Without a joint hypothesis theta is (H, N).  With one it is (H, N, C): component c of a row is its
-        c-th parameter (a single hypothesis' others fixed and blind, so that all weigh in one filter on
-        the same residuals), each by its own law with its own gammas.
+        Without a joint hypothesis theta is (H, N), and the residuals of the steps before the first
+        alarm (:meth:`steps_before`) are weighed too, each particle with an onset.  With one it is (H,
+        N, C): component c of a row is its c-th parameter (a single hypothesis' others fixed and
+        blind, so that all weigh in one filter on the same residuals), each by its own law with its
+        own gammas, from the alarm on.
         """
         parts = [h.parts if isinstance(h, JointHypothesis) else (h,) for h in hypotheses]
         part_starts = [s if isinstance(h, JointHypothesis) else (s,) for h, s in zip(hypotheses, starts)]
@@ -408,10 +410,29 @@ class IsolatingMonitor:
                                 seed=seeds.spawn(self.settings.seed, seeds.FILTER))
         bounds = (np.array(theta_lo).T, np.array(theta_hi).T) if joint else (np.array(theta_lo[0]),
                                                                                np.array(theta_hi[0]))
+        rows = (len(hypotheses), len(arrs))
+        before = [] if joint else [(np.broadcast_to([-e.residual[k] for e in evaluations], rows),
+                                    [[p[k] for p in e.points] for e in evaluations])
+                                   for k in self.steps_before(evaluations, k0, stride)]
         pf.initialize(bounds, gamma_bounds=(np.hstack(gamma_lo), np.hstack(gamma_hi)), assets=len(hypotheses),
-                      log_gamma=np.hstack(logs), components=width if joint else None)
+                      log_gamma=np.hstack(logs), components=width if joint else None, before=before,
+                      nominal=None if joint else [h.nominal for h in hypotheses])
         models = [tuple(bank.models[row] for bank in banks[:len(p)]) for row, p in enumerate(parts)]
         return pf, observations[0], models
+
+    def steps_before(self, evaluations: list, k0: int, stride: int) -> list:
+        """The samples of the filter steps before the first, ``k0``, whose residuals the filter weighs too.
+
+        Back from ``k0`` by filter steps while no ARR is in alarm and the record is past the healthy
+        stretch, at most :data:`BEFORE_STEPS`: the change below the thresholds, before it was seen.
+        """
+        t = evaluations[0].t
+        steps = []
+        for k in range(k0 - stride, -1, -stride):
+            if len(steps) == BEFORE_STEPS or t[k] <= self.healthy_until or any(e.alarm[k] for e in evaluations):
+                break
+            steps.append(k)
+        return steps[::-1]
 
     def _information(self, result: IsolationResult, observation: HypothesisObservation, evaluations: list,
                      noise: np.ndarray, steps: range) -> np.ndarray:

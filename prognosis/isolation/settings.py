@@ -32,9 +32,9 @@ from bondgraph.errors import SettingError
 
 from ..hypotheses import LIFE_PRIOR
 
-__all__ = ["MAX_PARTICLES", "ADEQUACY_LIMIT", "ADEQUACY_WINDOW", "CONFIRM_STEPS", "DRIFT_AWAY_STEPS", "EVIDENCE_RATIO",
-           "FORECAST_LIMIT", "FLEET_LAWS", "FLEET_SETTINGS", "FREEZE_BELOW", "HORIZON_STEPS", "IsolationSettings",
-           "LAWS", "METHODS", "MIXTURE_FLOOR", "PROCESS_NOISE", "SPIKE"]
+__all__ = ["MAX_PARTICLES", "ADEQUACY_LIMIT", "ADEQUACY_WINDOW", "BEFORE_STEPS", "CONFIRM_STEPS", "DRIFT_AWAY_STEPS",
+           "EVIDENCE_RATIO", "FORECAST_LIMIT", "FLEET_LAWS", "FLEET_SETTINGS", "FREEZE_BELOW", "HORIZON_STEPS",
+           "IsolationSettings", "LAWS", "METHODS", "MIXTURE_FLOOR", "PROCESS_NOISE", "SPIKE"]
 
 METHODS = ("resample-move", "sir")
 #: the competing laws by default: the two of Jha et al. (2016) and the flexible power law, which holds the
@@ -46,6 +46,8 @@ MIXTURE_FLOOR = 1e-3  # hypotheses less probable than this are left out of the R
 PROCESS_NOISE = 0.1  # sigma_v per filter step, as a fraction of the candidate's resolution per sample
 HORIZON_STEPS = 2000  # RUL horizon cap in filter steps, unless given
 CONFIRM_STEPS = 20  # filter steps after the first alarm over which the fired ARRs are read
+#: filter steps before the first alarm the resample-move filter weighs too (the change below the thresholds): at most
+BEFORE_STEPS = 1000
 ADEQUACY_WINDOW = 30  # filter steps of standardized innovations a law's fit is judged on
 #: mean standardized innovation over the window beyond which the law does not follow the residual: a
 #: fitting law stays within about 1 (clean or noisy torsion-bar wear), a law that lags drifts to tens

@@ -294,35 +294,54 @@ def test_a_law_the_data_contradict_is_inadequate_and_gives_no_rul(law, flagged):
         assert wear.score(scenario, answer)["within_20pct_second_half"] >= 0.8
 
 
-@pytest.mark.slow  # simulates the pipe and tank (tests/wear) and runs bgphm prognose: about 10 s of CPU
+@pytest.mark.slow  # simulates the pump drive (tests/wear) and runs bgphm prognose: about 10 s of CPU
+def test_a_power_wear_alarmed_late_is_told_by_its_start_below_the_thresholds():
+    """The brushes wear as the 2.5th power of the time since onset, and the noisy current alarms only at 61 % of
+    the life.  From the alarm on, the bend is too short to tell the exponent: the exponential law won and the
+    RUL was poor (median within 20 % at 42 % of the second half, RA 0.03, seed 5).  The residuals between
+    the healthy stretch and the alarm hold the start of the wear and tell the power law."""
+    from tests.wear import run as wear
+
+    scenario = wear.Scenario("pump_drive", "R_a", "power", "noisy")
+    answer = wear.run(scenario, seed=5, particles=150, rul_every=10, method="resample-move", pairs=False)
+    figures = wear.score(scenario, answer)
+    assert figures["found"] and figures["degradation"] == "power"
+    assert figures["within_20pct_second_half"] >= 0.8 and figures["ra"] >= 0.8
+    assert figures["coverage_90"] >= 0.85
+
+
+@pytest.mark.slow  # simulates the pipe and tank (tests/wear) and runs bgphm prognose twice: about 20 s of CPU
 def test_a_wear_that_levels_off_is_followed_by_the_saturating_law():
     """The strainer clogs along a logistic curve (no law of the prognoser's): slowly, fast, then levelling
     off just beyond its failure value.  The power law, bent through the start, forecasts a failure far too
-    soon (its band held the truth at 22-26 % of the predictions over two seeds); the saturating law
-    follows the bend and is the one declared."""
+    soon; the saturating law follows the bend better and is the one declared.  Its band, narrowed by the
+    start of the wear before the alarm, still holds the truth rarely (20 % of the predictions here):
+    no law foresees a levelling off it has not seen."""
     from tests.wear import run as wear
 
     scenario = wear.Scenario("pipe_tank", "R_f", "logistic", "clean")
-    answer = wear.run(scenario, seed=5, particles=150, rul_every=20, method="resample-move",
-                      degradation=("linear", "exponential", "power", "saturating"))
-    figures = wear.score(scenario, answer)
-    assert figures["found"] and figures["degradation"] == "saturating"
-    assert figures["coverage_90"] >= 0.4
+    figures = {}
+    for laws in (("linear", "exponential", "power"), ("linear", "exponential", "power", "saturating")):
+        answer = wear.run(scenario, seed=5, particles=150, rul_every=20, method="resample-move", degradation=laws)
+        figures[laws[-1]] = wear.score(scenario, answer)
+    assert figures["saturating"]["found"] and figures["saturating"]["degradation"] == "saturating"
+    assert figures["saturating"]["ra"] > figures["power"]["ra"] + 0.1
 
 
 @pytest.mark.slow  # simulates the pump drive (tests/wear) and runs bgphm prognose: about 10 s of CPU
 @pytest.mark.parametrize("seed", [5, 20261127])
 def test_a_wear_in_bursts_fails_every_law_s_forecast(seed):
-    """The brushes wear in four bursts with pauses between: each law, bent through the history, passes the
-    one-step innovations, but none forecasts what follows, and each leaves the RUL (when every probable
-    hypothesis has, the answer is undecided; another candidate's flexible law may still claim the bursts)."""
+    """The brushes wear in four bursts with pauses between: no law follows them (from the wear's start below
+    the thresholds, the one-step innovations show it; bent through the bursts since the alarm alone, each law
+    passed them, and none forecast what follows), and each leaves the RUL (when every probable hypothesis
+    has, the answer is undecided; another candidate's flexible law may still claim the bursts)."""
     from tests.wear import run as wear
 
     scenario = wear.Scenario("pump_drive", "R_a", "intermittent", "clean")
     answer = wear.run(scenario, seed=seed, particles=150, rul_every=40, method="resample-move", pairs=False)
     assert answer["status"] != "isolated" and wear.score(scenario, answer)["found"]
     for law in ("linear", "exponential", "power"):
-        assert "the data contradict the law's forecast" in (answer["evidence"][f"R_a/{law}"]["inadequate"] or ""), law
+        assert "the data contradict the law" in (answer["evidence"][f"R_a/{law}"]["inadequate"] or ""), law
 
 
 @pytest.mark.slow
