@@ -319,8 +319,7 @@ class IsolatingMonitor:
         result.healthy = {part.candidate: self.priors.healthy_box(part, arrs)
                           for h in hypotheses if isinstance(h, JointHypothesis) for part in h.parts}
         for done, k in enumerate(steps, 1):
-            y = np.array([-e.residual[k] for e in evaluations])
-            points = [[p[k] for p in e.points] for e in evaluations]
+            y, points = _measured(evaluations, k)
             if self.settings.method != "sir":  # far behind the best, or not following the data: weighed on, not moved
                 names = [h.name for h in hypotheses]
                 pf.frozen = ((pf.log_evidence < pf.log_evidence.max() - FREEZE_BELOW)
@@ -410,10 +409,10 @@ class IsolatingMonitor:
                                 seed=seeds.spawn(self.settings.seed, seeds.FILTER))
         bounds = (np.array(theta_lo).T, np.array(theta_hi).T) if joint else (np.array(theta_lo[0]),
                                                                                np.array(theta_hi[0]))
-        rows = (len(hypotheses), len(arrs))
-        before = [] if joint else [(np.broadcast_to([-e.residual[k] for e in evaluations], rows),
-                                    [[p[k] for p in e.points] for e in evaluations])
-                                   for k in self.steps_before(evaluations, k0, stride)]
+        # every row takes the same residuals, as at each step
+        before = [] if joint else [(np.broadcast_to(y, (len(hypotheses), y.size)), points)
+                                   for y, points in (_measured(evaluations, k)
+                                                     for k in self.steps_before(evaluations, k0, stride))]
         pf.initialize(bounds, gamma_bounds=(np.hstack(gamma_lo), np.hstack(gamma_hi)), assets=len(hypotheses),
                       log_gamma=np.hstack(logs), components=width if joint else None, before=before,
                       nominal=None if joint else [h.nominal for h in hypotheses])
@@ -715,6 +714,11 @@ def _part_estimates(hypotheses: Sequence, estimate: Mapping) -> dict:
     components = estimate.get("components", ())
     return {h.name: {part.candidate: float(components[c]["theta_mean"][row]) for c, part in enumerate(h.parts)}
             for row, h in enumerate(hypotheses) if isinstance(h, JointHypothesis)}
+
+
+def _measured(evaluations: Sequence, k: int) -> tuple[np.ndarray, list]:
+    """What the filter takes at sample ``k``: the residuals' ``-r`` (M,) and their points."""
+    return np.array([-e.residual[k] for e in evaluations]), [[p[k] for p in e.points] for e in evaluations]
 
 
 def _offset(start: tuple) -> float:
