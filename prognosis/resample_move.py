@@ -275,10 +275,11 @@ class ResampleMoveFilter:
         first = len(self.history) == self.lead + 1
         if first and self.lead:  # the steps before the first come in with it, each particle from its onset
             self.past, increment, _, self.level = self._replay_rows(self.z, None)
+        elif first:
+            self.past = np.zeros(increment.shape)
         updated = np.isfinite(y).any(axis=1) if y.ndim == 2 else np.isfinite(y)
         increment = np.where(updated[:, None, None], increment, 0.0)
         if first:  # the residuals' count is known now
-            self.past = np.zeros(increment.shape) if not self.lead else self.past
             self.excess = np.ones((self.assets, increment.shape[-1]))
         # the target moves from exp(sum past / excess_before) to exp(sum (past + increment) / excess_after);
         # at the first step the weights are the prior's, whatever came before it

@@ -425,13 +425,9 @@ class IsolatingMonitor:
         Back from ``k0`` by filter steps while no ARR is in alarm and the record is past the healthy
         stretch, at most :data:`BEFORE_STEPS`: the change below the thresholds, before it was seen.
         """
-        t = evaluations[0].t
-        steps = []
-        for k in range(k0 - stride, -1, -stride):
-            if len(steps) == BEFORE_STEPS or t[k] <= self.healthy_until or any(e.alarm[k] for e in evaluations):
-                break
-            steps.append(k)
-        return steps[::-1]
+        back = np.arange(k0 - stride, -1, -stride)[:BEFORE_STEPS]
+        quiet = (evaluations[0].t[back] > self.healthy_until) & ~np.any([e.alarm[back] for e in evaluations], axis=0)
+        return back[:int(np.argmin(quiet)) if not quiet.all() else back.size][::-1].tolist()
 
     def _information(self, result: IsolationResult, observation: HypothesisObservation, evaluations: list,
                      noise: np.ndarray, steps: range) -> np.ndarray:
