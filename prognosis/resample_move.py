@@ -69,8 +69,9 @@ class Prior:
     log: np.ndarray  # (A, G) bool
     sign: np.ndarray  # (A, G)
     width: int = 1  # the first coordinates are theta_0's: one, or one per parameter of a joint hypothesis
-    #: (A,) theta's value before its change began, when the record before the first step is weighed; the
-    #: last coordinate is then the onset: how many steps before the first the change began
+    #: (A,) theta's value before its change began, (A, C) each parameter's for a joint hypothesis, when the
+    #: record before the first step is weighed; the last ``width`` coordinates are then the onsets: how many
+    #: steps before the first each change began
     nominal: np.ndarray | None = None
 
     def draw(self, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -95,17 +96,22 @@ class Prior:
         return z[..., 0] if components is None else z[..., :components]
 
     def before_onset(self, path: np.ndarray, z: np.ndarray, steps: np.ndarray) -> np.ndarray:
-        """theta's ``path`` (A, N, K) at ``steps`` (K,) from the first (negative: before it) with the onset of
-        particles ``z``: the nominal value before the onset; between it and the first step the law's path
-        traced back, stopped at the nominal value (a wear does not come from beyond it)."""
+        """theta's ``path`` (A, N, K), or (A, N, K, C) of a joint hypothesis, at ``steps`` (K,) from the first
+        (negative: before it) with the onsets of particles ``z``: the nominal value before the onset;
+        between it and the first step the law's path traced back, stopped at the nominal value (a wear
+        does not come from beyond it).  Each parameter of a joint hypothesis has its own onset."""
         if self.nominal is None or not np.any(steps < 0):
             return path
-        nominal = self.nominal[:, None, None]
-        side = np.sign(z[..., :1] - nominal)  # (A, N, 1): the side of the nominal value theta_0 lies on
+        single = path.ndim == 3
+        path = path[..., None] if single else path  # (A, N, K, C)
+        nominal = self.nominal.reshape(self.nominal.shape[0], 1, 1, -1)
+        # (A, N, 1, C): the side of the nominal value theta_0 lies on, and the onset
+        side = np.sign(z[..., None, :self.width] - nominal)
+        onset = z[..., None, -self.width:]
         traced = nominal + side * np.maximum(side * (path - nominal), 0.0)
-        started = steps[None, None, :] >= -z[..., -1:]
-        before = steps[None, None, :] < 0
-        return np.where(before, np.where(started, traced, nominal), path)
+        at = steps[None, None, :, None]
+        shaped = np.where(at < 0, np.where(at >= -onset, traced, nominal), path)
+        return shaped[..., 0] if single else shaped
 
     def gamma(self, z: np.ndarray) -> np.ndarray:
         u = z[..., self.width:self.width + self.log.shape[1]]
@@ -195,13 +201,13 @@ class ResampleMoveFilter:
         :class:`~prognosis.degradation.JointDegradation`) and the observation takes it.
 
         ``before``: the measurements ``(y, points)`` of the steps just before the first, weighed too,
-        with ``nominal`` (A,) the value theta had before its change began (one parameter per row
-        only).  Each particle then also has an onset, uniform over those steps: before it theta was
+        with ``nominal`` (A,) (or (A, C)) the value theta had before its change began.  Each particle
+        then also has an onset (one per parameter), uniform over those steps: before it theta was
         nominal, after it theta followed the law traced back from theta_0, stopped at the nominal
         value.  A change seen only from the first step tells a law's curvature badly (a power law's
-        exponent, an exponential's rate); its start, below the alarm thresholds, tells it, and a
-        jump at the onset (a step, then a drift; a sensor's bias) is a change that starts there.  A
-        row whose ``y`` is NaN before the first step does not weigh them.
+        exponent, an exponential's rate); its start, below the alarm thresholds, tells it, and a jump
+        at the onset (a step, then a drift; a sensor's bias) is a change that starts there.  A row
+        whose ``y`` is NaN before the first step does not weigh them.
         """
         g = self.model.n_gamma
         shape = (assets,) if components is None else (assets, int(components))
@@ -219,15 +225,19 @@ class ResampleMoveFilter:
         u_hi = np.where(log, np.log(np.abs(np.where(log, np.where(sign > 0, g_hi, g_lo), 1.0))), g_hi)
         self.components = None if components is None else int(components)
         before = list(before)
-        if before and (components is not None or nominal is None):
-            raise PrognosisError("the steps before the first are weighed for one parameter per row, with its nominal "
-                                 "value")
+        if before and nominal is None:
+            raise PrognosisError("the steps before the first are weighed with theta's nominal value")
         self.lead = len(before)  # steps of the history before the first
-        onset = ([np.zeros((assets, 1)), np.full((assets, 1), float(self.lead))] if before
-                 else [np.empty((assets, 0))] * 2)
+        width = 1 if components is None else self.components
+        onset = [np.empty((assets, 0))] * 2
+        if before:
+            nominal = np.broadcast_to(np.asarray(nominal, float), shape).copy()
+            # an onset per parameter, uniform over the steps before the first; none for a parameter the prior
+            # holds at its nominal value (a joint row's missing part): its path before the first is nominal
+            held = ((lo == nominal) & (hi == nominal)).reshape(assets, width)
+            onset = [np.zeros((assets, width)), np.where(held, 0.0, float(self.lead))]
         self.prior = Prior(np.column_stack([lo, u_lo, onset[0]]), np.column_stack([hi, u_hi, onset[1]]), log, sign,
-                           1 if components is None else self.components,
-                           np.broadcast_to(np.asarray(nominal, float), (assets,)).copy() if before else None)
+                           width, nominal if before else None)
         self.z = self.prior.draw(self.n, self.rng)
         self.theta = self.prior.theta(self.z, self.components).copy()
         self.log_weights = np.full((assets, self.n), -np.log(self.n))

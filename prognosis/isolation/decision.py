@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
-from collections.abc import Mapping, Sequence
+from collections.abc import Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -140,14 +140,21 @@ def decide(hypotheses: Sequence[Hypothesis], log_evidence: np.ndarray, groups: S
 
 def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[str, str] = {},
               min_ratio: float = EVIDENCE_RATIO, estimates: Mapping[str, Mapping[str, float]] = {},
-              healthy: Mapping[str, tuple] = {}) -> dict:
+              healthy: Mapping[str, tuple] = {}, seen_by: Mapping[str, Collection[str]] = {},
+              apart: Mapping[str, Mapping[str, float]] = {}) -> dict:
     """The joint hypotheses two faults are not claimed for (name -> why): one fault explains the data as well.
 
-    Two reasons, each enough: the pair's evidence (over its laws) does not beat each of its
+    Three reasons, each enough: the pair's evidence (over its laws) does not beat each of its
     parameters' alone by ``min_ratio``; or one of its parameters' estimate (``estimates``: joint
     hypothesis name -> parameter -> value) lies within that parameter's healthy values (``healthy``:
     parameter -> (lo, hi), its uncertainty box), so it is no fault: the pair only uses a tolerance
-    to absorb what the single fault's law misses.
+    to absorb what the single fault's law misses; or, by the ARRs that see each parameter
+    (``seen_by``: parameter -> ARR names), one of its parameters is not seen apart from the other:
+    neither has an ARR of its own, blind to the other, or one has, and its estimated change shows
+    there by less than ``min_ratio`` (``apart``: joint hypothesis name -> parameter -> the log
+    evidence its own ARRs give its change, :meth:`IsolatingMonitor.apart_information`).  Its change
+    then shows only where the other acts, and cannot be told from the other's law being wrong (a
+    logistic wear of one parameter, bent by a second one).
 
     A candidate's evidence is the mean over its laws (a rejected law: none); a parameter without a
     single hypothesis (a second fault no fired ARR pointed to at the alarm) is not compared.
@@ -162,6 +169,14 @@ def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[
     ...                 healthy={"a": (0.95, 1.05), "b": (0.95, 1.05)})
     >>> why["a/power + b/power"]
     "b's estimate 1.02 lies within its healthy values [0.95, 1.05]: no second fault"
+    >>> seen_by = {"a": ["r1"], "b": ["r1", "r2"]}
+    >>> held_back(hs, np.array([0.0, -50.0, 9.0]), seen_by=seen_by, apart={hs[2].name: {"b": 2.5}})[hs[2].name]
+    "b's change shows in its own ARRs (r2), blind to a, by an evidence ratio of 12.2 < 100: not seen apart from a's"
+    >>> held_back(hs, np.array([0.0, -50.0, 9.0]), seen_by=seen_by, apart={hs[2].name: {"b": 40.0}})
+    {}
+    >>> why = held_back(hs, np.array([0.0, -50.0, 9.0]), seen_by={"a": ["r1"], "b": ["r1"]})
+    >>> why["a/power + b/power"]
+    'a and b are seen by the same ARRs (r1): a second fault there cannot be told from another law of one'
     """
     alone, pairs = {}, {}
     for h, value in zip(hypotheses, log_evidence):  # a rejected one counts with no evidence
@@ -180,10 +195,30 @@ def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[
             if isinstance(h, JointHypothesis) and h.name not in rejected and h.candidate in why}
     for h in hypotheses:
         if isinstance(h, JointHypothesis) and h.name not in rejected and h.name not in held:
-            inside = _within_healthy(estimates.get(h.name, {}), healthy)
-            if inside:
-                held[h.name] = inside
+            why_not = (_within_healthy(estimates.get(h.name, {}), healthy)
+                       or _unseen_apart(h.members, seen_by, apart.get(h.name, {}), min_ratio))
+            if why_not:
+                held[h.name] = why_not
     return held
+
+
+def _unseen_apart(members: Sequence[str], seen_by: Mapping[str, Collection[str]], apart: Mapping[str, float],
+                  min_ratio: float) -> str:
+    """Why a pair is no two faults: no ARR of its own for either parameter, or one whose change its own ARRs
+    show by less than ``min_ratio`` ('' if each is seen apart, or the ARRs are not given)."""
+    if not all(m in seen_by for m in members):
+        return ""
+    first, second = (set(seen_by[m]) for m in members)
+    if first == second:
+        return (f"{members[0]} and {members[1]} are seen by the same ARRs ({', '.join(sorted(first))}): a second "
+                "fault there cannot be told from another law of one")
+    for name, other, own in ((members[0], members[1], first - second), (members[1], members[0], second - first)):
+        shown = apart.get(name, 0.0)
+        if own and shown < math.log(min_ratio):
+            return (f"{name}'s change shows in its own ARRs ({', '.join(sorted(own))}), blind to {other}, by an "
+                    f"evidence ratio of {math.exp(max(shown, -700.0)):.3g} < {min_ratio:g}: not seen apart from "
+                    f"{other}'s")
+    return ""
 
 
 def _within_healthy(estimates: Mapping[str, float], healthy: Mapping[str, tuple]) -> str:

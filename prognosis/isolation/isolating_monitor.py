@@ -89,7 +89,8 @@ class IsolatingMonitor:
     With ``pairs``, two parameters degrading at once are weighed too (:meth:`pairs_for`,
     :class:`~prognosis.hypotheses.JointHypothesis`), each by each of the laws; a pair is declared only
     when its evidence beats each of its members' alone by ``min_ratio`` (one fault unless the data
-    demand two), and its RUL is that of the first failure.  Off by default: on a noisy residual with a
+    demand two) and each member is seen apart from the other (:meth:`apart_information`), and its RUL
+    is that of the first failure.  Off by default: on a noisy residual with a
     derivative (the pipe's flow) an inductance paired with the wearing resistance absorbs the model's
     misfit and wins on a single fault, and a run with pairs costs 2-9 times one without.
 
@@ -171,6 +172,7 @@ class IsolatingMonitor:
         result.same_signature = {c: same_signature(self.arrs, c) for c in result.candidates}
         result.hypotheses, result.rejected = self.priors.hypotheses_for(result.candidates)
         result.hypotheses += [h for pair in pairs for h in self.pair_hypotheses(pair)]
+        result.seen_by = {m: [a.name for a in self.arrs if sees(a, m)] for m in members}
         result.groups += pair_groups
         start = self.settled(evaluations, k, stride, result.transient)
         self._filter(result, [evaluations[i] for i in used], arrs, start, progress)
@@ -311,6 +313,9 @@ class IsolatingMonitor:
             pf, observation, models = self._resample_move(hypotheses, starts, evaluations, arrs, stride, k0)
         steps = range(k0, t.size, stride)
         information = self._information(result, observation, evaluations, noise, steps)
+        own = self.apart_information(hypotheses, arrs, evaluations, noise, steps)
+        result.apart = {name: dict.fromkeys(members, 0.0) for name, members in
+                        {h.name: h.members for h in hypotheses if isinstance(h, JointHypothesis)}.items()}
         every = -(-len(steps) // 100)
         rows, rul_t, rul, decisions, ess, innovations = [], [], [], [], [], []
         predictors, away = {}, np.zeros(len(hypotheses), int)
@@ -334,6 +339,7 @@ class IsolatingMonitor:
             for name, time in collapsed_now.items():
                 result.collapsed.setdefault(name, time)
             estimate = pf.estimate()
+            self._weigh_apart(result, hypotheses, _part_estimates(hypotheses, estimate), own, done - 1)
             self._reject(result, hypotheses, estimate, float(t[k]))
             away = self._reject_drift_away(result, hypotheses, estimate, float(t[k]), boxes, away)
             rows.append((float(t[k]), pf.log_evidence.copy(), estimate))
@@ -345,7 +351,8 @@ class IsolatingMonitor:
                 if self.settings.method != "sir":  # the clouds' forecasts, checked later on what came
                     self._check_forecasts(result, hypotheses, arrs, pf, forecasts, done, float(t[k]))
                     forecasts.append((done, float(t[k]), pf.z.copy(), pf.log_weights.copy(), pf.excess.copy()))
-                decision = result.decide_at(pf.log_evidence, float(t[k]), groups, _part_estimates(hypotheses, estimate))
+                decision = result.decide_at(pf.log_evidence, float(t[k]), groups, _part_estimates(hypotheses, estimate),
+                                            {name: dict(values) for name, values in result.apart.items()})
                 distribution, reason = self._mixture(pf, hypotheses, decision, predictors, models, key=done,
                                                      left_out={**collapsed_now, **result.inadequate})
                 rul.append(distribution)
@@ -372,11 +379,11 @@ class IsolatingMonitor:
         """The resample-move filter over the hypotheses' static parameters, its observation, and each row's
         models (one per parameter, for the RUL).
 
-        Without a joint hypothesis theta is (H, N), and the residuals of the steps before the first
-        alarm (:meth:`steps_before`) are weighed too, each particle with an onset.  With one it is (H,
-        N, C): component c of a row is its c-th parameter (a single hypothesis' others fixed and
-        blind, so that all weigh in one filter on the same residuals), each by its own law with its
-        own gammas, from the alarm on.
+        Without a joint hypothesis theta is (H, N).  With one it is (H, N, C): component c of a row is
+        its c-th parameter (a single hypothesis' others fixed and blind, so that all weigh in one
+        filter on the same residuals), each by its own law with its own gammas.  The residuals of the
+        steps before the first alarm (:meth:`steps_before`) are weighed too, each particle with an
+        onset per parameter.
         """
         parts = [h.parts if isinstance(h, JointHypothesis) else (h,) for h in hypotheses]
         part_starts = [s if isinstance(h, JointHypothesis) else (s,) for h, s in zip(hypotheses, starts)]
@@ -410,12 +417,13 @@ class IsolatingMonitor:
         bounds = (np.array(theta_lo).T, np.array(theta_hi).T) if joint else (np.array(theta_lo[0]),
                                                                                np.array(theta_hi[0]))
         # every row takes the same residuals, as at each step
-        before = [] if joint else [(np.broadcast_to(y, (len(hypotheses), y.size)), points)
-                                   for y, points in (_measured(evaluations, k)
-                                                     for k in self.steps_before(evaluations, k0, stride))]
+        before = [(np.broadcast_to(y, (len(hypotheses), y.size)), points)
+                  for y, points in (_measured(evaluations, k) for k in self.steps_before(evaluations, k0, stride))]
+        # a row's missing part is held at 0, its nominal value
+        nominal = np.array([[p[c].nominal if c < len(p) else 0.0 for c in range(width)] for p in parts])
         pf.initialize(bounds, gamma_bounds=(np.hstack(gamma_lo), np.hstack(gamma_hi)), assets=len(hypotheses),
                       log_gamma=np.hstack(logs), components=width if joint else None, before=before,
-                      nominal=None if joint else [h.nominal for h in hypotheses])
+                      nominal=nominal if joint else nominal[:, 0])
         models = [tuple(bank.models[row] for bank in banks[:len(p)]) for row, p in enumerate(parts)]
         return pf, observations[0], models
 
@@ -446,6 +454,40 @@ class IsolatingMonitor:
                         scaled[:, ci, m] = sensitivity(model, [np.asarray(p)[index] for p in e.points]) / noise[m]
         scaled = np.nan_to_num(scaled, nan=0.0, posinf=0.0, neginf=0.0)
         return np.cumsum(np.einsum("kcm,kdm->kcd", scaled, scaled), axis=0)
+
+    @staticmethod
+    def apart_information(hypotheses: Sequence, arrs: Sequence, evaluations: list, noise: np.ndarray,
+                          steps: range) -> dict:
+        """What each pair's parameters' own ARRs (blind to the other) tell of their change: (pair name,
+        parameter) -> (K,) the sum over those ARRs of ``(dy/dtheta / sd)^2`` at each filter step.
+
+        A change ``d`` there gives log evidence ``d^2 / 2`` times it over a change of 0: what the pair
+        shows of that parameter apart from the other (:func:`~prognosis.isolation.held_back`).
+        """
+        index = list(steps)
+
+        def information(name: str, other: str) -> np.ndarray:
+            total = np.zeros(len(index))
+            for a, e, sd in zip(arrs, evaluations, noise):
+                if sees(a, name) and not sees(a, other):
+                    with np.errstate(all="ignore"):
+                        scaled = sensitivity(candidate_model(a, name), [np.asarray(p)[index] for p in e.points]) / sd
+                    total += np.nan_to_num(np.square(scaled), nan=0.0, posinf=0.0, neginf=0.0)
+            return total
+
+        ordered = {h.name: (h.members, h.members[::-1]) for h in hypotheses if isinstance(h, JointHypothesis)}
+        cached = {pair: information(*pair) for both in ordered.values() for pair in both}
+        return {(name, pair[0]): cached[pair] for name, both in ordered.items() for pair in both}
+
+    @staticmethod
+    def _weigh_apart(result: IsolationResult, hypotheses: Sequence, parts: Mapping, own: Mapping, step: int) -> None:
+        """Add this step's log evidence of each pair's parameters' own ARRs for their estimated changes (``parts``:
+        joint hypothesis name -> parameter -> estimate) to ``result.apart``."""
+        for h in hypotheses:
+            if isinstance(h, JointHypothesis):
+                for part in h.parts:
+                    change = parts[h.name][part.candidate] - part.nominal
+                    result.apart[h.name][part.candidate] += 0.5 * change ** 2 * own[(h.name, part.candidate)][step]
 
     def _record_groups(self, result: IsolationResult, information: np.ndarray, log_evidence: np.ndarray,
                        theta: np.ndarray) -> tuple[list, dict]:

@@ -90,6 +90,13 @@ class IsolationResult:
     healthy : dict
         Parameter -> its healthy values (lo, hi), its uncertainty box about nominal: a pair one of whose
         parameters is estimated there is no two faults (:func:`held_back`).
+    seen_by : dict
+        Parameter of a pair -> the ARRs (of all the monitor's) that see it.
+    apart : dict
+        Joint hypothesis name -> parameter -> the log evidence its own ARRs (blind to the other)
+        give its estimated change, summed up to the end
+        (:meth:`~prognosis.isolation.IsolatingMonitor.apart_information`): a pair one of whose
+        parameters is not seen apart from the other is no two faults (:func:`held_back`).
     settings : dict
         What produced the result, for its JSON (:func:`~prognosis.pipeline.prognose` fills it: the
         failure values, the calibration end, the filter step, the residual noise...).
@@ -125,6 +132,8 @@ class IsolationResult:
     record_groups: list = field(default_factory=list)
     parts: dict = field(default_factory=dict)
     healthy: dict = field(default_factory=dict)
+    seen_by: dict = field(default_factory=dict)
+    apart: dict = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
 
     def as_dict(self) -> dict:
@@ -194,14 +203,19 @@ class IsolationResult:
         if not self.t.size:
             return None
         return self.decide_at(self.log_evidence[-1], float(self.t[-1]), self.record_groups or self.groups,
-                              {name: {c: float(v[-1]) for c, v in parts.items()} for name, parts in self.parts.items()})
+                              {name: {c: float(v[-1]) for c, v in parts.items()} for name, parts in self.parts.items()},
+                              self.apart)
 
     def decide_at(self, log_evidence: np.ndarray, time: float, groups: Sequence,
-                  estimates: Mapping[str, Mapping[str, float]] = {}) -> Decision:
+                  estimates: Mapping[str, Mapping[str, float]] = {},
+                  apart: Mapping[str, Mapping[str, float]] = {}) -> Decision:
         """The decision at ``time`` on the hypotheses' evidence then (:func:`decide`, :meth:`revised`), the joint
-        hypotheses not more probable than their parts alone, or with a part estimated within its healthy values
-        (``estimates``: joint hypothesis name -> parameter -> value then), held back (:func:`held_back`)."""
-        held = held_back(self.hypotheses, log_evidence, self.rejected, self.min_ratio, estimates, self.healthy)
+        hypotheses not more probable than their parts alone, with a part estimated within its healthy values
+        (``estimates``: joint hypothesis name -> parameter -> value then), or with a part not seen apart from
+        the other (``apart``: name -> parameter -> the log evidence of its own ARRs then), held back
+        (:func:`held_back`)."""
+        held = held_back(self.hypotheses, log_evidence, self.rejected, self.min_ratio, estimates, self.healthy,
+                         self.seen_by, apart)
         decision = decide(self.hypotheses, log_evidence, groups, {**self.rejected, **held}, self.min_ratio,
                           self.same_signature)
         return self.revised(decision, time, held)

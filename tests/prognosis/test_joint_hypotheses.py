@@ -107,6 +107,43 @@ def test_a_pair_with_a_parameter_estimated_within_its_healthy_values_is_no_two_f
     assert decision.candidate == "a" and decision.probabilities[pair.name] == 0.0
 
 
+def test_a_pair_is_claimed_only_when_each_parameter_is_seen_apart_from_the_other():
+    """b acts in r1, where a acts, and alone in r2: while r2 shows b's change by less than the decisive ratio,
+    b's part of the pair is seen only where a acts, as a misfit of a's law would be."""
+    a, b = Hypothesis("a", "power", 2.0, 1.0), Hypothesis("b", "power", 2.0, 1.0)
+    pair = JointHypothesis((a, b))
+    hypotheses, decisive = [a, b, pair], np.array([0.0, -50.0, 30.0])
+    seen_by = {"a": ["r1"], "b": ["r1", "r2"]}
+    why = held_back(hypotheses, decisive, seen_by=seen_by, apart={pair.name: {"a": 50.0, "b": 4.0}})
+    assert set(why) == {pair.name} and why[pair.name].startswith("b's change shows in its own ARRs (r2), blind to a")
+    assert held_back(hypotheses, decisive, seen_by=seen_by, apart={pair.name: {"a": 0.0, "b": 4.7}}) == {}
+    # the same ARRs for both, no ARR of its own: a second fault is no more than another law of the first
+    assert set(held_back(hypotheses, decisive, seen_by={"a": ["r1"], "b": ["r1"]})) == {pair.name}
+    # without the ARRs seeing each, judged by the evidence and the healthy values alone
+    assert held_back(hypotheses, decisive) == {}
+    result = IsolationResult(1.0, candidates=["a"], groups=[["a"], ["b"]], hypotheses=hypotheses, seen_by=seen_by)
+    before = result.decide_at(decisive, 4.9, [["a"], ["b"]], apart={pair.name: {"b": 1.0}})
+    assert before.candidate == "a" and before.probabilities[pair.name] == 0.0
+    assert result.decide_at(decisive, 5.0, [["a"], ["b"]], apart={pair.name: {"b": 9.0}}).candidate == "a + b"
+
+
+def test_the_information_apart_is_that_of_the_arrs_blind_to_the_other(arrs):
+    """The pump: the brushes' R_a is seen by the motor's ARR alone, which also sees the gear ratio r_g, seen by
+    the pump's ARR too; the impeller's c_p by the pump's ARR alone."""
+    t = np.linspace(0.0, 1.0, 201)
+    record = {"t": t, "i": 5.0 + np.sin(3 * t), "omega_p": 140.0 + 5 * np.cos(2 * t), "u": np.full(t.size, 17.5)}
+    evaluations = [a.evaluate(record) for a in arrs]
+    p = FACTS.failures
+    pairs = [JointHypothesis((Hypothesis("R_a", "linear", p["R_a"], FACTS.nominal["R_a"]),
+                              Hypothesis(other, "linear", 2 * FACTS.nominal[other], FACTS.nominal[other])))
+             for other in ("c_p", "r_g")]
+    own = IsolatingMonitor.apart_information(pairs, arrs, evaluations, np.ones(len(arrs)), range(20, 180, 20))
+    with_c_p, with_r_g = (pair.name for pair in pairs)
+    assert (own[(with_c_p, "R_a")] > 0).all() and (own[(with_c_p, "c_p")] > 0).all()
+    assert (own[(with_r_g, "R_a")] == 0).all() and (own[(with_r_g, "r_g")] > 0).all()
+    assert own[(with_r_g, "r_g")].shape == (8,)
+
+
 def test_the_pairs_of_a_first_candidate_are_with_every_other_parameter_that_adds(arrs):
     monitor = IsolatingMonitor(arrs, FACTS.failures, noise_std={a.name: 1.0 for a in arrs},
                                method="resample-move", pairs=True, dt=0.1)

@@ -11,7 +11,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from prognosis.degradation import LinearDegradation, PowerDegradation
+from prognosis.degradation import JointDegradation, LinearDegradation, PerAssetDegradation, PowerDegradation
 from prognosis.errors import PrognosisError
 from prognosis.isolation import IsolatingMonitor
 from prognosis.resample_move import ResampleMoveFilter
@@ -92,7 +92,51 @@ def test_the_start_of_a_power_law_tells_its_exponent():
     assert widths[0] < 0.5 * widths[1]
 
 
-def test_the_steps_before_need_one_parameter_per_row_and_its_nominal_value():
+def two_lines(lead: int, seed: int) -> ResampleMoveFilter:
+    """Two parameters seen each by its own residual, nominal 0: the first drifts 0.05 a step from 20 steps
+    before the first, the second jumps to 0.6 3 steps before it; ``lead`` of the steps before the first are
+    given."""
+    steps = np.arange(-LEAD, 25)
+    theta = np.column_stack([np.maximum(0.05 * (steps + 20), 0.0), np.where(steps >= -3, 0.6, 0.0)])
+    y = theta + np.random.default_rng(seed).normal(0.0, 0.05, theta.shape)
+    bank = PerAssetDegradation((LinearDegradation(),), (0,))
+    f = ResampleMoveFilter(JointDegradation((bank, bank)), lambda theta, points: theta, noise=[0.05, 0.05], dt=1.0,
+                           n_particles=400, discrepancy=None, seed=seed + 1)
+    f.initialize(((0.0, 0.0), (3.0, 3.0)), ((0.0, -0.5), (1.0, 1.0)), assets=1, components=2,
+                 before=[(value[None, :], ()) for value in y[LEAD - lead:LEAD]], nominal=(0.0, 0.0) if lead else None)
+    for value in y[LEAD:]:
+        f.step(value[None, :])
+    return f
+
+
+def test_each_parameter_of_a_joint_hypothesis_has_its_own_onset():
+    """The jump's onset lies in [3, 4) steps before the first; the drift's is no later than a step or two
+    after 20 (any earlier onset traces the same path: the line stops at the nominal value).  One onset
+    for both could not give that.  The drift's rate is known better than from the first step on."""
+    f, alone = two_lines(LEAD, seed=7), two_lines(0, seed=7)
+    w = f.weights[0]
+    assert weighted_interval(f.z[0, :, -2], w)[0] > 15.0
+    assert float(np.sum(w[(f.z[0, :, -1] >= 3.0) & (f.z[0, :, -1] < 4.0)])) > 0.9
+    widths = []
+    for g in (f, alone):
+        lo, hi = weighted_interval(g.gamma[0, :, 0], g.weights[0])
+        assert lo <= 0.05 <= hi
+        widths.append(hi - lo)
+    assert widths[0] < 0.7 * widths[1]
+    assert np.allclose(np.sum(w[:, None] * f.theta[0], axis=0), [2.2, 0.6], atol=0.06)
+
+
+def test_a_parameter_held_at_its_nominal_value_has_no_onset():
+    """A joint row's missing part (theta held at nominal) has nothing to date: its onset is fixed."""
+    bank = PerAssetDegradation((LinearDegradation(),), (0,))
+    f = ResampleMoveFilter(JointDegradation((bank, bank)), lambda theta, points: theta, noise=[0.1, 0.1], dt=1.0,
+                           n_particles=10)
+    f.initialize(((0.0, 1.0), (1.0, 1.0)), ((0.0, 0.0), (1.0, 0.0)), components=2,
+                 before=[(np.zeros((1, 2)), ())] * 4, nominal=(0.0, 1.0))
+    assert f.prior.free[0, -2:].tolist() == [True, False]
+
+
+def test_the_steps_before_need_the_nominal_value():
     f = ResampleMoveFilter(LinearDegradation(), lambda theta, points: theta, noise=0.1, dt=1.0, n_particles=10)
     with pytest.raises(PrognosisError, match="nominal value"):
         f.initialize((0.0, 1.0), (0.0, 1.0), before=[(np.zeros(1), ())])
