@@ -152,7 +152,7 @@ def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[
     (``seen_by``: parameter -> ARR names), one of its parameters is not seen apart from the other:
     neither has an ARR of its own, blind to the other, or one has, and its estimated change shows
     there by less than ``min_ratio`` (``apart``: joint hypothesis name -> parameter -> the log
-    evidence its own ARRs give its change, :meth:`IsolatingMonitor.apart_information`).  Its change
+    evidence its change would give in its own ARRs, :meth:`IsolatingMonitor.apart_information`).  Its change
     then shows only where the other acts, and cannot be told from the other's law being wrong (a
     logistic wear of one parameter, bent by a second one).
 

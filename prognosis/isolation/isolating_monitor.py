@@ -314,8 +314,7 @@ class IsolatingMonitor:
         steps = range(k0, t.size, stride)
         information = self._information(result, observation, evaluations, noise, steps)
         own = self.apart_information(hypotheses, arrs, evaluations, noise, steps)
-        result.apart = {name: dict.fromkeys(members, 0.0) for name, members in
-                        {h.name: h.members for h in hypotheses if isinstance(h, JointHypothesis)}.items()}
+        result.apart = {h.name: dict.fromkeys(h.members, 0.0) for h in hypotheses if isinstance(h, JointHypothesis)}
         every = -(-len(steps) // 100)
         rows, rul_t, rul, decisions, ess, innovations = [], [], [], [], [], []
         predictors, away = {}, np.zeros(len(hypotheses), int)
@@ -458,11 +457,13 @@ class IsolatingMonitor:
     @staticmethod
     def apart_information(hypotheses: Sequence, arrs: Sequence, evaluations: list, noise: np.ndarray,
                           steps: range) -> dict:
-        """What each pair's parameters' own ARRs (blind to the other) tell of their change: (pair name,
-        parameter) -> (K,) the sum over those ARRs of ``(dy/dtheta / sd)^2`` at each filter step.
+        """How plainly each pair's parameters' own ARRs (blind to the other) would show their change: (pair
+        name, parameter) -> (K,) the sum over those ARRs of ``(dy/dtheta / sd)^2`` at each filter step.
 
-        A change ``d`` there gives log evidence ``d^2 / 2`` times it over a change of 0: what the pair
-        shows of that parameter apart from the other (:func:`~prognosis.isolation.held_back`).
+        A change ``d`` there would give log evidence ``d^2 / 2`` times it over a change of 0: how far the
+        pair's estimate of that parameter is seen apart from the other (:func:`~prognosis.isolation.held_back`).
+        It is what the change would show, not a fit of those ARRs' residuals: on a clean record a small
+        estimated change is plain even where the residuals do not have it.
         """
         index = list(steps)
 
@@ -481,8 +482,8 @@ class IsolatingMonitor:
 
     @staticmethod
     def _weigh_apart(result: IsolationResult, hypotheses: Sequence, parts: Mapping, own: Mapping, step: int) -> None:
-        """Add this step's log evidence of each pair's parameters' own ARRs for their estimated changes (``parts``:
-        joint hypothesis name -> parameter -> estimate) to ``result.apart``."""
+        """Add to ``result.apart`` the log evidence each pair's parameters' estimated changes (``parts``: joint
+        hypothesis name -> parameter -> estimate) would give at this step in their own ARRs."""
         for h in hypotheses:
             if isinstance(h, JointHypothesis):
                 for part in h.parts:

@@ -93,8 +93,8 @@ class IsolationResult:
     seen_by : dict
         Parameter of a pair -> the ARRs (of all the monitor's) that see it.
     apart : dict
-        Joint hypothesis name -> parameter -> the log evidence its own ARRs (blind to the other)
-        give its estimated change, summed up to the end
+        Joint hypothesis name -> parameter -> the log evidence its estimated change would give in its
+        own ARRs (blind to the other), summed up to the end
         (:meth:`~prognosis.isolation.IsolatingMonitor.apart_information`): a pair one of whose
         parameters is not seen apart from the other is no two faults (:func:`held_back`).
     settings : dict
@@ -212,8 +212,8 @@ class IsolationResult:
         """The decision at ``time`` on the hypotheses' evidence then (:func:`decide`, :meth:`revised`), the joint
         hypotheses not more probable than their parts alone, with a part estimated within its healthy values
         (``estimates``: joint hypothesis name -> parameter -> value then), or with a part not seen apart from
-        the other (``apart``: name -> parameter -> the log evidence of its own ARRs then), held back
-        (:func:`held_back`)."""
+        the other (``apart``: name -> parameter -> the log evidence its change would give in its own ARRs),
+        held back (:func:`held_back`)."""
         held = held_back(self.hypotheses, log_evidence, self.rejected, self.min_ratio, estimates, self.healthy,
                          self.seen_by, apart)
         decision = decide(self.hypotheses, log_evidence, groups, {**self.rejected, **held}, self.min_ratio,
