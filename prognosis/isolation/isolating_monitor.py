@@ -338,7 +338,8 @@ class IsolatingMonitor:
             for name, time in collapsed_now.items():
                 result.collapsed.setdefault(name, time)
             estimate = pf.estimate()
-            self._weigh_apart(result, hypotheses, _part_estimates(hypotheses, estimate), own, done - 1)
+            parts = _part_estimates(hypotheses, estimate)
+            self._weigh_apart(result, hypotheses, parts, own, done - 1)
             self._reject(result, hypotheses, estimate, float(t[k]))
             away = self._reject_drift_away(result, hypotheses, estimate, float(t[k]), boxes, away)
             rows.append((float(t[k]), pf.log_evidence.copy(), estimate))
@@ -350,8 +351,7 @@ class IsolatingMonitor:
                 if self.settings.method != "sir":  # the clouds' forecasts, checked later on what came
                     self._check_forecasts(result, hypotheses, arrs, pf, forecasts, done, float(t[k]))
                     forecasts.append((done, float(t[k]), pf.z.copy(), pf.log_weights.copy(), pf.excess.copy()))
-                decision = result.decide_at(pf.log_evidence, float(t[k]), groups, _part_estimates(hypotheses, estimate),
-                                            {name: dict(values) for name, values in result.apart.items()})
+                decision = result.decide_at(pf.log_evidence, float(t[k]), groups, parts, result.apart)
                 distribution, reason = self._mixture(pf, hypotheses, decision, predictors, models, key=done,
                                                      left_out={**collapsed_now, **result.inadequate})
                 rul.append(distribution)
