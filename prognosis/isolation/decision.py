@@ -150,11 +150,11 @@ def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[
     parameter -> (lo, hi), its uncertainty box), so it is no fault: the pair only uses a tolerance
     to absorb what the single fault's law misses; or, by the ARRs that see each parameter
     (``seen_by``: parameter -> ARR names), one of its parameters is not seen apart from the other:
-    neither has an ARR of its own, blind to the other, or one has, and its estimated change shows
+    neither has an ARR of its own, blind to the other, or one has, and its estimated change fits
     there by less than ``min_ratio`` (``apart``: joint hypothesis name -> parameter -> the log
-    evidence its change would give in its own ARRs, :meth:`IsolatingMonitor.apart_information`).  Its change
-    then shows only where the other acts, and cannot be told from the other's law being wrong (a
-    logistic wear of one parameter, bent by a second one).
+    likelihood of its estimated change in its own ARRs' residuals over no change,
+    :meth:`IsolatingMonitor.apart_terms`).  Its change then shows only where the other acts, and cannot
+    be told from the other's law being wrong (a logistic wear of one parameter, bent by a second one).
 
     A candidate's evidence is the mean over its laws (a rejected law: none); a parameter without a
     single hypothesis (a second fault no fired ARR pointed to at the alarm) is not compared.
@@ -170,8 +170,9 @@ def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[
     >>> why["a/power + b/power"]
     "b's estimate 1.02 lies within its healthy values [0.95, 1.05]: no second fault"
     >>> seen_by = {"a": ["r1"], "b": ["r1", "r2"]}
-    >>> held_back(hs, np.array([0.0, -50.0, 9.0]), seen_by=seen_by, apart={hs[2].name: {"b": 2.5}})[hs[2].name]
-    "b's change shows in its own ARRs (r2), blind to a, by an evidence ratio of 12.2 < 100: not seen apart from a's"
+    >>> why = held_back(hs, np.array([0.0, -50.0, 9.0]), seen_by=seen_by, apart={hs[2].name: {"b": 2.5}})
+    >>> why[hs[2].name].split(", by ")[1]
+    "a likelihood ratio of 12.2 < 100 over none: not seen apart from a's"
     >>> held_back(hs, np.array([0.0, -50.0, 9.0]), seen_by=seen_by, apart={hs[2].name: {"b": 40.0}})
     {}
     >>> why = held_back(hs, np.array([0.0, -50.0, 9.0]), seen_by={"a": ["r1"], "b": ["r1"]})
@@ -215,9 +216,9 @@ def _unseen_apart(members: Sequence[str], seen_by: Mapping[str, Collection[str]]
     for name, other, own in ((members[0], members[1], first - second), (members[1], members[0], second - first)):
         shown = apart.get(name, 0.0)
         if own and shown < math.log(min_ratio):
-            return (f"{name}'s change shows in its own ARRs ({', '.join(sorted(own))}), blind to {other}, by an "
-                    f"evidence ratio of {math.exp(max(shown, -700.0)):.3g} < {min_ratio:g}: not seen apart from "
-                    f"{other}'s")
+            return (f"{name}'s estimated change fits its own ARRs ({', '.join(sorted(own))}), blind to {other}, "
+                    f"by a likelihood ratio of {math.exp(max(shown, -700.0)):.3g} < {min_ratio:g} over none: not "
+                    f"seen apart from {other}'s")
     return ""
 
 

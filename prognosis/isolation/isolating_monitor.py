@@ -89,7 +89,7 @@ class IsolatingMonitor:
     With ``pairs``, two parameters degrading at once are weighed too (:meth:`pairs_for`,
     :class:`~prognosis.hypotheses.JointHypothesis`), each by each of the laws; a pair is declared only
     when its evidence beats each of its members' alone by ``min_ratio`` (one fault unless the data
-    demand two) and each member is seen apart from the other (:meth:`apart_information`), and its RUL
+    demand two) and each member is seen apart from the other (:meth:`apart_terms`), and its RUL
     is that of the first failure.  Off by default: on a noisy residual with a
     derivative (the pipe's flow) an inductance paired with the wearing resistance absorbs the model's
     misfit and wins on a single fault, and a run with pairs costs 2-9 times one without.
@@ -313,7 +313,7 @@ class IsolatingMonitor:
             pf, observation, models = self._resample_move(hypotheses, starts, evaluations, arrs, stride, k0)
         steps = range(k0, t.size, stride)
         information = self._information(result, observation, evaluations, noise, steps)
-        own = self.apart_information(hypotheses, arrs, evaluations, noise, steps)
+        own = self.apart_terms(hypotheses, arrs, evaluations, noise, steps)
         result.apart = {h.name: dict.fromkeys(h.members, 0.0) for h in hypotheses if isinstance(h, JointHypothesis)}
         every = -(-len(steps) // 100)
         rows, rul_t, rul, decisions, ess, innovations = [], [], [], [], [], []
@@ -455,40 +455,46 @@ class IsolatingMonitor:
         return np.cumsum(np.einsum("kcm,kdm->kcd", scaled, scaled), axis=0)
 
     @staticmethod
-    def apart_information(hypotheses: Sequence, arrs: Sequence, evaluations: list, noise: np.ndarray,
-                          steps: range) -> dict:
-        """How plainly each pair's parameters' own ARRs (blind to the other) would show their change: (pair
-        name, parameter) -> (K,) the sum over those ARRs of ``(dy/dtheta / sd)^2`` at each filter step.
+    def apart_terms(hypotheses: Sequence, arrs: Sequence, evaluations: list, noise: np.ndarray,
+                    steps: range) -> dict:
+        """What each pair's parameters' own ARRs (blind to the other) say of their change: (pair name,
+        parameter) -> (score, information), each (K,), the sums over those ARRs at each filter step of
+        ``s y / sd^2`` and ``s^2 / sd^2`` (``s = dy/dtheta`` at nominal, ``y = -r`` the residual taken).
 
-        A change ``d`` there would give log evidence ``d^2 / 2`` times it over a change of 0: how far the
-        pair's estimate of that parameter is seen apart from the other (:func:`~prognosis.isolation.held_back`).
-        It is what the change would show, not a fit of those ARRs' residuals: on a clean record a small
-        estimated change is plain even where the residuals do not have it.
+        A change ``d`` there has log likelihood ``d score - d^2 information / 2`` over a change of 0 (the
+        residuals linear in ``d``, the noise at its healthy sd): how far the pair's estimate of that
+        parameter is seen apart from the other (:func:`~prognosis.isolation.held_back`).  A fit of those
+        ARRs' residuals, not what the change would show: where they do not have the change, a plain one
+        is evidence against it.
         """
         index = list(steps)
 
-        def information(name: str, other: str) -> np.ndarray:
-            total = np.zeros(len(index))
+        def terms(name: str, other: str) -> tuple[np.ndarray, np.ndarray]:
+            score, information = np.zeros(len(index)), np.zeros(len(index))
             for a, e, sd in zip(arrs, evaluations, noise):
                 if sees(a, name) and not sees(a, other):
                     with np.errstate(all="ignore"):
-                        scaled = sensitivity(candidate_model(a, name), [np.asarray(p)[index] for p in e.points]) / sd
-                    total += np.nan_to_num(np.square(scaled), nan=0.0, posinf=0.0, neginf=0.0)
-            return total
+                        s = sensitivity(candidate_model(a, name), [np.asarray(p)[index] for p in e.points])
+                        y = -np.asarray(e.residual, float)[index]
+                    usable = np.isfinite(s) & np.isfinite(y)   # a step it cannot be evaluated at tells nothing
+                    score += np.where(usable, s * y, 0.0) / sd ** 2
+                    information += np.where(usable, s * s, 0.0) / sd ** 2
+            return score, information
 
         ordered = {h.name: (h.members, h.members[::-1]) for h in hypotheses if isinstance(h, JointHypothesis)}
-        cached = {pair: information(*pair) for both in ordered.values() for pair in both}
+        cached = {pair: terms(*pair) for both in ordered.values() for pair in both}
         return {(name, pair[0]): cached[pair] for name, both in ordered.items() for pair in both}
 
     @staticmethod
     def _weigh_apart(result: IsolationResult, hypotheses: Sequence, parts: Mapping, own: Mapping, step: int) -> None:
-        """Add to ``result.apart`` the log evidence each pair's parameters' estimated changes (``parts``: joint
-        hypothesis name -> parameter -> estimate) would give at this step in their own ARRs."""
+        """Add to ``result.apart`` the log likelihood each pair's parameters' estimated changes (``parts``: joint
+        hypothesis name -> parameter -> estimate) have at this step in their own ARRs, over no change."""
         for h in hypotheses:
             if isinstance(h, JointHypothesis):
                 for part in h.parts:
                     change = parts[h.name][part.candidate] - part.nominal
-                    result.apart[h.name][part.candidate] += 0.5 * change ** 2 * own[(h.name, part.candidate)][step]
+                    score, information = own[(h.name, part.candidate)]
+                    result.apart[h.name][part.candidate] += change * score[step] - 0.5 * change ** 2 * information[step]
 
     def _record_groups(self, result: IsolationResult, information: np.ndarray, log_evidence: np.ndarray,
                        theta: np.ndarray) -> tuple[list, dict]:

@@ -93,9 +93,9 @@ class IsolationResult:
     seen_by : dict
         Parameter of a pair -> the ARRs (of all the monitor's) that see it.
     apart : dict
-        Joint hypothesis name -> parameter -> the log evidence its estimated change would give in its
-        own ARRs (blind to the other), summed up to the end
-        (:meth:`~prognosis.isolation.IsolatingMonitor.apart_information`): a pair one of whose
+        Joint hypothesis name -> parameter -> the log likelihood of its estimated change in its own
+        ARRs' residuals (blind to the other) over no change, summed up to the end
+        (:meth:`~prognosis.isolation.IsolatingMonitor.apart_terms`): a pair one of whose
         parameters is not seen apart from the other is no two faults (:func:`held_back`).
     settings : dict
         What produced the result, for its JSON (:func:`~prognosis.pipeline.prognose` fills it: the
@@ -212,7 +212,7 @@ class IsolationResult:
         """The decision at ``time`` on the hypotheses' evidence then (:func:`decide`, :meth:`revised`), the joint
         hypotheses not more probable than their parts alone, with a part estimated within its healthy values
         (``estimates``: joint hypothesis name -> parameter -> value then), or with a part not seen apart from
-        the other (``apart``: name -> parameter -> the log evidence its change would give in its own ARRs),
+        the other (``apart``: name -> parameter -> the log likelihood of its change in its own ARRs),
         held back (:func:`held_back`)."""
         held = held_back(self.hypotheses, log_evidence, self.rejected, self.min_ratio, estimates, self.healthy,
                          self.seen_by, apart)
