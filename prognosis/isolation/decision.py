@@ -152,7 +152,7 @@ def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[
     (``seen_by``: parameter -> ARR names), one of its parameters is not seen apart from the other:
     neither has an ARR of its own, blind to the other, or one has, and its estimated change fits
     there by less than ``min_ratio`` (``apart``: joint hypothesis name -> parameter -> the log
-    likelihood of its estimated change in its own ARRs' residuals over no change,
+    likelihood of its estimated change in its own ARRs' residuals over a constant offset,
     :meth:`IsolatingMonitor.apart_terms`).  Its change then shows only where the other acts, and cannot
     be told from the other's law being wrong (a logistic wear of one parameter, bent by a second one).
 
@@ -172,7 +172,7 @@ def held_back(hypotheses: Sequence, log_evidence: np.ndarray, rejected: Mapping[
     >>> seen_by = {"a": ["r1"], "b": ["r1", "r2"]}
     >>> why = held_back(hs, np.array([0.0, -50.0, 9.0]), seen_by=seen_by, apart={hs[2].name: {"b": 2.5}})
     >>> why[hs[2].name].split(", by ")[1]
-    "a likelihood ratio of 12.2 < 100 over none: not seen apart from a's"
+    "a likelihood ratio of 12.2 < 100 over an offset: not seen apart from a's"
     >>> held_back(hs, np.array([0.0, -50.0, 9.0]), seen_by=seen_by, apart={hs[2].name: {"b": 40.0}})
     {}
     >>> why = held_back(hs, np.array([0.0, -50.0, 9.0]), seen_by={"a": ["r1"], "b": ["r1"]})
@@ -217,7 +217,7 @@ def _unseen_apart(members: Sequence[str], seen_by: Mapping[str, Collection[str]]
         shown = apart.get(name, 0.0)
         if own and shown < math.log(min_ratio):
             return (f"{name}'s estimated change fits its own ARRs ({', '.join(sorted(own))}), blind to {other}, "
-                    f"by a likelihood ratio of {math.exp(max(shown, -700.0)):.3g} < {min_ratio:g} over none: not "
+                    f"by a likelihood ratio of {math.exp(max(shown, -700.0)):.3g} < {min_ratio:g} over an offset: not "
                     f"seen apart from {other}'s")
     return ""
 

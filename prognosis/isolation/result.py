@@ -94,7 +94,7 @@ class IsolationResult:
         Parameter of a pair -> the ARRs (of all the monitor's) that see it.
     apart : dict
         Joint hypothesis name -> parameter -> the log likelihood of its estimated change in its own
-        ARRs' residuals (blind to the other) over no change, summed up to the end
+        ARRs' residuals (blind to the other) over a constant offset, summed up to the end
         (:meth:`~prognosis.isolation.IsolatingMonitor.apart_terms`): a pair one of whose
         parameters is not seen apart from the other is no two faults (:func:`held_back`).
     settings : dict

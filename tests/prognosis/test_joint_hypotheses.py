@@ -155,6 +155,33 @@ def test_a_parts_change_fits_its_own_arrs_only_where_their_residuals_have_it(arr
     assert healthy == pytest.approx(-plain_healthy, rel=1e-3)
 
 
+def test_a_parts_offset_from_the_start_is_no_second_fault_a_change_is(arrs):
+    """The pump's physics with the impeller's c_p 30 % high from the start, as a model's mismatch reads, and with
+    c_p wearing from nominal to 1.6 times it: the pair's estimate following each, c_p's own ARR (the pump's) fits
+    the first no better than a constant offset does, the second by far more than the decisive ratio."""
+    nominal, dt = FACTS.nominal["c_p"], FACTS.dt
+    laws = {"offset": lambda t: np.full_like(np.asarray(t, float), 1.3 * nominal),
+            "wear": lambda t: nominal * (1.0 + 0.6 * np.clip((np.asarray(t, float) - 0.3) / 1.2, 0.0, None))}
+    pair = JointHypothesis((Hypothesis("R_a", "linear", FACTS.failures["R_a"], FACTS.nominal["R_a"]),
+                            Hypothesis("c_p", "linear", 2 * nominal, nominal)))
+    steps = range(int(0.3 / dt), int(1.5 / dt), 20)
+    apart = {}
+    for name, law in laws.items():
+        record = FACTS.simulate({"c_p": law}, t_end=1.6, dt=dt, noise={}, seed=0)
+        own = IsolatingMonitor.apart_terms([pair], arrs, [a.evaluate(record) for a in arrs], np.full(len(arrs), 0.05),
+                                           steps)
+        result = IsolationResult(0.3, hypotheses=[pair])
+        result.apart = {pair.name: {"R_a": 0.0, "c_p": 0.0}}
+        fits = {key: np.zeros(3) for key in own}
+        for k, sample in enumerate(steps):
+            parts = {pair.name: {"R_a": FACTS.nominal["R_a"], "c_p": float(law(record["t"][sample]))}}
+            IsolatingMonitor._weigh_apart(result, [pair], parts, own, fits, k)
+        apart[name] = (result.apart[pair.name]["c_p"], fits[(pair.name, "c_p")][0])
+    (offset, over_none), (wear, _) = apart["offset"], apart["wear"]
+    assert over_none > 100 and abs(offset) < 1.0   # plain against no change, not against an offset
+    assert wear > 10 * np.log(100)
+
+
 def test_the_pairs_of_a_first_candidate_are_with_every_other_parameter_that_adds(arrs):
     monitor = IsolatingMonitor(arrs, FACTS.failures, noise_std={a.name: 1.0 for a in arrs},
                                method="resample-move", pairs=True, dt=0.1)
