@@ -1,9 +1,10 @@
 """Prognosis scenarios: wear laws simulated from the physics, run through ``bgphm prognose``.
 
-    python benchmarks/bench_scenarios.py [--json] [--seeds 10] [--particles 300] [--rul-every 10]
-                                         [--jobs 2] [--filter sir|resample-move] [--pairs | --no-pairs]
-                                         [--system NAME]
-                                         [--degradation LAW ...] [NAME ...]
+    python benchmarks/bench_scenarios.py [--json] [--seeds 10] [--seed-from 0] [--particles 300]
+                                         [--rul-every 10] [--jobs 2] [--filter sir|resample-move]
+                                         [--pairs | --no-pairs] [--system NAME]
+                                         [--degradation LAW ...] [--runs] [NAME ...]
+    python benchmarks/bench_scenarios.py --pool RUNS.jsonl ... [--json] [NAME ...]
 
 Each scenario (tests/wear/run.py) is a parameter wearing by a law (linear, exponential, power,
 logistic, step then drift, intermittent) on one of three systems, each simulated from its physics, never
@@ -32,6 +33,11 @@ truth's place among the predicted 5, 25, 50, 75 and 95 % quantiles: 5, 20, 25, 2
 calibrated), and the relative accuracy (mean and worst).  The
 targets: found in every run, within-20 % >= 0.8, coverage 0.85-0.97 and 0.40-0.65.
 ``--json`` prints one JSON object per scenario, one per line.
+
+A sweep of 10 seeds over the whole suite costs hours of CPU; it can be cut by seeds and spread over
+machines or sessions at one commit: ``--runs`` prints each run's figures (one JSON line per scenario and
+seed) as it ends, so that an interrupted sweep keeps what it ran; ``--seed-from K`` starts at the K-th
+seed; ``--pool`` pools the runs of such files per scenario (a run given twice counts once).
 """
 
 from __future__ import annotations
@@ -58,7 +64,7 @@ def one(arguments: tuple) -> dict:
     started = time.process_time()
     figures = score(scenario, run(scenario, seed, particles=particles, rul_every=rul_every, method=method,
                                   degradation=laws, pairs=pairs))
-    return {**figures, "seed": seed, "filter": method, "pairs": pairs,
+    return {"scenario": scenario.name, **figures, "seed": seed, "filter": method, "pairs": pairs,
             "cpu_s": round(time.process_time() - started, 1)}
 
 
@@ -109,6 +115,10 @@ def main() -> int:
                         help="only this system's scenarios (repeatable; default: every system)")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--seeds", type=int, default=10)
+    parser.add_argument("--seed-from", type=int, default=0, help="the first seed's index (seeds SEED_BASE + K on)")
+    parser.add_argument("--runs", action="store_true", help="print each run's figures as it ends, not the pooled ones")
+    parser.add_argument("--pool", nargs="+", type=Path, metavar="RUNS",
+                        help="pool the runs of these files (printed by --runs) per scenario instead of running")
     parser.add_argument("--particles", type=int, default=300)
     parser.add_argument("--rul-every", type=int, default=10)
     parser.add_argument("--jobs", type=int, default=1)
@@ -124,12 +134,27 @@ def main() -> int:
     args = parser.parse_args()
     chosen = [s for s in scenarios() if (not args.names or s.name in args.names)
               and (not args.system or s.system in args.system)]
-    tasks = [(s, SEED_BASE + k, args.particles, args.rul_every, args.filter, tuple(args.degradation), args.pairs)
-             for s in chosen for k in range(args.seeds)]
-    with ProcessPoolExecutor(args.jobs) as pool:
-        results = list(pool.map(one, tasks)) if args.jobs > 1 else [one(t) for t in tasks]
+    if args.pool:
+        try:
+            runs = read_runs(args.pool)
+        except (OSError, ValueError) as error:
+            parser.error(str(error))
+    else:
+        tasks = [(s, SEED_BASE + k, args.particles, args.rul_every, args.filter, tuple(args.degradation),
+                  args.pairs) for s in chosen for k in range(args.seed_from, args.seed_from + args.seeds)]
+        with ProcessPoolExecutor(args.jobs) as pool:
+            runs = []
+            for row in (pool.map(one, tasks) if args.jobs > 1 else map(one, tasks)):
+                runs.append(row)
+                if args.runs:
+                    print(json.dumps(row), flush=True)
+        if args.runs:
+            return 0
     for s in chosen:
-        line = pooled(s.name, [r for (scenario, *_), r in zip(tasks, results) if scenario == s])
+        rows = [r for r in runs if r["scenario"] == s.name]
+        if not rows:   # not among the pooled runs
+            continue
+        line = pooled(s.name, rows)
         if args.json:
             print(json.dumps(line))
         else:
@@ -139,6 +164,21 @@ def main() -> int:
                   f"cov50 {_pct(line['coverage_50'])}  RA {_pct(line['ra_mean'])} (worst {_pct(line['ra_worst'])})  "
                   f"{line['statuses']} {line['laws']}")
     return 0
+
+
+def read_runs(paths: list[Path]) -> list[dict]:
+    """The runs printed by ``--runs`` in these files, each (scenario, seed, filter, pairs) once."""
+    runs = {}
+    for path in paths:
+        for number, text in enumerate(path.read_text().splitlines(), 1):
+            if text.strip():
+                try:
+                    row = json.loads(text)
+                    key = (row["scenario"], row["seed"], row["filter"], row["pairs"])
+                except (ValueError, KeyError, TypeError) as error:
+                    raise ValueError(f"{path}:{number}: not a run printed by --runs (no {error})") from None
+                runs.setdefault(key, row)
+    return list(runs.values())
 
 
 def _pct(value) -> str:
