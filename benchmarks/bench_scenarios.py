@@ -132,6 +132,9 @@ def main() -> int:
                         choices=("linear", "exponential", "power", "saturating"),
                         help="bgphm prognose --degradation (repeatable; default the command's laws)")
     args = parser.parse_args()
+    unknown = sorted(set(args.names) - {s.name for s in scenarios()})
+    if unknown:   # a name mistyped would otherwise leave its scenario out without a word
+        parser.error(f"no scenario {unknown[0]!r} (the names are those of tests/wear/run.py's scenarios())")
     chosen = [s for s in scenarios() if (not args.names or s.name in args.names)
               and (not args.system or s.system in args.system)]
     if args.pool:

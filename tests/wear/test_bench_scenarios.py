@@ -41,3 +41,10 @@ def test_a_line_that_is_no_run_names_its_file_and_line(tmp_path):
     path.write_text(json.dumps(a_run(1, 10, 1.0, 0.9)) + "\n" + json.dumps({"scenario": NAME}) + "\n")
     with pytest.raises(ValueError, match=r"runs.jsonl:2: not a run printed by --runs \(no 'seed'\)"):
         bench_scenarios.read_runs([path])
+
+
+def test_a_mistyped_scenario_is_refused_not_left_out(monkeypatch, capsys):
+    monkeypatch.setattr("sys.argv", ["bench_scenarios.py", NAME, NAME + "x"])
+    with pytest.raises(SystemExit) as stop:
+        bench_scenarios.main()
+    assert stop.value.code == 2 and f"no scenario '{NAME}x'" in capsys.readouterr().err
