@@ -459,28 +459,45 @@ class IsolatingMonitor:
     def apart_terms(hypotheses: Sequence, arrs: Sequence, evaluations: list, noise: np.ndarray,
                     steps: range) -> dict:
         """What each pair's parameters' own ARRs (blind to the other) say of their change: (pair name,
-        parameter) -> (score, information), each (K,), the sums over those ARRs at each filter step of
-        ``s y / sd^2`` and ``s^2 / sd^2`` (``s = dy/dtheta`` at nominal, ``y = -r`` the residual taken).
+        parameter) -> ``(fit, score, information)``.
 
-        A change ``d`` at a step has log likelihood ``d score - d^2 information / 2`` there over a change
-        of 0 (the residuals linear in ``d``, the noise at its healthy sd): what :meth:`_weigh_apart` sums
-        along the pair's estimate to tell whether that parameter is seen apart from the other
-        (:func:`~prognosis.isolation.held_back`).  A fit of those ARRs' residuals, not what the change
-        would show: where they do not have the change, a plain one is evidence against it.
+        ``fit(step, changes)`` is the log likelihood of each change ``d`` (H,) at the filter step
+        ``step`` in those ARRs over no change, ``sum (y h(d) - h(d)^2 / 2) / sd^2`` with ``h`` the
+        observation model (the residual's shift ``y = -r`` the change predicts) and the noise at its
+        healthy sd: exact, where a linear ``h`` would take a resistance doubled in a conductance's
+        place (the tank's ``p / R_o``) for twice what it shows.  ``score`` and ``information`` (K,)
+        sum ``s y / sd^2`` and ``s^2 / sd^2`` (``s = dh/dtheta`` at nominal) at each step: a small
+        constant offset's terms.  :meth:`_weigh_apart` weighs the pair's estimates with them, to tell
+        whether that parameter is seen apart from the other (:func:`~prognosis.isolation.held_back`).
         """
         index = list(steps)
 
-        def terms(name: str, other: str) -> tuple[np.ndarray, np.ndarray]:
-            score, information = np.zeros(len(index)), np.zeros(len(index))
+        def terms(name: str, other: str) -> tuple[Callable, np.ndarray, np.ndarray]:
+            score, information, own = np.zeros(len(index)), np.zeros(len(index)), []
             for a, e, sd in zip(arrs, evaluations, noise):
                 if sees(a, name) and not sees(a, other):
+                    model = candidate_model(a, name)
+                    points = [np.asarray(p, float)[index] for p in e.points]
                     with np.errstate(all="ignore"):
-                        s = sensitivity(candidate_model(a, name), [np.asarray(p)[index] for p in e.points])
+                        s = sensitivity(model, points)
                         y = -np.asarray(e.residual, float)[index]
                     usable = np.isfinite(s) & np.isfinite(y)   # a step it cannot be evaluated at tells nothing
                     score += np.where(usable, s * y, 0.0) / sd ** 2
                     information += np.where(usable, s * s, 0.0) / sd ** 2
-            return score, information
+                    own.append((model, points, np.where(usable, y, np.nan), sd))
+
+            def fit(step: int, changes: np.ndarray) -> np.ndarray:
+                total = np.zeros(len(changes))
+                for model, points, y, sd in own:
+                    if np.isfinite(y[step]):
+                        with np.errstate(all="ignore"):
+                            h = model.function()((model.nominal + np.asarray(changes, float))[None, :],
+                                                 *(p[step] for p in points))
+                            shift = np.broadcast_to(np.asarray(h, float), (1, len(changes)))[0]
+                            total += np.nan_to_num((y[step] * shift - 0.5 * shift ** 2) / sd ** 2, nan=0.0)
+                return total
+
+            return fit, score, information
 
         ordered = {h.name: (h.members, h.members[::-1]) for h in hypotheses if isinstance(h, JointHypothesis)}
         cached = {pair: terms(*pair) for both in ordered.values() for pair in both}
@@ -495,18 +512,22 @@ class IsolatingMonitor:
 
         Why an offset and not no change alone: a model's mismatch shows in an ARR as a parameter set
         off its nominal value from the start (the pump's ARR on its physics reads the gear ratio 10 %
-        high, 6 sd over the life), and a second fault is a change.  ``fits``: (pair name, parameter) ->
-        the path's log likelihood and the sums of the score and the information so far, updated here.
+        high, 6 sd over the life), and a second fault is a change.  The offset is small, so its
+        likelihood is the linear one, ``(sum s y)^2 / (2 sum s^2)``.  ``fits``: (pair name, parameter)
+        -> the path's log likelihood and the sums of the score and the information so far, updated here.
         """
-        for h in hypotheses:
-            if isinstance(h, JointHypothesis):
-                for part in h.parts:
-                    change = parts[h.name][part.candidate] - part.nominal
-                    score, information = (v[step] for v in own[(h.name, part.candidate)])
-                    fit = fits[(h.name, part.candidate)]
-                    fit += (change * score - 0.5 * change ** 2 * information, score, information)
-                    offset = 0.5 * fit[1] ** 2 / fit[2] if fit[2] > 0 else 0.0
-                    result.apart[h.name][part.candidate] = float(fit[0] - offset)
+        keys = [(h.name, part) for h in hypotheses if isinstance(h, JointHypothesis) for part in h.parts]
+        by_terms = {}   # the pairs' law combinations share their parameters' terms: each weighed in one call
+        for name, part in keys:
+            by_terms.setdefault(id(own[(name, part.candidate)]), []).append((name, part))
+        for shared in by_terms.values():
+            fit, score, information = own[(shared[0][0], shared[0][1].candidate)]
+            changes = np.array([parts[name][part.candidate] - part.nominal for name, part in shared])
+            for (name, part), likelihood in zip(shared, fit(step, changes)):
+                total = fits[(name, part.candidate)]
+                total += (likelihood, score[step], information[step])
+                offset = 0.5 * total[1] ** 2 / total[2] if total[2] > 0 else 0.0
+                result.apart[name][part.candidate] = float(total[0] - offset)
 
     def _record_groups(self, result: IsolationResult, information: np.ndarray, log_evidence: np.ndarray,
                        theta: np.ndarray) -> tuple[list, dict]:

@@ -146,13 +146,34 @@ def test_a_parts_change_fits_its_own_arrs_only_where_their_residuals_have_it(arr
     for worn, record in records.items():
         terms = IsolatingMonitor.apart_terms(pairs, arrs, [a.evaluate(record) for a in arrs], np.full(len(arrs), 0.05),
                                              steps)
-        score, information = (np.sum(v) for v in terms[(with_c_p, "c_p")])
-        fit[worn] = (change * score - 0.5 * change ** 2 * information, 0.5 * change ** 2 * information)
-        assert (terms[(with_c_p, "R_a")][1] > 0).all() and (terms[(with_r_g, "r_g")][1] > 0).all()
-        assert (terms[(with_r_g, "R_a")][1] == 0).all() and terms[(with_r_g, "r_g")][1].shape == (len(steps),)
+        likelihood, _, information = terms[(with_c_p, "c_p")]
+        fit[worn] = (sum(likelihood(k, np.array([change]))[0] for k in range(len(steps))),
+                     0.5 * change ** 2 * information.sum())
+        assert (terms[(with_c_p, "R_a")][2] > 0).all() and (terms[(with_r_g, "r_g")][2] > 0).all()
+        assert (terms[(with_r_g, "R_a")][2] == 0).all() and terms[(with_r_g, "r_g")][2].shape == (len(steps),)
     (worn, plain), (healthy, plain_healthy) = fit[True], fit[False]
     assert plain > 100 and worn == pytest.approx(plain, rel=0.02)
     assert healthy == pytest.approx(-plain_healthy, rel=1e-3)
+
+
+def test_a_large_change_is_weighed_by_what_it_does_not_by_its_slope_at_nominal():
+    """The tank's outlet resistance R_o doubled, in the physics of the pipe and tank: its ARR reads the
+    outflow ``p / R_o``, halved, where the slope at nominal predicts it gone.  The doubling fits the tank's
+    ARR, blind to the strainer's R_f, by half its squared shift over the noise; the slope would make it a
+    wash (a predicted shift twice the real one scores 0)."""
+    pipe = SYSTEMS["pipe_tank"]
+    arrs = derive_arrs(pipe.model())
+    nominal = pipe.nominal["R_o"]
+    record = pipe.simulate({"R_o": 2 * nominal}, t_end=60.0, dt=pipe.dt, noise={}, seed=0)
+    pair = JointHypothesis((Hypothesis("R_f", "linear", pipe.failures["R_f"], pipe.nominal["R_f"]),
+                            Hypothesis("R_o", "linear", pipe.failures["R_o"], nominal)))
+    steps = range(int(20.0 / pipe.dt), int(60.0 / pipe.dt), 10)   # the tank settled at its new level
+    sd = np.full(len(arrs), 1e-6)
+    likelihood, score, information = IsolatingMonitor.apart_terms([pair], arrs, [a.evaluate(record) for a in arrs],
+                                                                  sd, steps)[(pair.name, "R_o")]
+    exact = sum(likelihood(k, np.array([nominal]))[0] for k in range(len(steps)))
+    slope = nominal * score.sum() - 0.5 * nominal ** 2 * information.sum()
+    assert exact > 100 and abs(slope) < 0.05 * exact
 
 
 def test_a_parts_offset_from_the_start_is_no_second_fault_a_change_is(arrs):
