@@ -516,10 +516,11 @@ class IsolatingMonitor:
         likelihood is the linear one, ``(sum s y)^2 / (2 sum s^2)``.  ``fits``: (pair name, parameter)
         -> the path's log likelihood and the sums of the score and the information so far, updated here.
         """
-        keys = [(h.name, part) for h in hypotheses if isinstance(h, JointHypothesis) for part in h.parts]
-        by_terms = {}   # the pairs' law combinations share their parameters' terms: each weighed in one call
-        for name, part in keys:
-            by_terms.setdefault(id(own[(name, part.candidate)]), []).append((name, part))
+        by_terms = {}   # a pair's law combinations share its parameters' terms: each parameter weighed in one call
+        for h in hypotheses:
+            if isinstance(h, JointHypothesis):
+                for part in h.parts:
+                    by_terms.setdefault((part.candidate, h.members), []).append((h.name, part))
         for shared in by_terms.values():
             fit, score, information = own[(shared[0][0], shared[0][1].candidate)]
             changes = np.array([parts[name][part.candidate] - part.nominal for name, part in shared])
