@@ -15,9 +15,9 @@ from .decision import Decision, decide, held_back
 from .isolating_monitor import IsolatingMonitor, detection_options
 from .priors import Priors, check_noise_std
 from .result import RUL_KEYS, IsolationResult
-from .settings import (ADEQUACY_LIMIT, ADEQUACY_WINDOW, BEFORE_STEPS, CONFIRM_STEPS, DRIFT_AWAY_STEPS, EVIDENCE_RATIO,
-                       FLEET_LAWS, FLEET_SETTINGS, FORECAST_LIMIT, FREEZE_BELOW, HORIZON_STEPS, LAWS, MAX_PARTICLES,
-                       METHODS, MIXTURE_FLOOR, PROCESS_NOISE, SPIKE, IsolationSettings)
+from .settings import (ADEQUACY_LIMIT, ADEQUACY_WINDOW, BEFORE_STEPS, BLIND_LIMIT, CONFIRM_STEPS, DRIFT_AWAY_STEPS,
+                       EVIDENCE_RATIO, FLEET_LAWS, FLEET_SETTINGS, FORECAST_LIMIT, FREEZE_BELOW, HORIZON_STEPS, LAWS,
+                       MAX_PARTICLES, METHODS, MIXTURE_FLOOR, PROCESS_NOISE, SPIKE, IsolationSettings)
 
 __all__ = [
     # the monitor, its settings and its result
@@ -27,7 +27,8 @@ __all__ = [
     # the hypotheses and their starts
     "Priors", "check_noise_std",
     # constants of the method
-    "ADEQUACY_LIMIT", "ADEQUACY_WINDOW", "BEFORE_STEPS", "CONFIRM_STEPS", "DRIFT_AWAY_STEPS", "EVIDENCE_RATIO",
+    "ADEQUACY_LIMIT", "ADEQUACY_WINDOW", "BEFORE_STEPS", "BLIND_LIMIT", "CONFIRM_STEPS", "DRIFT_AWAY_STEPS",
+    "EVIDENCE_RATIO",
     "FLEET_LAWS", "FORECAST_LIMIT", "FREEZE_BELOW", "HORIZON_STEPS", "LAWS", "MAX_PARTICLES", "METHODS",
     "MIXTURE_FLOOR", "PROCESS_NOISE", "RUL_KEYS", "SPIKE",
 ]

@@ -44,8 +44,8 @@ from ..rul import RULDistribution, RULPredictor
 from .decision import Decision
 from .priors import Priors, check_noise_std
 from .result import IsolationResult
-from .settings import (ADEQUACY_LIMIT, ADEQUACY_WINDOW, BEFORE_STEPS, CONFIRM_STEPS, DRIFT_AWAY_STEPS, FORECAST_LIMIT,
-                       FREEZE_BELOW, MIXTURE_FLOOR, SPIKE, IsolationSettings)
+from .settings import (ADEQUACY_LIMIT, ADEQUACY_WINDOW, BEFORE_STEPS, BLIND_LIMIT, CONFIRM_STEPS, DRIFT_AWAY_STEPS,
+                       FORECAST_LIMIT, FREEZE_BELOW, MIXTURE_FLOOR, SPIKE, IsolationSettings)
 
 __all__ = ["IsolatingMonitor", "detection_options"]
 
@@ -321,6 +321,8 @@ class IsolatingMonitor:
         predictors, away = {}, np.zeros(len(hypotheses), int)
         forecasts = []  # (step, time, particles, log-weights) of the cloud at each RUL report
         boxes = np.array([self.priors.healthy_box(h, arrs) for h in hypotheses])
+        # each hypothesis' ARRs blind to it (H, M): it predicts their healthy residual, judged more strictly
+        blind = np.array([[not any(sees(a, m) for m in _members(h)) for a in arrs] for h in hypotheses])
         result.healthy = {part.candidate: self.priors.healthy_box(part, arrs)
                           for h in hypotheses if isinstance(h, JointHypothesis) for part in h.parts}
         for done, k in enumerate(steps, 1):
@@ -333,7 +335,7 @@ class IsolatingMonitor:
             ess.append(diagnostics.ess)
             if diagnostics.innovation is not None:
                 innovations.append(diagnostics.innovation)
-                self._check_adequacy(result, hypotheses, arrs, innovations, float(t[k]))
+                self._check_adequacy(result, hypotheses, arrs, innovations, float(t[k]), blind)
             # a cloud collapsed at this step is no band now (a random-walk cloud may spread again later)
             collapsed_now = {hypotheses[row].name: float(t[k]) for row in np.flatnonzero(diagnostics.collapsed)}
             for name, time in collapsed_now.items():
@@ -671,14 +673,16 @@ class IsolatingMonitor:
                                                f"outside its physical domain ({lo:g}, {hi:g})")
 
     def _check_adequacy(self, result: IsolationResult, hypotheses: list, arrs: list, innovations: list,
-                        time: float) -> None:
+                        time: float, blind: np.ndarray) -> None:
         """Flag the hypotheses whose standardized innovations drift over the last ADEQUACY_WINDOW steps.
 
         A law that fits leaves innovations near N(0, 1) about zero; one the data contradict leaves
         them on one side (a power-law wear seen through a linear law lags more and more).  The test
         is on the window's mean, in predictive sd: beyond ADEQUACY_LIMIT it is no chance (white
         innovations give a mean of sd 1/sqrt(window)) nor a small misfit of the model (a clean
-        residual shows those at about 1 sd).
+        residual shows those at about 1 sd).  On an ARR blind to the hypothesis (``blind``: (H, M))
+        it predicts the healthy residual, with no law to misfit: beyond BLIND_LIMIT another fault acts
+        there (a second wear below the ARR's threshold), and no single fault of this one explains it.
         """
         if len(innovations) < ADEQUACY_WINDOW:
             return
@@ -687,15 +691,21 @@ class IsolatingMonitor:
         with np.errstate(invalid="ignore"):
             count = np.sum(np.isfinite(window), axis=0)
             drift = np.nansum(window, axis=0) / np.sqrt(np.maximum(count, 1))
+        excess = np.nan_to_num(np.abs(drift), nan=0.0) / (np.where(blind, BLIND_LIMIT, ADEQUACY_LIMIT)
+                                                          * math.sqrt(ADEQUACY_WINDOW))
         for row, h in enumerate(hypotheses):
             if h.name in result.inadequate or h.name in result.rejected:
                 continue
-            worst = int(np.nanargmax(np.abs(np.nan_to_num(drift[row], nan=0.0))))
-            if abs(drift[row, worst]) > ADEQUACY_LIMIT * math.sqrt(ADEQUACY_WINDOW):
+            worst = int(np.argmax(excess[row]))
+            if excess[row, worst] > 1.0:
                 mean = np.nanmean(window[:, row, worst])
+                side = "above" if mean > 0 else "below"
                 result.inadequate[h.name] = (
+                    f"at t = {time:g} s the residual of {arrs[worst].name}, blind to {h.candidate}, stays {side} "
+                    f"its healthy level by {abs(mean):.2g} sd on average over {ADEQUACY_WINDOW} filter steps: "
+                    "another fault acts there" if blind[row, worst] else
                     f"at t = {time:g} s the {h.law} law leaves the residual of {arrs[worst].name} "
-                    f"{'above' if mean > 0 else 'below'} its prediction by {abs(mean):.2g} sd on average over "
+                    f"{side} its prediction by {abs(mean):.2g} sd on average over "
                     f"{ADEQUACY_WINDOW} filter steps: the data contradict the law")
 
     def _check_forecasts(self, result: IsolationResult, hypotheses: list, arrs: list, pf, forecasts: list,
@@ -777,6 +787,11 @@ class IsolatingMonitor:
         rng = seeds.generator(self.settings.seed, seeds.RESOLUTION, key)
         spread = self.settings.dt * (rng.random(rul.shape) - 0.5)
         return np.where(np.isfinite(rul), np.maximum(rul + spread, 0.0), rul)
+
+
+def _members(hypothesis) -> tuple:
+    """The faults a hypothesis holds: a joint hypothesis' parameters, or a single one's candidate."""
+    return hypothesis.members if isinstance(hypothesis, JointHypothesis) else (hypothesis.candidate,)
 
 
 def _component(pf, row: int, c: int) -> tuple[np.ndarray, np.ndarray]:

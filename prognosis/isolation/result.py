@@ -11,7 +11,7 @@ import numpy as np
 from ..errors import PrognosisError
 from ..health_monitor import MonitorResult
 from .decision import Decision, decide, finite_or_none, held_back
-from .settings import EVIDENCE_RATIO
+from .settings import EVIDENCE_RATIO, FREEZE_BELOW
 
 __all__ = ["RUL_KEYS", "IsolationResult"]
 
@@ -223,10 +223,14 @@ class IsolationResult:
     @property
     def contradicted(self) -> bool:
         """No fault weighed explains the residuals: at the end the most probable hypothesis not rejected is
-        contradicted by the data (inadequate), or every one was rejected.
+        contradicted by the data (inadequate), or every one was rejected; or the most probable wear is
+        contradicted while still in the running (within FREEZE_BELOW of the best's log evidence).
 
         The most probable, not every one: a hypothesis far behind in evidence is weighed on but no longer
-        moved, so it is not judged either, and it explains the record no better for that.
+        moved, so it is not judged either, and it explains the record no better for that.  The wears
+        apart: a sensor's fault, its gain following whatever the residuals do, can pass for two wears (the
+        flow sensor's gain for the pipe's friction and the tank's outflow, both wearing), and explaining
+        them does not make a second run of two wears at once needless.
 
         >>> IsolationResult(None).contradicted   # nothing weighed (no alarm): nothing contradicted
         False
@@ -236,8 +240,11 @@ class IsolationResult:
         standing = [i for i, h in enumerate(self.hypotheses) if h.name not in self.rejected]
         if not standing:
             return True
-        best = max(standing, key=lambda i: self.log_evidence[-1][i])
-        return self.hypotheses[best].name in self.inadequate
+        last = self.log_evidence[-1]
+        best = max(standing, key=lambda i: last[i])
+        wears = [i for i in standing if not self.hypotheses[i].sensor and last[i] >= last[best] - FREEZE_BELOW]
+        worn = max(wears, key=lambda i: last[i], default=best)
+        return self.hypotheses[best].name in self.inadequate or self.hypotheses[worn].name in self.inadequate
 
     def revised(self, decision: Decision, time: float, held: Mapping = {}) -> Decision:
         """``decision`` at ``time`` with what the evidence alone does not say: the ARRs fired late that no

@@ -32,7 +32,8 @@ from bondgraph.errors import SettingError
 
 from ..hypotheses import LIFE_PRIOR
 
-__all__ = ["MAX_PARTICLES", "ADEQUACY_LIMIT", "ADEQUACY_WINDOW", "BEFORE_STEPS", "CONFIRM_STEPS", "DRIFT_AWAY_STEPS",
+__all__ = ["MAX_PARTICLES", "ADEQUACY_LIMIT", "ADEQUACY_WINDOW", "BEFORE_STEPS", "BLIND_LIMIT", "CONFIRM_STEPS",
+           "DRIFT_AWAY_STEPS",
            "EVIDENCE_RATIO", "FORECAST_LIMIT", "FLEET_LAWS", "FLEET_SETTINGS", "FREEZE_BELOW", "HORIZON_STEPS",
            "IsolationSettings", "LAWS", "METHODS", "MIXTURE_FLOOR", "PROCESS_NOISE", "SPIKE"]
 
@@ -52,6 +53,11 @@ ADEQUACY_WINDOW = 30  # filter steps of standardized innovations a law's fit is 
 #: mean standardized innovation over the window beyond which the law does not follow the residual: a
 #: fitting law stays within about 1 (clean or noisy torsion-bar wear), a law that lags drifts to tens
 ADEQUACY_LIMIT = 3.0
+#: the same mean on an ARR blind to the hypothesis, which predicts the healthy residual there: no law of its
+#: own to misfit, so a sustained shift is another fault.  The single wears of the scenario suite leave their
+#: blind ARRs within 0.6 sd (white noise: the window's mean has sd 0.18); a second wear below the ARR's
+#: threshold shows at 2.8-4.2 sd (the pump's impeller, the tank's outflow)
+BLIND_LIMIT = 1.5
 #: standardized innovations are clipped at this many sd before the window's mean is taken: a drifting
 #: law still shows (each innovation beyond the limit counts in full up to here), one spike moves the
 #: mean by at most SPIKE / ADEQUACY_WINDOW

@@ -255,6 +255,22 @@ def test_a_result_is_contradicted_when_its_best_hypothesis_is():
     assert not IsolationResult(None, hypotheses=hypotheses).contradicted   # no filter step yet
 
 
+def test_a_result_is_contradicted_when_its_best_wear_in_the_running_is():
+    """A sensor's gain that explains the residuals does not stop two wears from being weighed when the most
+    probable wear, close behind it, is contradicted; a wear far behind (no longer moved) does not count."""
+    from prognosis.isolation import FREEZE_BELOW, IsolationResult
+
+    hypotheses = [Hypothesis.of_sensor("Q", "gain"), Hypothesis("R_f", "linear", 2.0, 1.0),
+                  Hypothesis("R_f", "power", 2.0, 1.0)]
+    evidence = np.array([[0.0, 0.0, 0.0], [0.0, -2.0, -3.0]])
+    result = IsolationResult(1.0, hypotheses=hypotheses, log_evidence=evidence, inadequate={"R_f/power": "drifts"})
+    assert not result.contradicted             # the best wear, R_f/linear, follows the residuals
+    result.inadequate["R_f/linear"] = "blind to R_f, the tank's ARR drifts"
+    assert result.contradicted
+    result.log_evidence = np.array([[0.0, 0.0, 0.0], [0.0, -FREEZE_BELOW - 1.0, -FREEZE_BELOW - 2.0]])
+    assert not result.contradicted             # the wears are far behind the sensor: its answer stands
+
+
 @pytest.mark.slow  # simulates the torsion bar under its PI loop (tests/wear) and runs bgphm prognose
 def test_resample_move_follows_a_clean_linear_wear_that_collapsed_the_random_walk_filter():
     """A wear scenario of tests/wear: noise on the speeds only, the alarm within a filter step of the onset."""

@@ -77,3 +77,20 @@ def test_a_wear_no_law_fits_is_not_bent_into_two_faults():
     assert figures["found"] and " + " not in str(answer["candidate"]) and " + " not in figures["top"], figures
     held = {name: e for name, e in answer["evidence"].items() if " + " in name and e["probability"] > 1e-9}
     assert not held, held
+
+
+@pytest.mark.slow  # 2 s of the pump's physics and two single-fault runs of bgphm prognose: about 30 s of CPU
+def test_a_second_wear_below_the_thresholds_contradicts_the_first_one_alone():
+    # at this seed the impeller's ARR (the pump's) never fires: c_p's wear stays below its thresholds, and the
+    # brushes' laws, which predict that ARR healthy, follow their own; it drifts off by about 3 sd
+    both = Scenario("pump_drive", "R_a + c_p", "linear + exponential", "clean")
+    answer = run(both, seed=20261134, particles=60, rul_every=80, method="resample-move", pairs=False)
+    assert answer["exit"] == 0 and answer["fired"] == ["ARR_1_e"] and not answer["late"], answer.get("error")
+    reasons = [e["inadequate"] or "" for name, e in answer["evidence"].items() if name.startswith("R_a/")]
+    assert reasons and all("blind to R_a" in r and "another fault acts there" in r for r in reasons), reasons
+    # the brushes wearing alone, the same noise: the pump's ARR stays healthy, and no law of R_a is told otherwise
+    alone = run(Scenario("pump_drive", "R_a", "linear", "clean"), seed=20261134, particles=60, rul_every=80,
+                method="resample-move", pairs=False)
+    reasons = [e["inadequate"] or "" for name, e in alone["evidence"].items() if name.startswith("R_a/")]
+    assert reasons and not any("blind to" in r for r in reasons), reasons
+    assert alone["candidate"] == "R_a"
