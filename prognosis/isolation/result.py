@@ -75,8 +75,9 @@ class IsolationResult:
         made at a step where it is collapsed leaves it out.
     inadequate : dict
         Hypothesis name -> why its law does not follow the residuals (its standardized innovations
-        drift, :data:`ADEQUACY_LIMIT`, or its forecast from half the record ago misses the last
-        steps, :data:`FORECAST_LIMIT`); it is left out of the RUL from then on.
+        drift, :data:`ADEQUACY_LIMIT`, or those of an ARR blind to it, :data:`BLIND_LIMIT`: another
+        fault acts there; or its forecast from half the record ago misses the last steps,
+        :data:`FORECAST_LIMIT`); it is left out of the RUL from then on.
     withheld : list of str or None
         Per RUL prediction: None, or why no RUL is given (every probable hypothesis inadequate or
         collapsed): the answer is then "undecided", not a band.
