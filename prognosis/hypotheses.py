@@ -96,6 +96,11 @@ class Hypothesis:
         return sensor_signal(self.candidate) is not None
 
     @property
+    def members(self) -> tuple:
+        """The faults it holds, as a joint hypothesis names its parameters: its candidate alone."""
+        return (self.candidate,)
+
+    @property
     def direction(self) -> str:
         """``"up"`` when the failure value lies above the nominal value, else ``"down"``."""
         return "up" if self.failure > self.nominal else "down"

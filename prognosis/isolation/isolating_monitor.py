@@ -322,7 +322,7 @@ class IsolatingMonitor:
         forecasts = []  # (step, time, particles, log-weights) of the cloud at each RUL report
         boxes = np.array([self.priors.healthy_box(h, arrs) for h in hypotheses])
         # each hypothesis' ARRs blind to it (H, M): it predicts their healthy residual, judged more strictly
-        blind = np.array([[not any(sees(a, m) for m in _members(h)) for a in arrs] for h in hypotheses])
+        blind = np.array([[not any(sees(a, m) for m in h.members) for a in arrs] for h in hypotheses])
         result.healthy = {part.candidate: self.priors.healthy_box(part, arrs)
                           for h in hypotheses if isinstance(h, JointHypothesis) for part in h.parts}
         for done, k in enumerate(steps, 1):
@@ -787,11 +787,6 @@ class IsolatingMonitor:
         rng = seeds.generator(self.settings.seed, seeds.RESOLUTION, key)
         spread = self.settings.dt * (rng.random(rul.shape) - 0.5)
         return np.where(np.isfinite(rul), np.maximum(rul + spread, 0.0), rul)
-
-
-def _members(hypothesis) -> tuple:
-    """The faults a hypothesis holds: a joint hypothesis' parameters, or a single one's candidate."""
-    return hypothesis.members if isinstance(hypothesis, JointHypothesis) else (hypothesis.candidate,)
 
 
 def _component(pf, row: int, c: int) -> tuple[np.ndarray, np.ndarray]:
