@@ -351,7 +351,8 @@ def _prognose_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--pairs", action=argparse.BooleanOptionalAction, default=None,
                    help="weigh two parameters wearing at once too, from the first alarm (the resample-move filter "
                         "only), declared only when the data demand two faults; the RUL is the first failure's "
-                        "(default: weighed only when no single fault explains the residuals; --no-pairs: never)")
+                        "(default: weighed only when no single fault explains the residuals, or no single parameter "
+                        "sees every ARR fired; --no-pairs: never)")
     p.add_argument("--direction", choices=("up", "down"), help="check that --candidate's failure value lies on "
                    "this side of nominal")
     p.add_argument("--rate", type=float, nargs=2, metavar=("LO", "HI"),

@@ -193,9 +193,10 @@ def prognose(arrs: Sequence, record, failures: Mapping[str, float], settings: Pr
     Notes
     -----
     With ``settings.isolation.pairs`` None (the default), single faults are weighed first; when none
-    explains the residuals at the end (:attr:`~prognosis.isolation.IsolationResult.contradicted`), the
-    record is run again with two parameters degrading at once among the hypotheses, and that run is
-    the answer.
+    explains the residuals at the end (:attr:`~prognosis.isolation.IsolationResult.contradicted`), or
+    no single parameter sees every ARR fired (:attr:`~prognosis.isolation.IsolationResult.wearless`:
+    alone, only a sensor's fault could explain them), the record is run again with two parameters
+    degrading at once among the hypotheses, and that run is the answer.
     """
     settings = settings or PrognosisSettings()
     chosen = settings.isolation
@@ -217,11 +218,13 @@ def prognose(arrs: Sequence, record, failures: Mapping[str, float], settings: Pr
 
     result = run(chosen.pairs)
     pairs = "weighed from the first alarm" if chosen.pairs else "not weighed"
-    if chosen.pairs is None and chosen.pairs_possible and result.contradicted:
-        # no single fault explains the residuals: two at once compete, on the whole record from the alarm
-        # (their cost is paid only here; a single fault weighed with them is not called two, isolation.held_back)
+    why = ("no single fault explained the residuals" if result.contradicted else
+           "no single parameter sees every ARR fired" if result.wearless else None)
+    if chosen.pairs is None and chosen.pairs_possible and why:
+        # two at once compete, on the whole record from the alarm (their cost is paid only here; a single
+        # fault weighed with them is not called two, isolation.held_back)
         result = run(True)
-        pairs = "weighed: no single fault explained the residuals"
+        pairs = f"weighed: {why}"
     result.settings = {"failure_values": dict(failures), "calibration_end": healthy.until, "filter_step": dt,
                        "horizon": horizon, "filter": chosen.method, "particles_per_hypothesis": chosen.n_particles,
                        "residual_noise_std": dict(healthy.noise_std), "margins": dict(healthy.margin),

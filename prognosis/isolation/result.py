@@ -10,6 +10,7 @@ import numpy as np
 
 from ..errors import PrognosisError
 from ..health_monitor import MonitorResult
+from ..hypotheses import sensor_signal
 from .decision import Decision, decide, finite_or_none, held_back
 from .settings import EVIDENCE_RATIO, FREEZE_BELOW
 
@@ -246,6 +247,24 @@ class IsolationResult:
         wears = [i for i in standing if not self.hypotheses[i].sensor and last[i] >= last[best] - FREEZE_BELOW]
         worn = max(wears, key=lambda i: last[i], default=best)
         return self.hypotheses[best].name in self.inadequate or self.hypotheses[worn].name in self.inadequate
+
+    @property
+    def wearless(self) -> bool:
+        """A fault was detected and no single parameter explains the ARRs fired: no parameter's signature
+        holds them all, so that alone only a sensor's fault is weighed, or none.
+
+        Two parameters wearing at once fire the ARRs either one sees, more than any one of them sees
+        when the second wear shows from the start; a sensor's gain shifting each of those ARRs (the
+        pipe's flow sensor, for its friction and the tank's outflow) may then explain the residuals
+        alone, and its doing so does not make two wears at once needless.
+
+        >>> IsolationResult(None).wearless   # no alarm
+        False
+        >>> IsolationResult(1.0, candidates=["sensor Q"]).wearless, IsolationResult(1.0, candidates=["R_f"]).wearless
+        (True, False)
+        """
+        return self.detection_time is not None and all(sensor_signal(c) is not None
+                                                       for c in [*self.candidates, *self.unweighed])
 
     def revised(self, decision: Decision, time: float, held: Mapping = {}) -> Decision:
         """``decision`` at ``time`` with what the evidence alone does not say: the ARRs fired late that no

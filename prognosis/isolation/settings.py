@@ -99,7 +99,8 @@ class IsolationSettings:
         only: :class:`~prognosis.isolation.IsolatingMonitor`): True from the first alarm, False never;
         None (default): :func:`prognosis.prognose` weighs them when no single fault explains the
         residuals (the most probable hypothesis ends contradicted by the data, or every one rejected:
-        :attr:`~prognosis.isolation.IsolationResult.contradicted`), running the record again with them;
+        :attr:`~prognosis.isolation.IsolationResult.contradicted`) or no single parameter sees every ARR
+        fired (:attr:`~prognosis.isolation.IsolationResult.wearless`), running the record again with them;
         a monitor alone weighs them only when True.
     method : {"resample-move", "sir"}
         The filter (:class:`~prognosis.isolation.IsolatingMonitor`); a fleet's is ``"sir"``.

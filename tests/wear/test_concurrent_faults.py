@@ -94,3 +94,24 @@ def test_a_second_wear_below_the_thresholds_contradicts_the_first_one_alone():
     reasons = [e["inadequate"] or "" for name, e in alone["evidence"].items() if name.startswith("R_a/")]
     assert reasons and not any("blind to" in r for r in reasons), reasons
     assert alone["candidate"] == "R_a"
+
+
+@pytest.mark.slow  # 300 s of the pipe's physics and bgphm prognose, three times: about 6 s of CPU
+def test_two_wears_firing_more_arrs_than_one_parameter_sees_are_weighed_as_a_pair():
+    # the strainer clogging and the tank's outlet scaling at once, read with a wider derivative window (a
+    # user's --window 61, residuals five times quieter): both ARRs fire at the alarm, which no single
+    # parameter sees, and alone only the flow and pressure sensors' faults are weighed
+    pair = Scenario("pipe_tank", "R_f + R_o", "linear + exponential", "clean")
+    alone = run(pair, seed=20261127, particles=60, rul_every=80, method="resample-move", window=61, pairs=False)
+    assert alone["exit"] == 0, alone.get("error")
+    assert set(alone["fired"]) == {"ARR_1_p", "ARR_0_t"}
+    assert alone["candidates"] == ["sensor Q", "sensor p_t"]
+    assert not score(pair, alone)["found"]    # a sensor's fault is named for two wears
+    # by default the pair is weighed beside them, and named
+    answer = run(pair, seed=20261127, particles=60, rul_every=80, method="resample-move", window=61)
+    assert answer["pairs"] == "weighed: no single parameter sees every ARR fired"
+    assert score(pair, answer)["found"] and answer["status"] == "isolated", (answer["candidate"], answer["status"])
+    # a single wear firing one ARR with the same window weighs no pair: one parameter sees it
+    single = run(Scenario("pipe_tank", "R_f", "linear", "clean"), seed=20261127, particles=60, rul_every=80,
+                 method="resample-move", window=61)
+    assert single["pairs"] == "not weighed" and score(Scenario("pipe_tank", "R_f", "linear", "clean"), single)["found"]
