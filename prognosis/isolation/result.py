@@ -251,7 +251,7 @@ class IsolationResult:
     @property
     def wearless(self) -> bool:
         """A fault was detected and no single parameter explains the ARRs fired: no parameter's signature
-        holds them all, so that alone only a sensor's fault is weighed, or none.
+        holds them all, so that, one fault at a time, only the sensors' faults are weighed, or nothing.
 
         Two parameters wearing at once fire the ARRs either one sees, more than any one of them sees
         when the second wear shows from the start; a sensor's gain shifting each of those ARRs (the

@@ -112,6 +112,6 @@ def test_two_wears_firing_more_arrs_than_one_parameter_sees_are_weighed_as_a_pai
     assert answer["pairs"] == "weighed: no single parameter sees every ARR fired"
     assert score(pair, answer)["found"] and answer["status"] == "isolated", (answer["candidate"], answer["status"])
     # a single wear firing one ARR with the same window weighs no pair: one parameter sees it
-    single = run(Scenario("pipe_tank", "R_f", "linear", "clean"), seed=20261127, particles=60, rul_every=80,
-                 method="resample-move", window=61)
-    assert single["pairs"] == "not weighed" and score(Scenario("pipe_tank", "R_f", "linear", "clean"), single)["found"]
+    strainer = Scenario("pipe_tank", "R_f", "linear", "clean")
+    single = run(strainer, seed=20261127, particles=60, rul_every=80, method="resample-move", window=61)
+    assert single["pairs"] == "not weighed" and score(strainer, single)["found"]
