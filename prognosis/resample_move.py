@@ -531,17 +531,18 @@ class ResampleMoveFilter:
         return ys[:, None] - predicted
 
     def forecast_miss(self, z: np.ndarray, log_weights: np.ndarray, made: int, start: int,
-                      excess: np.ndarray | None = None) -> np.ndarray:
+                      excess: np.ndarray | None = None, lag: int = 1) -> np.ndarray:
         """How far the residuals' mean over the steps ``start`` to now falls from what particles ``z`` (A, N, D)
         with ``log_weights`` (A, N), the cloud after step ``made``, forecast for it: (A, M), in sd.
 
         The forecast of the window's mean gap is the cloud's weighted mean.  Its variance: the cloud's
         spread of that mean; the noise's over the window, times the largest information excess (the
         gaps' persistence); the walk of an integral's offset since step ``made``; and what a lag of
-        theta by one filter step changes (the record does not time a change finer than its step, see
-        the RUL).  A law that fits keeps the miss within a few sd however far ahead; one that
-        cannot bend as the data do (a power law through a wear that saturates) misses by more and
-        more.  Unlike the one-step innovations, the cloud is not refitted to the data it is judged on.
+        theta by ``lag`` filter steps changes (the record does not time a change finer than its step,
+        or than its derivative window when longer: see the RUL).  A law that fits keeps the miss within
+        a few sd however far ahead; one that cannot bend as the data do (a power law through a wear
+        that saturates) misses by more and more.  Unlike the one-step innovations, the cloud is not
+        refitted to the data it is judged on.
 
         Examples
         --------
@@ -567,7 +568,7 @@ class ResampleMoveFilter:
             raise PrognosisError(f"a forecast made at step {made} is judged on the steps {start} to {stop} after it")
         made, start, stop = made + self.lead, start + self.lead, stop + self.lead
         mean_gap, path = self._mean_gaps(z, start, stop)
-        lagged, _ = self._mean_gaps(z, start, stop, lag=1)
+        lagged, _ = self._mean_gaps(z, start, stop, lag=lag)
         weights = normalize_log_weights(log_weights)[0]
         with np.errstate(invalid="ignore", over="ignore"):
             finite = np.isfinite(mean_gap) & np.isfinite(lagged)

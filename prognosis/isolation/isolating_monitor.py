@@ -28,6 +28,7 @@ from collections.abc import Callable, Mapping, Sequence
 
 import numpy as np
 
+from diagnosis.derivatives import default_window
 from diagnosis.detection import check_closed_form
 
 from .. import seeds
@@ -293,6 +294,8 @@ class IsolatingMonitor:
         self._reject_wrong_side(result, evaluations, arrs, k0, noise)
         t = evaluations[0].t
         stride = filter_stride(t, self.settings.dt)
+        span = self.resolution(t, arrs)   # the record times a change no finer (s), nor in fewer steps
+        lag = max(1, round(span / self.settings.dt))
         if self.settings.method == "sir":
             observation = HypothesisObservation(arrs, hypotheses)
             bounds = (np.array([s[0] for s in starts]), np.array([s[1] for s in starts]))
@@ -352,10 +355,10 @@ class IsolatingMonitor:
                 result.record_groups = groups
             if (done - 1) % self.settings.rul_every == 0:
                 if self.settings.method != "sir":  # the clouds' forecasts, checked later on what came
-                    self._check_forecasts(result, hypotheses, arrs, pf, forecasts, done, float(t[k]))
+                    self._check_forecasts(result, hypotheses, arrs, pf, forecasts, done, float(t[k]), lag)
                     forecasts.append((done, float(t[k]), pf.z.copy(), pf.log_weights.copy(), pf.excess.copy()))
                 decision = result.decide_at(pf.log_evidence, float(t[k]), groups, parts, result.apart)
-                distribution, reason = self._mixture(pf, hypotheses, decision, predictors, models, key=done,
+                distribution, reason = self._mixture(pf, hypotheses, decision, predictors, models, span, key=done,
                                                      left_out={**collapsed_now, **result.inadequate})
                 rul.append(distribution)
                 result.withheld.append(reason)
@@ -709,9 +712,10 @@ class IsolatingMonitor:
                     f"{ADEQUACY_WINDOW} filter steps: the data contradict the law")
 
     def _check_forecasts(self, result: IsolationResult, hypotheses: list, arrs: list, pf, forecasts: list,
-                         done: int, time: float) -> None:
+                         done: int, time: float, lag: int = 1) -> None:
         """Flag the hypotheses whose cloud, as it was when the filter had seen half the steps since the alarm,
-        misses the residuals' mean over the last ADEQUACY_WINDOW steps by more than FORECAST_LIMIT sd.
+        misses the residuals' mean over the last ADEQUACY_WINDOW steps by more than FORECAST_LIMIT sd
+        (``lag``: the filter steps the record does not time a change within, :meth:`resolution`).
 
         The one-step innovations judge a cloud refitted to every step; a flexible law bent through
         the whole history passes them while it cannot say where the wear goes (a power law through a
@@ -725,7 +729,7 @@ class IsolatingMonitor:
         del forecasts[:origins[-1]]  # later checks start from later clouds
         made, when, z, log_weights, excess = forecasts[0]
         with np.errstate(invalid="ignore"):
-            miss = pf.forecast_miss(z, log_weights, made - 1, start, excess)
+            miss = pf.forecast_miss(z, log_weights, made - 1, start, excess, lag=lag)
         for row, h in enumerate(hypotheses):
             if h.name in result.inadequate or h.name in result.rejected or not np.isfinite(miss[row]).any():
                 continue
@@ -737,7 +741,7 @@ class IsolatingMonitor:
                     f"sd: the data contradict the law's forecast")
 
     def _mixture(self, pf: ParticleFilter, hypotheses: list, decision: Decision, predictors: dict, models: tuple,
-                 key: int, left_out: Mapping = {}) -> tuple[RULDistribution, str | None]:
+                 span: float, key: int, left_out: Mapping = {}) -> tuple[RULDistribution, str | None]:
         """The RUL of every probable hypothesis not ``left_out`` (collapsed, inadequate), mixed by probability.
 
         Returns the distribution and None, or, when every probable hypothesis is left out, a
@@ -772,20 +776,44 @@ class IsolatingMonitor:
             mixed.append(p * weights[row])
         if not samples:  # every hypothesis rejected
             return RULDistribution(np.full((1, 1), np.inf), np.ones((1, 1)), self.settings.rul_horizon), None
-        return (RULDistribution(self._resolved(np.concatenate(samples), key)[None, :], np.concatenate(mixed)[None, :],
-                                self.settings.rul_horizon), None)
+        return (RULDistribution(self._resolved(np.concatenate(samples), span, key)[None, :],
+                                np.concatenate(mixed)[None, :], self.settings.rul_horizon), None)
 
-    def _resolved(self, rul: np.ndarray, key: int) -> np.ndarray:
-        """The RUL samples spread uniformly over one filter step about each (censored ones kept).
+    def resolution(self, t: np.ndarray, arrs: Sequence) -> float:
+        """The shortest time (s) the residuals of ``arrs``, sampled at times ``t``, time a change by: the
+        filter step, or the widest derivative window among them when it is longer.
 
-        The filter reads the residual once a step, and by default a step is the derivative window
-        the residual is computed over: the record resolves the time of the change no finer than that.
-        A lag of the residual within the window (a zero-order hold, a sensor's filter) is a shift of
-        theta at the alarm that no gap shows, and on a clean residual it is all the error there is;
-        a band narrower than the step would claim what the record cannot tell.
+        A derivative estimate fits a polynomial to its window's samples, so a residual that
+        differentiates a signal smooths a change over its window, whatever the filter step it is read
+        at.  By default the step is one window (:func:`prognosis.filter_step`) and the two agree.
+
+        >>> from bondgraph.library import rlc_circuit
+        >>> from diagnosis import derive_arrs
+        >>> arrs = derive_arrs(rlc_circuit())
+        >>> monitor = IsolatingMonitor(arrs, {"R": 20.0}, noise_std={a.name: 1e-3 for a in arrs}, dt=0.1,
+        ...                            detection={"window": 31})
+        >>> t = np.arange(0.0, 10.0, 0.01)
+        >>> round(monitor.resolution(t, arrs), 6), round(IsolatingMonitor(arrs, {"R": 20.0},
+        ...     noise_std={a.name: 1e-3 for a in arrs}, dt=0.1).resolution(t, arrs), 6)
+        (0.31, 0.11)
+        """
+        step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
+        windows = [self.options_for(a).get("window") or default_window(max(3, a.order))
+                   for a in arrs if getattr(a, "order", 0) > 0]
+        return max(self.settings.dt, step * max(windows, default=0))
+
+    def _resolved(self, rul: np.ndarray, span: float, key: int) -> np.ndarray:
+        """The RUL samples spread uniformly over ``span`` (s, :meth:`resolution`) about each (censored ones kept).
+
+        The filter reads the residual once a step, and a residual that differentiates a signal is
+        computed over a derivative window (by default the step): the record resolves the time of the
+        change no finer than the longer of the two.  A lag of the residual within the window (a
+        zero-order hold, a sensor's filter) is a shift of theta at the alarm that no gap shows, and on
+        a clean residual it is all the error there is; a narrower band would claim what the record
+        cannot tell.
         """
         rng = seeds.generator(self.settings.seed, seeds.RESOLUTION, key)
-        spread = self.settings.dt * (rng.random(rul.shape) - 0.5)
+        spread = span * (rng.random(rul.shape) - 0.5)
         return np.where(np.isfinite(rul), np.maximum(rul + spread, 0.0), rul)
 
 

@@ -227,14 +227,15 @@ def record(scenario: Scenario, seed: int, *, noise: Mapping | None = None) -> di
 
 def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int = 10, method: str = "sir",
         degradation: str | tuple = (), sensors: bool = True, pairs: bool | None = None,
-        window: int | None = None) -> dict:
+        window: int | None = None, extra: tuple = ()) -> dict:
     """``prognosis.json`` of ``bgphm prognose`` on the scenario's record (exit code under ``"exit"``).
 
     ``degradation``: the competing laws (``--degradation``, a name or several; default the command's);
     ``sensors=False``: the sensors' faults are not weighed (``--no-sensors``); ``pairs=True``: two
     parameters wearing at once are, from the first alarm (``--pairs``, with ``method="resample-move"``),
     ``False``: never (``--no-pairs``), None: the command's default (when no single fault explains the
-    residuals); ``window``: the derivative window (``--window``, default the command's).
+    residuals); ``window``: the derivative window (``--window``, default the command's); ``extra``: more
+    arguments of the command, as given.
     """
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -247,7 +248,7 @@ def run(scenario: Scenario, seed: int, *, particles: int = 300, rul_every: int =
                 "--seed", str(seed), "--filter", method, "--out", str(folder / "out"),
                 *(f"--degradation={law}" for law in ([degradation] if isinstance(degradation, str) else degradation)),
                 *([] if sensors else ["--no-sensors"]), *({True: ["--pairs"], False: ["--no-pairs"]}.get(pairs, [])),
-                *([] if window is None else ["--window", str(window)])]
+                *([] if window is None else ["--window", str(window)]), *extra]
         with contextlib.redirect_stdout(io.StringIO()), contextlib.redirect_stderr(io.StringIO()) as err:
             code = bgphm(argv)
         if code != 0:
