@@ -96,7 +96,7 @@ def test_a_second_wear_below_the_thresholds_contradicts_the_first_one_alone():
     assert alone["candidate"] == "R_a"
 
 
-@pytest.mark.slow  # 300 s of the pipe's physics and bgphm prognose, three times: about 6 s of CPU
+@pytest.mark.slow  # 300 s of the pipe's physics and bgphm prognose, four times: about 9 s of CPU
 def test_two_wears_firing_more_arrs_than_one_parameter_sees_are_weighed_as_a_pair():
     # the strainer clogging and the tank's outlet scaling at once, read with a wider derivative window (a
     # user's --window 61, residuals five times quieter): both ARRs fire at the alarm, which no single
@@ -111,6 +111,10 @@ def test_two_wears_firing_more_arrs_than_one_parameter_sees_are_weighed_as_a_pai
     answer = run(pair, seed=20261127, particles=60, rul_every=80, method="resample-move", window=61)
     assert answer["pairs"] == "weighed: no single parameter sees every ARR fired"
     assert score(pair, answer)["found"] and answer["status"] == "isolated", (answer["candidate"], answer["status"])
+    # with the sensors healthy, no single fault is weighed at all ("no candidate" before): the pair is
+    blind = run(pair, seed=20261127, particles=60, rul_every=80, method="resample-move", window=61, sensors=False)
+    assert blind["candidates"] == [] and blind["pairs"] == "weighed: no single parameter sees every ARR fired"
+    assert score(pair, blind)["found"], (blind["candidate"], blind["status"])
     # a single wear firing one ARR with the same window weighs no pair: one parameter sees it
     strainer = Scenario("pipe_tank", "R_f", "linear", "clean")
     single = run(strainer, seed=20261127, particles=60, rul_every=80, method="resample-move", window=61)
