@@ -3,7 +3,8 @@
     python benchmarks/bench_scenarios.py [--json] [--seeds 10] [--seed-from 0] [--particles 300]
                                          [--rul-every 10] [--jobs 2] [--filter sir|resample-move]
                                          [--pairs | --no-pairs] [--system NAME]
-                                         [--degradation LAW ...] [--runs] [NAME ...]
+                                         [--degradation LAW ...] [--window N [--step-samples M]]
+                                         [--runs] [NAME ...]
     python benchmarks/bench_scenarios.py --pool RUNS.jsonl ... [--json] [NAME ...]
 
 Each scenario (tests/wear/run.py) is a parameter wearing by a law (linear, exponential, power,
@@ -38,6 +39,10 @@ A sweep of 10 seeds over the whole suite costs hours of CPU; it can be cut by se
 machines or sessions at one commit: ``--runs`` prints each run's figures (one JSON line per scenario and
 seed) as it ends, so that an interrupted sweep keeps what it ran; ``--seed-from K`` starts at the K-th
 seed; ``--pool`` pools the runs of such files per scenario (a run given twice counts once).
+
+``--window N`` reads the residuals with a derivative window of N samples (``bgphm prognose --window``),
+``--step-samples M`` steps the filter every M samples of each system's record (``--dt``): the derivative
+window's measurement in docs/design.md is ``--window 31 --step-samples 11``.
 """
 
 from __future__ import annotations
@@ -60,11 +65,14 @@ SEED_BASE = 20261126   # seeds SEED_BASE + k: each its own noise and its own fil
 
 
 def one(arguments: tuple) -> dict:
-    scenario, seed, particles, rul_every, method, laws, pairs = arguments
+    scenario, seed, particles, rul_every, method, laws, pairs, window, step_samples = arguments
     started = time.process_time()
+    step = () if step_samples is None else ("--dt", f"{step_samples * scenario.facts.dt:.12g}")
     figures = score(scenario, run(scenario, seed, particles=particles, rul_every=rul_every, method=method,
-                                  degradation=laws, pairs=pairs))
+                                  degradation=laws, pairs=pairs, window=window, extra=step))
     return {"scenario": scenario.name, **figures, "seed": seed, "filter": method, "pairs": pairs,
+            **({} if window is None else {"window": window}),
+            **({} if step_samples is None else {"step_samples": step_samples}),
             "cpu_s": round(time.process_time() - started, 1)}
 
 
@@ -131,6 +139,11 @@ def main() -> int:
     parser.add_argument("--degradation", action="append", default=[],
                         choices=("linear", "exponential", "power", "saturating"),
                         help="bgphm prognose --degradation (repeatable; default the command's laws)")
+    parser.add_argument("--window", type=int, help="bgphm prognose --window: the derivative window in samples "
+                                                   "(default the command's, 11)")
+    parser.add_argument("--step-samples", type=int, metavar="M",
+                        help="the filter step in samples of each system's record (bgphm prognose --dt; default one "
+                             "derivative window)")
     args = parser.parse_args()
     unknown = sorted(set(args.names) - {s.name for s in scenarios()})
     if unknown:   # a name mistyped would otherwise leave its scenario out without a word
@@ -144,7 +157,8 @@ def main() -> int:
             parser.error(str(error))
     else:
         tasks = [(s, SEED_BASE + k, args.particles, args.rul_every, args.filter, tuple(args.degradation),
-                  args.pairs) for s in chosen for k in range(args.seed_from, args.seed_from + args.seeds)]
+                  args.pairs, args.window, args.step_samples)
+                 for s in chosen for k in range(args.seed_from, args.seed_from + args.seeds)]
         with ProcessPoolExecutor(args.jobs) as pool:
             runs = []
             for row in (pool.map(one, tasks) if args.jobs > 1 else map(one, tasks)):
