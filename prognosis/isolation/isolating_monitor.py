@@ -29,7 +29,7 @@ from collections.abc import Callable, Mapping, Sequence
 import numpy as np
 
 from diagnosis.derivatives import default_window
-from diagnosis.detection import check_closed_form
+from diagnosis.detection import check_closed_form, fitting_order
 
 from .. import seeds
 from ..degradation import JointDegradation, PerAssetDegradation, degradation_model
@@ -798,7 +798,7 @@ class IsolatingMonitor:
         (0.31, 0.11)
         """
         step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
-        windows = [self.options_for(a).get("window") or default_window(max(3, a.order))
+        windows = [self.options_for(a).get("window") or default_window(fitting_order(a, None))
                    for a in arrs if getattr(a, "order", 0) > 0]
         return max(self.settings.dt, step * max(windows, default=0))
 
