@@ -294,7 +294,7 @@ class IsolatingMonitor:
         self._reject_wrong_side(result, evaluations, arrs, k0, noise)
         t = evaluations[0].t
         stride = filter_stride(t, self.settings.dt)
-        span = self.resolution(t, arrs)   # the record times a change no finer (s), nor in fewer steps
+        span = self.resolution(stride, arrs)   # the record times a change no finer (s), nor in fewer steps
         lag = max(1, round(span / self.settings.dt))
         if self.settings.method == "sir":
             observation = HypothesisObservation(arrs, hypotheses)
@@ -779,9 +779,9 @@ class IsolatingMonitor:
         return (RULDistribution(self._resolved(np.concatenate(samples), span, key)[None, :],
                                 np.concatenate(mixed)[None, :], self.settings.rul_horizon), None)
 
-    def resolution(self, t: np.ndarray, arrs: Sequence) -> float:
-        """The shortest time (s) the residuals of ``arrs``, sampled at times ``t``, time a change by: the
-        filter step, or the widest derivative window among them when it is longer.
+    def resolution(self, stride: int, arrs: Sequence) -> float:
+        """The shortest time (s) the residuals of ``arrs``, read every ``stride`` samples (one filter step),
+        time a change by: the filter step, or the widest derivative window among them when it is longer.
 
         A derivative estimate fits a polynomial to its window's samples, so a residual that
         differentiates a signal smooths a change over its window, whatever the filter step it is read
@@ -792,15 +792,13 @@ class IsolatingMonitor:
         >>> arrs = derive_arrs(rlc_circuit())
         >>> monitor = IsolatingMonitor(arrs, {"R": 20.0}, noise_std={a.name: 1e-3 for a in arrs}, dt=0.1,
         ...                            detection={"window": 31})
-        >>> t = np.arange(0.0, 10.0, 0.01)
-        >>> round(monitor.resolution(t, arrs), 6), round(IsolatingMonitor(arrs, {"R": 20.0},
-        ...     noise_std={a.name: 1e-3 for a in arrs}, dt=0.1).resolution(t, arrs), 6)
+        >>> round(monitor.resolution(10, arrs), 6), round(IsolatingMonitor(arrs, {"R": 20.0},   # 10 ms samples
+        ...     noise_std={a.name: 1e-3 for a in arrs}, dt=0.1).resolution(10, arrs), 6)
         (0.31, 0.11)
         """
-        step = float(np.median(np.diff(t))) if t.size > 1 else 0.0
         windows = [self.options_for(a).get("window") or default_window(fitting_order(a, None))
                    for a in arrs if getattr(a, "order", 0) > 0]
-        return max(self.settings.dt, step * max(windows, default=0))
+        return self.settings.dt * max(1.0, max(windows, default=0) / stride)
 
     def _resolved(self, rul: np.ndarray, span: float, key: int) -> np.ndarray:
         """The RUL samples spread uniformly over ``span`` (s, :meth:`resolution`) about each (censored ones kept).
